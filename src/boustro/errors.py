@@ -1,0 +1,42 @@
+"""The library's error hierarchy.
+
+Every error that bad input can cause derives from :class:`BoustroError` and also from the
+built-in exception a caller would naturally catch (``ValueError`` for bad values), so both
+``except boustro.BoustroError`` and ``except ValueError`` work. Messages say what was expected
+and what came.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "BoustroError",
+    "InvalidParameterError",
+    "InvalidPolygonError",
+    "NoTransectError",
+    "NonConvexPolygonError",
+    "PolygonFileError",
+]
+
+
+class BoustroError(Exception):
+    """Base class of every error raised by boustro for bad input."""
+
+
+class InvalidPolygonError(BoustroError, ValueError):
+    """The vertices do not describe a valid simple polygon."""
+
+
+class NonConvexPolygonError(InvalidPolygonError):
+    """A convex polygon was required (e.g. by the paper's sigmoid model) and a concave one came."""
+
+
+class InvalidParameterError(BoustroError, ValueError):
+    """A numeric parameter (spacing, temperature, angle, ...) is out of its valid range."""
+
+
+class NoTransectError(BoustroError, ValueError):
+    """No transect of the grid crosses the polygon, so the fitness is undefined."""
+
+
+class PolygonFileError(BoustroError, ValueError):
+    """A polygon file is missing, unreadable, or holds no usable polygon."""

@@ -1,0 +1,393 @@
+"""Validated polygons, the paper's normalised frame, and inward half-planes.
+
+Conventions used throughout boustro:
+
+* Vertices are ``(x, y)`` pairs in the user's planar units. A :class:`Polygon` stores them
+  counter-clockwise (CCW), without a closing vertex, without duplicate or collinear vertices.
+* Angles are radians inside the library, counter-clockwise from ``+x``; degrees appear only at
+  the command line and in files.
+* The *normalised frame* (paper, Sec. III-B.1) centres the polygon on the mean of its vertices and
+  scales it so that its largest vertex-to-vertex distance (its *diameter*) is 1. Lengths in that
+  frame are user lengths divided by the diameter.
+* A half-plane is ``n . p + b >= 0`` with ``n`` the unit INWARD normal of a CCW edge
+  ``(x1, y1) -> (x2, y2)``: ``n = [y1 - y2, x2 - x1] / |edge|`` and
+  ``b = (x1*y2 - x2*y1) / |edge|``.
+
+  The paper's Eq. 2 as printed gives ``W = [x1 - x2, y1 - y2]``, the edge's *direction* rather
+  than its normal; the region it describes is the true polygon rotated by +90 degrees about the
+  origin (the authors' discrete code compensates by rotating by ``theta + 90``). boustro uses the
+  correct normal; :func:`paper_eq2_halfplanes` gives the printed form for comparison.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from typing import NamedTuple
+
+import numpy as np
+import torch
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import InvalidPolygonError, NonConvexPolygonError
+
+__all__ = [
+    "Frame",
+    "HalfPlanes",
+    "Polygon",
+    "halfplanes",
+    "paper_eq2_halfplanes",
+    "rotation_matrix",
+]
+
+#: Relative tolerance (to the polygon's diameter) under which two vertices are the same point,
+#: three vertices are collinear, or an area is zero.
+RELATIVE_TOLERANCE = 1e-12
+
+#: Offset given to padding half-planes when polygons with different vertex counts are batched:
+#: ``0 . p + PAD_OFFSET >= 0`` holds everywhere, and ``logsigmoid(T * PAD_OFFSET) == 0``.
+PAD_OFFSET = 1.0e6
+
+
+def rotation_matrix(angle: float) -> NDArray[np.float64]:
+    """The 2x2 matrix that rotates points counter-clockwise by ``angle`` radians."""
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s], [s, c]])
+
+
+class Frame(NamedTuple):
+    """An affine map between user coordinates and the normalised frame.
+
+    ``normalised = (user - centre) / scale``; ``scale`` is the polygon's diameter in user units.
+    """
+
+    centre: NDArray[np.float64]
+    scale: float
+
+    def to_normalised(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Map user points ``(..., 2)`` to the normalised frame."""
+        return (np.asarray(points, dtype=np.float64) - self.centre) / self.scale
+
+    def to_user(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Map normalised points ``(..., 2)`` back to user coordinates."""
+        return np.asarray(points, dtype=np.float64) * self.scale + self.centre
+
+
+def _as_vertex_array(vertices: ArrayLike) -> NDArray[np.float64]:
+    try:
+        arr = np.asarray(vertices, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidPolygonError(
+            f"expected a sequence of (x, y) number pairs, got non-numeric data: {exc}"
+        ) from None
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise InvalidPolygonError(
+            f"expected an array of (x, y) pairs with shape (N, 2), got shape {arr.shape}"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise InvalidPolygonError("vertex coordinates must be finite numbers (got NaN or inf)")
+    return arr
+
+
+def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def _drop_duplicates(v: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
+    """Remove consecutive (cyclically) coincident vertices, including a closing vertex."""
+    keep = [0]
+    for i in range(1, len(v)):
+        if np.linalg.norm(v[i] - v[keep[-1]]) > tol:
+            keep.append(i)
+    out = v[keep]
+    while len(out) > 1 and np.linalg.norm(out[-1] - out[0]) <= tol:
+        out = out[:-1]
+    return out
+
+
+def _drop_collinear(v: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
+    """Remove vertices where the boundary goes straight on; refuse spikes (turning back)."""
+    changed = True
+    while changed and len(v) >= 3:
+        changed = False
+        prev_edge = v - np.roll(v, 1, axis=0)
+        next_edge = np.roll(v, -1, axis=0) - v
+        cross = _cross(prev_edge, next_edge)
+        scale = np.linalg.norm(prev_edge, axis=1) * np.linalg.norm(next_edge, axis=1)
+        flat = np.abs(cross) <= tol * scale
+        if np.any(flat):
+            i = int(np.argmax(flat))
+            if float(np.dot(prev_edge[i], next_edge[i])) < 0:
+                raise InvalidPolygonError(
+                    f"the boundary turns back on itself at vertex {v[i].tolist()} "
+                    "(a zero-width spike): the polygon is not simple"
+                )
+            v = np.delete(v, i, axis=0)
+            changed = True
+    return v
+
+
+def _first_self_intersection(v: NDArray[np.float64], tol: float) -> tuple[int, int] | None:
+    """Indices of two non-adjacent edges that touch or cross, or None for a simple polygon."""
+    n = len(v)
+    p, q = v, np.roll(v, -1, axis=0)
+    i, j = np.triu_indices(n, k=2)
+    keep = ~((i == 0) & (j == n - 1))  # edge 0 and edge n-1 share vertex 0
+    i, j = i[keep], j[keep]
+    if len(i) == 0:
+        return None
+    p1, p2, q1, q2 = p[i], q[i], p[j], q[j]
+
+    def orient(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]):
+        d = _cross(b - a, c - a)
+        return np.where(np.abs(d) <= tol * np.linalg.norm(b - a, axis=1), 0.0, np.sign(d))
+
+    d1, d2 = orient(q1, q2, p1), orient(q1, q2, p2)
+    d3, d4 = orient(p1, p2, q1), orient(p1, p2, q2)
+    proper = (d1 * d2 <= 0) & (d3 * d4 <= 0)
+    collinear = (d1 == 0) & (d2 == 0)
+    # Two collinear segments meet only when their projections on the common line overlap.
+    direction = p2 - p1
+    t = lambda x: np.einsum("ij,ij->i", x - p1, direction)  # noqa: E731
+    lo, hi = np.minimum(t(q1), t(q2)), np.maximum(t(q1), t(q2))
+    length2 = np.einsum("ij,ij->i", direction, direction)
+    overlap = (hi >= -tol * length2) & (lo <= length2 * (1 + tol))
+    hit = np.where(collinear, overlap, proper)
+    if np.any(hit):
+        k = int(np.argmax(hit))
+        return int(i[k]), int(j[k])
+    return None
+
+
+class Polygon:
+    """A validated simple polygon with counter-clockwise vertices.
+
+    Built from vertices in any order of traversal: a closing vertex is accepted, consecutive
+    duplicates and collinear vertices are removed, clockwise input is re-oriented. Fewer than 3
+    distinct vertices, non-finite coordinates, zero area and self-intersection raise
+    :class:`~boustro.errors.InvalidPolygonError`.
+
+    Args:
+        vertices: ``(N, 2)`` array-like of ``(x, y)`` in user units.
+
+    Example:
+        >>> p = Polygon([(0, 0), (0, 1), (2, 1), (2, 0)])  # clockwise in, CCW stored
+        >>> p.area, p.is_convex
+        (2.0, True)
+    """
+
+    __slots__ = ("_diameter", "_is_convex", "_vertices")
+
+    def __init__(self, vertices: ArrayLike) -> None:
+        v = _as_vertex_array(vertices)
+        if len(v) < 3:
+            raise InvalidPolygonError(f"a polygon needs at least 3 vertices, got {len(v)}")
+        extent = float(np.max(np.ptp(v, axis=0)))
+        tol = RELATIVE_TOLERANCE * max(extent, np.finfo(np.float64).tiny)
+        v = _drop_duplicates(v, tol)
+        if len(v) < 3:
+            raise InvalidPolygonError(
+                f"a polygon needs at least 3 distinct vertices, got {len(v)} after removing "
+                "duplicates"
+            )
+        v = _drop_collinear(v, RELATIVE_TOLERANCE)
+        if len(v) < 3:
+            raise InvalidPolygonError("the polygon has zero area (all vertices are collinear)")
+        hit = _first_self_intersection(v, RELATIVE_TOLERANCE)
+        if hit is not None:
+            a, b = hit
+            raise InvalidPolygonError(
+                f"the polygon is self-intersecting: edge {a} ({v[a].tolist()} -> "
+                f"{v[(a + 1) % len(v)].tolist()}) meets edge {b} ({v[b].tolist()} -> "
+                f"{v[(b + 1) % len(v)].tolist()})"
+            )
+        area2 = float(np.sum(_cross(v, np.roll(v, -1, axis=0))))
+        if abs(area2) <= RELATIVE_TOLERANCE * extent**2:
+            raise InvalidPolygonError("the polygon has zero area")
+        if area2 < 0:
+            v = v[::-1].copy()
+        v.setflags(write=False)
+        self._vertices = v
+        turns = _cross(v - np.roll(v, 1, axis=0), np.roll(v, -1, axis=0) - v)
+        self._is_convex = bool(np.all(turns > 0))
+        diffs = v[:, None, :] - v[None, :, :]
+        self._diameter = float(np.sqrt(np.max(np.einsum("ijk,ijk->ij", diffs, diffs))))
+
+    # -- basic properties -------------------------------------------------------------------
+    @property
+    def vertices(self) -> NDArray[np.float64]:
+        """``(N, 2)`` read-only array of CCW vertices, no closing vertex."""
+        return self._vertices
+
+    def __len__(self) -> int:
+        return len(self._vertices)
+
+    def __repr__(self) -> str:
+        return f"Polygon({self._vertices.tolist()!r})"
+
+    @property
+    def area(self) -> float:
+        """Area in user units squared (positive)."""
+        v = self._vertices
+        return 0.5 * float(np.sum(_cross(v, np.roll(v, -1, axis=0))))
+
+    @property
+    def is_convex(self) -> bool:
+        """True when every interior angle is below 180 degrees."""
+        return self._is_convex
+
+    @property
+    def centre(self) -> NDArray[np.float64]:
+        """Mean of the vertices: the origin of the normalised frame (not the area centroid)."""
+        return self._vertices.mean(axis=0)
+
+    @property
+    def diameter(self) -> float:
+        """Largest vertex-to-vertex distance: the unit length of the normalised frame."""
+        return self._diameter
+
+    @property
+    def frame(self) -> Frame:
+        """The map between user coordinates and the paper's normalised frame."""
+        return Frame(self.centre, self._diameter)
+
+    def require_convex(self, what: str = "this operation") -> Polygon:
+        """Return ``self`` if convex, else raise :class:`NonConvexPolygonError` naming ``what``."""
+        if not self._is_convex:
+            raise NonConvexPolygonError(
+                f"{what} needs a convex polygon, but this one is concave "
+                f"({len(self)} vertices, area {self.area:.6g}, "
+                f"{self.area / self.convex_hull_area():.4f} of its convex hull)"
+            )
+        return self
+
+    def convex_hull_area(self) -> float:
+        """Area of the convex hull (Andrew's monotone chain)."""
+        pts = sorted(map(tuple, self._vertices))
+
+        def half(points: Iterable[tuple[float, float]]) -> list[tuple[float, float]]:
+            out: list[tuple[float, float]] = []
+            for p in points:
+                while (
+                    len(out) >= 2
+                    and (
+                        (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                        - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])
+                    )
+                    <= 0
+                ):
+                    out.pop()
+                out.append(p)
+            return out
+
+        hull = np.array(half(pts)[:-1] + half(reversed(pts))[:-1])
+        return 0.5 * float(np.sum(_cross(hull, np.roll(hull, -1, axis=0))))
+
+    # -- transformations --------------------------------------------------------------------
+    def normalised(self) -> Polygon:
+        """This polygon in the normalised frame (centred on the vertex mean, diameter 1)."""
+        return Polygon(self.frame.to_normalised(self._vertices))
+
+    def rotated(self, angle: float, origin: ArrayLike | None = None) -> Polygon:
+        """Rotate counter-clockwise by ``angle`` radians about ``origin`` (default: the centre)."""
+        o = self.centre if origin is None else np.asarray(origin, dtype=np.float64)
+        return Polygon((self._vertices - o) @ rotation_matrix(angle).T + o)
+
+    def translated(self, dx: float, dy: float) -> Polygon:
+        return Polygon(self._vertices + np.array([dx, dy]))
+
+    def scaled(self, factor: float, origin: ArrayLike | None = None) -> Polygon:
+        o = self.centre if origin is None else np.asarray(origin, dtype=np.float64)
+        return Polygon((self._vertices - o) * factor + o)
+
+    # -- half-planes ------------------------------------------------------------------------
+    def halfplanes(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Unit inward normals ``(E, 2)`` and offsets ``(E,)``: inside iff ``n . p + b >= 0``.
+
+        For a convex polygon the intersection of these half-planes IS the polygon; for a concave
+        one it is not (use the polygon's edges directly).
+        """
+        p1 = self._vertices
+        p2 = np.roll(p1, -1, axis=0)
+        normal = np.stack([p1[:, 1] - p2[:, 1], p2[:, 0] - p1[:, 0]], axis=1)
+        offset = p1[:, 0] * p2[:, 1] - p2[:, 0] * p1[:, 1]
+        norm = np.linalg.norm(normal, axis=1)
+        return normal / norm[:, None], offset / norm
+
+    @property
+    def radius(self) -> float:
+        """Largest distance of a vertex from the centre (<= diameter, >= diameter / 2)."""
+        return float(np.max(np.linalg.norm(self._vertices - self.centre, axis=1)))
+
+
+def paper_eq2_halfplanes(polygon: Polygon) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Eq. 2 of the paper exactly as printed: ``W = [x1 - x2, y1 - y2]``, ``B = x1*y2 - x2*y1``.
+
+    ``W`` is minus the edge direction, i.e. the inward normal rotated by +90 degrees, so the
+    region ``W . X + B >= 0`` is the polygon rotated by +90 degrees about the origin. Kept for
+    documentation and tests; the models use :meth:`Polygon.halfplanes`.
+    """
+    p1 = polygon.vertices
+    p2 = np.roll(p1, -1, axis=0)
+    return p1 - p2, p1[:, 0] * p2[:, 1] - p2[:, 0] * p1[:, 1]
+
+
+class HalfPlanes(NamedTuple):
+    """Polygons as tensors of inward half-planes, ready for the transect models.
+
+    Attributes:
+        normals: ``(*P, E, 2)`` unit inward normals. Polygons with fewer than ``E`` edges are
+            padded with the always-true half-plane ``0 . p + PAD_OFFSET >= 0``.
+        offsets: ``(*P, E)``; a point ``p`` is inside iff ``normals . p + offsets >= 0`` for all E.
+        radius: a bound on the distance of every vertex from the origin, over the whole batch.
+    """
+
+    normals: torch.Tensor
+    offsets: torch.Tensor
+    radius: float
+
+
+def halfplanes(
+    polygons: Polygon | Sequence[Polygon],
+    *,
+    normalise: bool = True,
+    dtype: torch.dtype = torch.float64,
+    device: torch.device | str | None = None,
+) -> HalfPlanes:
+    """Tensor half-planes of one convex polygon, or of a batch of them (padded to equal E).
+
+    Args:
+        polygons: a convex :class:`Polygon` or a sequence of them.
+        normalise: take each polygon in its normalised frame (default), as the paper does.
+        dtype, device: of the returned tensors (float64 by default).
+
+    Returns:
+        :class:`HalfPlanes` with ``normals`` ``(E, 2)`` for one polygon or ``(P, E, 2)`` for P.
+
+    Raises:
+        NonConvexPolygonError: a polygon is concave (half-planes would describe its hull's
+            intersection, not the polygon).
+    """
+    single = isinstance(polygons, Polygon)
+    items: list[Polygon] = [polygons] if single else list(polygons)  # type: ignore[list-item]
+    if not items:
+        raise InvalidPolygonError("expected at least one polygon, got an empty sequence")
+    items = [p.require_convex("the half-plane representation") for p in items]
+    if normalise:
+        items = [p.normalised() for p in items]
+    n_edges = max(len(p) for p in items)
+    normals = np.zeros((len(items), n_edges, 2))
+    offsets = np.full((len(items), n_edges), PAD_OFFSET)
+    for k, p in enumerate(items):
+        n, b = p.halfplanes()
+        normals[k, : len(p)] = n
+        offsets[k, : len(p)] = b
+    radius = max(float(np.max(np.linalg.norm(p.vertices, axis=1))) for p in items)
+    hp = HalfPlanes(
+        torch.as_tensor(normals, dtype=dtype, device=device),
+        torch.as_tensor(offsets, dtype=dtype, device=device),
+        radius,
+    )
+    if single:
+        return HalfPlanes(hp.normals[0], hp.offsets[0], radius)
+    return hp

@@ -1,0 +1,297 @@
+"""Transect-length models: the exact chords and the paper's differentiable sigmoid integral.
+
+Every model maps (polygon half-planes, angle ``theta``, offset ``d``, spacing ``s``) to the lengths
+of the transects of a grid and to a weight per transect saying whether it counts. They share one
+interface, :class:`TransectModel`, so the fitness functions and the optimisers take any of them.
+
+Transect grid convention (the same in every frame):
+
+* ``theta`` is the transect DIRECTION in radians, counter-clockwise from ``+x``. Its unit vector
+  is ``u = (cos theta, sin theta)``; the transects' left normal is ``n = (-sin theta, cos theta)``.
+* Transect ``k`` is the line ``{p : n . p = d + k s}``, ``k`` any integer: ``d`` is the signed
+  distance of the grid from the origin (the polygon's vertex mean in the normalised frame) along
+  ``n``. The set of lines is periodic in ``d`` with period ``s``, and ``(theta + pi, -d)`` is the
+  same set as ``(theta, d)``.
+* A point of transect ``k`` is ``p = (d + k s) n + t u``; ``t`` is the along-transect coordinate.
+
+Tensors: ``theta`` and ``offset`` broadcast together to the batch shape ``(*B)``; half-planes may
+carry their own leading polygon dimensions ``(*P)`` that broadcast with ``(*B)``. Outputs have shape
+``(*, K)`` with ``K`` candidate transects per grid (those that miss the polygon have length 0 and
+weight 0, so ``K`` is static and batches stack). dtype and device follow the half-planes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple, Protocol, runtime_checkable
+
+import torch
+import torch.nn.functional as F
+
+from .errors import InvalidParameterError
+from .geometry import HalfPlanes
+
+__all__ = [
+    "PAPER_WINDOW",
+    "Chords",
+    "ExactModel",
+    "PaperModel",
+    "TransectLengths",
+    "TransectModel",
+    "exact_chords",
+    "paper_lengths",
+    "transect_positions",
+]
+
+#: Half-width of the paper's transect window: transects at ``|n . p| <= 0.5`` only, integrated
+#: over ``t`` in ``[-0.5, 0.5]`` (used with ``clip=True`` for faithful reproduction).
+PAPER_WINDOW = 0.5
+
+
+class TransectLengths(NamedTuple):
+    """What a model says about the grid of transects.
+
+    Attributes:
+        lengths: ``(*, K)`` transect lengths, in the units of the half-planes' frame.
+        weights: ``(*, K)`` in ``[0, 1]``: how much each transect counts as "shown" (exact: 0 or
+            1; soft: the paper's Eq. 7 indicator).
+        positions: ``(*, K)`` signed distance ``d + k s`` of each transect from the origin.
+    """
+
+    lengths: torch.Tensor
+    weights: torch.Tensor
+    positions: torch.Tensor
+
+
+class Chords(NamedTuple):
+    """Exact chords of the transect grid: transect ``k`` spans ``t`` in ``[lower, upper]``."""
+
+    positions: torch.Tensor
+    lower: torch.Tensor
+    upper: torch.Tensor
+    lengths: torch.Tensor
+
+
+@runtime_checkable
+class TransectModel(Protocol):
+    """Anything that turns (half-planes, theta, offset, spacing) into :class:`TransectLengths`."""
+
+    name: str
+
+    def __call__(
+        self, hp: HalfPlanes, theta: torch.Tensor, offset: torch.Tensor, spacing: float
+    ) -> TransectLengths: ...
+
+
+def check_spacing(spacing: float) -> float:
+    """Return ``spacing`` as a float, or raise if it is not a finite positive number."""
+    try:
+        s = float(spacing)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"spacing must be a number, got {spacing!r}") from None
+    if not math.isfinite(s) or s <= 0:
+        raise InvalidParameterError(f"spacing must be a finite number > 0, got {spacing!r}")
+    return s
+
+
+def _prepare(
+    hp: HalfPlanes, theta: torch.Tensor, offset: torch.Tensor
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Angle and offset as tensors of the half-planes' dtype/device, and the per-edge components.
+
+    Returns ``(theta, offset, across, along, b)`` where ``across = n_j . n`` and
+    ``along = n_j . u`` have shape ``(*, E)``: edge ``j`` holds at ``(c, t)`` iff
+    ``across_j c + along_j t + b_j >= 0``. Rotating the edges instead of the transects is the
+    paper's "rotate W, keep B".
+    """
+    dtype, device = hp.normals.dtype, hp.normals.device
+    theta = torch.as_tensor(theta, dtype=dtype, device=device)
+    offset = torch.as_tensor(offset, dtype=dtype, device=device)
+    theta, offset = torch.broadcast_tensors(theta, offset)
+    cos, sin = torch.cos(theta)[..., None], torch.sin(theta)[..., None]
+    nx, ny = hp.normals[..., 0], hp.normals[..., 1]
+    across = -nx * sin + ny * cos
+    along = nx * cos + ny * sin
+    b = torch.broadcast_to(hp.offsets, across.shape)
+    return theta, offset, across, along, b
+
+
+def grid_size(spacing: float, radius: float) -> tuple[int, int]:
+    """``(K, m)``: ``K`` candidates at ``d mod s + (k - m) s``, k < K, cover ``[-radius, radius]``."""
+    m = math.ceil(radius / spacing) + 1
+    return 2 * m, m
+
+
+def transect_positions(offset: torch.Tensor, spacing: float, radius: float) -> torch.Tensor:
+    """Positions ``(*, K)`` of every grid line that can meet a disc of ``radius`` at the origin.
+
+    The offset is wrapped into ``[0, spacing)`` first (``torch.remainder``, whose gradient is 1),
+    so any offset, however far it has drifted, gives the same static ``K``.
+    """
+    spacing = check_spacing(spacing)
+    k_count, m = grid_size(spacing, radius)
+    k = torch.arange(k_count, dtype=offset.dtype, device=offset.device) - m
+    return torch.remainder(offset, spacing)[..., None] + k * spacing
+
+
+def _window_mask(positions: torch.Tensor, clip: bool) -> torch.Tensor | None:
+    if not clip:
+        return None
+    return (positions >= -PAPER_WINDOW) & (positions < PAPER_WINDOW)
+
+
+def exact_chords(
+    hp: HalfPlanes,
+    theta: torch.Tensor | float,
+    offset: torch.Tensor | float,
+    spacing: float,
+    *,
+    clip: bool = False,
+) -> Chords:
+    """Exact chords of a convex polygon's transect grid, in closed form (DESIGN.md sec. 4).
+
+    For transect position ``c`` each edge bounds ``t``: ``t >= -(across c + b) / along`` where
+    ``along > 0`` (lower bounds) and ``<=`` where ``along < 0`` (upper bounds); an edge parallel
+    to the transects (``along == 0``) either holds for every ``t`` or empties the chord. The chord
+    is ``[max lower, min upper]``, its length ``max(0, upper - lower)``: O(E) per transect.
+
+    Differentiable almost everywhere in ``theta`` and ``offset`` (not at transects through
+    vertices); denominators are made safe before ``torch.where`` so gradients stay finite.
+
+    Args:
+        hp: half-planes ``(*P, E, 2)``, see :func:`boustro.geometry.halfplanes`.
+        theta: transect direction(s) in radians, ``(*B)``.
+        offset: grid offset(s) in the half-planes' frame, ``(*B)``.
+        spacing: transect spacing in the same frame, > 0.
+        clip: restrict to the paper's window (``|c| <= 0.5`` and ``t`` in ``[-0.5, 0.5]``).
+
+    Returns:
+        :class:`Chords` with tensors ``(*, K)``; transects missing the polygon have length 0 and
+        ``lower == upper`` undefined (do not use their endpoints).
+    """
+    theta, offset, across, along, b = _prepare(hp, theta, offset)
+    c = transect_positions(offset, spacing, PAPER_WINDOW if clip else hp.radius)
+    across, along, b = across[..., None, :], along[..., None, :], b[..., None, :]
+    lhs = across * c[..., :, None] + b  # (*, K, E): edge j holds iff lhs + along t >= 0
+    parallel = along == 0
+    bound = -lhs / torch.where(parallel, torch.ones_like(along), along)
+    inf = torch.as_tensor(math.inf, dtype=c.dtype, device=c.device)
+    lower = torch.where(along > 0, bound, -inf).amax(dim=-1)
+    upper = torch.where(along < 0, bound, inf).amin(dim=-1)
+    if clip:
+        lower = lower.clamp(min=-PAPER_WINDOW)
+        upper = upper.clamp(max=PAPER_WINDOW)
+    blocked = (parallel & (lhs < 0)).any(dim=-1)
+    length = torch.where(blocked, torch.zeros_like(lower), (upper - lower).clamp(min=0))
+    mask = _window_mask(c, clip)
+    if mask is not None:
+        length = torch.where(mask, length, torch.zeros_like(length))
+    return Chords(c, lower, upper, length)
+
+
+def _as_temperature(temperature: torch.Tensor | float, like: torch.Tensor) -> torch.Tensor:
+    t = torch.as_tensor(temperature, dtype=like.dtype, device=like.device)
+    if not torch.all(torch.isfinite(t) & (t > 0)):
+        raise InvalidParameterError(f"temperature must be finite and > 0, got {temperature!r}")
+    return t
+
+
+def paper_lengths(
+    hp: HalfPlanes,
+    theta: torch.Tensor | float,
+    offset: torch.Tensor | float,
+    spacing: float,
+    *,
+    temperature: torch.Tensor | float = 1000.0,
+    points_per_transect: int = 1000,
+    clip: bool = False,
+) -> TransectLengths:
+    """The paper's differentiable transect lengths and "shown" weights (Eq. 3-7).
+
+    For each transect and each of ``points_per_transect`` points along it:
+    ``P = prod_j sigmoid(T (n_j . p + b_j))`` (Eq. 4, computed as ``exp(sum logsigmoid)`` so a
+    product of many tiny factors never underflows to a zero gradient), ``P_sigma =
+    sigmoid(T (P - 0.5))`` (Eq. 5), the length is the trapezoid integral of ``P_sigma`` along the
+    transect (Eq. 6) and the weight is ``S = 2 sigmoid(T L) - 1`` (Eq. 7).
+
+    Fully vectorised: one tensor of shape ``(*, K, points, E)``; memory grows with that product.
+
+    Args:
+        hp: half-planes of convex polygon(s) (:func:`boustro.geometry.halfplanes`).
+        theta, offset, spacing: see :func:`exact_chords`.
+        temperature: ``Temp`` of the paper, > 0; a tensor broadcasting with the batch is allowed.
+        points_per_transect: trapezoid points per transect (>= 2).
+        clip: the paper's window: transects with ``|c| <= 0.5`` integrated over
+            ``t`` in ``[-0.5, 0.5]``. A polygon centred on its vertex mean can reach beyond 0.5
+            (a triangle does), so this under-measures such polygons; by default the integral
+            spans ``[-radius, radius]``, the whole polygon.
+
+    Returns:
+        :class:`TransectLengths` ``(*, K)``.
+    """
+    if int(points_per_transect) != points_per_transect or points_per_transect < 2:
+        raise InvalidParameterError(
+            f"points_per_transect must be an integer >= 2, got {points_per_transect!r}"
+        )
+    theta, offset, across, along, b = _prepare(hp, theta, offset)
+    temp = _as_temperature(temperature, across)
+    half = PAPER_WINDOW if clip else hp.radius
+    c = transect_positions(offset, spacing, half)
+    t = torch.linspace(-half, half, int(points_per_transect), dtype=c.dtype, device=c.device)
+    temp_kp = temp.reshape((*temp.shape, 1, 1)) if temp.ndim else temp
+    # v[..., k, p, j] = across_j c_k + along_j t_p + b_j
+    lhs = across[..., None, :] * c[..., :, None] + b[..., None, :]  # (*, K, E)
+    v = lhs[..., :, None, :] + along[..., None, None, :] * t[:, None]  # (*, K, P, E)
+    log_p = F.logsigmoid(temp_kp[..., None] * v).sum(dim=-1)  # Eq. 4 in log space
+    p_sigma = torch.sigmoid(temp_kp * (torch.exp(log_p) - 0.5))  # Eq. 5
+    length = torch.trapezoid(p_sigma, dx=2 * half / (int(points_per_transect) - 1), dim=-1)
+    mask = _window_mask(c, clip)
+    if mask is not None:
+        length = torch.where(mask, length, torch.zeros_like(length))
+    temp_k = temp[..., None] if temp.ndim else temp
+    weight = 2 * torch.sigmoid(temp_k * length) - 1  # Eq. 7
+    return TransectLengths(length, weight, c)
+
+
+@dataclass(frozen=True)
+class ExactModel:
+    """Exact chord lengths (closed form); weights are 1 for transects of positive length.
+
+    Differentiable almost everywhere, but its gradient ignores transects entering or leaving
+    the polygon: use it to score, and a soft model to descend.
+    """
+
+    clip: bool = False
+    name: str = "exact"
+
+    def __call__(
+        self, hp: HalfPlanes, theta: torch.Tensor, offset: torch.Tensor, spacing: float
+    ) -> TransectLengths:
+        ch = exact_chords(hp, theta, offset, spacing, clip=self.clip)
+        # A chord shorter than this is a transect grazing a vertex: rounding, not a transect.
+        tiny = 1e-12 * max(hp.radius, 1e-300)
+        return TransectLengths(ch.lengths, (ch.lengths > tiny).to(ch.lengths.dtype), ch.positions)
+
+
+@dataclass(frozen=True)
+class PaperModel:
+    """The paper's sigmoid-integral model (Eq. 2-7) with its settings; see :func:`paper_lengths`."""
+
+    temperature: float = 1000.0
+    points_per_transect: int = 1000
+    clip: bool = False
+    name: str = "paper"
+
+    def __call__(
+        self, hp: HalfPlanes, theta: torch.Tensor, offset: torch.Tensor, spacing: float
+    ) -> TransectLengths:
+        return paper_lengths(
+            hp,
+            theta,
+            offset,
+            spacing,
+            temperature=self.temperature,
+            points_per_transect=self.points_per_transect,
+            clip=self.clip,
+        )
