@@ -118,7 +118,7 @@ def _prepare(
 
 
 def grid_size(spacing: float, radius: float) -> tuple[int, int]:
-    """``(K, m)``: ``K`` candidates at ``d mod s + (k - m) s``, k < K, cover ``[-radius, radius]``."""
+    """``(K, m)``: the ``K`` lines ``d mod s + (k - m) s``, ``0 <= k < K``, cover +-radius."""
     m = math.ceil(radius / spacing) + 1
     return 2 * m, m
 
@@ -187,7 +187,7 @@ def exact_chords(
     mask = _window_mask(c, clip)
     if mask is not None:
         length = torch.where(mask, length, torch.zeros_like(length))
-    return Chords(c, lower, upper, length)
+    return Chords(torch.broadcast_to(c, length.shape), lower, upper, length)
 
 
 def _as_temperature(temperature: torch.Tensor | float, like: torch.Tensor) -> torch.Tensor:
@@ -239,11 +239,13 @@ def paper_lengths(
     half = PAPER_WINDOW if clip else hp.radius
     c = transect_positions(offset, spacing, half)
     t = torch.linspace(-half, half, int(points_per_transect), dtype=c.dtype, device=c.device)
-    temp_kp = temp.reshape((*temp.shape, 1, 1)) if temp.ndim else temp
-    # v[..., k, p, j] = across_j c_k + along_j t_p + b_j
-    lhs = across[..., None, :] * c[..., :, None] + b[..., None, :]  # (*, K, E)
-    v = lhs[..., :, None, :] + along[..., None, None, :] * t[:, None]  # (*, K, P, E)
-    log_p = F.logsigmoid(temp_kp[..., None] * v).sum(dim=-1)  # Eq. 4 in log space
+    temp_e = temp[..., None] if temp.ndim else temp  # broadcasts with (*, E)
+    temp_kp = temp_e[..., None] if temp.ndim else temp  # broadcasts with (*, K, P)
+    # T v[..., k, p, j] = T (across_j c_k + b_j) + T along_j t_p, built from the two small
+    # factors with a single full-size addition (the (*, K, P, E) tensor dominates the cost).
+    lhs = (temp_e * across)[..., None, :] * c[..., :, None] + (temp_e * b)[..., None, :]
+    tv = lhs[..., :, None, :] + (temp_e * along)[..., None, None, :] * t[:, None]
+    log_p = F.logsigmoid(tv).sum(dim=-1)  # Eq. 4 in log space: (*, K, P)
     p_sigma = torch.sigmoid(temp_kp * (torch.exp(log_p) - 0.5))  # Eq. 5
     length = torch.trapezoid(p_sigma, dx=2 * half / (int(points_per_transect) - 1), dim=-1)
     mask = _window_mask(c, clip)
@@ -251,7 +253,7 @@ def paper_lengths(
         length = torch.where(mask, length, torch.zeros_like(length))
     temp_k = temp[..., None] if temp.ndim else temp
     weight = 2 * torch.sigmoid(temp_k * length) - 1  # Eq. 7
-    return TransectLengths(length, weight, c)
+    return TransectLengths(length, weight, torch.broadcast_to(c, length.shape))
 
 
 @dataclass(frozen=True)

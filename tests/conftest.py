@@ -1,0 +1,46 @@
+"""Shared fixtures: canonical shapes and a seeded random convex polygon factory."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from boustro.geometry import Polygon, random_convex_polygon
+from boustro.io import PAPER_PARALLELOGRAM
+
+# Spacing of the authors' scripts for the parallelogram, in the normalised frame (18 transects).
+PAPER_SPACING_NORMALISED = 0.5 / np.hypot(4.0, 8.0)
+
+
+@pytest.fixture
+def parallelogram() -> Polygon:
+    """The paper's Figure 1 parallelogram, in the authors' units."""
+    return Polygon(PAPER_PARALLELOGRAM)
+
+
+@pytest.fixture
+def square() -> Polygon:
+    return Polygon([(0, 0), (1, 0), (1, 1), (0, 1)])
+
+
+@pytest.fixture
+def triangle() -> Polygon:
+    return Polygon([(0, 0), (1, 0), (0.5, np.sqrt(3) / 2)])
+
+
+def random_polygons(seed: int, count: int, low: int = 3, high: int = 9) -> list[Polygon]:
+    """``count`` random convex polygons with ``low..high`` vertices, normalised frame."""
+    rng = np.random.default_rng(seed)
+    return [random_convex_polygon(rng, int(rng.integers(low, high + 1))) for _ in range(count)]
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(12345)
+
+
+@pytest.fixture(autouse=True)
+def _deterministic_torch():
+    torch.manual_seed(0)
+    yield
