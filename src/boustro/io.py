@@ -1,25 +1,54 @@
-"""Reading polygons from files (an edge of the system: the core never imports this module).
+"""Reading polygons and survey areas from files (an edge: the core never imports this module).
 
-Supported inputs, taken as planar coordinates:
+:func:`read_polygon` reads planar polygons (``boustro score``):
 
 * a JSON list of ``[x, y]`` pairs (extra coordinates such as ``z`` are ignored);
 * GeoJSON: a ``Polygon``, ``MultiPolygon`` (its first polygon), ``Feature``, or
   ``FeatureCollection`` (its first feature with a polygon geometry).
+
+:func:`read_area` reads a survey *area*: the ring as written in the file plus its coordinate
+reference system (CRS), for :mod:`boustro.geo` to project. It takes the formats above and:
+
+* KML (the first ``Polygon``, e.g. of a placemark; GML 2/3 rings in XML are read the same way);
+* WKT / EWKT: ``POLYGON``, ``POLYGON Z``, ``MULTIPOLYGON`` (first polygon), ``SRID=n;`` prefix.
+
+Coordinates are ``x, y`` = longitude, latitude (RFC 7946, KML) unless the file names another CRS
+(a GeoJSON ``crs`` member, a GML ``srsName``, an EWKT ``SRID``) or the caller gives one. Holes
+are refused (not supported yet), as is a file with no polygon.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
 from collections.abc import Sequence
+from dataclasses import dataclass
+from importlib import resources
 from typing import Any
+from xml.etree import ElementTree
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .errors import InvalidPolygonError, PolygonFileError
 from .geometry import Polygon
 
-__all__ = ["PAPER_PARALLELOGRAM", "PAPER_SPACING", "polygon_from_json", "read_polygon"]
+__all__ = [
+    "EMBEDDED_FIELD",
+    "LONLAT",
+    "PAPER_PARALLELOGRAM",
+    "PAPER_SPACING",
+    "Area",
+    "area_from_json",
+    "area_from_kml",
+    "area_from_text",
+    "area_from_wkt",
+    "embedded_field",
+    "polygon_from_json",
+    "read_area",
+    "read_polygon",
+]
 
 #: The parallelogram of the paper's Figure 1, in the authors' units.
 PAPER_PARALLELOGRAM: tuple[tuple[float, float], ...] = ((8, 4), (8, 10), (4, 8), (4, 2))
@@ -46,6 +75,15 @@ def _ring(coords: Any, where: str) -> np.ndarray:
 
 
 def _from_geometry(geom: Any, where: str) -> Polygon:
+    ring = _geometry_ring(geom, where)
+    try:
+        return Polygon(ring)
+    except InvalidPolygonError as exc:
+        raise InvalidPolygonError(f"{where}: {exc}") from None
+
+
+def _geometry_ring(geom: Any, where: str) -> np.ndarray:
+    """The outer ring of a GeoJSON Polygon (or a MultiPolygon's first polygon), unvalidated."""
     kind = geom.get("type")
     coords = geom.get("coordinates")
     if kind == "MultiPolygon":
@@ -60,10 +98,7 @@ def _from_geometry(geom: Any, where: str) -> Polygon:
         raise PolygonFileError(
             f"{where}: the polygon has {len(coords) - 1} hole(s); holes are not supported yet"
         )
-    try:
-        return Polygon(_ring(coords[0], where))
-    except InvalidPolygonError as exc:
-        raise InvalidPolygonError(f"{where}: {exc}") from None
+    return _ring(coords[0], where)
 
 
 def polygon_from_json(data: Any, where: str = "input") -> Polygon:
@@ -115,3 +150,335 @@ def read_polygon(path: str | os.PathLike[str]) -> Polygon:
             f"{name}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
         ) from None
     return polygon_from_json(data, name)
+
+
+# -- survey areas (ring + CRS) ----------------------------------------------------------------
+#: WGS 84 longitude/latitude, the CRS of GeoJSON (RFC 7946), KML and GPX.
+LONLAT = "EPSG:4326"
+
+#: The embedded example field: a 3.6 ha parcel in the Netherlands from the Fields2Cover project
+#: (BSD 3-Clause, Wageningen University; see ``data/LICENSE-Fields2Cover``).
+EMBEDDED_FIELD = "fields2cover_test_field.json"
+
+
+@dataclass(frozen=True)
+class Area:
+    """A survey area as read: its outer ring in the file's coordinates and their CRS.
+
+    Attributes:
+        ring: ``(N, 2)`` vertices ``(x, y)`` in file order (longitude, latitude for
+            geographic CRSs), without a repeated closing vertex. Not yet validated as a
+            polygon: :mod:`boustro.geo` projects it first.
+        crs: the CRS, e.g. ``"EPSG:4326"``, or ``None`` for plain planar coordinates.
+        name: a name for the area (placemark or feature name, else the file's stem).
+        source: where it came from (a path, or ``"<embedded>"``).
+    """
+
+    ring: NDArray[np.float64]
+    crs: str | None
+    name: str
+    source: str
+
+
+def _close_open(ring: np.ndarray, where: str) -> np.ndarray:
+    if len(ring) > 1 and np.array_equal(ring[0], ring[-1]):
+        ring = ring[:-1]
+    if len(ring) < 3:
+        raise PolygonFileError(f"{where}: a polygon needs at least 3 vertices, got {len(ring)}")
+    return ring
+
+
+def _geojson_crs(data: Any) -> str | None:
+    """The CRS named by an old-style (2008) GeoJSON ``crs`` member, if any."""
+    crs = data.get("crs") if isinstance(data, dict) else None
+    if not isinstance(crs, dict):
+        return None
+    name = (crs.get("properties") or {}).get("name")
+    return _crs_name(name) if isinstance(name, str) else None
+
+
+def _crs_name(name: str) -> str:
+    """``urn:ogc:def:crs:EPSG::28992``, ``EPSG:28992``, ``.../EPSG/0/28992`` -> ``EPSG:28992``."""
+    text = name.strip()
+    if text.upper() in ("URN:OGC:DEF:CRS:OGC:1.3:CRS84", "OGC:CRS84", "CRS84"):
+        return LONLAT
+    m = re.search(r"EPSG(?:::|:|/0/|/)(\d+)$", text, flags=re.IGNORECASE)
+    return f"EPSG:{m.group(1)}" if m else text
+
+
+def area_from_json(data: Any, where: str = "input", crs: str | None = None) -> Area:
+    """An :class:`Area` from parsed JSON: a list of ``[x, y]`` pairs or a GeoJSON object."""
+    name = ""
+    if isinstance(data, list):
+        ring = _ring(data, where)
+    elif not isinstance(data, dict) or "type" not in data:
+        raise PolygonFileError(
+            f"{where}: expected a JSON list of [x, y] pairs or a GeoJSON object, "
+            f"got {type(data).__name__}"
+        )
+    elif data["type"] == "FeatureCollection":
+        for i, feature in enumerate(data.get("features") or []):
+            geom = (feature or {}).get("geometry") or {}
+            if geom.get("type") in ("Polygon", "MultiPolygon"):
+                ring = _geometry_ring(geom, f"{where}: feature {i}")
+                name = _feature_name(feature)
+                break
+        else:
+            raise PolygonFileError(f"{where}: the FeatureCollection holds no Polygon feature")
+    elif data["type"] == "Feature":
+        geom = data.get("geometry")
+        if not isinstance(geom, dict):
+            raise PolygonFileError(f"{where}: the Feature has no geometry")
+        ring = _geometry_ring(geom, where)
+        name = _feature_name(data)
+    else:
+        ring = _geometry_ring(data, where)
+    file_crs = _geojson_crs(data) if isinstance(data, dict) else None
+    return Area(_close_open(ring, where), crs or file_crs or LONLAT, name, where)
+
+
+def _feature_name(feature: Any) -> str:
+    props = feature.get("properties") if isinstance(feature, dict) else None
+    if isinstance(props, dict):
+        for key in ("name", "Name", "NAME", "title"):
+            if isinstance(props.get(key), str):
+                return props[key]
+    return ""
+
+
+def _local(tag: str) -> str:
+    return tag.rsplit("}", 1)[-1]
+
+
+def _xml_coordinates(element: ElementTree.Element, where: str) -> np.ndarray:
+    """Vertices of a KML/GML ``LinearRing`` (``coordinates`` or GML 3 ``posList``/``pos``)."""
+    for child in element.iter():
+        tag = _local(child.tag)
+        if tag == "coordinates":
+            rows = []
+            for i, token in enumerate((child.text or "").split()):
+                parts = token.split(",")
+                try:
+                    rows.append((float(parts[0]), float(parts[1])))
+                except (ValueError, IndexError):
+                    raise PolygonFileError(
+                        f"{where}: coordinate tuple {i} must be 'x,y[,z]', got {token!r:.60}"
+                    ) from None
+            return np.asarray(rows, dtype=np.float64).reshape(-1, 2)
+        if tag == "posList":
+            dim = int(child.get("srsDimension") or child.get("dimension") or 2)
+            try:
+                values = [float(x) for x in (child.text or "").split()]
+            except ValueError:
+                raise PolygonFileError(f"{where}: non-numeric value in a GML posList") from None
+            if dim < 2 or len(values) % dim:
+                raise PolygonFileError(
+                    f"{where}: a GML posList of {len(values)} numbers is not made of "
+                    f"{dim}-dimensional positions"
+                )
+            return np.asarray(values, dtype=np.float64).reshape(-1, dim)[:, :2]
+    positions = [c for c in element.iter() if _local(c.tag) == "pos"]
+    if positions:
+        try:
+            pos_rows = [[float(x) for x in (p.text or "").split()[:2]] for p in positions]
+            return np.asarray(pos_rows, dtype=np.float64).reshape(-1, 2)
+        except ValueError:
+            raise PolygonFileError(f"{where}: non-numeric value in a GML pos") from None
+    raise PolygonFileError(f"{where}: the polygon's outer ring has no coordinates")
+
+
+def area_from_kml(text: str, where: str = "input", crs: str | None = None) -> Area:
+    """An :class:`Area` from KML (first ``Polygon``) or an XML document with a GML polygon.
+
+    KML coordinates are WGS 84 longitude, latitude; a GML ``srsName`` names the CRS of a GML
+    polygon (its coordinates are taken as ``x, y``, i.e. longitude first).
+    """
+    try:
+        root = ElementTree.fromstring(text)
+    except ElementTree.ParseError as exc:
+        raise PolygonFileError(f"{where}: malformed XML: {exc}") from None
+    polygon = next((e for e in root.iter() if _local(e.tag) == "Polygon"), None)
+    if polygon is None:
+        raise PolygonFileError(
+            f"{where}: no Polygon in the file (expected a KML Polygon placemark)"
+        )
+    outer = [e for e in polygon if _local(e.tag) in ("outerBoundaryIs", "exterior")]
+    inner = [e for e in polygon if _local(e.tag) in ("innerBoundaryIs", "interior")]
+    if not outer:
+        raise PolygonFileError(f"{where}: the Polygon has no outer boundary")
+    if inner:
+        raise PolygonFileError(
+            f"{where}: the polygon has {len(inner)} hole(s); holes are not supported yet"
+        )
+    ring = _xml_coordinates(outer[0], where)
+    name = ""
+    for placemark in (e for e in root.iter() if _local(e.tag) == "Placemark"):
+        if any(e is polygon for e in placemark.iter()):
+            found = next((c for c in placemark if _local(c.tag) == "name"), None)
+            name = (found.text or "").strip() if found is not None else ""
+            break
+    srs = polygon.get("srsName")
+    file_crs = _crs_name(srs) if srs else None
+    return Area(_close_open(ring, where), crs or file_crs or LONLAT, name, where)
+
+
+_WKT_TYPES = frozenset(
+    "POINT LINESTRING POLYGON MULTIPOINT MULTILINESTRING MULTIPOLYGON GEOMETRYCOLLECTION "
+    "CIRCULARSTRING COMPOUNDCURVE CURVEPOLYGON MULTICURVE MULTISURFACE TRIANGLE TIN "
+    "POLYHEDRALSURFACE".split()
+)
+
+_WKT_HEAD = re.compile(
+    r"^\s*(?:SRID\s*=\s*(\d+)\s*;)?\s*([A-Za-z]+)\s*(ZM|Z|M)?\s*", flags=re.IGNORECASE
+)
+
+
+def _wkt_nested(text: str, where: str) -> list[Any]:
+    """Parse ``((x y, x y), (...))`` into nested lists whose leaves are coordinate strings."""
+    pos = 0
+
+    def parse() -> list[Any]:
+        nonlocal pos
+        pos += 1  # past the "(" that the caller saw
+        items: list[Any] = []
+        start = pos
+        while pos < len(text):
+            ch = text[pos]
+            if ch == "(":
+                items.append(parse())
+                start = pos
+            elif ch in ",)":
+                chunk = text[start:pos].strip()
+                if chunk:
+                    items.append(chunk)
+                pos += 1
+                if ch == ")":
+                    return items
+                start = pos
+            else:
+                pos += 1
+        raise PolygonFileError(f"{where}: unbalanced parentheses in WKT")
+
+    text = text.strip()
+    if not text.startswith("("):
+        raise PolygonFileError(f"{where}: expected '(' after the WKT geometry type")
+    out = parse()
+    if text[pos:].strip():
+        raise PolygonFileError(f"{where}: unexpected text after the WKT geometry")
+    return out
+
+
+def area_from_wkt(text: str, where: str = "input", crs: str | None = None) -> Area:
+    """An :class:`Area` from WKT or EWKT: ``POLYGON``, ``POLYGON Z``, ``MULTIPOLYGON`` (first)."""
+    m = _WKT_HEAD.match(text)
+    if not m or not m.group(2):
+        raise PolygonFileError(f"{where}: not WKT (expected e.g. 'POLYGON ((x y, ...))')")
+    srid, kind = m.group(1), m.group(2).upper()
+    rest = text[m.end() :].strip()
+    if rest.upper() == "EMPTY":
+        raise PolygonFileError(f"{where}: the {kind} is EMPTY: no polygon in the file")
+    if kind not in _WKT_TYPES:
+        raise PolygonFileError(
+            f"{where}: not a polygon file: expected GeoJSON, a JSON list of [x, y] pairs, KML "
+            f"or WKT, got text starting {text.strip()[:40]!r}"
+        )
+    if kind not in ("POLYGON", "MULTIPOLYGON"):
+        raise PolygonFileError(f"{where}: expected a WKT POLYGON or MULTIPOLYGON, got {kind}")
+    text = rest.strip()
+    nested = _wkt_nested(text, where)
+    if kind == "MULTIPOLYGON":
+        if not nested or not isinstance(nested[0], list):
+            raise PolygonFileError(f"{where}: empty MULTIPOLYGON")
+        nested = nested[0]
+    rings = [r for r in nested if isinstance(r, list)]
+    if not rings or len(rings) != len(nested):
+        raise PolygonFileError(f"{where}: a WKT POLYGON needs rings in parentheses")
+    if len(rings) > 1:
+        raise PolygonFileError(
+            f"{where}: the polygon has {len(rings) - 1} hole(s); holes are not supported yet"
+        )
+    rows = []
+    for i, pos in enumerate(rings[0]):
+        if not isinstance(pos, str):
+            raise PolygonFileError(f"{where}: position {i} of the ring is nested, not 'x y'")
+        parts = pos.split()
+        try:
+            rows.append((float(parts[0]), float(parts[1])))
+        except (ValueError, IndexError):
+            raise PolygonFileError(
+                f"{where}: position {i} must be two numbers 'x y', got {pos!r:.60}"
+            ) from None
+    ring = np.asarray(rows, dtype=np.float64).reshape(-1, 2)
+    file_crs = f"EPSG:{srid}" if srid else None
+    return Area(_close_open(ring, where), crs or file_crs or LONLAT, "", where)
+
+
+def area_from_text(
+    text: str, where: str = "input", crs: str | None = None, kind: str | None = None
+) -> Area:
+    """An :class:`Area` from file content; ``kind`` is ``json``, ``kml`` or ``wkt`` (sniffed
+    from the first character when ``None``: ``<`` XML, ``{`` or ``[`` JSON, else WKT)."""
+    if kind is None:
+        head = text.lstrip()[:1]
+        kind = "kml" if head == "<" else "json" if head in ("{", "[") else "wkt"
+    if kind == "json":
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise PolygonFileError(
+                f"{where}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
+            ) from None
+        return area_from_json(data, where, crs)
+    if kind == "kml":
+        return area_from_kml(text, where, crs)
+    if kind == "wkt":
+        if not text.strip():
+            raise PolygonFileError(f"{where}: the file is empty: no polygon in it")
+        return area_from_wkt(text, where, crs)
+    raise PolygonFileError(f"{where}: unknown area format {kind!r}; expected json, kml or wkt")
+
+
+_AREA_KINDS = {
+    ".json": "json",
+    ".geojson": "json",
+    ".kml": "kml",
+    ".xml": "kml",
+    ".gml": "kml",
+    ".wkt": "wkt",
+}
+
+
+def read_area(path: str | os.PathLike[str], crs: str | None = None) -> Area:
+    """Read a survey area: GeoJSON, a JSON list of pairs, KML, or WKT (by extension, else sniffed).
+
+    Args:
+        path: the file.
+        crs: the CRS of its coordinates, overriding what the file says (default: the file's
+            CRS, else WGS 84 longitude/latitude ``"EPSG:4326"``).
+
+    Raises:
+        PolygonFileError: missing or unreadable file, malformed content, no polygon, holes.
+    """
+    name = os.fspath(path)
+    try:
+        with open(name, encoding="utf-8-sig") as fh:
+            text = fh.read()
+    except FileNotFoundError:
+        raise PolygonFileError(f"{name}: no such file") from None
+    except IsADirectoryError:
+        raise PolygonFileError(f"{name}: is a directory, not a polygon file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise PolygonFileError(f"{name}: cannot read: {exc}") from None
+    kind = _AREA_KINDS.get(os.path.splitext(name)[1].lower())
+    area = area_from_text(text, name, crs, kind)
+    if not area.name:
+        stem = os.path.splitext(os.path.basename(name))[0]
+        area = Area(area.ring, area.crs, stem, area.source)
+    return area
+
+
+def embedded_field() -> Area:
+    """The embedded example field (3.6 ha, the Netherlands, WGS 84), see :data:`EMBEDDED_FIELD`."""
+    text = (resources.files("boustro") / "data" / EMBEDDED_FIELD).read_text("utf-8")
+    area = area_from_text(text, "<embedded field>", None, "json")
+    return Area(area.ring, area.crs, area.name or "test parcel", "<embedded>")

@@ -1,0 +1,350 @@
+"""``boustro plan``: from a survey area to a mission file (and a plot)."""
+
+from __future__ import annotations
+
+import argparse
+import io
+import math
+import os
+from typing import Any
+
+from ..errors import InvalidParameterError
+from ..fitness import SmithFitness
+from ..formats import FORMATS, atomic_write, format_for, render
+from ..geo import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission, plan_area
+from ..io import Area, embedded_field, read_area
+from ..sensors import Camera, Swath
+from ._common import finite_float, positive_float, print_json, print_table
+
+#: Objectives by name (maximised or minimised as each says); add entries here.
+OBJECTIVES: dict[str, Any] = {"smith": SmithFitness}
+
+#: Spacing used for the embedded field when none is given, metres.
+EMBEDDED_SPACING = 10.0
+
+DETAILS = """\
+area files:
+  GeoJSON (RFC 7946: Polygon, MultiPolygon, Feature, FeatureCollection: first polygon), a JSON
+  list of [x, y] pairs, KML (first Polygon placemark), WKT/EWKT (POLYGON, MULTIPOLYGON).
+  Coordinates are longitude, latitude (WGS 84) unless the file or --crs says otherwise; lon/lat
+  areas are planned in the UTM zone of the area and written back in lon/lat. Without AREA, an
+  embedded 3.6 ha field in the Netherlands (Fields2Cover, BSD-3-Clause) is planned at 10 m.
+
+coverage:
+  every transect covers the strip of width SPACING centred on it, and its segment spans the
+  whole part of the area inside that strip, so no part of the area is left outside every swath
+  ("covered" is computed exactly with shapely). Such a plan can have one transect more than the
+  layout the optimiser scores; --layout chords flies the lines' chords instead (no guarantee).
+
+output formats (--out, by extension or --format):
+  .geojson/.json  area, path, transects and waypoints (area coordinates)
+  .kml            area, path, transects (WGS 84)
+  .gpx            route of waypoints + transects as track segments (WGS 84)
+  .csv            one row per waypoint
+  .plan           QGroundControl plan, MAV_CMD_NAV_WAYPOINT items (needs --altitude)
+  .waypoints/.txt MAVLink 'QGC WPL 110' (needs --altitude)
+  Files are written atomically: an error never leaves a half-written file.
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "plan",
+        help="plan a survey area: optimised, coverage-guaranteed waypoints and mission files",
+        description="Plan a boustrophedon survey of an area given in real coordinates: choose "
+        "the transect angle and offset with an optimiser, place coverage-guaranteed transects, "
+        "order them from the start corner, report statistics, write a mission file and a plot.",
+        epilog=DETAILS,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument(
+        "area",
+        nargs="?",
+        metavar="AREA",
+        help="area file (GeoJSON, JSON list, KML, WKT); default: the embedded example field",
+    )
+    p.add_argument(
+        "--crs",
+        default=None,
+        help="CRS of AREA's coordinates: an EPSG code (e.g. EPSG:28992) or 'planar' (default: "
+        "the file's, else EPSG:4326 longitude/latitude)",
+    )
+    sensor = p.add_argument_group("spacing (one of)")
+    which = sensor.add_mutually_exclusive_group()
+    which.add_argument("--spacing", type=positive_float, help="transect spacing, metres")
+    which.add_argument(
+        "--camera",
+        type=_camera,
+        metavar="SENSOR_MM,FOCAL_MM,IMAGE_PX",
+        help="camera: sensor width (mm), focal length (mm), image width (px), with --altitude "
+        "or --gsd; e.g. 13.2,8.8,5472",
+    )
+    which.add_argument(
+        "--swath", type=positive_float, metavar="WIDTH_M", help="swath sensor width, metres"
+    )
+    sensor.add_argument(
+        "--gsd", type=positive_float, metavar="CM", help="camera ground sample distance, cm/px"
+    )
+    sensor.add_argument(
+        "--overlap",
+        type=_percent,
+        metavar="PCT",
+        help="side overlap between neighbouring swaths, percent (camera default 70, swath 0)",
+    )
+    sensor.add_argument(
+        "--nadir-gap",
+        type=_non_negative,
+        default=0.0,
+        metavar="M",
+        help="swath sensor's blind strip under the vehicle (side-scan sonar), metres",
+    )
+    opt = p.add_argument_group("optimisation")
+    opt.add_argument("--method", default=None, help=f"optimiser (default: {DEFAULT_METHOD})")
+    opt.add_argument(
+        "--objective",
+        choices=sorted(OBJECTIVES),
+        default="smith",
+        help="what the optimiser maximises (default: smith, Eq. 1 of the paper)",
+    )
+    path = p.add_argument_group("path")
+    path.add_argument(
+        "--start",
+        type=_point,
+        metavar="X,Y",
+        help="start at the corner nearest this point, in AREA's coordinates (LON,LAT for "
+        "lon/lat); also the mission's home (default: AREA's first vertex)",
+    )
+    path.add_argument(
+        "--turnaround",
+        type=_non_negative,
+        default=0.0,
+        metavar="M",
+        help="run-in / run-out distance beyond each transect end, metres (default 0)",
+    )
+    path.add_argument(
+        "--altitude",
+        type=finite_float,
+        metavar="M",
+        help="mission altitude above take-off, metres (with --camera: its flying height)",
+    )
+    path.add_argument("--speed", type=positive_float, metavar="M/S", help="ground speed, m/s")
+    path.add_argument(
+        "--turn-time", type=_non_negative, default=0.0, metavar="S", help="seconds per turn"
+    )
+    path.add_argument(
+        "--layout",
+        choices=("guaranteed", "chords"),
+        default="guaranteed",
+        help="transect segments: coverage-guaranteed (default) or the lines' chords",
+    )
+    path.add_argument(
+        "--hull-tolerance",
+        type=_non_negative,
+        default=DEFAULT_HULL_TOLERANCE,
+        metavar="M",
+        help="plan a nearly convex area on its convex hull if the hull reaches at most this far "
+        f"beyond it, metres (default {DEFAULT_HULL_TOLERANCE:g}; 0 refuses every concave area)",
+    )
+    out = p.add_argument_group("output")
+    out.add_argument("--out", metavar="FILE", help="write the mission to FILE")
+    out.add_argument(
+        "--format", choices=tuple(FORMATS), help="format of --out (default: from its extension)"
+    )
+    out.add_argument("--plot", metavar="FILE", help="draw the plan to an image (e.g. plan.png)")
+    out.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+# -- argument types ----------------------------------------------------------------------------
+def _numbers(text: str, count: int, what: str) -> list[float]:
+    parts = text.replace(" ", "").split(",")
+    if len(parts) != count:
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+    try:
+        values = [float(x) for x in parts]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what} (numbers), got {text!r}") from None
+    if not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"expected finite numbers, got {text!r}")
+    return values
+
+
+def _point(text: str) -> tuple[float, float]:
+    x, y = _numbers(text, 2, "X,Y")
+    return x, y
+
+
+def _camera(text: str) -> tuple[float, float, float]:
+    sw, f, px = _numbers(text, 3, "SENSOR_MM,FOCAL_MM,IMAGE_PX")
+    if min(sw, f, px) <= 0:
+        raise argparse.ArgumentTypeError(f"camera values must be > 0, got {text!r}")
+    return sw, f, px
+
+
+def _percent(text: str) -> float:
+    value = finite_float(text.rstrip("%"))
+    if not 0 <= value < 100:
+        raise argparse.ArgumentTypeError(f"expected a percentage in [0, 100), got {text!r}")
+    return value
+
+
+def _non_negative(text: str) -> float:
+    value = finite_float(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value
+
+
+# -- the command ---------------------------------------------------------------------------
+def _spacing(args: argparse.Namespace, embedded: bool) -> Any:
+    if args.gsd is not None and args.camera is None:
+        raise InvalidParameterError("--gsd needs --camera")
+    if args.nadir_gap and args.swath is None:
+        raise InvalidParameterError("--nadir-gap needs --swath")
+    if args.camera is not None:
+        sw, f, px = args.camera
+        if args.gsd is not None and args.altitude is not None:
+            raise InvalidParameterError(
+                "give the camera's --altitude or its --gsd, not both (one follows from the other)"
+            )
+        overlap = 70.0 if args.overlap is None else args.overlap
+        return Camera(sw, f, px, altitude=args.altitude, gsd=args.gsd, side_overlap=overlap / 100)
+    if args.swath is not None:
+        overlap = 0.0 if args.overlap is None else args.overlap
+        return Swath(args.swath, overlap / 100, args.nadir_gap)
+    if args.overlap is not None:
+        raise InvalidParameterError("--overlap needs --camera or --swath")
+    if args.spacing is not None:
+        return args.spacing
+    if embedded:
+        return EMBEDDED_SPACING
+    raise InvalidParameterError("give the spacing: --spacing METRES, --camera ... or --swath ...")
+
+
+def _load(args: argparse.Namespace) -> Area:
+    if args.area is None:
+        area = embedded_field()
+        if args.crs is not None:
+            raise InvalidParameterError(
+                "--crs applies to an AREA file; the embedded field is lon/lat"
+            )
+        return area
+    return read_area(args.area, crs=args.crs)
+
+
+def _plot_bytes(mission: Mission, path: str) -> bytes:
+    from ..plot_plan import plot_plan
+
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise InvalidParameterError(
+            "--plot needs matplotlib: pip install 'boustro[plot]'"
+        ) from None
+    ext = os.path.splitext(path)[1].lstrip(".").lower() or "png"
+    fig, ax = plt.subplots(figsize=(8, 8))
+    try:
+        plot_plan(mission, ax=ax)
+        buf = io.BytesIO()
+        try:
+            fig.savefig(buf, format=ext, dpi=150, bbox_inches="tight")
+        except ValueError as exc:
+            raise InvalidParameterError(f"--plot {path}: {exc}") from None
+        return buf.getvalue()
+    finally:
+        plt.close(fig)
+
+
+def _rows(mission: Mission, written: list[str]) -> list[tuple[str, str]]:
+    s, opt = mission.stats, mission.optimum
+    proj = mission.projection
+    where = mission.area.source
+    crs = "planar coordinates" if proj.planar else f"{mission.crs}"
+    if proj.geographic:
+        crs += f", planned in {proj.plan_crs}"
+    rows = [
+        ("area", f"{mission.name or '(unnamed)'} ({where}), {crs}"),
+        ("area size", f"{s.area:.1f} m2 ({s.area / 1e4:.4g} ha)"),
+        (
+            "spacing",
+            f"{mission.spacing:.4g} m" + (f" ({mission.sensor})" if mission.sensor else ""),
+        ),
+        (
+            "transects",
+            f"angle {math.degrees(mission.plan.angle):.4f} deg (bearing {mission.bearing:.2f} "
+            f"deg from north), offset {mission.plan.offset:.4g} m",
+        ),
+        ("optimiser", f"{opt.method}, fitness {opt.fitness:.6f} ({opt.evaluations} evaluations)"),
+        ("count", f"{s.n_transects} transects, {s.n_turns} turns ({mission.plan.layout} layout)"),
+        ("transect length", f"{s.transect_length:.1f} m"),
+        ("path length", f"{s.path_length:.1f} m"),
+    ]
+    if mission.coverage is not None:
+        rows.append(
+            (
+                "covered",
+                f"{100 * mission.coverage.covered_share:.4f}% of the area "
+                f"(overlap {100 * mission.coverage.overlap_share:.2f}%)",
+            )
+        )
+    if s.duration is not None:
+        rows.append(
+            (
+                "duration",
+                f"{s.duration:.0f} s ({s.duration / 60:.1f} min) at {s.speed:g} m/s, "
+                f"{s.turn_time:g} s per turn",
+            )
+        )
+    if mission.hull_depth > 0:
+        rows.append(
+            (
+                "note",
+                f"the area is not convex; its convex hull, planned instead, reaches at most "
+                f"{mission.hull_depth:.2f} m beyond it",
+            )
+        )
+    if mission.altitude is not None:
+        rows.append(("altitude", f"{mission.altitude:g} m above take-off"))
+    rows += [("written", name) for name in written]
+    return rows
+
+
+def run(args: argparse.Namespace) -> int:
+    area = _load(args)
+    spacing = _spacing(args, embedded=args.area is None)
+    fitness = OBJECTIVES[args.objective]()
+    mission = plan_area(
+        area,
+        spacing,
+        method=args.method,
+        fitness=fitness,
+        start=args.start,
+        turnaround=args.turnaround,
+        speed=args.speed,
+        turn_time=args.turn_time,
+        altitude=args.altitude,
+        hull_tolerance=args.hull_tolerance,
+        layout=args.layout,
+    )
+    # Render everything before touching any file, so that an error writes nothing.
+    outputs: list[tuple[str, bytes | str, str]] = []
+    if args.out is not None:
+        fmt = format_for(args.out, args.format)
+        outputs.append((args.out, render(mission, fmt), fmt))
+    elif args.format is not None:
+        raise InvalidParameterError("--format needs --out FILE")
+    if args.plot is not None:
+        outputs.append((args.plot, _plot_bytes(mission, args.plot), "plot"))
+    for path, data, _ in outputs:
+        atomic_write(path, data)
+    written = [f"{path} ({fmt})" for path, _, fmt in outputs]
+    if args.json:
+        out = mission.summary()
+        out["written"] = [path for path, _, _ in outputs]
+        print_json(out)
+    else:
+        print_table(_rows(mission, written))
+    return 0

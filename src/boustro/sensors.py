@@ -1,0 +1,151 @@
+"""Transect spacing from a sensor: a camera or a swath sensor (sonar, lidar, sprayer boom).
+
+An edge of the system (plain arithmetic, no dependency): each sensor turns into a
+:class:`SensorSpacing`, the spacing to plan with plus the numbers a user wants printed next to it.
+Lengths are metres, the camera's sensor size and focal length millimetres, GSD centimetres per
+pixel, overlaps fractions in ``[0, 1)``.
+
+Conventions:
+
+* Camera: the image's *width* lies across the transects (landscape, long side across track, as
+  QGroundControl assumes). Footprint across track ``W = sensor_width * altitude / focal_length``,
+  ground sample distance ``GSD = W / image_width``; spacing ``W * (1 - side_overlap)``.
+* Swath sensor of total width ``W`` across track: spacing ``W * (1 - overlap)``. A side-scan
+  sonar sees nothing in a strip of width ``g`` (the *nadir gap*) centred under the vehicle; that
+  strip must be seen by a neighbouring line, which needs ``spacing <= (W - g) / 2`` (however small
+  ``g`` is, it halves the spacing), and each line must then cover the polygon over a band of
+  half-width ``reach = spacing + g / 2`` rather than ``spacing / 2`` (see
+  :func:`boustro.plan.guaranteed_segments`): with ``spacing = (1 - overlap) (W - g) / 2``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .errors import InvalidParameterError
+
+__all__ = ["Camera", "SensorSpacing", "Swath"]
+
+
+def _positive(name: str, value: float) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(v) or v <= 0:
+        raise InvalidParameterError(f"{name} must be a finite number > 0, got {value!r}")
+    return v
+
+
+def _fraction(name: str, value: float) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
+    if not (0 <= v < 1):
+        raise InvalidParameterError(f"{name} must be a fraction in [0, 1), got {value!r}")
+    return v
+
+
+@dataclass(frozen=True)
+class SensorSpacing:
+    """What a sensor implies for the plan.
+
+    Attributes:
+        spacing: distance between neighbouring transects, metres.
+        reach: half-width of the band each transect must cover, metres (``spacing / 2`` unless
+            there is a nadir gap).
+        nadir_gap: blind strip under the vehicle, metres (0 for a camera).
+        footprint: the sensor's full width across track, metres.
+        altitude: flying height above ground, metres, when the sensor fixes it (camera).
+        description: one line for the user, e.g. the footprint and GSD.
+    """
+
+    spacing: float
+    reach: float
+    nadir_gap: float
+    footprint: float
+    altitude: float | None
+    description: str
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A frame camera looking straight down.
+
+    Give exactly one of ``altitude`` (m) and ``gsd`` (cm/px); the other follows.
+
+    Example (a 1-inch 20 MP camera, 13.2 mm wide sensor, 8.8 mm lens, 5472 px wide images):
+        >>> round(Camera(13.2, 8.8, 5472, altitude=80, side_overlap=0.7).spacing().spacing, 6)
+        36.0
+    """
+
+    sensor_width: float  # mm
+    focal_length: float  # mm
+    image_width: int  # px
+    altitude: float | None = None  # m above ground
+    gsd: float | None = None  # cm / px
+    side_overlap: float = 0.7
+
+    def spacing(self) -> SensorSpacing:
+        sw = _positive("sensor width (mm)", self.sensor_width)
+        f = _positive("focal length (mm)", self.focal_length)
+        px = _positive("image width (px)", self.image_width)
+        overlap = _fraction("side overlap", self.side_overlap)
+        if (self.altitude is None) == (self.gsd is None):
+            raise InvalidParameterError(
+                "a camera needs exactly one of altitude (m) and ground sample distance (cm/px), "
+                f"got altitude={self.altitude!r}, gsd={self.gsd!r}"
+            )
+        if self.altitude is not None:
+            altitude = _positive("altitude (m)", self.altitude)
+        else:
+            gsd_m = _positive("ground sample distance (cm/px)", self.gsd) / 100  # type: ignore[arg-type]
+            altitude = gsd_m * px * f / sw
+        footprint = sw * altitude / f
+        gsd_cm = footprint / px * 100
+        spacing = footprint * (1 - overlap)
+        text = (
+            f"camera footprint {footprint:.2f} m across track at {altitude:.1f} m, "
+            f"GSD {gsd_cm:.2f} cm/px, side overlap {overlap * 100:g}%: spacing {spacing:.2f} m"
+        )
+        return SensorSpacing(spacing, spacing / 2, 0.0, footprint, altitude, text)
+
+
+@dataclass(frozen=True)
+class Swath:
+    """A sensor that sees a strip of ``width`` metres across track (sonar, lidar, boom).
+
+    ``nadir_gap`` (m): a blind strip of that width centred under the vehicle (side-scan sonar).
+    """
+
+    width: float
+    overlap: float = 0.0
+    nadir_gap: float = 0.0
+
+    def spacing(self) -> SensorSpacing:
+        w = _positive("swath width (m)", self.width)
+        overlap = _fraction("swath overlap", self.overlap)
+        try:
+            gap = float(self.nadir_gap)
+        except (TypeError, ValueError):
+            raise InvalidParameterError(
+                f"nadir gap must be a number, got {self.nadir_gap!r}"
+            ) from None
+        if not (math.isfinite(gap) and 0 <= gap < w):
+            raise InvalidParameterError(
+                f"nadir gap must be >= 0 and smaller than the swath width {w:g} m, got "
+                f"{self.nadir_gap!r}"
+            )
+        if gap == 0:
+            spacing = w * (1 - overlap)
+            text = f"swath {w:g} m, overlap {overlap * 100:g}%: spacing {spacing:.2f} m"
+            return SensorSpacing(spacing, spacing / 2, 0.0, w, None, text)
+        spacing = (w - gap) / 2 * (1 - overlap)
+        reach = spacing + gap / 2
+        text = (
+            f"swath {w:g} m with a {gap:g} m nadir gap, overlap {overlap * 100:g}%: spacing "
+            f"{spacing:.2f} m (each gap seen by a neighbouring line)"
+        )
+        return SensorSpacing(spacing, reach, gap, w, None, text)

@@ -1,0 +1,222 @@
+"""`boustro plan`, tested in-process on exit code, output and the files it writes."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+from boustro import geo
+from boustro.cli import main
+from boustro.io import embedded_field
+
+FAST = {"n_angles": 36, "n_offsets": 8}
+SHIPPED = dict(geo.METHOD_OPTIONS.get(geo.DEFAULT_METHOD, {}))
+
+
+@pytest.fixture(autouse=True)
+def _fast_optimiser(monkeypatch):
+    """A coarse grid keeps the suite quick; one test runs the shipped default."""
+    monkeypatch.setitem(geo.METHOD_OPTIONS, geo.DEFAULT_METHOD, FAST)
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _ring_text(kind: str) -> str:
+    ring = embedded_field().ring.tolist()
+    if kind == "wkt":
+        return "POLYGON ((" + ", ".join(f"{x} {y}" for x, y in ring) + "))"
+    if kind == "kml":
+        return (
+            '<kml xmlns="http://www.opengis.net/kml/2.2"><Placemark><name>k</name><Polygon>'
+            "<outerBoundaryIs><LinearRing><coordinates>"
+            + " ".join(f"{x},{y}" for x, y in ring)
+            + "</coordinates></LinearRing></outerBoundaryIs></Polygon></Placemark></kml>"
+        )
+    if kind == "json":
+        return json.dumps(ring)
+    return json.dumps({"type": "Polygon", "coordinates": [[*ring, ring[0]]]})
+
+
+def test_default_plans_the_embedded_field(capsys, tmp_path, monkeypatch):
+    monkeypatch.setitem(geo.METHOD_OPTIONS, geo.DEFAULT_METHOD, SHIPPED)  # the shipped default
+    out_file = tmp_path / "plan.geojson"
+    code, out, err = run(capsys, "plan", "--out", out_file)
+    assert code == 0, err
+    assert "covered          100.0000% of the area" in out
+    assert "test parcel" in out and "EPSG:32632" in out and "10 m" in out
+    assert f"{out_file} (geojson)" in out
+    doc = json.loads(out_file.read_text())
+    assert doc["boustro"]["covered_share"] >= 1 - 1e-9
+    assert doc["boustro"]["method"] == geo.DEFAULT_METHOD
+
+
+@pytest.mark.parametrize("kind", ["geojson", "json", "kml", "wkt"])
+def test_area_formats(capsys, tmp_path, kind):
+    area = tmp_path / f"field.{kind}"
+    area.write_text(_ring_text(kind))
+    code, out, err = run(capsys, "plan", area, "--spacing", "12", "--json")
+    assert code == 0, err
+    summary = json.loads(out)
+    assert summary["crs"] == "EPSG:4326" and summary["plan_crs"] == "EPSG:32632"
+    assert summary["spacing_m"] == 12 and summary["covered_share"] >= 1 - 1e-9
+    assert summary["n_transects"] >= 15
+
+
+def test_every_output_format(capsys, tmp_path):
+    for ext in ("geojson", "kml", "gpx", "csv", "plan", "waypoints"):
+        out_file = tmp_path / f"m.{ext}"
+        code, _, err = run(capsys, "plan", "--spacing", "15", "--altitude", "30", "--out", out_file)
+        assert code == 0, err
+        assert out_file.stat().st_size > 100
+    code, _, err = run(capsys, "plan", "--out", tmp_path / "m.xyz", "--format", "gpx")
+    assert code == 0, err
+    assert (tmp_path / "m.xyz").read_text().lstrip().startswith("<?xml")
+
+
+def test_sensors_and_statistics(capsys):
+    code, out, err = run(
+        capsys, "plan", "--camera", "13.2,8.8,5472", "--altitude", "80", "--overlap", "70",
+        "--speed", "5", "--turn-time", "10", "--turnaround", "8", "--json",
+    )  # fmt: skip
+    assert code == 0, err
+    s = json.loads(out)
+    assert s["spacing_m"] == pytest.approx(36.0)
+    assert s["altitude_m"] == 80 and "GSD 2.19 cm/px" in s["sensor"]
+    assert s["n_turns"] == s["n_transects"] - 1
+    assert s["duration_s"] == pytest.approx(s["path_length_m"] / 5 + s["n_turns"] * 10)
+    assert s["turnaround_m"] == 8
+    code, out, err = run(capsys, "plan", "--swath", "30", "--nadir-gap", "4", "--json")
+    assert code == 0, err
+    s = json.loads(out)
+    assert s["spacing_m"] == pytest.approx(13.0) and s["nadir_gap_m"] == 4
+    assert s["covered_share"] >= 1 - 1e-9
+    code, out, err = run(capsys, "plan", "--camera", "13.2,8.8,5472", "--gsd", "2")
+    assert code == 0, err
+    assert "GSD 2.00 cm/px" in out
+
+
+def test_start_corner(capsys):
+    ring = embedded_field().ring
+    east = ring[np.argmax(ring[:, 0])]
+    west = ring[np.argmin(ring[:, 0])]
+    firsts = []
+    for corner in (east, west):
+        code, out, err = run(capsys, "plan", "--start", f"{corner[0]},{corner[1]}", "--json")
+        assert code == 0, err
+        assert json.loads(out)["covered_share"] >= 1 - 1e-9
+    # Through the API the same: the first waypoint lies on the side of the start point.
+    for corner in (east, west):
+        m = geo.plan_area(embedded_field(), 10.0, start=corner, options=FAST)
+        firsts.append(m.waypoints_lonlat[0, 0])
+    assert firsts[0] > firsts[1]
+
+
+def test_projected_crs(capsys, tmp_path):
+    pyproj = pytest.importorskip("pyproj")
+    ring = embedded_field().ring
+    x, y = pyproj.Transformer.from_crs(4326, 28992, always_xy=True).transform(*ring.T)
+    area = tmp_path / "rd.wkt"
+    area.write_text("POLYGON ((" + ", ".join(f"{a} {b}" for a, b in zip(x, y, strict=True)) + "))")
+    out_file = tmp_path / "rd.csv"
+    code, out, err = run(
+        capsys, "plan", area, "--crs", "EPSG:28992", "--spacing", "10", "--out", out_file
+    )
+    assert code == 0, err
+    assert "EPSG:28992" in out
+    header = out_file.read_text().splitlines()[0]
+    assert header == "seq,kind,transect,x,y,lon,lat"
+
+
+def test_plot(capsys, tmp_path):
+    pytest.importorskip("matplotlib")
+    png = tmp_path / "plan.png"
+    code, _, err = run(capsys, "plan", "--turnaround", "5", "--plot", png)
+    assert code == 0, err
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def _write(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("setup", "extra", "match"),
+    [
+        (None, ["missing.geojson", "--spacing", "10"], "no such file"),
+        ("empty.geojson", ["--spacing", "10"], "malformed JSON"),
+        ("nopoly.geojson", ["--spacing", "10"], "holds no Polygon"),
+        ("lat.json", ["--spacing", "10"], "latitude 95 at vertex 1 is outside"),
+        ("anti.json", ["--spacing", "10"], "crosses the antimeridian"),
+        ("pole.json", ["--spacing", "10"], "encloses the North Pole"),
+        ("ell.json", ["--spacing", "10"], "concave"),
+        ("cross.json", ["--spacing", "10"], "self-intersecting"),
+        ("hole.wkt", ["--spacing", "10"], "hole"),
+        ("ok.json", [], "give the spacing"),
+        ("ok.json", ["--spacing", "10", "--crs", "EPSG:0"], "unknown coordinate reference"),
+        ("ok.json", ["--spacing", "10", "--method", "annealing"], "unknown method"),
+        ("ok.json", ["--spacing", "10", "--gsd", "2"], "--gsd needs --camera"),
+        ("ok.json", ["--spacing", "10", "--out", "OUT.plan"], "needs a mission altitude"),
+        ("ok.json", ["--spacing", "10", "--out", "OUT.shp"], "cannot tell the format"),
+        ("ok.json", ["--spacing", "1e6", "--out", "OUT.geojson"], "spacing"),
+    ],
+)
+def test_bad_inputs_write_nothing(capsys, tmp_path, setup, extra, match):
+    ring = [[6.0, 51.0], [6.01, 51.0], [6.01, 51.01], [6.0, 51.01]]
+    files = {
+        "empty.geojson": "",
+        "nopoly.geojson": json.dumps({"type": "FeatureCollection", "features": []}),
+        "lat.json": json.dumps([[6.0, 51.0], [6.01, 95.0], [6.0, 51.01]]),
+        "anti.json": json.dumps([[179.99, 0], [-179.99, 0], [-179.99, 0.01], [179.99, 0.01]]),
+        "pole.json": json.dumps([[0, 85], [90, 85], [180, 85], [-90, 85]]),
+        "ell.json": json.dumps(
+            [[6.0, 51.0], [6.02, 51.0], [6.02, 51.01], [6.01, 51.01], [6.01, 51.02], [6.0, 51.02]]
+        ),
+        "cross.json": json.dumps([[6.0, 51.0], [6.01, 51.01], [6.01, 51.0], [6.0, 51.01]]),
+        "hole.wkt": "POLYGON ((6 51, 6.1 51, 6.1 51.1, 6 51), (6.05 51.01, 6.06 51.01, 6.06 51.02,"
+        " 6.05 51.01))",
+        "ok.json": json.dumps(ring),
+    }
+    args = list(extra)
+    if setup is not None:
+        args.insert(0, _write(tmp_path, setup, files[setup]))
+    else:
+        args[0] = tmp_path / args[0]
+    args = [str(a).replace("OUT", str(tmp_path / "out")) for a in args]
+    before = set(os.listdir(tmp_path))
+    code, _, err = run(capsys, "plan", *args)
+    assert code == 2
+    assert err.startswith("boustro: error: ") and match in err
+    assert len(err.strip().splitlines()) == 1
+    assert set(os.listdir(tmp_path)) == before  # no file written, no temporary left
+
+
+def test_argument_errors(capsys):
+    for argv in (
+        ["plan", "--spacing", "0"],
+        ["plan", "--spacing", "nan"],
+        ["plan", "--spacing", "10", "--camera", "1,2,3", "--altitude", "5"],
+        ["plan", "--camera", "1,2"],
+        ["plan", "--start", "1"],
+        ["plan", "--overlap", "100", "--swath", "5"],
+    ):
+        with pytest.raises(SystemExit) as exc:
+            main(argv)
+        assert exc.value.code == 2
+    capsys.readouterr()
+
+
+def test_help_mentions_the_guarantee(capsys):
+    with pytest.raises(SystemExit):
+        main(["plan", "--help"])
+    out = capsys.readouterr().out
+    assert "no part of the area is left outside every swath" in out
+    assert "QGC WPL 110" in out
