@@ -149,3 +149,14 @@ def test_bad_numbers_are_usage_errors(capsys, args):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "error" in err and "Traceback" not in err
+
+
+def test_soft_model(capsys):
+    code, out, err = run(
+        capsys, "score", "--model", "soft", "--angle", "20", "--offset", "0.1", "--json"
+    )
+    assert code == 0, err
+    soft = json.loads(out)
+    assert soft["model"] == "soft" and soft["smoothing"] == pytest.approx(1e-4)
+    code, out, _ = run(capsys, "score", "--angle", "20", "--offset", "0.1", "--json")
+    assert abs(json.loads(out)["fitness"] - soft["fitness"]) < 1e-3

@@ -3,7 +3,8 @@
 Layers, each importing only those below it (see ``DESIGN.md``):
 
 1. :mod:`boustro.geometry` - validated polygons, the normalised frame, half-planes.
-2. :mod:`boustro.models` - transect-length models: exact chords, the paper's sigmoid integral.
+2. :mod:`boustro.models` - transect-length models: exact chords, the paper's sigmoid integral;
+   :mod:`boustro.smooth` - the smooth closed form (the paper's first item of future work).
 3. :mod:`boustro.fitness` - fitness functions of transect lengths (Eq. 1 of the paper).
 4. :mod:`boustro.scoring` - score a layout in user units.
 
@@ -31,8 +32,16 @@ from .models import (
     transect_positions,
 )
 from .scoring import Score, Segments, make_model, score, transect_segments
+from .smooth import (
+    DEFAULT_SMOOTHING,
+    SmoothModel,
+    smooth_lengths,
+    smoothing_from_temperature,
+    temperature_from_smoothing,
+)
 
 __all__ = [
+    "DEFAULT_SMOOTHING",
     "BoustroError",
     "ExactModel",
     "Frame",
@@ -47,6 +56,7 @@ __all__ = [
     "Score",
     "Segments",
     "SmithFitness",
+    "SmoothModel",
     "TransectLengths",
     "TransectModel",
     "__version__",
@@ -56,6 +66,9 @@ __all__ = [
     "paper_lengths",
     "score",
     "smith_fitness",
+    "smooth_lengths",
+    "smoothing_from_temperature",
+    "temperature_from_smoothing",
     "transect_positions",
     "transect_segments",
 ]

@@ -18,6 +18,7 @@ from .errors import InvalidParameterError, NoTransectError
 from .fitness import SmithFitness
 from .geometry import Polygon, halfplanes
 from .models import ExactModel, PaperModel, TransectModel, check_spacing, exact_chords
+from .smooth import DEFAULT_SMOOTHING, SmoothModel
 
 __all__ = ["Score", "Segments", "as_polygon", "make_model", "score", "transect_segments"]
 
@@ -42,16 +43,24 @@ def make_model(
     *,
     temperature: float = 1000.0,
     points_per_transect: int = 1000,
+    smoothing: float = DEFAULT_SMOOTHING,
     clip: bool = False,
 ) -> TransectModel:
-    """A transect model by name: ``"exact"`` or ``"paper"`` (settings ignored where unused)."""
+    """A transect model by name (settings ignored where unused).
+
+    ``"exact"``: closed-form chords; ``"paper"``: the paper's sigmoid integral (``temperature``,
+    ``points_per_transect``); ``"soft"``: the smooth closed form (``smoothing``, a length in the
+    normalised frame; ``1 / temperature`` gives the paper's softness).
+    """
     if name == "exact":
         return ExactModel(clip=clip)
     if name == "paper":
         return PaperModel(
             temperature=temperature, points_per_transect=points_per_transect, clip=clip
         )
-    raise InvalidParameterError(f"unknown model {name!r}; expected 'exact' or 'paper'")
+    if name == "soft":
+        return SmoothModel(smoothing=smoothing, clip=clip)
+    raise InvalidParameterError(f"unknown model {name!r}; expected 'exact', 'paper' or 'soft'")
 
 
 @dataclass(frozen=True)

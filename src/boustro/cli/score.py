@@ -9,6 +9,7 @@ from typing import Any
 from ..errors import InvalidParameterError
 from ..fitness import SmithFitness
 from ..scoring import Score, make_model, score
+from ..smooth import DEFAULT_SMOOTHING
 from ._common import (
     add_polygon_argument,
     finite_float,
@@ -59,9 +60,17 @@ def add_layout_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--model",
-        choices=("exact", "paper"),
+        choices=("exact", "paper", "soft"),
         default="exact",
-        help="transect-length model (default: exact)",
+        help="transect-length model: exact chords, the paper's sigmoid integral, or the smooth "
+        "closed form (default: exact)",
+    )
+    p.add_argument(
+        "--smoothing",
+        type=positive_float,
+        default=DEFAULT_SMOOTHING,
+        help="soft model smoothing length, a fraction of the polygon's diameter "
+        "(default: 1e-4, the softness of the paper's temperature 10000)",
     )
     p.add_argument(
         "--temperature",
@@ -107,6 +116,7 @@ def model_from_args(args: argparse.Namespace):
     return make_model(
         args.model,
         temperature=args.temperature,
+        smoothing=args.smoothing,
         points_per_transect=args.points_per_transect,
         clip=args.clip,
     )
@@ -126,6 +136,8 @@ def score_to_json(result: Score, args: argparse.Namespace) -> dict[str, Any]:
         "a": args.a,
         "b": args.b,
     }
+    if result.model == "soft":
+        out["smoothing"] = args.smoothing
     if result.model == "paper":
         out["temperature"] = args.temperature
         out["points_per_transect"] = args.points_per_transect
