@@ -373,7 +373,7 @@ def halfplanes(
             intersection, not the polygon).
     """
     single = isinstance(polygons, Polygon)
-    items: list[Polygon] = [polygons] if single else list(polygons)  # type: ignore[list-item]
+    items: list[Polygon] = [polygons] if isinstance(polygons, Polygon) else list(polygons)
     if not items:
         raise InvalidPolygonError("expected at least one polygon, got an empty sequence")
     items = [p.require_convex("the half-plane representation") for p in items]

@@ -77,7 +77,8 @@ class Chords(NamedTuple):
 class TransectModel(Protocol):
     """Anything that turns (half-planes, theta, offset, spacing) into :class:`TransectLengths`."""
 
-    name: str
+    @property
+    def name(self) -> str: ...
 
     def __call__(
         self, hp: HalfPlanes, theta: torch.Tensor, offset: torch.Tensor, spacing: float
@@ -96,7 +97,7 @@ def check_spacing(spacing: float) -> float:
 
 
 def _prepare(
-    hp: HalfPlanes, theta: torch.Tensor, offset: torch.Tensor
+    hp: HalfPlanes, theta: torch.Tensor | float, offset: torch.Tensor | float
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
     """Angle and offset as tensors of the half-planes' dtype/device, and the per-edge components.
 
@@ -106,15 +107,15 @@ def _prepare(
     paper's "rotate W, keep B".
     """
     dtype, device = hp.normals.dtype, hp.normals.device
-    theta = torch.as_tensor(theta, dtype=dtype, device=device)
-    offset = torch.as_tensor(offset, dtype=dtype, device=device)
-    theta, offset = torch.broadcast_tensors(theta, offset)
-    cos, sin = torch.cos(theta)[..., None], torch.sin(theta)[..., None]
+    theta_t = torch.as_tensor(theta, dtype=dtype, device=device)
+    offset_t = torch.as_tensor(offset, dtype=dtype, device=device)
+    theta_t, offset_t = torch.broadcast_tensors(theta_t, offset_t)
+    cos, sin = torch.cos(theta_t)[..., None], torch.sin(theta_t)[..., None]
     nx, ny = hp.normals[..., 0], hp.normals[..., 1]
     across = -nx * sin + ny * cos
     along = nx * cos + ny * sin
     b = torch.broadcast_to(hp.offsets, across.shape)
-    return theta, offset, across, along, b
+    return theta_t, offset_t, across, along, b
 
 
 def grid_size(spacing: float, radius: float) -> tuple[int, int]:

@@ -170,28 +170,28 @@ def score(
         NoTransectError: with the exact model, when no transect crosses the polygon.
     """
     poly = as_polygon(polygon)
-    model = ExactModel() if model is None else model
-    fitness = SmithFitness() if fitness is None else fitness
-    poly.require_convex(f"the {model.name} model")
+    model_: TransectModel = ExactModel() if model is None else model
+    fitness_ = SmithFitness() if fitness is None else fitness
+    poly.require_convex(f"the {model_.name} model")
     layout = transect_segments(poly, spacing, angle, offset)
-    if model.name == "exact" and len(layout.lengths) == 0:
+    if model_.name == "exact" and len(layout.lengths) == 0:
         raise NoTransectError(
             f"no transect crosses the polygon at spacing {spacing:g} (polygon diameter "
             f"{poly.diameter:g}), angle {math.degrees(angle):g} deg, offset {offset:g}"
         )
     frame = poly.frame
     with torch.no_grad():
-        tl = model(
+        tl = model_(
             halfplanes(poly),
             torch.tensor(float(angle), dtype=torch.float64),
             torch.tensor(float(offset) / frame.scale, dtype=torch.float64),
             float(spacing) / frame.scale,
         )
-        value = float(fitness(tl))
+        value = float(fitness_(tl))
     # The model's grid may span a different window (clip): match transects by position.
     grid = tl.positions.numpy()
     k = np.rint((layout.positions / frame.scale - grid[0]) / (grid[1] - grid[0])).astype(int)
     inside = (k >= 0) & (k < len(grid))
     lengths = np.zeros(len(k))
     lengths[inside] = tl.lengths.numpy()[k[inside]] * frame.scale
-    return Score(value, float(angle), float(offset), float(spacing), model.name, lengths, layout)
+    return Score(value, float(angle), float(offset), float(spacing), model_.name, lengths, layout)

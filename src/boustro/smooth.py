@@ -182,10 +182,11 @@ def smooth_lengths(
     window = PAPER_WINDOW if clip else hp.radius + margin
     far = window + 2.0 * margin
     c = transect_positions(offset, spacing, window)  # (*, K)
-    batched = isinstance(h, torch.Tensor) and h.ndim > 0
-    h_k = h[..., None] if batched else h  # broadcasts with (*, K)
-    h_ke = h[..., None, None] if batched else h  # with (*, K, E)
-    h_kre = h[..., None, None, None] if batched else h  # with (*, K, 2, E)
+    h_k: torch.Tensor | float = h  # broadcasts with (*, K)
+    h_ke: torch.Tensor | float = h  # with (*, K, E)
+    h_kre: torch.Tensor | float = h  # with (*, K, 2, E)
+    if isinstance(h, torch.Tensor) and h.ndim > 0:
+        h_k, h_ke, h_kre = h[..., None], h[..., None, None], h[..., None, None, None]
 
     # Per edge (small tensors, (*, E)): an edge with |along| below machine epsilon is parallel to
     # the transects (its bound -a / along would be rounding noise). It plays a lower bound with
@@ -203,7 +204,7 @@ def smooth_lengths(
     # a[..., k, j] = across_j c_k + b_j: edge j holds at (c_k, t) iff a + along_j t >= 0.
     a = torch.addcmul(b[..., None, :], across[..., None, :], c[..., :, None])  # (*, K, E)
     far_h = far / h_kre  # |bounds| >= far are clamped: beyond the window, or no chord at all
-    v = torch.clamp((a * scale)[..., None, :], -far_h, far_h)  # (*, K, 1, E)
+    v = torch.clamp((a * scale)[..., None, :], -far_h, far_h)  # type: ignore[arg-type]
     # Role mask (*, 1, 2, E): row 0 the lower edges, row 1 the upper ones; the other role's
     # entries are -far / h, i.e. exp(-64) below the window bound: negligible, never -inf, so
     # every log-sum-exp and its gradient stay finite.
