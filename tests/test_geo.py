@@ -15,6 +15,7 @@ from boustro.errors import (
     PolygonFileError,
 )
 from boustro.geo import check_lonlat, parse_crs, plan_area, projection_for, utm_crs
+from boustro.geometry import Polygon
 from boustro.io import Area, area_from_text, embedded_field, read_area
 from boustro.sensors import Camera
 
@@ -185,11 +186,23 @@ def test_start_point_in_input_coordinates():
 
 
 def test_hull_tolerance_and_concave_areas():
-    with pytest.raises(NonConvexPolygonError, match=r"hull tolerance 0\.1"):
-        plan_area(embedded_field(), 10.0, hull_tolerance=0.1, options=FAST)
+    # Issue 7 changed this: a concave area beyond the hull tolerance is planned as a concave
+    # area (decomposed where that pays) instead of being refused.
+    hulled = plan_area(embedded_field(), 10.0, options=FAST, check_coverage=False)
+    assert hulled.hull_depth > 0 and hulled.plan.region is None
+    exact = plan_area(embedded_field(), 10.0, hull_tolerance=0.1, options=FAST)
+    assert exact.hull_depth == 0 and exact.plan.region is not None
+    assert exact.coverage.covered_share >= 1 - 1e-9
     ell = np.array([(0, 0), (200, 0), (200, 100), (100, 100), (100, 200), (0, 200)], float)
-    with pytest.raises(NonConvexPolygonError, match="concave"):
-        plan_area(ell, 10.0, crs=None)
+    single = plan_area(ell, 10.0, crs=None, decompose=False)
+    assert single.plan.stats.n_cells == 1 and single.coverage.covered_share >= 1 - 1e-9
+    mission = plan_area(ell, 10.0, crs=None, decompose=True, sweep=135.0)
+    assert mission.plan.stats.n_cells == 2 and mission.coverage.covered_share >= 1 - 1e-9
+    assert mission.summary()["n_cells"] == 2 and mission.optimum.method == "decomposed"
+    with pytest.raises(NonConvexPolygonError, match=r"hull tolerance 0\.1"):
+        from boustro.plan import nearly_convex
+
+        nearly_convex(Polygon(ell), 0.1)
 
 
 def test_camera_sets_spacing_and_altitude():
@@ -244,7 +257,6 @@ def _shared(name: str):
         ("<kml><Document/></kml>", "no Polygon"),
         ("POINT (1 2)", "expected a WKT POLYGON"),
         ("POLYGON EMPTY", "EMPTY"),
-        ("POLYGON ((0 0, 1 0, 1 1, 0 0), (0.1 0.1, 0.2 0.1, 0.2 0.2, 0.1 0.1))", "hole"),
         ("just some words", "not a polygon file"),
         ("", "empty"),
         ("[[0, 0], [1, 1]]", "at least 3 vertices"),

@@ -81,6 +81,13 @@ def _ccw(ring: NDArray[np.float64]) -> NDArray[np.float64]:
     return ring if signed > 0 else ring[::-1]
 
 
+def _polygon_coordinates(
+    ring: NDArray[np.float64], holes: tuple[NDArray[np.float64], ...] | list[NDArray[np.float64]]
+) -> list[Any]:
+    """GeoJSON Polygon coordinates: the exterior CCW, holes clockwise (RFC 7946)."""
+    return [_closed(_ccw(ring)).tolist()] + [_closed(_ccw(h)[::-1]).tolist() for h in holes]
+
+
 def _lonlat(
     mission: Mission, what: str
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
@@ -117,7 +124,9 @@ def _crs_member(crs: str | None) -> dict[str, Any] | None:
 def to_geojson(mission: Mission) -> str:
     """A GeoJSON FeatureCollection: the area, the path, each transect, each waypoint.
 
-    Features carry a ``role`` property (``area``, ``path``, ``transect``, ``waypoint``);
+    Features carry a ``role`` property (``area`` (with its holes), ``path``, ``transect``,
+    ``waypoint``, and ``cell`` for each cell of a decomposed plan);
+    transects also ``pass`` (``lane``, or ``hole`` for an edge of a pass around a hole);
     waypoints also ``seq``, ``kind`` (:data:`boustro.plan.KINDS`) and ``transect``. The mission's
     summary is the foreign member ``boustro``.
     """
@@ -129,7 +138,7 @@ def to_geojson(mission: Mission) -> str:
             "properties": {"role": "area", "name": mission.name},
             "geometry": {
                 "type": "Polygon",
-                "coordinates": [_closed(_ccw(mission.area.ring)).tolist()],
+                "coordinates": _polygon_coordinates(mission.area.ring, mission.area.holes),
             },
         },
         {
@@ -142,6 +151,7 @@ def to_geojson(mission: Mission) -> str:
             "geometry": {"type": "LineString", "coordinates": mission.waypoints.tolist()},
         },
     ]
+    roles = plan.role()
     for i, seg in enumerate(mission.transects):
         features.append(
             {
@@ -149,11 +159,29 @@ def to_geojson(mission: Mission) -> str:
                 "properties": {
                     "role": "transect",
                     "transect": i,
+                    "pass": roles[i],
                     "length_m": float(lengths[i] / plan.ground_scale),
                 },
                 "geometry": {"type": "LineString", "coordinates": seg.tolist()},
             }
         )
+    if len(plan.cells) > 1:
+        for i, (cell, rings) in enumerate(zip(plan.cells, mission.cell_rings(), strict=True)):
+            features.append(
+                {
+                    "type": "Feature",
+                    "properties": {
+                        "role": "cell",
+                        "cell": i,
+                        "angle_deg": float(np.degrees(cell.angle)),
+                        "n_transects": cell.n_transects,
+                    },
+                    "geometry": {
+                        "type": "Polygon",
+                        "coordinates": _polygon_coordinates(rings[0], rings[1:]),
+                    },
+                }
+            )
     for i, (point, kind) in enumerate(zip(mission.waypoints, plan.kinds, strict=True)):
         features.append(
             {
@@ -213,7 +241,14 @@ def to_kml(mission: Mission) -> str:
         f"<description>{escape(_describe(mission))}</description>",
         "<Placemark><name>Area</name><Polygon><outerBoundaryIs><LinearRing><coordinates>"
         + _kml_coords(_closed(_ccw(area)))
-        + "</coordinates></LinearRing></outerBoundaryIs></Polygon></Placemark>",
+        + "</coordinates></LinearRing></outerBoundaryIs>"
+        + "".join(
+            "<innerBoundaryIs><LinearRing><coordinates>"
+            + _kml_coords(_closed(_ccw(h)[::-1]))
+            + "</coordinates></LinearRing></innerBoundaryIs>"
+            for h in mission.holes_lonlat
+        )
+        + "</Polygon></Placemark>",
         "<Placemark><name>Path</name><LineString><tessellate>1</tessellate>"
         + mode
         + "<coordinates>"

@@ -27,18 +27,21 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import BoustroError, InvalidParameterError, InvalidPolygonError
+from .decompose import plan_region
+from .errors import BoustroError, InvalidParameterError, InvalidPolygonError, NonConvexPolygonError
 from .fitness import SmithFitness
 from .geometry import Polygon
 from .io import LONLAT, Area
 from .optimize import OptimizeResult, optimize
 from .plan import Coverage, Plan, PlanStats, build_plan, coverage, nearly_convex
+from .regions import Region
 from .sensors import SensorSpacing
 
 __all__ = [
@@ -46,6 +49,7 @@ __all__ = [
     "DEFAULT_METHOD",
     "LONLAT",
     "METHOD_OPTIONS",
+    "REGION_OPTIONS",
     "MissingDependencyError",
     "Mission",
     "Projection",
@@ -65,6 +69,11 @@ METHOD_OPTIONS: dict[str, dict[str, Any]] = {"grid": {"n_angles": 360, "n_offset
 
 #: Deepest pocket (metres) of a nearly convex area that is planned on its convex hull.
 DEFAULT_HULL_TOLERANCE = 0.5
+
+#: Grid of the optimiser for concave areas and areas with holes
+#: (:func:`boustro.decompose.optimize_region`; a cell or the whole area), overridden by
+#: ``options``.
+REGION_OPTIONS: dict[str, Any] = {"n_angles": 90, "n_offsets": 16}
 
 _PLANAR_NAMES = ("planar", "local", "none")
 
@@ -387,10 +396,27 @@ class Mission:
     bearing: float
     home: NDArray[np.float64]
     home_lonlat: NDArray[np.float64] | None
+    holes_lonlat: tuple[NDArray[np.float64], ...] = ()
 
     @property
     def crs(self) -> str | None:
         return self.area.crs
+
+    @property
+    def decomposed(self) -> bool:
+        """True for a plan over several cells."""
+        return len(self.plan.cells) > 1
+
+    def cell_rings(self) -> list[list[NDArray[np.float64]]]:
+        """Each cell's rings (outer boundary, then holes) in the area's coordinates."""
+        out = []
+        for cell in self.plan.cells:
+            region = cell.region
+            out.append(
+                [self.projection.to_source(region.shell.vertices)]
+                + [self.projection.to_source(h.vertices) for h in region.holes]
+            )
+        return out
 
     @property
     def kinds(self) -> tuple[str, ...]:
@@ -434,6 +460,23 @@ class Mission:
             out["reach_m"] = self.reach
         if self.sensor:
             out["sensor"] = self.sensor
+        if self.plan.region is not None:
+            out["holes"] = self.plan.region.n_holes
+            out["n_cells"] = s.n_cells
+            out["cells"] = [
+                {
+                    "angle_deg": math.degrees(c.angle),
+                    "offset": c.offset,
+                    "fitness": None if math.isnan(c.fitness) else c.fitness,
+                    "n_transects": c.n_transects,
+                    "area_m2": c.region.area / self.plan.ground_scale**2,
+                }
+                for c in self.plan.cells
+            ]
+            out["hole_pass_length_m"] = s.hole_pass_length
+            out["outside_length_m"] = s.outside_length
+            if self.plan.notes:
+                out["notes"] = list(self.plan.notes)
         return out
 
 
@@ -476,6 +519,9 @@ def plan_area(
     hull_tolerance: float = DEFAULT_HULL_TOLERANCE,
     layout: str = "guaranteed",
     check_coverage: bool = True,
+    holes: Sequence[ArrayLike] = (),
+    decompose: bool | None = None,
+    sweep: float | None = None,
 ) -> Mission:
     """Plan a survey area end to end: project, optimise, build the path, map it back.
 
@@ -488,70 +534,129 @@ def plan_area(
         crs: CRS of a bare ring (ignored for an :class:`Area`, which carries its own); default
             WGS 84 longitude/latitude, ``None`` for planar.
         method: optimiser (default :data:`DEFAULT_METHOD`), see :func:`boustro.optimize.optimize`;
-            ``options`` override :data:`METHOD_OPTIONS`.
+            ``options`` override :data:`METHOD_OPTIONS`. Concave areas and areas with holes
+            are optimised by :func:`boustro.decompose.optimize_region` (a grid search with the
+            exact per-segment fitness, :data:`REGION_OPTIONS`, ``options`` override it).
         fitness: the objective (default Eq. 1).
         start: ``(x, y)`` in the area's coordinates; the path starts at the corner nearest it
             (default: the area's first vertex).
         turnaround: run-in / run-out distance beyond each transect end, metres.
         speed: ground speed, m/s, for the duration; ``turn_time``: seconds per turn.
         altitude: mission altitude above take-off, metres (default: the camera's, if any).
-        hull_tolerance: a concave area whose convex hull reaches at most this many metres beyond
-            it is planned on its hull (its pockets are digitising noise); else it is refused.
+        hull_tolerance: a concave area without holes whose convex hull reaches at most this many
+            metres beyond it is planned on its hull (its pockets are digitising noise), unless
+            ``decompose`` is given; a deeper one is planned as a concave area.
         layout: ``"guaranteed"`` (default) or ``"chords"`` (see :func:`boustro.plan.build_plan`).
         check_coverage: compute the covered share with shapely.
+        holes: holes of a bare ring (an :class:`Area` carries its own), in ``crs``.
+        decompose: for a concave area or one with holes: ``None`` (default) decomposes into
+            cells when that promises fewer turns, ``True`` always, ``False`` plans one angle
+            with lines cut at the boundary and the holes (:func:`boustro.decompose.plan_region`).
+            Given, it also turns off the convex-hull rule for nearly convex areas.
+        sweep: sweep direction of the decomposition, degrees in the plan frame (default:
+            chosen by :func:`boustro.decompose.choose_sweep`).
 
     Raises:
         InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError.
     """
     if not isinstance(area, Area):
-        area = Area(np.asarray(area, dtype=np.float64), parse_crs(crs), "", "<array>")
+        hole_rings = tuple(np.asarray(h, dtype=np.float64) for h in holes)
+        area = Area(np.asarray(area, dtype=np.float64), parse_crs(crs), "", "<array>", hole_rings)
     where = area.source
     s_m, reach_m, gap_m, sensor_altitude, sensor_text = _sensor_spacing(spacing)
     proj = projection_for(area.ring, area.crs, where)
     ring_plan = proj.to_plan(area.ring)
+    holes_plan = []
+    for i, hole in enumerate(area.holes):
+        if proj.geographic:
+            check_lonlat(proj.to_lonlat(proj.to_plan(hole)), f"{where}: hole {i}")
+        hp = proj.to_plan(hole)
+        if not np.all(np.isfinite(hp)):
+            raise InvalidPolygonError(f"{where}: hole {i} cannot be projected to {proj.plan_crs}")
+        holes_plan.append(hp)
     try:
         surveyed = Polygon(ring_plan)
+        region = Region(surveyed, holes_plan) if holes_plan else None
     except InvalidPolygonError as exc:
         raise InvalidPolygonError(f"{where}: {exc}") from None
     k_lo, k_hi = proj.scale_min, proj.scale_max
-    poly, depth = nearly_convex(surveyed, float(hull_tolerance) * k_lo)
+    depth = 0.0
+    poly = surveyed
+    if region is None and (decompose is None or surveyed.is_convex):
+        try:
+            poly, depth = nearly_convex(surveyed, float(hull_tolerance) * k_lo)
+        except NonConvexPolygonError:
+            region = Region(surveyed)
+    elif region is None:
+        region = Region(surveyed)
     if depth > 0:
         log.debug(
             "the area is not convex, but its convex hull reaches only %.3g m beyond it: "
             "planning the hull",
             depth / k_lo,
         )
-    method = method or DEFAULT_METHOD
-    opts = dict(METHOD_OPTIONS.get(method, {}))
-    opts.update(options or {})
     s_plan = s_m * k_lo
-    optimum = optimize(poly, s_plan, method=method, fitness=fitness, **opts)
     start_plan = ring_plan[0] if start is None else proj.to_plan(np.asarray(start, float))
-    plan = build_plan(
-        poly,
-        s_plan,
-        optimum.angle,
-        optimum.offset,
-        layout=layout,  # type: ignore[arg-type]
-        start=start_plan,
-        turnaround=float(turnaround) * k_hi,
-        reach=reach_m * k_lo,
-        nadir_gap=gap_m * k_hi,
-        ground_scale=proj.scale,
-        speed=speed,
-        turn_time=turn_time,
-        area=proj.ground_area(ring_plan),
-    )
-    cov = coverage(plan, surveyed) if check_coverage else None
+    ground_area = proj.ground_area(ring_plan) - sum(proj.ground_area(h) for h in holes_plan)
+    if region is None:
+        method = method or DEFAULT_METHOD
+        opts = dict(METHOD_OPTIONS.get(method, {}))
+        opts.update(options or {})
+        optimum = optimize(poly, s_plan, method=method, fitness=fitness, **opts)
+        plan = build_plan(
+            poly,
+            s_plan,
+            optimum.angle,
+            optimum.offset,
+            layout=layout,  # type: ignore[arg-type]
+            start=start_plan,
+            turnaround=float(turnaround) * k_hi,
+            reach=reach_m * k_lo,
+            nadir_gap=gap_m * k_hi,
+            ground_scale=proj.scale,
+            speed=speed,
+            turn_time=turn_time,
+            area=ground_area,
+        )
+        cov = coverage(plan, surveyed) if check_coverage else None
+    else:
+        if method not in (None, DEFAULT_METHOD, "grid", "region-grid"):
+            raise InvalidParameterError(
+                f"method {method!r} optimises convex areas only; a concave area or one with "
+                "holes is optimised by grid search over its segments (leave --method out)"
+            )
+        opts = dict(REGION_OPTIONS)
+        opts.update({k: v for k, v in (options or {}).items() if k in ("n_angles", "n_offsets")})
+        plan = plan_region(
+            region,
+            s_plan,
+            decompose_area="auto" if decompose is None else bool(decompose),
+            sweep=None if sweep is None else math.radians(float(sweep)),
+            fitness=fitness,
+            layout=layout,  # type: ignore[arg-type]
+            start=start_plan,
+            turnaround=float(turnaround) * k_hi,
+            reach=reach_m * k_lo,
+            nadir_gap=gap_m * k_hi,
+            ground_scale=proj.scale,
+            speed=speed,
+            turn_time=turn_time,
+            area=ground_area,
+            **opts,
+        )
+        optimum = _region_optimum(plan, s_plan)
+        cov = coverage(plan, region) if check_coverage else None
     if proj.planar:
         wp_ll = tr_ll = area_ll = None
-        u = plan.transects[0, 1] - plan.transects[0, 0]
+        holes_ll: tuple[NDArray[np.float64], ...] = ()
+        u = np.array([math.cos(plan.angle), math.sin(plan.angle)])
         bearing = math.degrees(math.atan2(u[0], u[1])) % 180.0
     else:
         wp_ll = proj.to_lonlat(plan.waypoints)
         tr_ll = proj.to_lonlat(plan.transects)
         area_ll = proj.to_lonlat(ring_plan)
-        c = poly.centre
+        holes_ll = tuple(proj.to_lonlat(h) for h in holes_plan)
+        c = poly.centre if region is None else plan.cells[_main_cell(plan)].polygon.centre
         u = np.array([math.cos(plan.angle), math.sin(plan.angle)])
         a, b = proj.to_lonlat(np.stack([c - 5 * u, c + 5 * u]))
         azimuth, _, _ = proj._geod.inv(a[0], a[1], b[0], b[1])
@@ -581,4 +686,32 @@ def plan_area(
         bearing=bearing,
         home=proj.to_source(home_plan),
         home_lonlat=None if proj.planar else proj.to_lonlat(home_plan),
+        holes_lonlat=holes_ll,
+    )
+
+
+def _main_cell(plan: Plan) -> int:
+    return max(range(len(plan.cells)), key=lambda i: plan.cells[i].region.area)
+
+
+def _region_optimum(plan: Plan, spacing: float) -> OptimizeResult:
+    """One :class:`OptimizeResult` for a plan of cells: the largest cell's angle and offset,
+    the area-weighted mean of the cells' fitness, the evaluations and time of all of them."""
+    cells = plan.cells
+    results = [c.optimum for c in cells if c.optimum is not None]
+    areas = np.array([c.region.area for c in cells])
+    values = np.array([c.fitness for c in cells])
+    ok = np.isfinite(values)
+    fitness = float(np.sum(values[ok] * areas[ok]) / np.sum(areas[ok])) if ok.any() else math.nan
+    main = cells[_main_cell(plan)]
+    method = "region-grid" if len(cells) == 1 else "decomposed"
+    return OptimizeResult(
+        angle=main.angle,
+        offset=main.offset,
+        fitness=fitness,
+        spacing=spacing,
+        method=method,
+        evaluations=int(sum(r.evaluations for r in results)),
+        seconds=float(sum(r.seconds for r in results)),
+        info={"cells": len(cells)},
     )

@@ -13,8 +13,11 @@ reference system (CRS), for :mod:`boustro.geo` to project. It takes the formats 
 * WKT / EWKT: ``POLYGON``, ``POLYGON Z``, ``MULTIPOLYGON`` (first polygon), ``SRID=n;`` prefix.
 
 Coordinates are ``x, y`` = longitude, latitude (RFC 7946, KML) unless the file names another CRS
-(a GeoJSON ``crs`` member, a GML ``srsName``, an EWKT ``SRID``) or the caller gives one. Holes
-are refused (not supported yet), as is a file with no polygon.
+(a GeoJSON ``crs`` member, a GML ``srsName``, an EWKT ``SRID``) or the caller gives one. A
+survey area may have holes (obstacles): GeoJSON interior rings, KML ``innerBoundaryIs``, GML
+``interior``, WKT rings after the first; :attr:`Area.holes` holds them. :func:`read_polygon`
+(planar polygons for ``boustro score``) refuses holes, and every reader refuses a file with no
+polygon.
 """
 
 from __future__ import annotations
@@ -83,7 +86,19 @@ def _from_geometry(geom: Any, where: str) -> Polygon:
 
 
 def _geometry_ring(geom: Any, where: str) -> np.ndarray:
-    """The outer ring of a GeoJSON Polygon (or a MultiPolygon's first polygon), unvalidated."""
+    """The outer ring of a GeoJSON Polygon (or a MultiPolygon's first polygon), unvalidated;
+    holes are refused (planar polygons for ``boustro score``)."""
+    ring, holes = _geometry_rings(geom, where)
+    if holes:
+        raise PolygonFileError(
+            f"{where}: the polygon has {len(holes)} hole(s); this command takes polygons "
+            "without holes (boustro plan takes areas with holes)"
+        )
+    return ring
+
+
+def _geometry_rings(geom: Any, where: str) -> tuple[np.ndarray, list[np.ndarray]]:
+    """The outer ring and the holes of a GeoJSON Polygon (or a MultiPolygon's first polygon)."""
     kind = geom.get("type")
     coords = geom.get("coordinates")
     if kind == "MultiPolygon":
@@ -94,11 +109,8 @@ def _geometry_ring(geom: Any, where: str) -> np.ndarray:
         raise PolygonFileError(f"{where}: expected a Polygon geometry, got {kind!r}")
     if not isinstance(coords, list) or not coords:
         raise PolygonFileError(f"{where}: a Polygon needs at least one ring")
-    if len(coords) > 1:
-        raise PolygonFileError(
-            f"{where}: the polygon has {len(coords) - 1} hole(s); holes are not supported yet"
-        )
-    return _ring(coords[0], where)
+    holes = [_ring(h, f"{where}: hole {i}") for i, h in enumerate(coords[1:])]
+    return _ring(coords[0], where), holes
 
 
 def polygon_from_json(data: Any, where: str = "input") -> Polygon:
@@ -172,12 +184,15 @@ class Area:
         crs: the CRS, e.g. ``"EPSG:4326"``, or ``None`` for plain planar coordinates.
         name: a name for the area (placemark or feature name, else the file's stem).
         source: where it came from (a path, or ``"<embedded>"``).
+        holes: the inner rings (obstacles), each ``(M, 2)`` like ``ring``; validated with the
+            area (:class:`boustro.regions.Region`).
     """
 
     ring: NDArray[np.float64]
     crs: str | None
     name: str
     source: str
+    holes: tuple[NDArray[np.float64], ...] = ()
 
 
 def _close_open(ring: np.ndarray, where: str) -> np.ndarray:
@@ -209,6 +224,7 @@ def _crs_name(name: str) -> str:
 def area_from_json(data: Any, where: str = "input", crs: str | None = None) -> Area:
     """An :class:`Area` from parsed JSON: a list of ``[x, y]`` pairs or a GeoJSON object."""
     name = ""
+    holes: list[np.ndarray] = []
     if isinstance(data, list):
         ring = _ring(data, where)
     elif not isinstance(data, dict) or "type" not in data:
@@ -220,7 +236,7 @@ def area_from_json(data: Any, where: str = "input", crs: str | None = None) -> A
         for i, feature in enumerate(data.get("features") or []):
             geom = (feature or {}).get("geometry") or {}
             if geom.get("type") in ("Polygon", "MultiPolygon"):
-                ring = _geometry_ring(geom, f"{where}: feature {i}")
+                ring, holes = _geometry_rings(geom, f"{where}: feature {i}")
                 name = _feature_name(feature)
                 break
         else:
@@ -229,12 +245,18 @@ def area_from_json(data: Any, where: str = "input", crs: str | None = None) -> A
         geom = data.get("geometry")
         if not isinstance(geom, dict):
             raise PolygonFileError(f"{where}: the Feature has no geometry")
-        ring = _geometry_ring(geom, where)
+        ring, holes = _geometry_rings(geom, where)
         name = _feature_name(data)
     else:
-        ring = _geometry_ring(data, where)
+        ring, holes = _geometry_rings(data, where)
     file_crs = _geojson_crs(data) if isinstance(data, dict) else None
-    return Area(_close_open(ring, where), crs or file_crs or LONLAT, name, where)
+    return Area(
+        _close_open(ring, where),
+        crs or file_crs or LONLAT,
+        name,
+        where,
+        tuple(_close_open(h, f"{where}: hole {i}") for i, h in enumerate(holes)),
+    )
 
 
 def _feature_name(feature: Any) -> str:
@@ -306,11 +328,13 @@ def area_from_kml(text: str, where: str = "input", crs: str | None = None) -> Ar
     inner = [e for e in polygon if _local(e.tag) in ("innerBoundaryIs", "interior")]
     if not outer:
         raise PolygonFileError(f"{where}: the Polygon has no outer boundary")
-    if inner:
-        raise PolygonFileError(
-            f"{where}: the polygon has {len(inner)} hole(s); holes are not supported yet"
-        )
     ring = _xml_coordinates(outer[0], where)
+    holes: list[np.ndarray] = []
+    for element in inner:
+        # KML may hold several LinearRings in one innerBoundaryIs.
+        rings = [e for e in element.iter() if _local(e.tag) == "LinearRing"] or [element]
+        for r in rings:
+            holes.append(_close_open(_xml_coordinates(r, where), f"{where}: hole {len(holes)}"))
     name = ""
     for placemark in (e for e in root.iter() if _local(e.tag) == "Placemark"):
         if any(e is polygon for e in placemark.iter()):
@@ -319,7 +343,7 @@ def area_from_kml(text: str, where: str = "input", crs: str | None = None) -> Ar
             break
     srs = polygon.get("srsName")
     file_crs = _crs_name(srs) if srs else None
-    return Area(_close_open(ring, where), crs or file_crs or LONLAT, name, where)
+    return Area(_close_open(ring, where), crs or file_crs or LONLAT, name, where, tuple(holes))
 
 
 _WKT_TYPES = frozenset(
@@ -369,7 +393,8 @@ def _wkt_nested(text: str, where: str) -> list[Any]:
 
 
 def area_from_wkt(text: str, where: str = "input", crs: str | None = None) -> Area:
-    """An :class:`Area` from WKT or EWKT: ``POLYGON``, ``POLYGON Z``, ``MULTIPOLYGON`` (first)."""
+    """An :class:`Area` from WKT or EWKT: ``POLYGON``, ``POLYGON Z``, ``MULTIPOLYGON`` (first);
+    rings after the first are holes."""
     m = _WKT_HEAD.match(text)
     if not m or not m.group(2):
         raise PolygonFileError(f"{where}: not WKT (expected e.g. 'POLYGON ((x y, ...))')")
@@ -393,24 +418,23 @@ def area_from_wkt(text: str, where: str = "input", crs: str | None = None) -> Ar
     rings = [r for r in nested if isinstance(r, list)]
     if not rings or len(rings) != len(nested):
         raise PolygonFileError(f"{where}: a WKT POLYGON needs rings in parentheses")
-    if len(rings) > 1:
-        raise PolygonFileError(
-            f"{where}: the polygon has {len(rings) - 1} hole(s); holes are not supported yet"
-        )
-    rows = []
-    for i, pos in enumerate(rings[0]):
-        if not isinstance(pos, str):
-            raise PolygonFileError(f"{where}: position {i} of the ring is nested, not 'x y'")
-        parts = pos.split()
-        try:
-            rows.append((float(parts[0]), float(parts[1])))
-        except (ValueError, IndexError):
-            raise PolygonFileError(
-                f"{where}: position {i} must be two numbers 'x y', got {pos!r:.60}"
-            ) from None
-    ring = np.asarray(rows, dtype=np.float64).reshape(-1, 2)
+    parsed = []
+    for r_index, ring_items in enumerate(rings):
+        what = where if r_index == 0 else f"{where}: hole {r_index - 1}"
+        rows = []
+        for i, pos in enumerate(ring_items):
+            if not isinstance(pos, str):
+                raise PolygonFileError(f"{what}: position {i} of the ring is nested, not 'x y'")
+            parts = pos.split()
+            try:
+                rows.append((float(parts[0]), float(parts[1])))
+            except (ValueError, IndexError):
+                raise PolygonFileError(
+                    f"{what}: position {i} must be two numbers 'x y', got {pos!r:.60}"
+                ) from None
+        parsed.append(_close_open(np.asarray(rows, dtype=np.float64).reshape(-1, 2), what))
     file_crs = f"EPSG:{srid}" if srid else None
-    return Area(_close_open(ring, where), crs or file_crs or LONLAT, "", where)
+    return Area(parsed[0], crs or file_crs or LONLAT, "", where, tuple(parsed[1:]))
 
 
 def area_from_text(
@@ -457,7 +481,7 @@ def read_area(path: str | os.PathLike[str], crs: str | None = None) -> Area:
             CRS, else WGS 84 longitude/latitude ``"EPSG:4326"``).
 
     Raises:
-        PolygonFileError: missing or unreadable file, malformed content, no polygon, holes.
+        PolygonFileError: missing or unreadable file, malformed content, no polygon.
     """
     name = os.fspath(path)
     try:
@@ -473,7 +497,7 @@ def read_area(path: str | os.PathLike[str], crs: str | None = None) -> Area:
     area = area_from_text(text, name, crs, kind)
     if not area.name:
         stem = os.path.splitext(os.path.basename(name))[0]
-        area = Area(area.ring, area.crs, stem, area.source)
+        area = Area(area.ring, area.crs, stem, area.source, area.holes)
     return area
 
 

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import torch
@@ -52,23 +52,30 @@ from .geometry import HalfPlanes, Polygon, halfplanes
 from .models import check_spacing, exact_chords
 from .scoring import Segments, as_polygon, transect_segments
 
+if TYPE_CHECKING:
+    from .regions import Region
+
 __all__ = [
     "KINDS",
     "Coverage",
     "Plan",
+    "PlanCell",
     "PlanStats",
     "build_plan",
     "convex_hull",
     "coverage",
     "edge_offset",
+    "footprint",
     "guaranteed_segments",
     "hull_depth",
     "nearly_convex",
     "swath_polygons",
 ]
 
-#: What each waypoint is: run-in point before a transect, its start, its end, the run-out point.
-KINDS = ("run_in", "start", "end", "run_out")
+#: What each waypoint is: run-in point before a transect, its start, its end, the run-out point;
+#: for areas with holes or cells also ``via`` (a corner of a connecting move that goes around an
+#: obstacle) and ``loop`` (a corner of a pass around a hole).
+KINDS = ("run_in", "start", "end", "run_out", "via", "loop")
 
 #: Width (relative to the polygon's diameter) under which a band's overlap with the polygon is
 #: rounding, not a sliver to cover.
@@ -234,6 +241,14 @@ class PlanStats:
         speed: speed used for the duration, or ``None``.
         turn_time: time added per turn (seconds).
         duration: ``path_length / speed + n_turns * turn_time`` (seconds), ``None`` without speed.
+        n_cells: cells of a decomposed plan (1 otherwise).
+        hole_pass_length: length of the passes around holes (included in ``path_length``).
+        outside_length: length of the connecting moves outside the area (ends of lanes that
+            reach beyond the boundary, and moves between them; included in ``path_length``).
+
+    For a plan over an area with holes or a decomposed plan, ``n_transects`` counts the lane
+    segments driven and ``n_turns`` the connecting moves between consecutive passes (a lane
+    segment, or a pass around a hole): ``passes - 1``.
     """
 
     n_transects: int
@@ -244,6 +259,35 @@ class PlanStats:
     speed: float | None = None
     turn_time: float = 0.0
     duration: float | None = None
+    n_cells: int = 1
+    hole_pass_length: float = 0.0
+    outside_length: float = 0.0
+
+
+@dataclass(frozen=True)
+class PlanCell:
+    """One cell of a decomposed plan (or the whole area of a single-angle plan).
+
+    Attributes:
+        region: the cell (plan units), a :class:`~boustro.regions.Region` (it has holes where
+            it surrounds one of the area's).
+        angle, offset: its lanes (radians; plan units from the cell's shell's vertex mean).
+        fitness: the optimiser's value for the cell (Eq. 1 over segments by default), or NaN.
+        n_transects: lane segments planned in the cell.
+        optimum: the optimiser's result for the cell, if it was optimised.
+    """
+
+    region: Region
+    angle: float
+    offset: float
+    fitness: float
+    n_transects: int
+    optimum: Any = None
+
+    @property
+    def polygon(self) -> Polygon:
+        """The cell's outer boundary."""
+        return self.region.shell
 
 
 @dataclass(frozen=True)
@@ -267,6 +311,14 @@ class Plan:
         ground_scale: plan units per ground unit (1 for a planar frame; a projection's scale
             factor for a map projection); statistics are divided by it.
         stats: :class:`PlanStats`.
+        region: for an area with a concave boundary or holes
+            (:func:`boustro.decompose.plan_region`), the area planned; ``polygon`` is its shell.
+        cells: the cells of a decomposed plan (:class:`PlanCell`), or the whole area as one cell.
+        transect_angles: ``(T,)`` lane direction of each transect where they differ (cells,
+            passes around holes), else ``None`` (all at ``angle``).
+        roles: ``"lane"`` or ``"hole"`` per transect (empty: all lanes).
+        transect_cells: ``(T,)`` the cell of each transect (-1 for passes around holes).
+        notes: what the plan could not do as asked (e.g. moves that leave the area).
     """
 
     polygon: Polygon
@@ -284,10 +336,27 @@ class Plan:
     lane: NDArray[np.int64]
     ground_scale: float
     stats: PlanStats
+    region: Region | None = None
+    cells: tuple[PlanCell, ...] = ()
+    transect_angles: NDArray[np.float64] | None = None
+    roles: tuple[str, ...] = ()
+    transect_cells: NDArray[np.int64] | None = None
+    notes: tuple[str, ...] = ()
 
     @property
     def n_transects(self) -> int:
         return len(self.transects)
+
+    def transect_angle(self) -> NDArray[np.float64]:
+        """``(T,)`` the lane direction of every transect (the plan's angle unless it has many)."""
+        if self.transect_angles is None:
+            return np.full(len(self.transects), self.angle)
+        return self.transect_angles
+
+    def role(self) -> tuple[str, ...]:
+        """What each transect is: ``"lane"`` (a survey lane) or ``"hole"`` (an edge of a pass
+        around a hole)."""
+        return self.roles or ("lane",) * len(self.transects)
 
     @property
     def start(self) -> NDArray[np.float64]:
@@ -445,12 +514,15 @@ def swath_polygons(plan: Plan) -> NDArray[np.float64]:
 
     ``P`` is 1 (the band ``[-reach, reach]`` across the transect over the segment's length) or,
     with a nadir gap, 2 (``[-reach, -gap/2]`` and ``[gap/2, reach]``). Every rectangle is
-    counter-clockwise.
+    counter-clockwise. Each transect's rectangle is aligned with its own lane direction
+    (:meth:`Plan.transect_angle`); for the edges of a pass around a hole it is the band along
+    the edge (the pass's corners are swept as the vehicle turns, see :func:`coverage`).
     """
-    u = np.array([math.cos(plan.angle), math.sin(plan.angle)])
-    n = np.array([-math.sin(plan.angle), math.cos(plan.angle)])
+    angles = plan.transect_angle()
+    u = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    n = np.stack([-np.sin(angles), np.cos(angles)], axis=1)
     seg = plan.transects.copy()
-    backwards = (seg[:, 1] - seg[:, 0]) @ u < 0
+    backwards = np.einsum("ij,ij->i", seg[:, 1] - seg[:, 0], u) < 0
     seg[backwards] = seg[backwards, ::-1]  # along +u, so that every rectangle is CCW
     if plan.nadir_gap > 0:
         sides = [(-plan.reach, -plan.nadir_gap / 2), (plan.nadir_gap / 2, plan.reach)]
@@ -488,8 +560,9 @@ class Coverage:
     overlap_share: float
 
 
-def coverage(plan: Plan, region: Polygon | ArrayLike | None = None) -> Coverage:
-    """The share of ``region`` (default: the planned polygon) that the plan's footprints cover.
+def coverage(plan: Plan, region: Polygon | Region | ArrayLike | None = None) -> Coverage:
+    """The share of ``region`` (default: the planned polygon or region) that the plan's
+    footprints cover.
 
     Computed exactly with shapely (imported here, not at module import): the area of region ∩
     union of the footprints of :func:`swath_polygons`. The computation runs in the transects'
@@ -497,10 +570,17 @@ def coverage(plan: Plan, region: Polygon | ArrayLike | None = None) -> Coverage:
     is an axis-aligned box and neighbouring boxes share their edge coordinate exactly (edges that
     differ by rounding only, < 1e-9 spacing, are merged): GEOS's union of many rotated rectangles
     with nearly coincident edges was seen to lose whole rectangles (GEOS 3.14).
+
+    Plans over concave areas, cells or holes (:func:`boustro.decompose.plan_region`) are
+    measured the same way per lane direction (:func:`footprint`), the unions are mapped back to
+    the plan frame and joined with the footprints of the passes around holes; ``region`` may
+    then be a :class:`~boustro.regions.Region` (default: the plan's).
     """
+    if plan.transect_angles is not None or plan.region is not None or _has_holes(region):
+        return _coverage_general(plan, region)
     import shapely
 
-    ring = plan.polygon.vertices if region is None else as_polygon(region).vertices
+    ring = plan.polygon.vertices if region is None else as_polygon(region).vertices  # type: ignore[arg-type]
     u = np.array([math.cos(plan.angle), math.sin(plan.angle)])
     n = np.array([-math.sin(plan.angle), math.cos(plan.angle)])
     origin = plan.polygon.centre
@@ -527,6 +607,100 @@ def coverage(plan: Plan, region: Polygon | ArrayLike | None = None) -> Coverage:
     swept = float(np.sum((t_hi - t_lo) * (hi - lo)))
     real = (t_hi > t_lo) & (hi > lo)
     union = shapely.union_all(boxes[real])
+    covered = float(shapely.area(shapely.intersection(target, union)))
+    area = float(target.area)
+    return Coverage(
+        area=area,
+        covered_area=covered,
+        covered_share=min(1.0, covered / area),
+        swept_area=swept,
+        overlap_share=(swept - covered) / area,
+    )
+
+
+def _has_holes(region: object) -> bool:
+    return getattr(region, "n_holes", 0) > 0 or (
+        region is not None and not isinstance(region, Polygon) and hasattr(region, "shell")
+    )
+
+
+def _aligned_boxes(
+    transects: NDArray[np.float64],
+    angle: float,
+    origin: NDArray[np.float64],
+    sides: list[tuple[float, float]],
+    spacing: float,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """``(t_lo, c_lo, t_hi, c_hi)`` of every footprint box in the lanes' frame, with box edges
+    that differ by rounding only merged (see :func:`coverage`)."""
+    u = np.array([math.cos(angle), math.sin(angle)])
+    n = np.array([-math.sin(angle), math.cos(angle)])
+    t = (transects - origin) @ u
+    c = ((transects - origin) @ n).mean(axis=1)
+    lo = np.concatenate([c + a for a, _ in sides])
+    hi = np.concatenate([c + b for _, b in sides])
+    t_lo = np.tile(t.min(axis=1), len(sides))
+    t_hi = np.tile(t.max(axis=1), len(sides))
+    edges = np.unique(np.concatenate([lo, hi]))
+    merged = edges.copy()
+    for i in range(1, len(edges)):
+        if edges[i] - merged[i - 1] <= 1e-9 * spacing:
+            merged[i] = merged[i - 1]
+    lo = merged[np.searchsorted(edges, lo)]
+    hi = merged[np.searchsorted(edges, hi)]
+    return t_lo, lo, t_hi, hi
+
+
+def footprint(plan: Plan) -> tuple[Any, float]:
+    """The union of a plan's sensor footprints as a shapely geometry (plan frame), and the sum
+    of their areas. Lanes: rectangles (one union per lane direction, built in that direction's
+    frame, see :func:`coverage`); passes around holes: every point within ``reach`` of the pass
+    (the vehicle turns on the spot at the hole's corners with its sensor on)."""
+    import shapely
+
+    origin = plan.polygon.centre
+    angles = plan.transect_angle()
+    lane = np.array(plan.role()) == "lane"
+    if plan.nadir_gap > 0:
+        sides = [(-plan.reach, -plan.nadir_gap / 2), (plan.nadir_gap / 2, plan.reach)]
+    else:
+        sides = [(-plan.reach, plan.reach)]
+    parts = []
+    swept = 0.0
+    for angle in np.unique(angles[lane]):
+        pick = lane & (angles == angle)
+        t_lo, lo, t_hi, hi = _aligned_boxes(
+            plan.transects[pick], float(angle), origin, sides, plan.spacing
+        )
+        swept += float(np.sum((t_hi - t_lo) * (hi - lo)))
+        real = (t_hi > t_lo) & (hi > lo)
+        union = shapely.union_all(shapely.box(t_lo, lo, t_hi, hi)[real])
+        u = np.array([math.cos(angle), math.sin(angle)])
+        n = np.array([-math.sin(angle), math.cos(angle)])
+        parts.append(
+            shapely.transform(union, lambda p, u=u, n=n: origin + p[:, :1] * u + p[:, 1:] * n)
+        )
+    holes = ~lane
+    if holes.any():
+        lines = shapely.linestrings(plan.transects[holes])
+        buffers = shapely.buffer(lines, plan.reach)
+        swept += float(np.sum(shapely.area(buffers)))
+        parts.append(shapely.union_all(buffers))
+    return shapely.union_all(parts), swept
+
+
+def _coverage_general(plan: Plan, region: Any) -> Coverage:
+    """:func:`coverage` for plans with several lane directions, passes around holes, or a
+    region with holes."""
+    import shapely
+
+    if region is None:
+        region = plan.region if plan.region is not None else plan.polygon
+    if hasattr(region, "shell"):
+        target = shapely.Polygon(region.shell.vertices, [h.vertices for h in region.holes])
+    else:
+        target = shapely.Polygon(as_polygon(region).vertices)
+    union, swept = footprint(plan)
     covered = float(shapely.area(shapely.intersection(target, union)))
     area = float(target.area)
     return Coverage(
@@ -611,6 +785,6 @@ def nearly_convex(polygon: Polygon | ArrayLike, tolerance: float) -> tuple[Polyg
     except NonConvexPolygonError as exc:
         raise NonConvexPolygonError(
             f"{exc}; its convex hull reaches {depth:.3g} beyond it, more than the hull "
-            f"tolerance {tolerance:g} (concave areas are not supported yet)"
+            f"tolerance {tolerance:g} (plan it as a concave area: boustro.decompose.plan_region)"
         ) from None
     raise AssertionError("unreachable")  # pragma: no cover

@@ -38,7 +38,8 @@ def plot_plan(
 ) -> dict[str, Any]:
     """Draw a plan (or a :class:`~boustro.geo.Mission`) in its metric plan frame.
 
-    The area (and, for a nearly convex area planned on its hull, the hull dashed), the sensor
+    The area with its holes (and, for a nearly convex area planned on its hull, the hull
+    dashed; for a decomposed plan, the cells dashed and labelled with their angles), the sensor
     footprint of each transect (``swaths``), the transects with an arrow in the direction they
     are driven, the connecting moves, the start and end, and a scale bar. Georeferenced missions
     are drawn in metres from the area's south-west corner with an arrow to true north.
@@ -50,8 +51,8 @@ def plot_plan(
         title: set a title with the main statistics.
 
     Returns:
-        the artists by name: ``area``, ``hull``, ``swaths``, ``transects``, ``path``,
-        ``arrows``, ``start``, ``end``, ``scalebar``, ``north``.
+        the artists by name: ``area``, ``holes``, ``cells``, ``hull``, ``swaths``,
+        ``transects``, ``path``, ``arrows``, ``start``, ``end``, ``scalebar``, ``north``.
     """
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection, PolyCollection
@@ -64,8 +65,10 @@ def plot_plan(
     georeferenced = mission is not None and not mission.projection.planar
     if mission is not None:
         area = mission.projection.to_plan(mission.area.ring)
+        holes = [mission.projection.to_plan(h) for h in mission.area.holes]
     else:
         area = core.polygon.vertices
+        holes = [h.vertices for h in core.region.holes] if core.region is not None else []
     origin = area.min(axis=0) if georeferenced else np.zeros(2)
 
     def local(points: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -75,6 +78,38 @@ def plot_plan(
     artists["area"] = ax.fill(
         *local(area).T, facecolor="#d9ead3", edgecolor="#38761d", lw=1.5, label="area", zorder=1
     )[0]
+    artists["holes"] = [
+        ax.fill(
+            *local(h).T, facecolor="white", edgecolor="#38761d", lw=1.2, hatch="xx", zorder=1.5
+        )[0]
+        for h in holes
+    ]
+    if holes:
+        artists["holes"][0].set_label("hole")
+    artists["cells"] = []
+    if len(core.cells) > 1:
+        for i, cell in enumerate(core.cells):
+            for k, ring in enumerate(
+                [cell.region.shell.vertices] + [h.vertices for h in cell.region.holes]
+            ):
+                closed = local(np.concatenate([ring, ring[:1]]))
+                line = ax.plot(*closed.T, ls="--", lw=1.0, color="#b45f06", zorder=2.5)[0]
+                if i == 0 and k == 0:
+                    line.set_label("cells")
+                artists["cells"].append(line)
+            label = local(cell.region.shell.vertices).mean(axis=0)
+            artists["cells"].append(
+                ax.annotate(
+                    f"{i + 1}: {math.degrees(cell.angle):.0f}°",
+                    xy=label,
+                    ha="center",
+                    va="center",
+                    fontsize="small",
+                    color="#b45f06",
+                    bbox={"boxstyle": "round", "fc": "white", "ec": "#b45f06", "alpha": 0.8},
+                    zorder=7,
+                )
+            )
     if mission is not None and mission.hull_depth > 0:
         hull = np.concatenate([core.polygon.vertices, core.polygon.vertices[:1]])
         artists["hull"] = ax.plot(
@@ -90,8 +125,9 @@ def plot_plan(
     wp = local(core.waypoints)
     artists["path"] = ax.plot(*wp.T, color="0.35", lw=0.8, label="path", zorder=3)[0]
     tr = local(core.transects)
+    colours = ["#1155cc" if role == "lane" else "#8e7cc3" for role in core.role()]
     artists["transects"] = ax.add_collection(
-        LineCollection(list(tr), colors="#1155cc", linewidths=2.0, label="transects", zorder=4)
+        LineCollection(list(tr), colors=colours, linewidths=2.0, label="transects", zorder=4)
     )
     arrows = []
     for seg in tr:
@@ -166,6 +202,8 @@ def plot_plan(
             )
             if mission.coverage is not None:
                 text += f", {100 * mission.coverage.covered_share:.2f}% covered"
+            if len(core.cells) > 1:
+                text += f", {len(core.cells)} cells"
         else:
             text = (
                 f"{s.n_transects} transects at {core.spacing:.3g}, "

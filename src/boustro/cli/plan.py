@@ -30,6 +30,14 @@ area files:
   areas are planned in the UTM zone of the area and written back in lon/lat. Without AREA, an
   embedded 3.6 ha field in the Netherlands (Fields2Cover, BSD-3-Clause) is planned at 10 m.
 
+concave areas and holes:
+  holes (GeoJSON interior rings, KML innerBoundaryIs, WKT inner rings) are obstacles: no path
+  enters them. A concave area (unless nearly convex, see --hull-tolerance) or one with holes is
+  decomposed into cells, each with its own angle and offset, when that promises fewer turns;
+  --decompose always decomposes, --no-decompose plans one angle with the lines cut at the
+  boundary and the holes. Connecting moves go around holes; a hole that cuts lanes gets one
+  pass around it so that the area along its edge is covered too.
+
 coverage:
   every transect covers the strip of width SPACING centred on it, and its segment spans the
   whole part of the area inside that strip, so no part of the area is left outside every swath
@@ -143,7 +151,23 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=DEFAULT_HULL_TOLERANCE,
         metavar="M",
         help="plan a nearly convex area on its convex hull if the hull reaches at most this far "
-        f"beyond it, metres (default {DEFAULT_HULL_TOLERANCE:g}; 0 refuses every concave area)",
+        f"beyond it, metres (default {DEFAULT_HULL_TOLERANCE:g}; 0 plans every concave area as "
+        "such)",
+    )
+    path.add_argument(
+        "--decompose",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="concave areas and holes: always decompose into cells (--decompose), or plan one "
+        "angle with lines cut at the boundary (--no-decompose); default: decompose when it "
+        "promises fewer turns. Either also turns off the hull rule of --hull-tolerance",
+    )
+    path.add_argument(
+        "--sweep",
+        type=finite_float,
+        metavar="DEG",
+        help="sweep direction of the decomposition, degrees counter-clockwise from east in the "
+        "plan frame (default: chosen for few turns)",
     )
     out = p.add_argument_group("output")
     out.add_argument("--out", metavar="FILE", help="write the mission to FILE")
@@ -298,6 +322,26 @@ def _rows(mission: Mission, written: list[str]) -> list[tuple[str, str]]:
                 f"{s.turn_time:g} s per turn",
             )
         )
+    region = mission.plan.region
+    if region is not None:
+        shape = "concave" if not region.shell.is_convex else "convex"
+        rows.append(
+            (
+                "area shape",
+                f"{shape}, {region.n_holes} hole(s), "
+                + (
+                    f"{s.n_cells} cells (boustrophedon decomposition)"
+                    if s.n_cells > 1
+                    else "one angle, lines cut at the boundary"
+                ),
+            )
+        )
+        if s.n_cells > 1:
+            angles = ", ".join(f"{math.degrees(c.angle):.1f}" for c in mission.plan.cells)
+            rows.append(("cell angles", f"{angles} deg"))
+        if s.hole_pass_length > 0:
+            rows.append(("hole passes", f"{s.hole_pass_length:.1f} m around holes that cut lanes"))
+        rows += [("note", note) for note in mission.plan.notes]
     if mission.hull_depth > 0:
         rows.append(
             (
@@ -328,6 +372,8 @@ def run(args: argparse.Namespace) -> int:
         altitude=args.altitude,
         hull_tolerance=args.hull_tolerance,
         layout=args.layout,
+        decompose=args.decompose,
+        sweep=args.sweep,
     )
     # Render everything before touching any file, so that an error writes nothing.
     outputs: list[tuple[str, bytes | str, str]] = []
