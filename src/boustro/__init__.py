@@ -6,12 +6,23 @@ Layers, each importing only those below it (see ``DESIGN.md``):
 2. :mod:`boustro.models` - transect-length models: exact chords, the paper's sigmoid integral;
    :mod:`boustro.smooth` - the smooth closed form (the paper's first item of future work).
 3. :mod:`boustro.fitness` - fitness functions of transect lengths (Eq. 1 of the paper).
-4. :mod:`boustro.scoring` - score a layout in user units.
+4. :mod:`boustro.scoring` - score a layout in user units; :mod:`boustro.objectives` - fewest
+   transects, shortest path.
+5. :mod:`boustro.optimize` - grid search, gradient descent (SGD/Adam, temperature schedules),
+   hybrid, and :mod:`boustro.global_opt` - the certified global optimum; one result type.
+6. :mod:`boustro.regions`, :mod:`boustro.decompose` - concave areas and holes;
+   :mod:`boustro.plan` - ordered, coverage-guaranteed waypoints and statistics.
 
-Edges (never imported by the core): :mod:`boustro.io` (files), :mod:`boustro.cli`.
+The functions ``optimize.optimize`` and ``decompose.decompose`` are not re-exported here, so
+that ``boustro.optimize`` and ``boustro.decompose`` stay the modules.
+
+Edges (never imported by the core): :mod:`boustro.io` (reading areas), :mod:`boustro.geo`
+(coordinate systems, missions), :mod:`boustro.formats` (mission files), :mod:`boustro.plot`,
+:mod:`boustro.plot_plan`, :mod:`boustro.experiments`, :mod:`boustro.cli`.
 """
 
 from ._version import __version__
+from .decompose import optimize_region, plan_region
 from .errors import (
     BoustroError,
     InvalidParameterError,
@@ -22,6 +33,12 @@ from .errors import (
 )
 from .fitness import SmithFitness, smith_fitness
 from .geometry import Frame, HalfPlanes, Polygon, halfplanes
+from .global_opt import (
+    best_offset,
+    fewest_transects_optimum,
+    global_optimum,
+    shortest_path_optimum,
+)
 from .models import (
     ExactModel,
     PaperModel,
@@ -31,6 +48,18 @@ from .models import (
     paper_lengths,
     transect_positions,
 )
+from .objectives import FewestTransects, ShortestPath, get_objective, path_length
+from .optimize import (
+    GRID_200,
+    OptimizeResult,
+    TemperatureSchedule,
+    gradient_descent,
+    grid_search,
+    hybrid,
+    register_method,
+)
+from .plan import Plan, PlanStats, build_plan, coverage, guaranteed_segments
+from .regions import Region, RegionExactModel, RegionSoftModel, region_segments
 from .scoring import Score, Segments, make_model, score, transect_segments
 from .smooth import (
     DEFAULT_SMOOTHING,
@@ -42,29 +71,55 @@ from .smooth import (
 
 __all__ = [
     "DEFAULT_SMOOTHING",
+    "GRID_200",
     "BoustroError",
     "ExactModel",
+    "FewestTransects",
     "Frame",
     "HalfPlanes",
     "InvalidParameterError",
     "InvalidPolygonError",
     "NoTransectError",
     "NonConvexPolygonError",
+    "OptimizeResult",
     "PaperModel",
+    "Plan",
+    "PlanStats",
     "Polygon",
     "PolygonFileError",
+    "Region",
+    "RegionExactModel",
+    "RegionSoftModel",
     "Score",
     "Segments",
+    "ShortestPath",
     "SmithFitness",
     "SmoothModel",
+    "TemperatureSchedule",
     "TransectLengths",
     "TransectModel",
     "__version__",
+    "best_offset",
+    "build_plan",
+    "coverage",
     "exact_chords",
+    "fewest_transects_optimum",
+    "get_objective",
+    "global_optimum",
+    "gradient_descent",
+    "grid_search",
+    "guaranteed_segments",
     "halfplanes",
+    "hybrid",
     "make_model",
+    "optimize_region",
     "paper_lengths",
+    "path_length",
+    "plan_region",
+    "region_segments",
+    "register_method",
     "score",
+    "shortest_path_optimum",
     "smith_fitness",
     "smooth_lengths",
     "smoothing_from_temperature",

@@ -64,7 +64,7 @@ log = logging.getLogger("boustro")
 
 #: The optimiser :func:`plan_area` uses unless told otherwise, and the options it passes to each
 #: method. Switching the default is this one line.
-DEFAULT_METHOD = "grid"
+DEFAULT_METHOD = "global"
 METHOD_OPTIONS: dict[str, dict[str, Any]] = {"grid": {"n_angles": 360, "n_offsets": 32}}
 
 #: Deepest pocket (metres) of a nearly convex area that is planned on its convex hull.

@@ -19,7 +19,7 @@ from ..errors import BoustroError
 __all__ = ["build_parser", "main"]
 
 #: Subcommand modules, in the order ``--help`` lists them.
-SUBCOMMANDS = ("score", "plan")
+SUBCOMMANDS = ("score", "optimize", "plan")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,256 @@
+"""``boustro optimize``: the best transect angle and offset for a polygon and a spacing."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import sys
+from typing import Any
+
+from ..errors import InvalidParameterError
+from ..fitness import SmithFitness
+from ..optimize import GRID_200, OptimizeResult, TemperatureSchedule, optimize
+from ..scoring import score
+from ._common import (
+    add_polygon_argument,
+    load_polygon,
+    positive_float,
+    positive_int,
+    print_json,
+    print_table,
+)
+from .score import (
+    CONVENTIONS,
+    add_layout_arguments,
+    model_from_args,
+    resolve_spacing,
+    score_rows,
+    score_to_json,
+)
+
+log = logging.getLogger("boustro")
+
+METHODS = ("grid", "gradient", "hybrid", "global")
+
+EPILOG = (
+    CONVENTIONS
+    + """
+methods:
+  grid      exact fitness on an angles x offsets grid (default 180 x 20; --paper-grid: the
+            paper's 14 x 14 over [0, 180) degrees x one spacing)
+  gradient  gradient ascent through the paper's differentiable model from --starts random
+            layouts (picked from 1024 by the exact fitness), then an exact zoom
+  hybrid    (default) a 42 x 28 grid, gradient refinement of its --starts best local maxima,
+            then an exact zoom; never worse than the grid
+  global    the certified global optimum of Eq. 1: branch and bound over the angle, exact in
+            the offset; prints upper_bound and gap (<= --tol)
+  Every method ranks layouts by the EXACT fitness. --model and its settings (--temperature,
+  --points-per-transect, --smoothing, --clip) only choose the model that scores the answer in
+  the output, as in 'boustro score'; -a and -b weigh the fitness searched and reported.
+"""
+)
+
+
+def schedule_type(text: str) -> TemperatureSchedule:
+    """``T`` (constant) or ``T0:T1`` (annealed geometrically), every temperature > 0."""
+    parts = text.split(":")
+    if len(parts) not in (1, 2):
+        raise argparse.ArgumentTypeError(f"expected T or T0:T1, got {text!r}")
+    try:
+        values = [positive_float(part) for part in parts]
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(f"expected T or T0:T1 with T > 0, got {text!r}") from None
+    return TemperatureSchedule(*values)
+
+
+def nonnegative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
+    return value
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "optimize",
+        help="best transect angle and offset (grid, gradient or hybrid search)",
+        description="Find the transect angle and grid offset that maximise the fitness of Smith "
+        "et al. (the paper's Eq. 1) for a convex polygon and a spacing.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    add_polygon_argument(p)
+    add_layout_arguments(p)
+    p.add_argument(
+        "--method", choices=METHODS, default="hybrid", help="search method (default: hybrid)"
+    )
+    grid = p.add_argument_group("grid (grid, hybrid)")
+    grid.add_argument(
+        "--angles", type=positive_int, default=None, help="grid angles over [0, 180) degrees"
+    )
+    grid.add_argument(
+        "--offsets", type=positive_int, default=None, help="grid offsets over one spacing"
+    )
+    grid.add_argument(
+        "--paper-grid",
+        action="store_true",
+        help="the paper's 200-sample grid: 14 angles x 14 offsets",
+    )
+    grad = p.add_argument_group("gradient (gradient, hybrid)")
+    grad.add_argument(
+        "--starts",
+        type=positive_int,
+        default=None,
+        help="layouts descended together (gradient: 8 random; hybrid: the 3 best grid maxima)",
+    )
+    grad.add_argument(
+        "--steps", type=nonnegative_int, default=None, help="most gradient steps (200; hybrid 30)"
+    )
+    grad.add_argument(
+        "--optimizer", choices=("adam", "sgd"), default="adam", help="(default: adam)"
+    )
+    grad.add_argument(
+        "--momentum", type=float, default=0.8, help="SGD momentum (default: the paper's 0.8)"
+    )
+    grad.add_argument(
+        "--schedule",
+        type=schedule_type,
+        default=None,
+        metavar="T|T0:T1",
+        help="temperature of the guiding model: constant T, or annealed geometrically from T0 "
+        "to T1 (default 50:200)",
+    )
+    grad.add_argument(
+        "--seed", type=int, default=0, help="seed of the random starts (gradient; default 0)"
+    )
+    p.add_argument(
+        "--tol",
+        type=positive_float,
+        default=None,
+        help="global: the optimality gap to certify (default 1e-6)",
+    )
+    p.add_argument(
+        "--plot",
+        metavar="FILE.png",
+        default=None,
+        help="also draw the polygon and the chosen transects into this image file",
+    )
+    p.set_defaults(func=run)
+
+
+def _options(args: argparse.Namespace) -> dict[str, Any]:
+    """The keyword arguments of the chosen method; warn about options it does not use."""
+    method = args.method
+    options: dict[str, Any] = {"progress": False if args.quiet else None}
+    ignored = []
+    if args.paper_grid and (args.angles is not None or args.offsets is not None):
+        raise InvalidParameterError("--paper-grid fixes the grid: drop --angles and --offsets")
+    if method in ("grid", "hybrid"):
+        if args.paper_grid:
+            options.update(GRID_200)
+        if args.angles is not None:
+            options["n_angles"] = args.angles
+        if args.offsets is not None:
+            options["n_offsets"] = args.offsets
+    elif args.paper_grid or args.angles is not None or args.offsets is not None:
+        ignored.append("--angles/--offsets/--paper-grid")
+    if method in ("gradient", "hybrid"):
+        if args.starts is not None:
+            options["starts" if method == "gradient" else "top_k"] = args.starts
+        if args.steps is not None:
+            options["steps"] = args.steps
+        if args.schedule is not None:
+            options["temperature"] = args.schedule
+        options["optimizer"] = args.optimizer
+        options["momentum"] = args.momentum
+    else:
+        for flag, value, default in (
+            ("--starts", args.starts, None),
+            ("--steps", args.steps, None),
+            ("--schedule", args.schedule, None),
+            ("--optimizer", args.optimizer, "adam"),
+            ("--momentum", args.momentum, 0.8),
+        ):
+            if value != default:
+                ignored.append(flag)
+    if method == "gradient":
+        options["seed"] = args.seed
+    elif args.seed != 0:
+        ignored.append("--seed")
+    if method == "global":
+        options["tol"] = 1e-6 if args.tol is None else args.tol
+    elif args.tol is not None:
+        ignored.append("--tol")
+    for flag in ignored:
+        log.warning("%s is not used by --method %s; ignored", flag, method)
+    return options
+
+
+def _check_plot_target(path: str) -> None:
+    """Fail before the search if the plot cannot be written: no matplotlib, unknown format."""
+    try:
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise InvalidParameterError(
+            "--plot needs matplotlib: pip install 'boustro[plot]'"
+        ) from None
+    suffix = path.rsplit(".", 1)[-1].lower() if "." in path else ""
+    supported = Figure().canvas.get_supported_filetypes()
+    if suffix not in supported:
+        raise InvalidParameterError(
+            f"--plot {path}: unknown image format {suffix!r}; expected a file name ending in "
+            f"one of {', '.join('.' + k for k in sorted(supported))}"
+        )
+
+
+def _save_plot(path: str, polygon, result, found: OptimizeResult) -> None:
+    from matplotlib.figure import Figure
+
+    from ..plot import plot_layout
+
+    fig = Figure(figsize=(6, 6))
+    ax = fig.add_subplot()
+    plot_layout(
+        polygon,
+        result.layout,
+        ax=ax,
+        title=f"{found.method}: {math.degrees(found.angle):.2f} deg, offset "
+        f"{found.offset:.4g}, fitness {found.fitness:.4f}",
+    )
+    fig.savefig(path, dpi=150, bbox_inches="tight")
+
+
+def run(args: argparse.Namespace) -> int:
+    polygon = load_polygon(args.polygon)
+    spacing = resolve_spacing(args)
+    if args.plot is not None:
+        _check_plot_target(args.plot)
+    fitness = SmithFitness(a=args.a, b=args.b)
+    model = model_from_args(args)  # validates the scoring model's settings before the search
+    found = optimize(polygon, spacing, method=args.method, fitness=fitness, **_options(args))
+    result = score(polygon, spacing, found.angle, found.offset, model=model, fitness=fitness)
+    if args.plot is not None:
+        _save_plot(args.plot, polygon, result, found)
+    if args.json:
+        out = score_to_json(result, args)
+        out.update(method=found.method, evaluations=found.evaluations, seconds=found.seconds)
+        if found.upper_bound is not None:
+            out.update(upper_bound=found.upper_bound, gap=found.gap)
+        print_json(out)
+    else:
+        rows = score_rows(result)
+        rows += [
+            ("method", found.method),
+            ("evaluations", f"{found.evaluations}"),
+            ("time", f"{found.seconds:.3f} s"),
+        ]
+        if found.upper_bound is not None:
+            rows += [("upper bound", f"{found.upper_bound:.9f}"), ("gap", f"{found.gap:.2e}")]
+        print_table(rows)
+        if args.plot is not None:
+            print(f"plot written to {args.plot}", file=sys.stderr)
+    return 0
