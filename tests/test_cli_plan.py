@@ -221,3 +221,14 @@ def test_help_mentions_the_guarantee(capsys):
     out = capsys.readouterr().out
     assert "no part of the area is left outside every swath" in out
     assert "QGC WPL 110" in out
+
+
+def test_fewest_transects_objective_flies_fewer_lanes(capsys):
+    counts = {}
+    for objective in ("smith", "fewest-transects"):
+        code, out, err = run(capsys, "plan", "--objective", objective, "--json")
+        assert code == 0, err
+        summary = json.loads(out)
+        assert summary["covered_share"] >= 1 - 1e-9
+        counts[objective] = summary["n_transects"]
+    assert counts["fewest-transects"] <= counts["smith"]

@@ -439,3 +439,13 @@ def test_bad_grid_options(parallelogram, options):
 def test_problem_frame(parallelogram):
     p = _problem(parallelogram, 0.5, None, "test")
     assert p.s_n == pytest.approx(0.5 / parallelogram.diameter) and p.sign == 1.0
+
+
+def test_global_method_dispatches_on_the_objective():
+    from boustro.objectives import FewestTransects, ShortestPath
+
+    poly = [(8, 4), (8, 10), (4, 8), (4, 2)]
+    assert optimize(poly, 0.5, method="global").method == "global"
+    fewest = optimize(poly, 0.5, method="global", fitness=FewestTransects())
+    assert fewest.method == "fewest_transects" and fewest.fitness == 8  # width 4 / 0.5
+    assert optimize(poly, 0.5, method="global", fitness=ShortestPath()).method == "shortest_path"

@@ -1110,19 +1110,28 @@ def hybrid(
 Method = Callable[..., OptimizeResult]
 
 
-#: Optimisers by name; :func:`optimize` dispatches here. Each is called as
-#: ``method(polygon, spacing, fitness=fitness, **options)`` and returns an
-#: :class:`OptimizeResult`.
 def _global(polygon: Polygon | ArrayLike, spacing: float, **options: Any) -> OptimizeResult:
-    """``method="global"``: :func:`boustro.global_opt.global_optimum`, certified (Eq. 1 only)."""
-    from .global_opt import global_optimum  # lazy: global_opt imports this module
+    """``method="global"``: the certified optimum of Eq. 1, or of fewest transects / shortest
+    path when ``fitness`` is :class:`~boustro.objectives.FewestTransects` / ``ShortestPath``."""
+    # lazy: global_opt imports this module
+    from .global_opt import fewest_transects_optimum, global_optimum, shortest_path_optimum
+    from .objectives import FewestTransects, ShortestPath
 
     # The same rule as every other method: a spacing at least the diameter is refused here
     # (global_optimum itself answers it: one transect along the diameter, fitness a + b).
-    _problem(polygon, spacing, options.get("fitness"), "the global optimiser")
+    fitness = options.get("fitness")
+    _problem(polygon, spacing, fitness, "the global optimiser")
+    # Each objective has its own exact machinery; options that only Eq. 1's uses are dropped.
+    if isinstance(fitness, FewestTransects):
+        return fewest_transects_optimum(polygon, spacing)
+    if isinstance(fitness, ShortestPath):
+        return shortest_path_optimum(polygon, spacing)
     return global_optimum(polygon, spacing, **options)
 
 
+#: Optimisers by name; :func:`optimize` dispatches here. Each is called as
+#: ``method(polygon, spacing, fitness=fitness, **options)`` and returns an
+#: :class:`OptimizeResult`.
 METHODS: dict[str, Method] = {
     "grid": grid_search,
     "gradient": gradient_descent,
