@@ -258,3 +258,24 @@ def test_temperature_as_batched_tensor(parallelogram):
     for i in range(2):
         one = paper_lengths(hp, 0.0, 0.0, 0.1, temperature=float(temps[i]), points_per_transect=100)
         torch.testing.assert_close(batched.lengths[i], one.lengths)
+
+
+@pytest.mark.grad
+def test_fused_integral_equals_log_space_autograd(parallelogram, triangle):
+    """The chunked kernel with analytic backward and plain autograd through
+    exp(sum(logsigmoid)) (taken when the temperature requires grad) agree, values and grads."""
+    for poly in (parallelogram, triangle):
+        hp = halfplanes(poly)
+        for temp in (3.0, 1e3, 1e5):
+            out = []
+            for needs_grad in (False, True):
+                theta = torch.tensor([0.3, 1.7, 2.9], dtype=torch.float64, requires_grad=True)
+                offset = torch.tensor([0.01, -0.2, 0.05], dtype=torch.float64, requires_grad=True)
+                t = torch.tensor(temp, dtype=torch.float64, requires_grad=needs_grad)
+                tl = paper_lengths(hp, theta, offset, 0.07, temperature=t, points_per_transect=300)
+                f = smith_fitness(tl.lengths, tl.weights).sum()
+                f.backward()
+                out.append((tl.lengths.detach(), theta.grad, offset.grad))
+            for a, b in zip(*out):
+                torch.testing.assert_close(a, b, rtol=1e-9, atol=1e-9)
+                assert torch.all(torch.isfinite(a))
