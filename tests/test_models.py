@@ -276,6 +276,6 @@ def test_fused_integral_equals_log_space_autograd(parallelogram, triangle):
                 f = smith_fitness(tl.lengths, tl.weights).sum()
                 f.backward()
                 out.append((tl.lengths.detach(), theta.grad, offset.grad))
-            for a, b in zip(*out):
+            for a, b in zip(*out, strict=True):
                 torch.testing.assert_close(a, b, rtol=1e-9, atol=1e-9)
                 assert torch.all(torch.isfinite(a))
