@@ -214,7 +214,7 @@ class _SigmoidIntegral(torch.autograd.Function):
     """
 
     @staticmethod
-    def forward(  # type: ignore[override]
+    def forward(
         ctx: Any,
         lhs: torch.Tensor,
         slope: torch.Tensor,
