@@ -196,3 +196,11 @@ def test_global_method_reports_a_certified_gap(capsys):
     # no grid layout beats the certified optimum
     code = main(["optimize", "--method", "grid", "--angles", "720", "--offsets", "40", "--json"])
     assert json.loads(capsys.readouterr().out)["fitness"] <= data["upper_bound"]
+
+
+def test_learned_method(capsys):
+    for extra in ([], ["--refine"]):
+        code = main(["optimize", "--method", "learned", *extra, "--json"])
+        data = json.loads(capsys.readouterr().out)
+        assert code == 0 and data["method"] == "learned"
+        assert 0.25 <= data["fitness"] <= 1.0

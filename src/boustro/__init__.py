@@ -10,6 +10,7 @@ Layers, each importing only those below it (see ``DESIGN.md``):
    transects, shortest path.
 5. :mod:`boustro.optimize` - grid search, gradient descent (SGD/Adam, temperature schedules),
    hybrid, and :mod:`boustro.global_opt` - the certified global optimum; one result type.
+   :mod:`boustro.learned` - a planner network trained through the differentiable fitness.
 6. :mod:`boustro.regions`, :mod:`boustro.decompose` - concave areas and holes;
    :mod:`boustro.plan` - ordered, coverage-guaranteed waypoints and statistics.
 

@@ -1129,6 +1129,13 @@ def _global(polygon: Polygon | ArrayLike, spacing: float, **options: Any) -> Opt
     return global_optimum(polygon, spacing, **options)
 
 
+def _learned(polygon: Polygon | ArrayLike, spacing: float, **options: Any) -> OptimizeResult:
+    """``method="learned"``: :func:`boustro.learned.learned` (``refine=True`` to refine)."""
+    from .learned import learned  # lazy: boustro.learned imports this module
+
+    return learned(polygon, spacing, **options)
+
+
 #: Optimisers by name; :func:`optimize` dispatches here. Each is called as
 #: ``method(polygon, spacing, fitness=fitness, **options)`` and returns an
 #: :class:`OptimizeResult`.
@@ -1137,6 +1144,7 @@ METHODS: dict[str, Method] = {
     "gradient": gradient_descent,
     "hybrid": hybrid,
     "global": _global,
+    "learned": _learned,
 }
 
 
@@ -1166,7 +1174,8 @@ def optimize(
         method: a name in :data:`METHODS`: ``"grid"`` (:func:`grid_search`), ``"gradient"``
             (:func:`gradient_descent`), ``"hybrid"`` (:func:`hybrid`) or ``"global"``
             (:func:`boustro.global_opt.global_optimum`: the certified optimum of Eq. 1, with an
-            upper bound in ``upper_bound``).
+            upper bound in ``upper_bound``) or ``"learned"`` (:func:`boustro.learned.learned`:
+            the shipped planner network, ``refine=True`` for its exact refinement).
         fitness: the objective (default Eq. 1 with a = b = 0.5), maximised.
         **options: passed to the method.
     """

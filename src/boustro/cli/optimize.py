@@ -31,7 +31,7 @@ from .score import (
 
 log = logging.getLogger("boustro")
 
-METHODS = ("grid", "gradient", "hybrid", "global")
+METHODS = ("grid", "gradient", "hybrid", "global", "learned")
 
 EPILOG = (
     CONVENTIONS
@@ -45,6 +45,8 @@ methods:
             then an exact zoom; never worse than the grid
   global    the certified global optimum of Eq. 1: branch and bound over the angle, exact in
             the offset; prints upper_bound and gap (<= --tol)
+  learned   the shipped planner network (trained through the differentiable fitness, see
+            'boustro train'); --refine adds its fast exact refinement
   Every method ranks layouts by the EXACT fitness. --model and its settings (--temperature,
   --points-per-transect, --smoothing, --clip) only choose the model that scores the answer in
   the output, as in 'boustro score'; -a and -b weigh the fitness searched and reported.
@@ -128,6 +130,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--seed", type=int, default=0, help="seed of the random starts (gradient; default 0)"
     )
     p.add_argument(
+        "--refine",
+        action="store_true",
+        help="learned: refine the network's candidates exactly (offset sweep, vertex events, zoom)",
+    )
+    p.add_argument(
         "--tol",
         type=positive_float,
         default=None,
@@ -185,6 +192,10 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
         options["tol"] = 1e-6 if args.tol is None else args.tol
     elif args.tol is not None:
         ignored.append("--tol")
+    if method == "learned":
+        options["refine"] = args.refine
+    elif args.refine:
+        ignored.append("--refine")
     for flag in ignored:
         log.warning("%s is not used by --method %s; ignored", flag, method)
     return options
