@@ -8,6 +8,7 @@ import torch
 
 from boustro.geometry import Polygon, random_convex_polygon
 from boustro.io import PAPER_PARALLELOGRAM
+from boustro.regions import Region, random_region
 
 # Spacing of the authors' scripts for the parallelogram, in the normalised frame (18 transects).
 PAPER_SPACING_NORMALISED = 0.5 / np.hypot(4.0, 8.0)
@@ -44,3 +45,26 @@ def rng() -> np.random.Generator:
 def _deterministic_torch():
     torch.manual_seed(0)
     yield
+
+
+def random_regions(
+    seed: int, count: int, n_vertices: tuple[int, int] = (6, 16), n_holes: tuple[int, int] = (0, 3)
+) -> list[Region]:
+    """``count`` random concave regions with holes (``boustro.regions.random_region``)."""
+    rng = np.random.default_rng(seed)
+    return [
+        random_region(
+            rng,
+            int(rng.integers(n_vertices[0], n_vertices[1] + 1)),
+            int(rng.integers(n_holes[0], n_holes[1] + 1)),
+            roughness=float(rng.uniform(0.3, 0.7)),
+        )
+        for _ in range(count)
+    ]
+
+
+def shapely_region(region: Region):
+    """The same area as a shapely polygon (reference for exact tests)."""
+    import shapely
+
+    return shapely.Polygon(region.shell.vertices, [h.vertices for h in region.holes])

@@ -24,26 +24,19 @@ from boustro.geo import plan_area
 from boustro.geometry import Polygon
 from boustro.io import area_from_text, read_area
 from boustro.plan import KINDS, coverage
-from boustro.regions import Region, RegionExactModel, random_region, region_edges, region_segments
+from boustro.regions import Region, RegionExactModel, region_edges, region_segments
 from boustro.routing import Router
+
+from .conftest import random_regions, shapely_region
 
 L_SHAPE = [(0, 0), (10, 0), (10, 3), (3, 3), (3, 10), (0, 10)]
 
 
-def _shapely(region: Region) -> shapely.Polygon:
-    return shapely.Polygon(region.shell.vertices, [h.vertices for h in region.holes])
-
-
 def _regions(seed: int, count: int, n_vertices=(8, 24), n_holes=(1, 3)) -> list[Region]:
-    rng = np.random.default_rng(seed)
+    """Random regions in metres, far from the origin."""
     return [
-        random_region(
-            rng,
-            int(rng.integers(n_vertices[0], n_vertices[1] + 1)),
-            int(rng.integers(n_holes[0], n_holes[1] + 1)),
-            roughness=float(rng.uniform(0.3, 0.7)),
-        ).map(lambda v: 100.0 * v + np.array([5e5, 5e6]))  # metres, far from the origin
-        for _ in range(count)
+        r.map(lambda v: 100.0 * v + np.array([5e5, 5e6]))
+        for r in random_regions(seed, count, n_vertices, n_holes)
     ]
 
 
@@ -51,7 +44,7 @@ def _assert_tiles(region: Region, pieces: list[shapely.Polygon]) -> None:
     """Union = area and pairwise overlap zero: every piece lies in the area, the pieces'
     areas add up to the area's, no two overlap. (Checked this way rather than by GEOS's
     union of all pieces, which was seen to lose a piece of a valid tiling.)"""
-    target = _shapely(region)
+    target = shapely_region(region)
     for p in pieces:
         assert p.difference(target).area <= 1e-9 * target.area
     assert sum(p.area for p in pieces) == pytest.approx(target.area, rel=1e-9)
@@ -76,7 +69,7 @@ def test_cells_tile_the_area_exactly(merge):
     for region in _regions(seed=3, count=6):
         for sweep in rng.uniform(0, math.pi, 3):
             dec = decompose(region, float(sweep), merge=merge, min_width=8.0 if merge else 0.0)
-            pieces = [_shapely(c) for c in dec.cells]
+            pieces = [shapely_region(c) for c in dec.cells]
             assert all(p.is_valid for p in pieces)
             _assert_tiles(region, pieces)
             assert len(dec.widths) == len(dec.cells)
@@ -129,7 +122,7 @@ def test_router_paths_stay_inside_and_avoid_holes():
     rng = np.random.default_rng(8)
     for region in _regions(seed=9, count=3, n_holes=(2, 3)):
         router = Router(region, reach=0.0)
-        area = _shapely(region).buffer(1e-7 * region.diameter)
+        area = shapely_region(region).buffer(1e-7 * region.diameter)
         pts = []
         while len(pts) < 24:
             p = rng.uniform(-100, 100, 2) + np.array([5e5, 5e6])
@@ -187,7 +180,7 @@ def test_chords_layout_is_the_exact_segments():
     plan = plan_region(region, 0.5, layout="chords", decompose_area=False, angle=0.2, offset=0.1)
     assert set(plan.role()) == {"lane"}  # no hole passes without the guarantee
     lanes = region_lanes(region, 0.5, 0.2, 0.1, layout="chords")
-    shape = _shapely(region)
+    shape = shapely_region(region)
     for seg in lanes.segments:
         line = shapely.LineString(seg)
         assert line.length == pytest.approx(shape.intersection(line).length, abs=1e-9)

@@ -28,25 +28,10 @@ from boustro.regions import (
     soft_region_lengths,
 )
 
+from .conftest import random_regions, shapely_region
+
 SQUARE = [(0, 0), (4, 0), (4, 4), (0, 4)]
 INNER = [(1, 1), (2, 1), (2, 2), (1, 2)]
-
-
-def _shapely(region: Region) -> shapely.Polygon:
-    return shapely.Polygon(region.shell.vertices, [h.vertices for h in region.holes])
-
-
-def _regions(seed: int, count: int, n_vertices=(6, 16), n_holes=(0, 3)) -> list[Region]:
-    rng = np.random.default_rng(seed)
-    return [
-        random_region(
-            rng,
-            int(rng.integers(n_vertices[0], n_vertices[1] + 1)),
-            int(rng.integers(n_holes[0], n_holes[1] + 1)),
-            roughness=float(rng.uniform(0.3, 0.7)),
-        )
-        for _ in range(count)
-    ]
 
 
 # -- validation -------------------------------------------------------------------------------
@@ -62,7 +47,7 @@ def test_region_basics():
     inside = r.contains([(0.5, 0.5), (1.5, 1.5), (5, 5), (3, 3)])
     assert inside.tolist() == [True, False, False, True]
     np.testing.assert_allclose(r.normalised().shell.diameter, 1.0)
-    assert _shapely(r).area == pytest.approx(r.area)
+    assert shapely_region(r).area == pytest.approx(r.area)
 
 
 @pytest.mark.parametrize(
@@ -91,10 +76,10 @@ def test_invalid_shell_and_hole_argument():
 
 
 def test_random_regions_are_valid():
-    for r in _regions(seed=1, count=10, n_holes=(1, 3)):
+    for r in random_regions(seed=1, count=10, n_holes=(1, 3)):
         assert r.n_holes >= 1
-        assert _shapely(r).is_valid
-        assert _shapely(r).area == pytest.approx(r.area, rel=1e-12)
+        assert shapely_region(r).is_valid
+        assert shapely_region(r).area == pytest.approx(r.area, rel=1e-12)
 
 
 # -- exact segments ---------------------------------------------------------------------------
@@ -102,7 +87,7 @@ def _shapely_lengths(region: Region, angle: float, position: float) -> list[floa
     u = np.array([math.cos(angle), math.sin(angle)])
     n = np.array([-math.sin(angle), math.cos(angle)])
     line = shapely.LineString([position * n - 10 * u, position * n + 10 * u])
-    piece = _shapely(region).intersection(line)
+    piece = shapely_region(region).intersection(line)
     parts = getattr(piece, "geoms", [piece])
     return sorted(g.length for g in parts if g.length > 0)
 
@@ -110,7 +95,7 @@ def _shapely_lengths(region: Region, angle: float, position: float) -> list[floa
 def test_exact_segments_match_shapely_on_random_concave_regions_with_holes():
     rng = np.random.default_rng(7)
     checked = 0
-    for region in _regions(seed=2, count=12, n_holes=(1, 3)):
+    for region in random_regions(seed=2, count=12, n_holes=(1, 3)):
         r = region.normalised()
         edges = region_edges(r, normalise=False)
         for _ in range(4):
@@ -144,7 +129,7 @@ def test_segments_through_vertices_and_along_edges():
 
 def test_segment_moments_match_the_dense_model():
     rng = np.random.default_rng(3)
-    for region in _regions(seed=4, count=6):
+    for region in random_regions(seed=4, count=6):
         edges = region_edges(region)
         e = region.frame.to_normalised(region.edges)
         angles = rng.uniform(0, math.pi, 50)
@@ -171,7 +156,7 @@ def test_region_model_on_a_convex_polygon_is_the_papers_model():
 
 
 def test_evaluate_region_grid_fast_path_equals_the_model():
-    region = _regions(seed=5, count=1, n_holes=(2, 2))[0]
+    region = random_regions(seed=5, count=1, n_holes=(2, 2))[0]
     edges = region_edges(region)
     angles = np.linspace(0, math.pi, 7, endpoint=False)
     offsets = np.linspace(0, 0.05, 4, endpoint=False)

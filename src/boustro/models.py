@@ -97,6 +97,17 @@ def check_spacing(spacing: float) -> float:
     return s
 
 
+def check_finite(name: str, value: float) -> float:
+    """Return ``value`` as a float, or raise if it is not a finite number."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise InvalidParameterError(f"{name} must be a finite number, got {value!r}")
+    return v
+
+
 def _prepare(
     hp: HalfPlanes, theta: torch.Tensor | float, offset: torch.Tensor | float
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:

@@ -49,7 +49,7 @@ from .errors import (
     NoTransectError,
 )
 from .geometry import HalfPlanes, Polygon, halfplanes
-from .models import check_spacing, exact_chords
+from .models import check_finite, check_spacing, exact_chords
 from .scoring import Segments, as_polygon, transect_segments
 
 if TYPE_CHECKING:
@@ -92,16 +92,6 @@ def _check_nonnegative(name: str, value: float) -> float:
         raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
     if not math.isfinite(v) or v < 0:
         raise InvalidParameterError(f"{name} must be a finite number >= 0, got {value!r}")
-    return v
-
-
-def _check_finite(name: str, value: float) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise InvalidParameterError(f"{name} must be a finite number, got {value!r}")
     return v
 
 
@@ -158,8 +148,8 @@ def guaranteed_segments(
     """
     poly = as_polygon(polygon).require_convex("coverage-guaranteed transects")
     spacing = check_spacing(spacing)
-    angle, offset = _check_finite("angle", angle), _check_finite("offset", offset)
-    reach = spacing / 2 if reach is None else _check_finite("reach", reach)
+    angle, offset = check_finite("angle", angle), check_finite("offset", offset)
+    reach = spacing / 2 if reach is None else check_finite("reach", reach)
     if reach < spacing / 2 * (1 - 1e-12):
         raise InvalidParameterError(
             f"reach must be >= spacing / 2 = {spacing / 2:g} for the bands to tile the area, "
@@ -220,7 +210,7 @@ def edge_offset(
     """
     poly = as_polygon(polygon)
     spacing = check_spacing(spacing)
-    angle = _check_finite("angle", angle)
+    angle = check_finite("angle", angle)
     n = np.array([-math.sin(angle), math.cos(angle)])
     first = float(np.min((poly.vertices - poly.centre) @ n)) + inset * spacing
     return math.fmod(first, spacing) % spacing
@@ -428,11 +418,11 @@ def build_plan(
     turnaround = _check_nonnegative("turnaround", turnaround)
     nadir_gap = _check_nonnegative("nadir_gap", nadir_gap)
     turn_time = _check_nonnegative("turn_time", turn_time)
-    ground_scale = _check_finite("ground_scale", ground_scale)
+    ground_scale = check_finite("ground_scale", ground_scale)
     if ground_scale <= 0:
         raise InvalidParameterError(f"ground_scale must be > 0, got {ground_scale!r}")
     if speed is not None:
-        speed = _check_finite("speed", speed)
+        speed = check_finite("speed", speed)
         if speed <= 0:
             raise InvalidParameterError(f"speed must be > 0, got {speed!r}")
     if layout == "guaranteed":

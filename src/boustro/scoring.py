@@ -17,7 +17,14 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import InvalidParameterError, NoTransectError
 from .fitness import SmithFitness
 from .geometry import Polygon, halfplanes
-from .models import ExactModel, PaperModel, TransectModel, check_spacing, exact_chords
+from .models import (
+    ExactModel,
+    PaperModel,
+    TransectModel,
+    check_finite,
+    check_spacing,
+    exact_chords,
+)
 from .smooth import DEFAULT_SMOOTHING, SmoothModel
 
 __all__ = ["Score", "Segments", "as_polygon", "make_model", "score", "transect_segments"]
@@ -26,16 +33,6 @@ __all__ = ["Score", "Segments", "as_polygon", "make_model", "score", "transect_s
 def as_polygon(polygon: Polygon | ArrayLike) -> Polygon:
     """Accept a :class:`Polygon` or anything :class:`Polygon` accepts."""
     return polygon if isinstance(polygon, Polygon) else Polygon(polygon)
-
-
-def _check_finite(name: str, value: float) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise InvalidParameterError(f"{name} must be a finite number, got {value!r}")
-    return v
 
 
 def make_model(
@@ -96,7 +93,7 @@ def transect_segments(
     """
     poly = as_polygon(polygon).require_convex("exact transect segments")
     spacing = check_spacing(spacing)
-    angle, offset = _check_finite("angle", angle), _check_finite("offset", offset)
+    angle, offset = check_finite("angle", angle), check_finite("offset", offset)
     frame = poly.frame
     hp = halfplanes(poly)
     ch = exact_chords(hp, angle, offset / frame.scale, spacing / frame.scale)
