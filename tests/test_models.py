@@ -354,3 +354,20 @@ def test_band_kernel_equals_full_kernel(parallelogram, triangle, square, dtype, 
                     own_error = float((ref.double() - ref64).abs().max())
                     diff = float((got.double() - ref.double()).abs().max())
                     assert diff <= 2 * own_error + 1e-6 * float(ref64.abs().max()) + 1e-30
+
+
+def test_public_band_switch_matches_every_point_evaluation(parallelogram):
+    """Through the public API: a call large and hot enough to take the band evaluation equals
+    PaperModel(band=False) in values and gradients."""
+    hp = halfplanes(parallelogram)
+    out = []
+    for band in (True, False):
+        theta = torch.linspace(0.0, 3.0, 40, dtype=torch.float64).requires_grad_()
+        offset = torch.full((40,), 0.013, dtype=torch.float64, requires_grad=True)
+        tl = PaperModel(temperature=2000.0, points_per_transect=1000, band=band)(
+            hp, theta, offset, 0.0559
+        )
+        smith_fitness(tl.lengths, tl.weights).sum().backward()
+        out.append((tl.lengths.detach(), theta.grad, offset.grad))
+    for a, b in zip(*out, strict=True):
+        torch.testing.assert_close(a, b, rtol=1e-10, atol=1e-12)
