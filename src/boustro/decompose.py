@@ -52,7 +52,7 @@ from typing import Any, Literal, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import InvalidParameterError, InvalidPolygonError, NoTransectError
+from .errors import InvalidParameterError, InvalidPolygonError, NoTransectError, as_number
 from .fitness import SmithFitness
 from .geometry import Polygon
 from .models import check_spacing
@@ -1011,10 +1011,7 @@ def _order(
 
 # -- plans ------------------------------------------------------------------------------------
 def _check_float(name: str, value: Any, low: float | None = None) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
+    v = as_number(name, value)
     if not math.isfinite(v) or (low is not None and v < low):
         bound = "" if low is None else f" >= {low:g}"
         raise InvalidParameterError(f"{name} must be a finite number{bound}, got {value!r}")

@@ -15,6 +15,7 @@ __all__ = [
     "NoTransectError",
     "NonConvexPolygonError",
     "PolygonFileError",
+    "as_number",
 ]
 
 
@@ -40,3 +41,14 @@ class NoTransectError(BoustroError, ValueError):
 
 class PolygonFileError(BoustroError, ValueError):
     """A polygon file is missing, unreadable, or holds no usable polygon."""
+
+
+def as_number(name: str, value: object) -> float:
+    """``float(value)``, or :class:`InvalidParameterError` ``"<name> must be a number, got ..."``.
+
+    Callers check the range themselves, with a message that states it.
+    """
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None

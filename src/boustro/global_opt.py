@@ -33,7 +33,7 @@ import numpy as np
 import torch
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import InvalidParameterError, NoTransectError
+from .errors import InvalidParameterError, NoTransectError, as_number
 from .fitness import SmithFitness
 from .geometry import Polygon, halfplanes
 from .models import check_spacing, exact_chords
@@ -762,10 +762,7 @@ def _check_count(name: str, value: int) -> int:
 
 
 def _check_tol(tol: float) -> float:
-    try:
-        t = float(tol)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"tol must be a number, got {tol!r}") from None
+    t = as_number("tol", tol)
     if not (t > 0 and math.isfinite(t)):
         raise InvalidParameterError(f"tol must be a finite number > 0, got {tol!r}")
     return t

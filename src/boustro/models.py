@@ -31,7 +31,7 @@ import torch
 import torch.nn.functional as F
 from torch.autograd.function import once_differentiable
 
-from .errors import InvalidParameterError
+from .errors import InvalidParameterError, as_number
 from .geometry import HalfPlanes
 
 __all__ = [
@@ -89,10 +89,7 @@ class TransectModel(Protocol):
 
 def check_spacing(spacing: float) -> float:
     """Return ``spacing`` as a float, or raise if it is not a finite positive number."""
-    try:
-        s = float(spacing)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"spacing must be a number, got {spacing!r}") from None
+    s = as_number("spacing", spacing)
     if not math.isfinite(s) or s <= 0:
         raise InvalidParameterError(f"spacing must be a finite number > 0, got {spacing!r}")
     return s
@@ -100,10 +97,7 @@ def check_spacing(spacing: float) -> float:
 
 def check_finite(name: str, value: float) -> float:
     """Return ``value`` as a float, or raise if it is not a finite number."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
+    v = as_number(name, value)
     if not math.isfinite(v):
         raise InvalidParameterError(f"{name} must be a finite number, got {value!r}")
     return v

@@ -38,7 +38,7 @@ import numpy as np
 import torch
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import InvalidParameterError, NoTransectError
+from .errors import InvalidParameterError, NoTransectError, as_number
 from .fitness import SmithFitness
 from .geometry import HalfPlanes, Polygon, halfplanes
 from .models import ExactModel, PaperModel, TransectLengths, TransectModel, check_spacing
@@ -184,10 +184,7 @@ def _check_count(name: str, value: Any, low: int = 1) -> int:
 
 
 def _check_positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
+    v = as_number(name, value)
     if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
         bound = ">= 0" if allow_zero else "> 0"
         raise InvalidParameterError(f"{name} must be a finite number {bound}, got {value!r}")

@@ -47,6 +47,7 @@ from .errors import (
     InvalidParameterError,
     NonConvexPolygonError,
     NoTransectError,
+    as_number,
 )
 from .geometry import HalfPlanes, Polygon, halfplanes
 from .models import check_finite, check_spacing, exact_chords
@@ -86,10 +87,7 @@ Layout = Literal["guaranteed", "chords"]
 
 # -- segments ---------------------------------------------------------------------------------
 def _check_nonnegative(name: str, value: float) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
+    v = as_number(name, value)
     if not math.isfinite(v) or v < 0:
         raise InvalidParameterError(f"{name} must be a finite number >= 0, got {value!r}")
     return v

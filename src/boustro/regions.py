@@ -79,7 +79,7 @@ import torch
 import torch.nn.functional as F
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import InvalidParameterError, InvalidPolygonError
+from .errors import InvalidParameterError, InvalidPolygonError, as_number
 from .fitness import SmithFitness
 from .geometry import Frame, Polygon, random_convex_polygon
 from .models import TransectLengths, check_spacing, transect_positions
@@ -696,10 +696,7 @@ def _trapezoids(edges: RegionEdges, theta: torch.Tensor) -> _Trapezoids:
 
 
 def _check_smoothing(smoothing: float) -> float:
-    try:
-        h = float(smoothing)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"smoothing must be a number, got {smoothing!r}") from None
+    h = as_number("smoothing", smoothing)
     if not (math.isfinite(h) and h > 0):
         raise InvalidParameterError(f"smoothing must be finite and > 0, got {smoothing!r}")
     return h

@@ -23,26 +23,20 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .errors import InvalidParameterError
+from .errors import InvalidParameterError, as_number
 
 __all__ = ["Camera", "SensorSpacing", "Swath"]
 
 
 def _positive(name: str, value: float) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
+    v = as_number(name, value)
     if not math.isfinite(v) or v <= 0:
         raise InvalidParameterError(f"{name} must be a finite number > 0, got {value!r}")
     return v
 
 
 def _fraction(name: str, value: float) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
+    v = as_number(name, value)
     if not (0 <= v < 1):
         raise InvalidParameterError(f"{name} must be a fraction in [0, 1), got {value!r}")
     return v
@@ -127,12 +121,7 @@ class Swath:
     def spacing(self) -> SensorSpacing:
         w = _positive("swath width (m)", self.width)
         overlap = _fraction("swath overlap", self.overlap)
-        try:
-            gap = float(self.nadir_gap)
-        except (TypeError, ValueError):
-            raise InvalidParameterError(
-                f"nadir gap must be a number, got {self.nadir_gap!r}"
-            ) from None
+        gap = as_number("nadir gap", self.nadir_gap)
         if not (math.isfinite(gap) and 0 <= gap < w):
             raise InvalidParameterError(
                 f"nadir gap must be >= 0 and smaller than the swath width {w:g} m, got "

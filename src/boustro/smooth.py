@@ -45,7 +45,7 @@ from dataclasses import dataclass, replace
 import torch
 import torch.nn.functional as F
 
-from .errors import InvalidParameterError
+from .errors import InvalidParameterError, as_number
 from .geometry import HalfPlanes
 from .models import (
     PAPER_WINDOW,
@@ -117,10 +117,7 @@ def _as_smoothing(
                 "smoothing must be > 0 everywhere (a scalar 0 gives the exact model)"
             )
         return h, float(h.detach().max())
-    try:
-        value = float(smoothing)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"smoothing must be a number, got {smoothing!r}") from None
+    value = as_number("smoothing", smoothing)
     if not (math.isfinite(value) and value >= 0):
         raise InvalidParameterError(f"smoothing must be finite and >= 0, got {smoothing!r}")
     return value, value
