@@ -68,3 +68,12 @@ def shapely_region(region: Region):
     import shapely
 
     return shapely.Polygon(region.shell.vertices, [h.vertices for h in region.holes])
+
+
+def run_cli(capsys, *argv):
+    """Run ``boustro ARGV...`` in-process: ``(exit code, stdout, stderr)``."""
+    from boustro.cli import main
+
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err

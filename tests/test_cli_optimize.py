@@ -8,6 +8,8 @@ from boustro.cli import main
 from boustro.optimize import exact_fitness
 from boustro.scoring import as_polygon
 
+from .conftest import run_cli
+
 PARALLELOGRAM = [[8, 4], [8, 10], [4, 8], [4, 2]]
 
 SCORE_KEYS = (
@@ -26,10 +28,7 @@ SCORE_KEYS = (
 )
 
 
-def run(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
+run = run_cli
 
 
 @pytest.fixture

@@ -12,6 +12,8 @@ from boustro import geo
 from boustro.cli import main
 from boustro.io import embedded_field
 
+from .conftest import run_cli
+
 FAST = {"n_angles": 36, "n_offsets": 8}
 SHIPPED = dict(geo.METHOD_OPTIONS.get(geo.DEFAULT_METHOD, {}))
 
@@ -23,10 +25,7 @@ def _fast_optimiser(monkeypatch):
     monkeypatch.setitem(geo.METHOD_OPTIONS, "grid", FAST)
 
 
-def run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
+run = run_cli
 
 
 def _ring_text(kind: str) -> str:

@@ -8,13 +8,12 @@ import pytest
 from boustro import __version__
 from boustro.cli import main
 
+from .conftest import run_cli
+
 PARALLELOGRAM = [[8, 4], [8, 10], [4, 8], [4, 2]]
 
 
-def run(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
+run = run_cli
 
 
 @pytest.fixture
