@@ -9,10 +9,17 @@ import numpy as np
 import pytest
 import torch
 
+import boustro.smooth as smooth_module
 from boustro.errors import InvalidParameterError
 from boustro.fitness import smith_fitness
 from boustro.geometry import HalfPlanes, Polygon, halfplanes
-from boustro.models import ExactModel, TransectModel, _prepare, exact_chords
+from boustro.models import (
+    ExactModel,
+    TransectModel,
+    _prepare,
+    exact_chords,
+    transect_positions,
+)
 from boustro.optimize import evaluate_grid
 from boustro.smooth import (
     DEFAULT_SMOOTHING,
@@ -115,11 +122,19 @@ def test_zero_smoothing_is_the_exact_model():
     assert SmoothModel(smoothing=0).temperature == math.inf
 
 
+@pytest.fixture(params=["whole", "sparse"])
+def kernel_path(request, monkeypatch):
+    """Both evaluations of the kernel: whole-tensor (small calls) and sparse tail with the
+    slot-by-slot backward (large calls), chosen by ``boustro.smooth._SPARSE_MIN``."""
+    monkeypatch.setattr(smooth_module, "_SPARSE_MIN", 0 if request.param == "sparse" else 1 << 62)
+    return request.param
+
+
 # -- gradients -------------------------------------------------------------------------------------
 @pytest.mark.grad
 @pytest.mark.parametrize("h", [0.05, 0.01])
 @pytest.mark.parametrize("clip", [False, True])
-def test_gradcheck(h, clip):
+def test_gradcheck(h, clip, kernel_path):
     hp = halfplanes(random_polygons(4, 3))
     theta = torch.tensor([0.3, 1.9, 4.0], dtype=F64, requires_grad=True)
     offset = torch.tensor([0.03, 0.05, 0.07], dtype=F64, requires_grad=True)
@@ -187,7 +202,7 @@ def _square() -> HalfPlanes:
 @pytest.mark.grad
 @pytest.mark.parametrize("h", [1e-1, 1e-4, 1e-8])
 @pytest.mark.parametrize("dtype", [torch.float64, torch.float32])
-def test_finite_gradients_at_degenerate_places(h, dtype):
+def test_finite_gradients_at_degenerate_places(h, dtype, kernel_path):
     square = _square()
     diamond = halfplanes(Polygon([(0.5, 0), (0, 0.5), (-0.5, 0), (0, -0.5)]))
     hexagon = [(math.cos(k * math.pi / 3), math.sin(k * math.pi / 3)) for k in range(6)]
@@ -227,9 +242,54 @@ def test_transect_on_a_parallel_edge_counts_like_the_exact_model():
     assert torch.all(tl.weights[outside] < 1e-12)
 
 
+# -- the evaluation against the plain formula -----------------------------------------------------
+def plain_formula(hp, theta, offset, spacing, h, clip):
+    """The module docstring's formula, term by term, with autograd: the reference for the
+    slot-sorted kernel with its analytic backward and its shortcuts."""
+    theta, offset, across, along, b = _prepare(hp, theta, offset)
+    window = 0.5 if clip else hp.radius + MARGIN * h
+    c = transect_positions(offset, spacing, window)
+    real = torch.broadcast_to(hp.normals.abs().sum(-1) > 0, along.shape)  # not padding
+    safe = torch.where(real, along, torch.ones_like(along))
+    bound = -(b[..., None, :] + across[..., None, :] * c[..., :, None]) / safe[..., None, :]
+    lower = torch.where((real & (along > 0))[..., None, :], bound / h, -math.inf)
+    minus_upper = torch.where((real & (along < 0))[..., None, :], -bound / h, -math.inf)
+    if clip:
+        w = torch.full((*lower.shape[:-1], 1), -0.5 / h, dtype=lower.dtype)
+        lower, minus_upper = torch.cat([lower, w], -1), torch.cat([minus_upper, w], -1)
+    z = -torch.logsumexp(lower, -1) - torch.logsumexp(minus_upper, -1)
+    length, weight = h * torch.nn.functional.softplus(z), torch.sigmoid(z)
+    if clip:
+        inside = (c >= -0.5) & (c < 0.5)
+        length, weight = length * inside, weight * inside
+    return length, weight
+
+
+@pytest.mark.grad
+@pytest.mark.parametrize("clip", [False, True])
+@pytest.mark.parametrize("h", [3e-2, 1e-3, 1e-4])
+def test_kernel_equals_the_plain_formula(h, clip, kernel_path):
+    # batched polygons of 3-9 edges (padded), two angle/offset pairs each; values and the
+    # gradients of Eq. 1 w.r.t. angle and offset, on both evaluation paths
+    hp, theta, offset, s = batch(11, polygons=12, pairs=2, spacing=0.05)
+    results = []
+    for f in (smooth_lengths, plain_formula):
+        th, off = theta.clone().requires_grad_(True), offset.clone().requires_grad_(True)
+        if f is smooth_lengths:
+            length, weight, _ = f(hp, th, off, s, smoothing=h, clip=clip)
+        else:
+            length, weight = f(hp, th, off, s, h, clip)
+        fit = smith_fitness(length, weight)
+        results.append((length, weight, fit, *torch.autograd.grad(fit.sum(), (th, off))))
+    names = ("lengths", "weights", "fitness", "d/dangle", "d/doffset")
+    for name, x, y in zip(names, *results, strict=True):
+        scale = float(y.detach().abs().max())
+        torch.testing.assert_close(x, y, atol=1e-9 * max(scale, 1.0), rtol=1e-9, msg=name)
+
+
 # -- batching, interface, errors -------------------------------------------------------------------
 @pytest.mark.parametrize("clip", [False, True])
-def test_batched_equals_looped(clip):
+def test_batched_equals_looped(clip, kernel_path):
     hp, theta, offset, s = batch(6, polygons=5, pairs=3)
     tl = smooth_lengths(hp, theta, offset, s, smoothing=1e-3, clip=clip)
     for i in range(theta.shape[0]):

@@ -74,7 +74,11 @@ GRID_200: dict[str, int] = {"n_angles": 14, "n_offsets": 14}
 #: below, where the sigmoid's transition (about ``4 / T`` wide, 0.02 at T = 200) still spans a
 #: trapezoid step (``2 radius / 63``, at most 0.032 in the normalised frame). With 64 points
 #: the default hybrid meets its benchmark target (mean gap < 0.005 to a dense grid) at about
-#: 35 ms of CPU per polygon; see ``benchmarks/optimizers.py``.
+#: 35 ms of CPU per polygon; see ``benchmarks/optimizers.py``. The smooth closed form
+#: (:class:`boustro.smooth.SmoothModel`, ``model=``) is the more accurate model and cheaper per
+#: call (0.49 vs 0.60 ms at 4 starts, 0.50 vs 0.91 ms at 16, parallelogram, one thread), but as
+#: the guide it gave slightly larger final gaps on the same 200 polygons (0.00156 at the best
+#: schedule tried, against 0.00134; README, "Benchmarks"), so it is not the default.
 DEFAULT_GUIDE = PaperModel(temperature=100.0, points_per_transect=64)
 
 #: Upper bound on the elements of one batched exact evaluation (pairs x transects x edges);

@@ -7,8 +7,9 @@ above where ``along_j < 0``, and the chord is ``[max of the lower bounds, min of
 bounds]``. This module replaces the hard ``max``/``min``/``max(0, .)`` by their smooth versions
 with ONE smoothing length ``h``:
 
-* ``lower = h * logsumexp(l_j / h)`` over the lower bounds (and the window bound ``-W``),
-* ``upper = -h * logsumexp(-u_j / h)`` over the upper bounds (and ``+W``),
+* ``lower = h * logsumexp(l_j / h)`` over the lower bounds (with ``clip``, and the paper's
+  window bound ``-0.5``),
+* ``upper = -h * logsumexp(-u_j / h)`` over the upper bounds (with ``clip``, and ``+0.5``),
 * ``D = upper - lower``, ``length = h * softplus(D / h)``, ``weight = sigmoid(D / h)``.
 
 ``h`` is a LENGTH in the half-planes' frame (a fraction of the diameter in the normalised frame),
@@ -23,24 +24,43 @@ frame, unit normals) switch over a width ``~1/T``; here the switch between two c
 ``sigmoid((l_1 - l_2) / h)`` and the switch of the weight is ``sigmoid(D / h)``, so ``h = 1 / T``
 makes the two models' logistic transitions the same width (see ``docs/closed_form.md``).
 
+Evaluation (``_SoftChords``, exact to rounding against the plain formula; a test compares
+them): the bounds of the lower edges and of the upper edges are sorted into two groups of
+"slots" per (angle, offset) pair, the slots laid out slot-major so that the soft maxima reduce
+over the outer dimension, and the backward pass is analytic (the softmax weights of the
+forward pass times the upstream gradient), so one forward + backward costs about ten passes over
+the ``(slots, pairs, K)`` tensor. Two shortcuts, both below rounding:
+
+* exponents are floored at ``log(tiny) + 1`` (``-707`` in float64) before ``exp``: a term below
+  that adds nothing to a sum that contains ``1``, and ``exp`` of very negative numbers is slow;
+* ``softplus`` and ``sigmoid`` are evaluated only for transects whose two soft extrema have a
+  competing bound (a sum ``!= 1``) or whose chord is within ``707 h`` of empty; elsewhere they are
+  ``max(0, D / h)`` and the 0/1 step to the last bit.
+
 Gradient safety (no ``inf`` or ``NaN`` in values or gradients, for any input):
 
-* bounds are computed as ``-a_j / (|along_j| h)`` and clamped to ``[-F/h, F/h]`` with ``F`` just
-  outside the window: a bound at ``+-F`` is either inactive or empties the chord, so the clamp
-  changes no exact length, and its zero gradient is the exact one there;
 * an edge parallel to the transects (``|along_j|`` below machine epsilon, padding included)
-  plays a lower bound with ``along = eps``: ``-F`` where it holds, ``+F`` where it does not (the
-  transect misses the polygon), with no division by zero;
-* the entries of the other role in each log-sum-exp are ``-F/h`` rather than ``-inf`` (they
-  weigh ``exp(-64)`` against the window bound), so nothing infinite reaches autograd;
-* the window bounds ``+-W`` (the paper's ``0.5`` with ``clip``, else the polygon's disc grown
-  by ``32 h``) make a transect whose bounds all lie far outside the polygon come out empty.
+  plays a lower bound with ``along = eps``, its offset moved out by ``4 eps``: its bound is
+  about ``-1/eps`` (inactive) where it holds and ``+1/eps`` (empty chord) where it does not,
+  never a division by zero;
+* the per-edge coefficients of ``v = (alpha + beta c) / h`` are clamped to
+  ``+-sqrt(float max)``, so ``v`` is finite for every ``h > 0``; a bound far outside the
+  polygon has weight ``exp(floor)`` in its soft maximum, or empties its chord so that the
+  length's gradient ``sigmoid(D / h)`` underflows to 0;
+* with ``clip`` the window bounds ``+-0.5`` are one more slot on each side; without it no
+  window is needed (a bounded polygon has a lower and an upper edge in every direction), except
+  for a pair with no edge of a role (a sliver all of whose edges are parallel to the transects
+  up to ``eps``), which gets the bound ``-W`` (the polygon's disc grown by ``32 h``) there;
+* a pair with fewer edges of a role than the batch's most fills the spare slots with ``-inf``
+  (``exp(floor)`` after the floor: nothing, against a sum ``>= 1``), so batched equals looped
+  to rounding.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import torch
 import torch.nn.functional as F
@@ -70,9 +90,9 @@ __all__ = [
 #: ``T = 10000``). See ``docs/closed_form.md`` for the fidelity it buys.
 DEFAULT_SMOOTHING = 1.0e-4
 
-#: Margin in units of ``h``: the window sits this far outside the polygon's disc (and the grid
-#: of candidate transects covers the disc grown by as much), and the far bound ``F`` twice as
-#: far outside the window, so that a transect with no chord at all weighs ``sigmoid(-64)``.
+#: Margin in units of ``h``: the grid of candidate transects covers the polygon's disc grown by
+#: this much (so a transect just outside the polygon, whose soft length is not yet 0, is on the
+#: grid), and the fallback window ``-W`` sits there.
 _MARGIN = 32.0
 
 
@@ -123,15 +143,123 @@ def _as_smoothing(
     return value, value
 
 
-def _logsumexp(x: torch.Tensor) -> torch.Tensor:
-    """``logsumexp`` over the last dimension whose backward reuses the forward's exponentials.
+#: Below this many (slot, pair, transect) elements, ``_SoftChords`` evaluates every transect's
+#: softplus and sigmoid and reduces the backward pass in whole-tensor operations: for small calls
+#: (an optimiser's few starts) the count of operations, not of elements, sets the cost.
+_SPARSE_MIN = 1 << 15
 
-    ``torch.logsumexp`` recomputes ``exp`` in its backward; here autograd keeps ``exp``'s
-    result. The shift ``m`` is detached: the value does not depend on it, so neither does the
-    gradient.
+
+class _SoftChords(torch.autograd.Function):
+    """Soft chords ``(softplus(z), sigmoid(z))``, ``(N, K)``, from the edges' components.
+
+    Inputs ``across, along, b`` ``(N, E)`` (edge ``j`` holds at ``(c, t)`` iff
+    ``across_j c + along_j t + b_j >= 0``), positions ``c`` ``(N, K)``, the smoothing ``h`` (a
+    float, or an ``(N, 1)`` tensor), and the slot layout: ``slot`` ``(N, E)`` puts each edge in
+    a slot, lower edges in ``[0, n_low)``, upper ones in ``[n_low, S)``; ``windows`` lists the
+    slots that hold the window bound ``-window / h``; the rest are ``-inf``.
+
+    Per slot ``v[s, n, k] = alpha[s, n] + beta[s, n] c[n, k]`` with ``alpha = -b / (|along| h)``,
+    ``beta = -across / (|along| h)``: the lower bound ``l / h`` of a lower edge, minus the upper
+    bound ``-u / h`` of an upper one. ``z = -logsumexp(lower slots) - logsumexp(upper slots)``
+    is ``D / h``. The backward pass is analytic: ``dz / dv[s] = -softmax(role of s)[s]``,
+    ``d softplus / dz = sigmoid``, ``d sigmoid / dz = sigmoid (1 - sigmoid)``, and
+    ``d alpha / d b = d beta / d across = -1 / (|along| h)``,
+    ``d alpha / d along = -alpha / along``, ``d beta / d along = -beta / along``,
+    ``d (alpha, beta) / d h = -(alpha, beta) / h``; zero where a clamp holds (``|along|`` below
+    ``eps``, ``|alpha|`` or ``|beta|`` at ``sqrt(float max)``).
     """
-    m = x.detach().amax(dim=-1, keepdim=True)
-    return (m + torch.log(torch.exp(x - m).sum(dim=-1, keepdim=True)))[..., 0]
+
+    @staticmethod
+    def forward(
+        ctx: Any,
+        across: torch.Tensor,
+        along: torch.Tensor,
+        b: torch.Tensor,
+        c: torch.Tensor,
+        h: torch.Tensor | float,
+        slot: torch.Tensor,
+        n_low: int,
+        n_slots: int,
+        windows: list[int],
+        window: float,
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        dtype = c.dtype
+        eps, big = torch.finfo(dtype).eps, torch.finfo(dtype).max ** 0.5
+        floor = math.log(torch.finfo(dtype).tiny) + 1.0
+        n_pairs = c.shape[0]
+        scale = along.abs().clamp_(min=eps).mul_(h).reciprocal_().neg_()  # -1 / (|along| h)
+        alpha_e = (b * scale).clamp_(-big, big)
+        beta_e = (across * scale).clamp_(-big, big)
+        alpha = torch.full((n_slots, n_pairs), -math.inf, dtype=dtype, device=c.device)
+        alpha.scatter_(0, slot.T, alpha_e.T)
+        beta = torch.zeros_like(alpha).scatter_(0, slot.T, beta_e.T)
+        if windows:  # the window bound -W / h on each side (beta = 0)
+            w_h = torch.as_tensor(-window / h, dtype=dtype, device=c.device).reshape(-1)
+            alpha[windows] = torch.broadcast_to(w_h, (len(windows), n_pairs))
+
+        v = torch.addcmul(alpha[:, :, None], beta[:, :, None], c)  # (S, N, K)
+        lower, upper = v[:n_low], v[n_low:]
+        z_hard = lower.amax(0)
+        m_upper = upper.amax(0)
+        lower.sub_(z_hard)
+        upper.sub_(m_upper)
+        v.clamp_(min=floor).exp_()  # in place: v now holds exp(v - max of its role)
+        sum_lower, sum_upper = lower.sum(0), upper.sum(0)
+        z_hard.add_(m_upper).neg_()  # D / h of the hard extrema
+        spread = sum_lower * sum_upper  # >= 1; exactly 1 where no bound competes
+        if v.numel() < _SPARSE_MIN:  # small calls: fewer operations beat fewer elements
+            z = z_hard - torch.log(spread)
+            soft, weight = F.softplus(z), torch.sigmoid(z)
+        else:
+            soft = torch.relu(z_hard)
+            weight = (z_hard > 0).to(dtype)
+            near = (spread != 1.0) | (z_hard.abs() < -floor)
+            idx = near.view(-1).nonzero().squeeze(1)
+            if idx.numel():
+                z = z_hard.view(-1)[idx] - torch.log(spread.view(-1)[idx])
+                soft.view(-1)[idx] = F.softplus(z)
+                weight.view(-1)[idx] = torch.sigmoid(z)
+        if any(ctx.needs_input_grad[:5]):
+            lower.div_(sum_lower)  # softmax weights of each role
+            upper.div_(sum_upper)
+            ctx.save_for_backward(v, c, alpha, beta, weight, along, alpha_e, beta_e, scale, slot)
+            ctx.h = h
+        return soft, weight
+
+    @staticmethod
+    def backward(
+        ctx: Any, grad_soft: torch.Tensor, grad_weight: torch.Tensor
+    ) -> tuple[torch.Tensor | None, ...]:
+        softmax, c, alpha, beta, weight, along, alpha_e, beta_e, scale, slot = ctx.saved_tensors
+        grad_z = (grad_soft + grad_weight * (1.0 - weight)).mul_(weight).neg_()
+        if softmax.numel() < _SPARSE_MIN:  # dL / dv = -softmax * grad_z, in three operations
+            grad_v = softmax * grad_z
+            grad_alpha, grad_beta = grad_v.sum(2), (grad_v * c).sum(2)
+            grad_c = (grad_v * beta[:, :, None]).sum(0)
+        else:
+            # The same reduced slot by slot: each slot is a contiguous (N, K) slab, and no
+            # (S, N, K) temporary is allocated (the allocation costs more than the loop).
+            grad_zc = grad_z * c
+            grad_alpha = torch.empty_like(beta)
+            grad_beta = torch.empty_like(beta)
+            grad_c = torch.zeros_like(c)  # sum_s softmax[s] * beta[s]
+            for s, w in enumerate(softmax):
+                torch.sum(w * grad_z, dim=1, out=grad_alpha[s])
+                torch.sum(w * grad_zc, dim=1, out=grad_beta[s])
+                grad_c.addcmul_(w, beta[s, :, None])
+            grad_c.mul_(grad_z)
+        big = torch.finfo(c.dtype).max ** 0.5
+        eps = torch.finfo(c.dtype).eps
+        ga = torch.where(alpha_e.abs() < big, grad_alpha.gather(0, slot.T).T, 0.0)
+        gb = torch.where(beta_e.abs() < big, grad_beta.gather(0, slot.T).T, 0.0)
+        grad_along = torch.where(along.abs() >= eps, (ga * alpha_e + gb * beta_e) / along, 0.0)
+        grad_h = None
+        if ctx.needs_input_grad[4]:  # alpha and beta (windows included) are proportional to 1/h
+            terms = torch.where(alpha.abs() < big, grad_alpha * alpha, 0.0)  # not -inf, clamped
+            terms += torch.where(beta.abs() < big, grad_beta * beta, 0.0)
+            grad_h = -(terms.sum(0) / ctx.h[:, 0])[:, None]
+        nothing = (None,) * 5  # slot, n_low, n_slots, windows, window
+        return gb * scale, grad_along.neg_(), ga * scale, grad_c, grad_h, *nothing
 
 
 def smooth_lengths(
@@ -177,42 +305,46 @@ def smooth_lengths(
         return ExactModel(clip=clip)(hp, theta, offset, spacing)
     margin = _MARGIN * h_max
     window = PAPER_WINDOW if clip else hp.radius + margin
-    far = window + 2.0 * margin
-    c = transect_positions(offset, spacing, window)  # (*, K)
-    h_k: torch.Tensor | float = h  # broadcasts with (*, K)
-    h_ke: torch.Tensor | float = h  # with (*, K, E)
-    h_kre: torch.Tensor | float = h  # with (*, K, 2, E)
-    if isinstance(h, torch.Tensor) and h.ndim > 0:
-        h_k, h_ke, h_kre = h[..., None], h[..., None, None], h[..., None, None, None]
+    c = transect_positions(offset, spacing, window)  # (*B, K)
+    dtype, device = across.dtype, across.device
+    batch, n_edges, n_k = across.shape[:-1], across.shape[-1], c.shape[-1]
 
-    # Per edge (small tensors, (*, E)): an edge with |along| below machine epsilon is parallel to
-    # the transects (its bound -a / along would be rounding noise). It plays a lower bound with
-    # along = +eps, and its offset moves out by 4 eps (|b| + far), just above the rounding of a,
-    # so that a transect exactly on it is inside (as in exact_chords); its bound is then -far
-    # (inactive) where it holds and +far (empty chord) where it does not, never a division by 0.
-    eps = torch.finfo(along.dtype).eps
-    parallel = along.abs() < eps
-    is_lower = parallel | (along > 0)
-    b = torch.where(parallel, b + 4.0 * eps * (b.abs() + far), b)
-    # v = -a / |along| / h: the lower bound l / h for a lower edge, minus the upper bound -u / h
-    # for an upper edge, so that both soft maxima are log-sum-exps of v.
-    scale = -1.0 / (torch.where(parallel, eps, along.abs())[..., None, :] * h_ke)  # (*, 1, E)
-
-    # a[..., k, j] = across_j c_k + b_j: edge j holds at (c_k, t) iff a + along_j t >= 0.
-    a = torch.addcmul(b[..., None, :], across[..., None, :], c[..., :, None])  # (*, K, E)
-    far_h = far / h_kre  # |bounds| >= far are clamped: beyond the window, or no chord at all
-    v = torch.clamp((a * scale)[..., None, :], -far_h, far_h)  # type: ignore[arg-type]
-    # Role mask (*, 1, 2, E): row 0 the lower edges, row 1 the upper ones; the other role's
-    # entries are -far / h, i.e. exp(-64) below the window bound: negligible, never -inf, so
-    # every log-sum-exp and its gradient stay finite.
-    role = torch.stack([is_lower, ~is_lower], dim=-2)[..., None, :, :]
-    lse = _logsumexp(torch.where(role, v, -far_h))  # (*, K, 2)
-    w_h = torch.as_tensor(window / h_k, dtype=a.dtype, device=a.device)
-    soft_lower = torch.logaddexp(lse[..., 0], -w_h)  # lower / h, window -W included
-    soft_minus_upper = torch.logaddexp(lse[..., 1], -w_h)  # -upper / h, window +W included
-    z = -soft_minus_upper - soft_lower  # D / h with D = upper - lower
-    length = h_k * F.softplus(z)
-    weight = torch.sigmoid(z)
+    # Roles (no gradient): an edge with |along| below machine epsilon is parallel to the
+    # transects (its bound -a / along would be rounding noise) and plays a lower bound with
+    # along = eps; its offset moves out by 4 eps (|b| + far), just above the rounding of a, so
+    # that a transect exactly on it is inside (as in exact_chords).
+    eps = torch.finfo(dtype).eps
+    with torch.no_grad():
+        parallel = along.abs() < eps
+        lower = (parallel | (along > 0)).reshape(-1, n_edges)
+        n_pairs = lower.shape[0]
+        n_lower_row = lower.sum(-1, keepdim=True)
+        # Slots per role: the batch's most edges of that role, then the window bound with clip
+        # (or where some pair has no edge of that role: a sliver whose edges are all parallel
+        # to the transects up to eps). Unused slots are -inf: nothing in a soft max.
+        most_lower, least_lower, any_parallel = (
+            torch.stack([n_lower_row.max(), n_lower_row.min(), parallel.sum()]).tolist()
+            if n_pairs
+            else (0, 0, 0)
+        )
+        lower_window = clip or least_lower == 0
+        upper_window = clip or most_lower == n_edges
+        n_low = most_lower + lower_window
+        n_slots = n_low + n_edges - least_lower + upper_window
+        rank = torch.cumsum(lower, -1) - 1  # the lower edges fill slots 0.., the upper n_low..
+        slot = torch.where(lower, rank, n_low - rank - 1 + torch.arange(n_edges, device=device))
+    if any_parallel:
+        far = window + 2.0 * margin
+        b = torch.where(parallel, b + 4.0 * eps * (b.abs() + far), b)
+    h_n = torch.broadcast_to(h, batch).reshape(-1, 1) if isinstance(h, torch.Tensor) else h
+    windows = [n_low - 1] * lower_window + [n_slots - 1] * upper_window
+    c_n = torch.broadcast_to(c, (*batch, n_k)).reshape(-1, n_k)
+    across, along, b = (x.reshape(-1, n_edges) for x in (across, along, b))
+    soft, weight = _SoftChords.apply(
+        across, along, b, c_n, h_n, slot, n_low, n_slots, windows, window
+    )
+    length = (soft * h_n).reshape((*batch, n_k))
+    weight = weight.reshape((*batch, n_k))
     mask = _window_mask(c, clip)
     if mask is not None:
         zero = torch.zeros_like(length)
