@@ -534,7 +534,7 @@ def choose_sweep(
         ``(sweep, (estimated turns, estimated lane length))`` of the best candidate.
     """
     r = as_region(region)
-    s = check_spacing(spacing)
+    s = check_spacing(spacing, extent=r.diameter)
     min_width = 2 * s if min_width is None else float(min_width)
     if candidates is None:
         e = r.edges
@@ -583,7 +583,7 @@ def optimize_region(
     """
     t0 = time.perf_counter()
     r = as_region(region)
-    s = check_spacing(spacing)
+    s = check_spacing(spacing, extent=r.diameter)
     fitness = SmithFitness() if fitness is None else fitness
     sign = 1.0 if getattr(fitness, "maximise", True) else -1.0
     if s >= r.diameter:
@@ -782,7 +782,7 @@ def region_lanes(
             docstring) or ``"chords"`` (the lines' exact segments inside the cover).
     """
     r = as_region(cover)
-    s = check_spacing(spacing)
+    s = check_spacing(spacing, extent=r.diameter)
     reach = s / 2 if reach is None else float(reach)
     o = r.centre if origin is None else np.asarray(origin, dtype=np.float64)
     u, n = _frame(angle)
@@ -1092,7 +1092,7 @@ def plan_region(
         InvalidParameterError: bad parameters. NoTransectError: nothing to plan.
     """
     r = as_region(region)
-    s = check_spacing(spacing)
+    s = check_spacing(spacing, extent=r.diameter)
     reach = s / 2 if reach is None else _check_float("reach", reach)
     if reach < s / 2 * (1 - 1e-12):
         raise InvalidParameterError(

@@ -25,7 +25,7 @@ import csv
 import io
 import json
 import os
-import tempfile
+import re
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import escape, quoteattr
@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 
 from ._version import __version__
 from .errors import InvalidParameterError
+from .io import atomic_write
 
 if TYPE_CHECKING:
     from .geo import Mission
@@ -109,6 +110,15 @@ def _need_altitude(mission: Mission, what: str) -> float:
             "ground or surface vehicle), or a camera with --altitude or --gsd"
         )
     return float(mission.altitude)
+
+
+#: Characters XML 1.0 does not allow anywhere (control characters other than tab, newline, CR).
+_XML_INVALID = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff]")
+
+
+def _xml_text(text: str) -> str:
+    """``text`` escaped for XML character data, characters XML 1.0 forbids replaced by ``?``."""
+    return escape(_XML_INVALID.sub("?", text))
 
 
 # -- GeoJSON --------------------------------------------------------------------------------
@@ -232,13 +242,13 @@ def to_kml(mission: Mission) -> str:
     waypoints, transects, area, _ = _lonlat(mission, "KML")
     alt = mission.altitude
     mode = "" if alt is None else "<altitudeMode>relativeToGround</altitudeMode>"
-    name = escape(mission.name or "boustro plan")
+    name = _xml_text(mission.name or "boustro plan")
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         '<kml xmlns="http://www.opengis.net/kml/2.2">',
         "<Document>",
         f"<name>{name}</name>",
-        f"<description>{escape(_describe(mission))}</description>",
+        f"<description>{_xml_text(_describe(mission))}</description>",
         "<Placemark><name>Area</name><Polygon><outerBoundaryIs><LinearRing><coordinates>"
         + _kml_coords(_closed(_ccw(area)))
         + "</coordinates></LinearRing></outerBoundaryIs>"
@@ -272,12 +282,12 @@ def to_gpx(mission: Mission) -> str:
     transects as a track with one segment each. No ``ele``: GPX elevations are above sea level,
     mission altitudes are above take-off."""
     waypoints, transects, _, _ = _lonlat(mission, "GPX")
-    name = escape(mission.name or "boustro plan")
+    name = _xml_text(mission.name or "boustro plan")
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         f'<gpx version="1.1" creator={quoteattr(f"boustro {__version__}")} '
         'xmlns="http://www.topografix.com/GPX/1/1">',
-        f"<metadata><name>{name}</name><desc>{escape(_describe(mission))}</desc></metadata>",
+        f"<metadata><name>{name}</name><desc>{_xml_text(_describe(mission))}</desc></metadata>",
         f"<rte><name>{name}</name>",
     ]
     for i, ((lon, lat), kind) in enumerate(zip(waypoints, mission.kinds, strict=True)):
@@ -466,37 +476,6 @@ def format_for(path: str | os.PathLike[str], fmt: str | None = None) -> str:
 def render(mission: Mission, fmt: str) -> str:
     """The text of ``mission`` in format ``fmt`` (a key of :data:`FORMATS`)."""
     return FORMATS[format_for("", fmt)][1](mission)
-
-
-def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> None:
-    """Write ``data`` to ``path`` atomically: a temporary file in the same folder, then rename.
-
-    Readers see either the old file or the complete new one; on any error the temporary file
-    is removed and ``path`` is left as it was. New files get the usual permissions (umask).
-    """
-    name = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(name))
-    payload = data.encode("utf-8") if isinstance(data, str) else data
-    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(name)}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(payload)
-            fh.flush()
-            os.fsync(fh.fileno())
-        try:
-            mode = os.stat(name).st_mode & 0o777
-        except FileNotFoundError:
-            umask = os.umask(0)
-            os.umask(umask)
-            mode = 0o666 & ~umask
-        os.chmod(tmp, mode)
-        os.replace(tmp, name)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
 
 
 def write_mission(mission: Mission, path: str | os.PathLike[str], fmt: str | None = None) -> str:

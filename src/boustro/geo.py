@@ -25,6 +25,7 @@ pyproj is imported when a projection is built, shapely only for the coverage che
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections.abc import Sequence
@@ -35,7 +36,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .decompose import plan_region
-from .errors import BoustroError, InvalidParameterError, InvalidPolygonError, NonConvexPolygonError
+from .errors import (
+    BoustroError,
+    InvalidParameterError,
+    InvalidPolygonError,
+    NonConvexPolygonError,
+    as_number,
+)
 from .fitness import SmithFitness
 from .geometry import Polygon
 from .io import LONLAT, Area
@@ -562,6 +569,8 @@ def plan_area(
     if not isinstance(area, Area):
         hole_rings = tuple(np.asarray(h, dtype=np.float64) for h in holes)
         area = Area(np.asarray(area, dtype=np.float64), parse_crs(crs), "", "<array>", hole_rings)
+    else:  # one spelling of the CRS from here on ("EPSG:n", or None for planar)
+        area = dataclasses.replace(area, crs=parse_crs(area.crs))
     where = area.source
     s_m, reach_m, gap_m, sensor_altitude, sensor_text = _sensor_spacing(spacing)
     proj = projection_for(area.ring, area.crs, where)
@@ -663,6 +672,12 @@ def plan_area(
         bearing = float(azimuth) % 180.0
     if altitude is None:
         altitude = sensor_altitude
+    else:
+        value = as_number("altitude", altitude)
+        if not (math.isfinite(value) and value >= 0):
+            raise InvalidParameterError(
+                f"altitude must be a finite number >= 0 (metres above take-off), got {altitude!r}"
+            )
     home_plan = plan.waypoints[0] if start is None else start_plan
     return Mission(
         name=area.name,

@@ -45,6 +45,12 @@ __all__ = [
 #: three vertices are collinear, or an area is zero.
 RELATIVE_TOLERANCE = 1e-12
 
+#: Largest coordinate magnitude accepted (squares of coordinates, as in areas, stay finite).
+COORDINATE_LIMIT = 1e100
+#: Smallest extent of a polygon relative to its largest coordinate: below it the vertices have
+#: fewer than ~4 significant digits in float64.
+MIN_RELATIVE_EXTENT = 1e-12
+
 #: Offset given to padding half-planes when polygons with different vertex counts are batched:
 #: ``0 . p + PAD_OFFSET >= 0`` holds everywhere, and ``logsigmoid(T * PAD_OFFSET) == 0``.
 PAD_OFFSET = 1.0e6
@@ -128,8 +134,13 @@ def _drop_collinear(v: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
     return v
 
 
-def _first_self_intersection(v: NDArray[np.float64], tol: float) -> tuple[int, int] | None:
-    """Indices of two non-adjacent edges that touch or cross, or None for a simple polygon."""
+def _first_self_intersection(
+    v: NDArray[np.float64], tol: float, scale: float
+) -> tuple[int, int] | None:
+    """Indices of two non-adjacent edges that touch or cross, or None for a simple polygon.
+
+    A point counts as on a line when it is within ``tol * scale`` of it (``scale`` the
+    polygon's extent), whatever the polygon's units."""
     n = len(v)
     p, q = v, np.roll(v, -1, axis=0)
     i, j = np.triu_indices(n, k=2)
@@ -141,7 +152,8 @@ def _first_self_intersection(v: NDArray[np.float64], tol: float) -> tuple[int, i
 
     def orient(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]):
         d = _cross(b - a, c - a)
-        return np.where(np.abs(d) <= tol * np.linalg.norm(b - a, axis=1), 0.0, np.sign(d))
+        on_line = np.abs(d) <= tol * scale * np.linalg.norm(b - a, axis=1)
+        return np.where(on_line, 0.0, np.sign(d))
 
     d1, d2 = orient(q1, q2, p1), orient(q1, q2, p2)
     d3, d4 = orient(p1, p2, q1), orient(p1, p2, q2)
@@ -184,6 +196,18 @@ class Polygon:
         if len(v) < 3:
             raise InvalidPolygonError(f"a polygon needs at least 3 vertices, got {len(v)}")
         extent = float(np.max(np.ptp(v, axis=0)))
+        size = float(np.max(np.abs(v)))
+        if size > COORDINATE_LIMIT:
+            raise InvalidPolygonError(
+                f"coordinates up to {size:.3g}: boustro supports coordinates within "
+                f"+-{COORDINATE_LIMIT:g}"
+            )
+        if extent < size * MIN_RELATIVE_EXTENT:
+            raise InvalidPolygonError(
+                f"the polygon is {extent:.3g} across at coordinates of {size:.3g}: too small for "
+                f"float64 to resolve (at least {MIN_RELATIVE_EXTENT:g} of the coordinates' size); "
+                "subtract a reference point from the coordinates"
+            )
         tol = RELATIVE_TOLERANCE * max(extent, np.finfo(np.float64).tiny)
         v = _drop_duplicates(v, tol)
         distinct = len(np.unique(v, axis=0))
@@ -197,7 +221,7 @@ class Polygon:
         v = _drop_collinear(v, RELATIVE_TOLERANCE)
         if len(v) < 3:
             raise InvalidPolygonError("the polygon has zero area (all vertices are collinear)")
-        hit = _first_self_intersection(v, RELATIVE_TOLERANCE)
+        hit = _first_self_intersection(v, RELATIVE_TOLERANCE, extent)
         if hit is not None:
             a, b = hit
             raise InvalidPolygonError(

@@ -22,9 +22,12 @@ polygon.
 
 from __future__ import annotations
 
+import errno
 import json
+import logging
 import os
 import re
+import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
@@ -37,6 +40,8 @@ from numpy.typing import NDArray
 from .errors import InvalidPolygonError, PolygonFileError
 from .geometry import Polygon
 
+log = logging.getLogger(__name__)
+
 __all__ = [
     "EMBEDDED_FIELD",
     "LONLAT",
@@ -47,6 +52,7 @@ __all__ = [
     "area_from_kml",
     "area_from_text",
     "area_from_wkt",
+    "atomic_write",
     "embedded_field",
     "polygon_from_json",
     "read_area",
@@ -73,7 +79,12 @@ def _ring(coords: Any, where: str) -> np.ndarray:
             raise PolygonFileError(
                 f"{where}: position {i} must be a list of at least two numbers, got {pos!r:.80}"
             )
-        rows.append((float(pos[0]), float(pos[1])))
+        try:
+            rows.append((float(pos[0]), float(pos[1])))
+        except OverflowError:
+            raise PolygonFileError(
+                f"{where}: position {i} has a number too large for float64: {pos!r:.80}"
+            ) from None
     return np.asarray(rows, dtype=np.float64)
 
 
@@ -99,11 +110,17 @@ def _geometry_ring(geom: Any, where: str) -> np.ndarray:
 
 def _geometry_rings(geom: Any, where: str) -> tuple[np.ndarray, list[np.ndarray]]:
     """The outer ring and the holes of a GeoJSON Polygon (or a MultiPolygon's first polygon)."""
+    if not isinstance(geom, dict):
+        raise PolygonFileError(f"{where}: expected a GeoJSON geometry object, got {geom!r:.80}")
     kind = geom.get("type")
     coords = geom.get("coordinates")
     if kind == "MultiPolygon":
-        if not coords:
-            raise PolygonFileError(f"{where}: empty MultiPolygon")
+        if not isinstance(coords, list) or not coords:
+            raise PolygonFileError(f"{where}: a MultiPolygon needs a non-empty list of polygons")
+        if len(coords) > 1:
+            log.warning(
+                "%s: a MultiPolygon of %d parts: only the first part is used", where, len(coords)
+            )
         coords, kind = coords[0], "Polygon"
     if kind != "Polygon":
         raise PolygonFileError(f"{where}: expected a Polygon geometry, got {kind!r}")
@@ -111,6 +128,41 @@ def _geometry_rings(geom: Any, where: str) -> tuple[np.ndarray, list[np.ndarray]
         raise PolygonFileError(f"{where}: a Polygon needs at least one ring")
     holes = [_ring(h, f"{where}: hole {i}") for i, h in enumerate(coords[1:])]
     return _ring(coords[0], where), holes
+
+
+def _polygon_geometry(data: dict[str, Any], where: str) -> tuple[Any, str, Any]:
+    """``(geometry, where, feature)`` of the polygon in a GeoJSON object: the object itself, a
+    Feature's geometry, or a FeatureCollection's first Polygon or MultiPolygon feature (a warning
+    names the ones left out)."""
+    kind = data["type"]
+    if kind == "FeatureCollection":
+        features = data.get("features")
+        if not isinstance(features, list):
+            raise PolygonFileError(f"{where}: a FeatureCollection needs a list of features")
+        found = [
+            (i, f)
+            for i, f in enumerate(features)
+            if isinstance(f, dict)
+            and isinstance(f.get("geometry"), dict)
+            and f["geometry"].get("type") in ("Polygon", "MultiPolygon")
+        ]
+        if not found:
+            raise PolygonFileError(f"{where}: the FeatureCollection holds no Polygon feature")
+        if len(found) > 1:
+            log.warning(
+                "%s: %d polygon features; only the first (feature %d) is used",
+                where,
+                len(found),
+                found[0][0],
+            )
+        i, feature = found[0]
+        return feature["geometry"], f"{where}: feature {i}", feature
+    if kind == "Feature":
+        geom = data.get("geometry")
+        if not isinstance(geom, dict):
+            raise PolygonFileError(f"{where}: the Feature has no geometry")
+        return geom, where, data
+    return data, where, None
 
 
 def polygon_from_json(data: Any, where: str = "input") -> Polygon:
@@ -125,19 +177,8 @@ def polygon_from_json(data: Any, where: str = "input") -> Polygon:
             f"{where}: expected a JSON list of [x, y] pairs or a GeoJSON object, "
             f"got {type(data).__name__}"
         )
-    kind = data["type"]
-    if kind == "FeatureCollection":
-        for i, feature in enumerate(data.get("features") or []):
-            geom = (feature or {}).get("geometry") or {}
-            if geom.get("type") in ("Polygon", "MultiPolygon"):
-                return _from_geometry(geom, f"{where}: feature {i}")
-        raise PolygonFileError(f"{where}: the FeatureCollection holds no Polygon feature")
-    if kind == "Feature":
-        geom = data.get("geometry")
-        if not isinstance(geom, dict):
-            raise PolygonFileError(f"{where}: the Feature has no geometry")
-        return _from_geometry(geom, where)
-    return _from_geometry(data, where)
+    geom, where, _ = _polygon_geometry(data, where)
+    return _from_geometry(geom, where)
 
 
 def read_polygon(path: str | os.PathLike[str]) -> Polygon:
@@ -232,23 +273,10 @@ def area_from_json(data: Any, where: str = "input", crs: str | None = None) -> A
             f"{where}: expected a JSON list of [x, y] pairs or a GeoJSON object, "
             f"got {type(data).__name__}"
         )
-    elif data["type"] == "FeatureCollection":
-        for i, feature in enumerate(data.get("features") or []):
-            geom = (feature or {}).get("geometry") or {}
-            if geom.get("type") in ("Polygon", "MultiPolygon"):
-                ring, holes = _geometry_rings(geom, f"{where}: feature {i}")
-                name = _feature_name(feature)
-                break
-        else:
-            raise PolygonFileError(f"{where}: the FeatureCollection holds no Polygon feature")
-    elif data["type"] == "Feature":
-        geom = data.get("geometry")
-        if not isinstance(geom, dict):
-            raise PolygonFileError(f"{where}: the Feature has no geometry")
-        ring, holes = _geometry_rings(geom, where)
-        name = _feature_name(data)
     else:
-        ring, holes = _geometry_rings(data, where)
+        geom, where_geom, feature = _polygon_geometry(data, where)
+        ring, holes = _geometry_rings(geom, where_geom)
+        name = _feature_name(feature)
     file_crs = _geojson_crs(data) if isinstance(data, dict) else None
     return Area(
         _close_open(ring, where),
@@ -506,3 +534,38 @@ def embedded_field() -> Area:
     text = (resources.files("boustro") / "data" / EMBEDDED_FIELD).read_text("utf-8")
     area = area_from_text(text, "<embedded field>", None, "json")
     return Area(area.ring, area.crs, area.name or "test parcel", "<embedded>")
+
+
+def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> None:
+    """Write ``data`` to ``path`` atomically: a temporary file in the same folder, then rename.
+
+    Readers see either the old file or the complete new one; on any error the temporary file
+    is removed and ``path`` is left as it was. New files get the usual permissions (umask).
+    """
+    name = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(name))
+    if not os.path.isdir(folder):
+        raise FileNotFoundError(errno.ENOENT, "no such folder", name)
+    if os.path.isdir(name):
+        raise IsADirectoryError(errno.EISDIR, "is a folder", name)
+    payload = data.encode("utf-8") if isinstance(data, str) else data
+    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(name)}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(payload)
+            fh.flush()
+            os.fsync(fh.fileno())
+        try:
+            mode = os.stat(name).st_mode & 0o777
+        except FileNotFoundError:
+            umask = os.umask(0)
+            os.umask(umask)
+            mode = 0o666 & ~umask
+        os.chmod(tmp, mode)
+        os.replace(tmp, name)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise

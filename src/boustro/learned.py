@@ -52,6 +52,7 @@ coarse-to-fine zoom). See ``docs/learned.md`` for the design, training and bench
 from __future__ import annotations
 
 import inspect
+import io
 import json
 import math
 import sys
@@ -69,6 +70,7 @@ from torch import nn
 from .errors import InvalidParameterError, NoTransectError
 from .fitness import SmithFitness
 from .geometry import PAD_OFFSET, HalfPlanes, Polygon, random_convex_polygon
+from .io import atomic_write
 from .models import TransectLengths, _prepare, check_spacing, transect_positions
 from .optimize import OptimizeResult, canonical
 from .scoring import as_polygon
@@ -752,14 +754,37 @@ class LearnedPlanner(nn.Module):
 def save_planner(
     model: LearnedPlanner, path: str | Path, *, metadata: dict[str, Any] | None = None
 ) -> tuple[Path, Path]:
-    """Save ``state_dict`` (float32) to ``path`` and hyperparameters (+ metadata) to ``.json``."""
+    """Save ``state_dict`` (float32) to ``path`` and hyperparameters (+ metadata) to ``.json``.
+
+    Both files are written atomically (a temporary file, then a rename), the settings last;
+    missing folders are created.
+
+    Raises:
+        InvalidParameterError: ``path`` ends in ``.json`` (the settings' name), or a weight or a
+            metadata number is not finite (a diverged training).
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.suffix.lower() == ".json":
+        raise InvalidParameterError(
+            f"weights file {path} must not end in .json: the settings are written beside it "
+            "with that suffix"
+        )
     state = {k: v.detach().to(torch.float32).clone() for k, v in model.state_dict().items()}
-    torch.save(state, path)
+    if not all(bool(torch.isfinite(v).all()) for v in state.values()):
+        raise InvalidParameterError("the planner's weights are not all finite; nothing saved")
     meta = {"config": asdict(model.config), **(metadata or {})}
+    try:
+        text = json.dumps(meta, indent=2, sort_keys=True, allow_nan=False) + "\n"
+    except ValueError:
+        raise InvalidParameterError(
+            "the planner's metadata has a number that is not finite; nothing saved"
+        ) from None
+    buffer = io.BytesIO()
+    torch.save(state, buffer)
+    path.parent.mkdir(parents=True, exist_ok=True)
     json_path = path.with_suffix(".json")
-    json_path.write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
+    atomic_write(path, buffer.getvalue())
+    atomic_write(json_path, text)
     return path, json_path
 
 
@@ -1159,7 +1184,7 @@ def learned(
     """
     t0 = time.perf_counter()
     poly = as_polygon(polygon).require_convex("the learned planner")
-    spacing = check_spacing(spacing)
+    spacing = check_spacing(spacing, extent=poly.diameter)
     if spacing >= poly.diameter:
         raise NoTransectError(
             f"spacing {spacing:g} is not smaller than the polygon's diameter {poly.diameter:g}: "
@@ -1231,7 +1256,7 @@ def warm_start(
         gradient_descent(poly, s, init=warm_start(poly, s), steps=40)
     """
     poly = as_polygon(polygon).require_convex("the learned planner")
-    spacing = check_spacing(spacing)
+    spacing = check_spacing(spacing, extent=poly.diameter)
     batch = make_batch([poly], spacing)
     theta, offset = _hypotheses(_as_planner(planner), batch)
     order = torch.argsort(batch_objective(batch, theta, offset)[0], descending=True)

@@ -87,11 +87,28 @@ class TransectModel(Protocol):
     ) -> TransectLengths: ...
 
 
-def check_spacing(spacing: float) -> float:
-    """Return ``spacing`` as a float, or raise if it is not a finite positive number."""
+#: Most transects across one area that boustro plans or scores (a 10 km field at 10 cm): a
+#: smaller spacing is refused with a clear error instead of exhausting memory.
+MAX_TRANSECTS = 100_000
+
+
+#: Most integration points per transect of the paper's model (the paper uses 1000; 10^4 is
+#: already exact to its temperature's resolution in every benchmark here).
+MAX_POINTS_PER_TRANSECT = 1_000_000
+
+
+def check_spacing(spacing: float, extent: float | None = None) -> float:
+    """Return ``spacing`` as a float, or raise if it is not a finite positive number, or (with
+    ``extent``, the width to cover in the same units) if more than :data:`MAX_TRANSECTS`
+    transects would be needed."""
     s = as_number("spacing", spacing)
     if not math.isfinite(s) or s <= 0:
         raise InvalidParameterError(f"spacing must be a finite number > 0, got {spacing!r}")
+    if extent is not None and extent / s > MAX_TRANSECTS:
+        raise InvalidParameterError(
+            f"spacing {s:.6g} is too small for an area {extent:.6g} across: about "
+            f"{extent / s:.3g} transects, more than the {MAX_TRANSECTS} boustro handles"
+        )
     return s
 
 
@@ -126,7 +143,19 @@ def _prepare(
 
 
 def grid_size(spacing: float, radius: float) -> tuple[int, int]:
-    """``(K, m)``: the ``K`` lines ``d mod s + (k - m) s``, ``0 <= k < K``, cover +-radius."""
+    """``(K, m)``: the ``K`` lines ``d mod s + (k - m) s``, ``0 <= k < K``, cover +-radius.
+
+    Raises:
+        InvalidParameterError: more than :data:`MAX_TRANSECTS` lines (a tiny spacing, or a
+            model whose margin, e.g. a huge smoothing, grows the disc by as much).
+    """
+    if 2 * radius / spacing > MAX_TRANSECTS:
+        raise InvalidParameterError(
+            f"{2 * radius / spacing:.3g} candidate transects at spacing {spacing:.6g} across a "
+            f"disc of radius {radius:.6g} (the polygon's, grown by the model's margin): more "
+            f"than the {MAX_TRANSECTS} boustro handles; use a larger spacing (or smoothing "
+            "below the spacing)"
+        )
     m = math.ceil(radius / spacing) + 1
     return 2 * m, m
 
@@ -556,9 +585,13 @@ def paper_lengths(
     Returns:
         :class:`TransectLengths` ``(*, K)``.
     """
-    if int(points_per_transect) != points_per_transect or points_per_transect < 2:
+    if (
+        int(points_per_transect) != points_per_transect
+        or not 2 <= points_per_transect <= MAX_POINTS_PER_TRANSECT
+    ):
         raise InvalidParameterError(
-            f"points_per_transect must be an integer >= 2, got {points_per_transect!r}"
+            f"points_per_transect must be an integer in [2, {MAX_POINTS_PER_TRANSECT}], got "
+            f"{points_per_transect!r}"
         )
     theta, offset, across, along, b = _prepare(hp, theta, offset)
     temp = _as_temperature(temperature, across)

@@ -166,7 +166,7 @@ def _problem(
     polygon: Polygon | ArrayLike, spacing: float, fitness: Objective | None, what: str
 ) -> _Problem:
     poly = as_polygon(polygon).require_convex(what)
-    spacing = check_spacing(spacing)
+    spacing = check_spacing(spacing, extent=poly.diameter)
     if spacing >= poly.diameter:
         raise NoTransectError(
             f"spacing {spacing:g} is not smaller than the polygon's diameter {poly.diameter:g} "

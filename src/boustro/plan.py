@@ -145,7 +145,7 @@ def guaranteed_segments(
         InvalidParameterError: bad spacing, angle, offset or reach.
     """
     poly = as_polygon(polygon).require_convex("coverage-guaranteed transects")
-    spacing = check_spacing(spacing)
+    spacing = check_spacing(spacing, extent=poly.diameter)
     angle, offset = check_finite("angle", angle), check_finite("offset", offset)
     reach = spacing / 2 if reach is None else check_finite("reach", reach)
     if reach < spacing / 2 * (1 - 1e-12):
@@ -207,7 +207,7 @@ def edge_offset(
     the spacing. Returned in ``[0, spacing)``, for :func:`boustro.scoring.transect_segments`.
     """
     poly = as_polygon(polygon)
-    spacing = check_spacing(spacing)
+    spacing = check_spacing(spacing, extent=poly.diameter)
     angle = check_finite("angle", angle)
     n = np.array([-math.sin(angle), math.cos(angle)])
     first = float(np.min((poly.vertices - poly.centre) @ n)) + inset * spacing
@@ -412,7 +412,7 @@ def build_plan(
         NoTransectError: no transect crosses the polygon (chords layout only).
     """
     poly = as_polygon(polygon).require_convex("a boustrophedon plan")
-    spacing = check_spacing(spacing)
+    spacing = check_spacing(spacing, extent=poly.diameter)
     turnaround = _check_nonnegative("turnaround", turnaround)
     nadir_gap = _check_nonnegative("nadir_gap", nadir_gap)
     turn_time = _check_nonnegative("turn_time", turn_time)

@@ -92,7 +92,7 @@ def transect_segments(
             transects' left normal ``(-sin angle, cos angle)``, user units; periodic in spacing.
     """
     poly = as_polygon(polygon).require_convex("exact transect segments")
-    spacing = check_spacing(spacing)
+    spacing = check_spacing(spacing, extent=poly.diameter)
     angle, offset = check_finite("angle", angle), check_finite("offset", offset)
     frame = poly.frame
     hp = halfplanes(poly)

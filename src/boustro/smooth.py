@@ -303,6 +303,13 @@ def smooth_lengths(
     h, h_max = _as_smoothing(smoothing, across)
     if h_max == 0.0:  # a scalar 0: the exact model
         return ExactModel(clip=clip)(hp, theta, offset, spacing)
+    h_min = float(h.detach().min()) if isinstance(h, torch.Tensor) else h
+    floor = float(hp.radius) * torch.finfo(across.dtype).max ** -0.25
+    if h_min < floor:  # keeps every bound / h far below the clamp at sqrt(float max)
+        raise InvalidParameterError(
+            f"smoothing {h_min:g} is below {floor:.3g} ({across.dtype}, this polygon): "
+            "numerically the exact model; pass smoothing=0 for it"
+        )
     margin = _MARGIN * h_max
     window = PAPER_WINDOW if clip else hp.radius + margin
     c = transect_positions(offset, spacing, window)  # (*B, K)

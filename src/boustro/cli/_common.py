@@ -5,20 +5,25 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from typing import Any
 
+from ..errors import InvalidParameterError
 from ..geometry import Polygon
 from ..io import PAPER_PARALLELOGRAM, read_polygon
 
 __all__ = [
     "add_polygon_argument",
+    "check_output_path",
+    "check_plot_target",
     "finite_float",
     "load_polygon",
     "positive_float",
     "positive_int",
     "print_json",
     "print_table",
+    "seed_int",
 ]
 
 
@@ -49,6 +54,48 @@ def positive_int(text: str) -> int:
     return value
 
 
+def seed_int(text: str) -> int:
+    """A random seed: a whole number >= 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
+    return value
+
+
+def check_plot_target(path: str | os.PathLike[str], option: str = "--plot") -> None:
+    """Fail before any work if the plot cannot be written: no matplotlib, an unknown image
+    format, a missing folder, or a folder in the file's place."""
+    try:
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise InvalidParameterError(
+            f"{option} needs matplotlib: pip install 'boustro[plot]'"
+        ) from None
+    name = os.fspath(path)
+    suffix = name.rsplit(".", 1)[-1].lower() if "." in os.path.basename(name) else ""
+    supported = Figure().canvas.get_supported_filetypes()
+    if suffix not in supported:
+        raise InvalidParameterError(
+            f"{option} {name}: unknown image format {suffix!r}; expected a file name ending in "
+            f"one of {', '.join('.' + k for k in sorted(supported))}"
+        )
+    check_output_path(name, option)
+
+
+def check_output_path(path: str | os.PathLike[str], option: str) -> None:
+    """Fail before any work if ``path`` cannot be a file: its folder is missing, or it is a
+    folder itself."""
+    name = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(name))
+    if os.path.isdir(name):
+        raise InvalidParameterError(f"{option} {name}: is a folder; give a file name")
+    if not os.path.isdir(folder):
+        raise InvalidParameterError(f"{option} {name}: no such folder {folder}")
+
+
 def add_polygon_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "polygon",
@@ -65,8 +112,16 @@ def load_polygon(path: str | None) -> Polygon:
 
 
 def print_json(obj: Any) -> None:
-    json.dump(obj, sys.stdout, indent=2, allow_nan=False)
-    sys.stdout.write("\n")
+    """Print ``obj`` as strict JSON, all at once: a result that is not a finite number (an
+    overflow) is an error, never half a document or a bare ``NaN``."""
+    try:
+        text = json.dumps(obj, indent=2, allow_nan=False)
+    except ValueError:
+        raise InvalidParameterError(
+            "a result is not a finite number (inf or nan: an overflow in the inputs' range?); "
+            "no JSON written"
+        ) from None
+    sys.stdout.write(text + "\n")
 
 
 def print_table(rows: list[tuple[str, str]]) -> None:

@@ -14,11 +14,13 @@ from ..optimize import GRID_200, OptimizeResult, TemperatureSchedule, optimize
 from ..scoring import score
 from ._common import (
     add_polygon_argument,
+    check_plot_target,
     load_polygon,
     positive_float,
     positive_int,
     print_json,
     print_table,
+    seed_int,
 )
 from .score import (
     CONVENTIONS,
@@ -127,7 +129,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "to T1 (default 50:200)",
     )
     grad.add_argument(
-        "--seed", type=int, default=0, help="seed of the random starts (gradient; default 0)"
+        "--seed", type=seed_int, default=0, help="seed of the random starts (gradient; default 0)"
     )
     p.add_argument(
         "--refine",
@@ -201,23 +203,6 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
     return options
 
 
-def _check_plot_target(path: str) -> None:
-    """Fail before the search if the plot cannot be written: no matplotlib, unknown format."""
-    try:
-        from matplotlib.figure import Figure
-    except ImportError:
-        raise InvalidParameterError(
-            "--plot needs matplotlib: pip install 'boustro[plot]'"
-        ) from None
-    suffix = path.rsplit(".", 1)[-1].lower() if "." in path else ""
-    supported = Figure().canvas.get_supported_filetypes()
-    if suffix not in supported:
-        raise InvalidParameterError(
-            f"--plot {path}: unknown image format {suffix!r}; expected a file name ending in "
-            f"one of {', '.join('.' + k for k in sorted(supported))}"
-        )
-
-
 def _save_plot(path: str, polygon, result, found: OptimizeResult) -> None:
     from matplotlib.figure import Figure
 
@@ -239,7 +224,7 @@ def run(args: argparse.Namespace) -> int:
     polygon = load_polygon(args.polygon)
     spacing = resolve_spacing(args)
     if args.plot is not None:
-        _check_plot_target(args.plot)
+        check_plot_target(args.plot)
     fitness = SmithFitness(a=args.a, b=args.b)
     model = model_from_args(args)  # validates the scoring model's settings before the search
     found = optimize(polygon, spacing, method=args.method, fitness=fitness, **_options(args))
@@ -250,7 +235,7 @@ def run(args: argparse.Namespace) -> int:
         out = score_to_json(result, args)
         out.update(method=found.method, evaluations=found.evaluations, seconds=found.seconds)
         if found.upper_bound is not None:
-            out.update(upper_bound=found.upper_bound, gap=found.gap)
+            out.update(upper_bound=found.upper_bound, gap=found.gap, bound_model="exact")
         print_json(out)
     else:
         rows = score_rows(result)
@@ -260,7 +245,10 @@ def run(args: argparse.Namespace) -> int:
             ("time", f"{found.seconds:.3f} s"),
         ]
         if found.upper_bound is not None:
-            rows += [("upper bound", f"{found.upper_bound:.9f}"), ("gap", f"{found.gap:.2e}")]
+            rows += [
+                ("upper bound", f"{found.upper_bound:.9f} (exact model, whole polygon)"),
+                ("gap", f"{found.gap:.2e} (exact fitness {found.fitness:.9f})"),
+            ]
         print_table(rows)
         if args.plot is not None:
             print(f"plot written to {args.plot}", file=sys.stderr)

@@ -15,7 +15,14 @@ from ..geo import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission, plan_area
 from ..io import Area, embedded_field, read_area
 from ..objectives import FewestTransects
 from ..sensors import Camera, Swath
-from ._common import finite_float, positive_float, print_json, print_table
+from ._common import (
+    check_output_path,
+    check_plot_target,
+    finite_float,
+    positive_float,
+    print_json,
+    print_table,
+)
 
 #: Objectives by name (maximised or minimised as each says); add entries here.
 # ShortestPath is not offered here: it scores the chords of the layout, and the
@@ -366,6 +373,11 @@ def _rows(mission: Mission, written: list[str]) -> list[tuple[str, str]]:
 
 
 def run(args: argparse.Namespace) -> int:
+    # Refuse unwritable outputs before any work (an error writes nothing).
+    if args.out is not None:
+        check_output_path(args.out, "--out")
+    if args.plot is not None:
+        check_plot_target(args.plot)
     area = _load(args)
     spacing = _spacing(args, embedded=args.area is None)
     fitness = OBJECTIVES[args.objective]()

@@ -15,7 +15,6 @@ import logging
 import os
 import shlex
 import sys
-import tempfile
 import time
 from typing import Any
 
@@ -24,7 +23,8 @@ import torch
 
 from .. import experiments as ex
 from .._version import __version__
-from ._common import positive_int
+from ..io import atomic_write
+from ._common import positive_int, seed_int
 
 log = logging.getLogger(__name__)
 
@@ -78,7 +78,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         f"{DEFAULT_SAMPLES}, the paper's; with --quick {QUICK_SAMPLES['table1']} and "
         f"{QUICK_SAMPLES['optimizers']})",
     )
-    p.add_argument("--seed", type=_seed, default=0, help="random seed, >= 0 (default 0)")
+    p.add_argument("--seed", type=seed_int, default=0, help="random seed, >= 0 (default 0)")
     p.add_argument("--out", default="reproduce-out", help="output folder (default reproduce-out)")
     p.add_argument(
         "--quick",
@@ -93,33 +93,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         "shared machine one thread is often faster than two)",
     )
     p.set_defaults(func=run)
-
-
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
-    return value
-
-
-def _atomic_write(path: str, data: str | bytes) -> None:
-    """Write ``data`` to ``path`` via a temporary file in the same folder and a rename."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data.encode() if isinstance(data, str) else data)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; a plain file is not
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def _jsonable(obj: Any) -> Any:
@@ -138,15 +111,25 @@ def _jsonable(obj: Any) -> Any:
 
 
 def _write_json(path: str, obj: Any) -> None:
-    _atomic_write(path, json.dumps(_jsonable(obj), indent=1, allow_nan=False) + "\n")
+    atomic_write(path, json.dumps(_jsonable(obj), indent=1, allow_nan=False) + "\n")
 
 
-def _read_json(path: str) -> dict[str, Any] | None:
+def _read_json(path: str, part: str) -> dict[str, Any] | None:
+    """The results of ``part`` stored in ``path`` by an earlier run, or None (with a warning when
+    the file exists but is not such a result: another program's file, an older format)."""
+    if not os.path.exists(path):
+        return None
     try:
         with open(path, encoding="utf-8") as fh:
-            return json.load(fh)
-    except (OSError, ValueError):
+            data = json.load(fh)
+        if not isinstance(data, dict) or not isinstance(data.get("meta"), dict):
+            raise ValueError("no 'meta' object")
+        table1, optimizers, figures = (data if p == part else None for p in PARTS)
+        ex.render_report(table1, optimizers, figures)  # the report can be built from it
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, IndexError) as exc:
+        log.warning("ignoring %s: not a result of 'boustro reproduce %s' (%s)", path, part, exc)
         return None
+    return data
 
 
 def _meta(args: argparse.Namespace, n: int | None, seconds: float, load: str) -> dict[str, Any]:
@@ -225,7 +208,7 @@ def run(args: argparse.Namespace) -> int:
                 for name, draw in ex.FIGURES.items():
                     buf = io.BytesIO()
                     draw(data).savefig(buf, format="png", dpi=120)
-                    _atomic_write(os.path.join(args.out, name), buf.getvalue())
+                    atomic_write(os.path.join(args.out, name), buf.getvalue())
                 keep = ("fitness_vs_angle", "surface_angle_offset", "surface_angle_temperature")
                 result = {
                     "meta": _meta(args, None, time.perf_counter() - t0, load),
@@ -234,13 +217,11 @@ def run(args: argparse.Namespace) -> int:
                 _write_json(os.path.join(args.out, "figures.json"), result)
             log.info("%s: %.1f s", part, time.perf_counter() - t0)
         present = [f for f in ex.FIGURES if os.path.exists(os.path.join(args.out, f))]
-        report = ex.render_report(
-            _read_json(os.path.join(args.out, "table1.json")),
-            _read_json(os.path.join(args.out, "optimizers.json")),
-            _read_json(os.path.join(args.out, "figures.json")),
-            present,
+        table1, optimizers, figures = (
+            _read_json(os.path.join(args.out, f"{part}.json"), part) for part in PARTS
         )
-        _atomic_write(os.path.join(args.out, "report.md"), report)
+        report = ex.render_report(table1, optimizers, figures, present)
+        atomic_write(os.path.join(args.out, "report.md"), report)
     finally:
         torch.set_num_threads(previous_threads)
     print(os.path.join(args.out, "report.md"))

@@ -147,8 +147,8 @@ def score_to_json(result: Score, args: argparse.Namespace) -> dict[str, Any]:
 
 def score_rows(result: Score) -> list[tuple[str, str]]:
     return [
-        ("angle", f"{math.degrees(result.angle):.4f} deg"),
-        ("offset", f"{result.offset:.6g}"),
+        ("angle", f"{math.degrees(result.angle)!r} deg"),
+        ("offset", f"{result.offset!r}"),
         ("spacing", f"{result.spacing:.6g}"),
         ("fitness", f"{result.fitness:.6f} ({result.model} model)"),
         ("transects", f"{result.n_transects}"),

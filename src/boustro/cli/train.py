@@ -3,11 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Any
 
+from ..errors import InvalidParameterError
 from ..learned import PlannerConfig, TrainConfig, save_planner, train_planner
-from ._common import positive_float, positive_int, print_json, print_table
+from ._common import (
+    check_plot_target,
+    positive_float,
+    positive_int,
+    print_json,
+    print_table,
+    seed_int,
+)
 
 DETAILS = """\
 what it does:
@@ -56,7 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help=f"held-out polygons ({d.validation})",
     )  # fmt: skip
     p.add_argument("--lr", type=positive_float, default=d.lr, help=f"learning rate ({d.lr:g})")
-    p.add_argument("--seed", type=int, default=d.seed, help=f"random seed ({d.seed})")
+    p.add_argument("--seed", type=seed_int, default=d.seed, help=f"random seed ({d.seed})")
     p.add_argument(
         "--hypotheses", type=positive_int, default=n.hypotheses,
         help=f"candidate layouts per polygon ({n.hypotheses})",
@@ -122,7 +131,21 @@ def plot_training(history: dict[str, list[float]], path: Path | None = None, *, 
     return fig
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Fail before training if the results cannot be written."""
+    if args.out.suffix.lower() == ".json":
+        raise InvalidParameterError(
+            f"--out {args.out}: the weights file must not end in .json (its settings are written "
+            "beside it with that suffix); use e.g. .pt"
+        )
+    if args.out.is_dir():
+        raise InvalidParameterError(f"--out {args.out}: is a folder; give a file name")
+    if args.plot is not None:
+        check_plot_target(args.plot)
+
+
 def run(args: argparse.Namespace) -> int:
+    _check_outputs(args)
     config = TrainConfig(
         epochs=args.epochs,
         steps_per_epoch=args.steps_per_epoch,
@@ -135,6 +158,12 @@ def run(args: argparse.Namespace) -> int:
     )
     planner = PlannerConfig(hidden=args.hidden, hypotheses=args.hypotheses)
     result = train_planner(config, planner_config=planner, progress=not args.quiet)
+    final = result.history["val_fitness"][-1]
+    if not math.isfinite(final):
+        raise InvalidParameterError(
+            f"training diverged (held-out fitness {final}); nothing written: try a smaller --lr "
+            f"than {args.lr:g}"
+        )
     weights, meta = save_planner(result.planner, args.out, metadata=result.metadata())
     if args.plot is not None:
         plot_training(result.history, args.plot)

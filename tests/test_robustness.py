@@ -1,0 +1,217 @@
+"""Bad and extreme input: one clear error (exit 2, nothing written) instead of a traceback, an
+exhausted memory or a silently wrong file. Cases found by adversarial review."""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+
+import numpy as np
+import pytest
+
+from boustro.errors import InvalidParameterError, InvalidPolygonError, PolygonFileError
+from boustro.formats import _xml_text
+from boustro.geometry import Polygon, halfplanes
+from boustro.io import area_from_json, polygon_from_json
+from boustro.learned import LearnedPlanner, PlannerConfig, save_planner
+from boustro.models import MAX_TRANSECTS, PaperModel, check_spacing, exact_chords
+from boustro.optimize import optimize
+from boustro.smooth import smooth_lengths
+
+from .conftest import run_cli
+
+PENTAGON = [[0, 0], [7, 1], [9, 5], [4, 8], [-1, 4]]
+
+
+def _one_line_error(code: int, err: str, *, usage: bool = False) -> str:
+    """The error line; ``usage``: argparse's refusal (its usage block, then one error line)."""
+    assert code == 2, err
+    lines = [line for line in err.strip().splitlines() if line]
+    assert "Traceback" not in err
+    assert lines[-1].startswith("boustro") and "error:" in lines[-1], err
+    assert usage or len(lines) == 1, err
+    return lines[-1]
+
+
+def _run(capsys, *argv) -> tuple[int, str, str, bool]:
+    """``run_cli``, and whether argparse refused the arguments (SystemExit)."""
+    try:
+        return (*run_cli(capsys, *argv), False)
+    except SystemExit as exc:
+        out, err = capsys.readouterr()
+        return int(exc.code or 0), out, err, True
+
+
+@pytest.fixture
+def pentagon_file(tmp_path):
+    path = tmp_path / "pent.json"
+    path.write_text(json.dumps(PENTAGON))
+    return path
+
+
+# -- sizes: refused before any allocation ---------------------------------------------------
+def test_too_many_transects_are_refused():
+    with pytest.raises(InvalidParameterError, match="too small"):
+        check_spacing(1e-7, extent=1.0)
+    assert check_spacing(1.0 / MAX_TRANSECTS, extent=1.0) == 1.0 / MAX_TRANSECTS
+    hp = halfplanes(Polygon(PENTAGON))
+    with pytest.raises(InvalidParameterError, match="candidate transects"):
+        exact_chords(hp, 0.3, 0.0, 1e-9)
+    with pytest.raises(InvalidParameterError, match="too small"):
+        optimize(Polygon(PENTAGON), 1e-6, method="global")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["score", "--spacing", "1e-7"],
+        ["score", "--spacing", "1e-300"],
+        ["score", "--model", "soft", "--smoothing", "1e9"],
+        ["score", "--model", "paper", "--points-per-transect", "1000000000"],
+        ["optimize", "--spacing", "1e-6", "--method", "global"],
+        ["optimize", "--spacing", "1e-6", "--method", "grid"],
+        ["optimize", "--spacing", "0.7", "--method", "gradient", "--seed", "-1"],
+        ["optimize", "--spacing", "0.7", "--method", "global", "--tol", "1e-15"],
+        ["score", "--spacing", "12", "--angle", "45", "-a", "1e308", "-b", "1e308", "--json"],
+        ["plan", "--spacing", "1e-300"],
+        ["plan", "--altitude", "-50"],
+    ],
+)
+def test_cli_refuses_with_one_line(capsys, pentagon_file, argv):
+    if argv[0] in ("score", "optimize"):
+        argv = [argv[0], pentagon_file, *argv[1:]]
+    code, out, err, usage = _run(capsys, *argv)
+    _one_line_error(code, err, usage=usage)
+    assert out == ""
+
+
+def test_tiny_smoothing_is_refused_not_wrong():
+    hp = halfplanes(Polygon(PENTAGON))
+    with pytest.raises(InvalidParameterError, match="smoothing=0"):
+        smooth_lengths(hp, 0.5, 0.0, 0.1, smoothing=1e-200)
+    small = smooth_lengths(hp, 0.5, 0.0, 0.1, smoothing=1e-60).lengths
+    exact = exact_chords(hp, 0.5, 0.0, 0.1).lengths
+    np.testing.assert_allclose(small, exact, atol=1e-12)
+
+
+def test_points_per_transect_has_an_upper_bound():
+    hp = halfplanes(Polygon(PENTAGON))
+    with pytest.raises(InvalidParameterError, match="points_per_transect"):
+        PaperModel(points_per_transect=10**9)(hp, 0.5, 0.0, 0.1)
+
+
+# -- polygons at any scale -------------------------------------------------------------------
+@pytest.mark.parametrize("scale", [1e-30, 1e-13, 1.0, 1e13, 1e90])
+def test_valid_polygon_at_any_scale(scale):
+    p = Polygon(np.array(PENTAGON, dtype=float) * scale)
+    assert len(p) == 5
+    assert p.area / scale**2 == pytest.approx(51.0, rel=1e-12)
+
+
+def test_out_of_range_coordinates_are_refused():
+    with pytest.raises(InvalidPolygonError, match="coordinates"):
+        Polygon(np.array(PENTAGON, dtype=float) * 1e200)
+    with pytest.raises(InvalidPolygonError, match="too small for float64"):
+        Polygon(np.array(PENTAGON, dtype=float) * 1e-10 + 1e9)
+
+
+# -- malformed GeoJSON ---------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "data",
+    [
+        {"type": "FeatureCollection", "features": [[1, 2]]},
+        {"type": "FeatureCollection", "features": "abc"},
+        {"type": "Feature", "geometry": [1]},
+        {"type": "MultiPolygon", "coordinates": {"a": 1}},
+        {"type": "Polygon", "coordinates": "x"},
+        [[0, 0], [1, 0], [1, 1], [0, 10**400]],
+    ],
+)
+def test_malformed_json_raises_the_file_error(data):
+    with pytest.raises(PolygonFileError):
+        polygon_from_json(data)
+    with pytest.raises(PolygonFileError):
+        area_from_json(data)
+
+
+def test_several_polygons_warn_that_only_the_first_is_used(caplog):
+    square = [[[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]]]
+    data = {
+        "type": "FeatureCollection",
+        "features": [
+            {"type": "Feature", "geometry": {"type": "Point", "coordinates": [0, 0]}},
+            {"type": "Feature", "geometry": {"type": "Polygon", "coordinates": square}},
+            {"type": "Feature", "geometry": {"type": "Polygon", "coordinates": square}},
+        ],
+    }
+    with caplog.at_level(logging.WARNING):
+        area = area_from_json(data, "f.geojson")
+    assert len(area.ring) == 4
+    assert "only the first (feature 1)" in caplog.text
+
+
+# -- outputs ---------------------------------------------------------------------------------
+def test_plan_writes_nothing_when_an_output_cannot_be(capsys, tmp_path):
+    out = tmp_path / "ok.geojson"
+    code, _, err = run_cli(
+        capsys, "plan", "--spacing", "20", "--out", out, "--plot", tmp_path / "no" / "x.png"
+    )
+    assert "no such folder" in _one_line_error(code, err)
+    assert not out.exists()
+    code, _, err = run_cli(capsys, "plan", "--spacing", "20", "--out", tmp_path / "no" / "x.kml")
+    assert str(tmp_path / "no") in _one_line_error(code, err)  # the folder, not a temp file
+
+
+@pytest.mark.parametrize(
+    ("crs", "member"), [("28992", "urn:ogc:def:crs:EPSG::28992"), ("planar", None)]
+)
+def test_geojson_names_its_crs_the_standard_way(capsys, tmp_path, crs, member):
+    area = tmp_path / "rd.json"
+    ring = [[120000, 480000], [120300, 480000], [120300, 480200], [120000, 480200]]
+    area.write_text(json.dumps(ring))
+    out = tmp_path / "x.geojson"
+    code, _, err = run_cli(capsys, "plan", area, "--crs", crs, "--spacing", "10", "--out", out)
+    assert code == 0, err
+    written = json.loads(out.read_text()).get("crs")
+    assert (written and written["properties"]["name"]) == member
+
+
+def test_xml_text_drops_characters_xml_forbids():
+    assert _xml_text("a\x01b<c>\td") == "a?b&lt;c&gt;\td"
+
+
+def test_train_refuses_outputs_before_training(capsys, tmp_path):
+    tiny = ["--epochs", "1", "--steps-per-epoch", "1", "--batch-size", "2", "--pool", "4"]
+    for extra, needle in [
+        (["--out", tmp_path / "w.json"], "must not end in .json"),
+        (["--out", tmp_path], "is a folder"),
+        (["--out", tmp_path / "w.pt", "--plot", tmp_path / "c.xyz"], "unknown image format"),
+        (["--out", tmp_path / "w.pt", "--seed", "-1"], ">= 0"),
+    ]:
+        code, _, err, _ = _run(capsys, "-q", "train", *tiny, "--validation", "2", *extra)
+        assert needle in err and code == 2, err
+    assert not list(tmp_path.iterdir())
+
+
+def test_save_planner_refuses_non_finite_weights_and_json_names(tmp_path):
+    planner = LearnedPlanner(PlannerConfig(hidden=8, hypotheses=2))
+    with pytest.raises(InvalidParameterError, match=r"\.json"):
+        save_planner(planner, tmp_path / "w.json")
+    with pytest.raises(InvalidParameterError, match="not all finite"):
+        for p in planner.parameters():
+            p.data.fill_(math.nan)
+        save_planner(planner, tmp_path / "w.pt")
+    assert not list(tmp_path.iterdir())
+
+
+def test_reproduce_ignores_foreign_result_files(tmp_path, caplog):
+    from boustro.cli import reproduce
+
+    (tmp_path / "optimizers.json").write_text("[1, 2]")
+    (tmp_path / "table1.json").write_text("{bad")
+    with caplog.at_level(logging.WARNING):
+        for part in ("table1", "optimizers"):
+            assert reproduce._read_json(str(tmp_path / f"{part}.json"), part) is None
+        assert reproduce._read_json(str(tmp_path / "figures.json"), "figures") is None  # absent
+    assert caplog.text.count("ignoring") == 2
