@@ -19,11 +19,11 @@ __all__ = [
     "check_plot_target",
     "finite_float",
     "load_polygon",
+    "nonnegative_int",
     "positive_float",
     "positive_int",
     "print_json",
     "print_table",
-    "seed_int",
 ]
 
 
@@ -54,8 +54,8 @@ def positive_int(text: str) -> int:
     return value
 
 
-def seed_int(text: str) -> int:
-    """A random seed: a whole number >= 0."""
+def nonnegative_int(text: str) -> int:
+    """A whole number >= 0 (a random seed, a count that may be 0)."""
     try:
         value = int(text)
     except ValueError:

@@ -16,11 +16,11 @@ from ._common import (
     add_polygon_argument,
     check_plot_target,
     load_polygon,
+    nonnegative_int,
     positive_float,
     positive_int,
     print_json,
     print_table,
-    seed_int,
 )
 from .score import (
     CONVENTIONS,
@@ -68,20 +68,10 @@ def schedule_type(text: str) -> TemperatureSchedule:
     return TemperatureSchedule(*values)
 
 
-def nonnegative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
-    return value
-
-
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "optimize",
-        help="best transect angle and offset (grid, gradient or hybrid search)",
+        help="best transect angle and offset (global, grid, gradient, hybrid or learned search)",
         description="Find the transect angle and grid offset that maximise the fitness of Smith "
         "et al. (the paper's Eq. 1) for a convex polygon and a spacing.",
         epilog=EPILOG,
@@ -129,7 +119,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         "to T1 (default 50:200)",
     )
     grad.add_argument(
-        "--seed", type=seed_int, default=0, help="seed of the random starts (gradient; default 0)"
+        "--seed",
+        type=nonnegative_int,
+        default=0,
+        help="seed of the random starts (gradient; default 0)",
     )
     p.add_argument(
         "--refine",

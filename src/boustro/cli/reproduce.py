@@ -24,7 +24,7 @@ import torch
 from .. import experiments as ex
 from .._version import __version__
 from ..io import atomic_write
-from ._common import positive_int, seed_int
+from ._common import nonnegative_int, positive_int
 
 log = logging.getLogger(__name__)
 
@@ -78,7 +78,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         f"{DEFAULT_SAMPLES}, the paper's; with --quick {QUICK_SAMPLES['table1']} and "
         f"{QUICK_SAMPLES['optimizers']})",
     )
-    p.add_argument("--seed", type=seed_int, default=0, help="random seed, >= 0 (default 0)")
+    p.add_argument("--seed", type=nonnegative_int, default=0, help="random seed, >= 0 (default 0)")
     p.add_argument("--out", default="reproduce-out", help="output folder (default reproduce-out)")
     p.add_argument(
         "--quick",

@@ -11,11 +11,11 @@ from ..errors import InvalidParameterError
 from ..learned import PlannerConfig, TrainConfig, save_planner, train_planner
 from ._common import (
     check_plot_target,
+    nonnegative_int,
     positive_float,
     positive_int,
     print_json,
     print_table,
-    seed_int,
 )
 
 DETAILS = """\
@@ -65,7 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help=f"held-out polygons ({d.validation})",
     )  # fmt: skip
     p.add_argument("--lr", type=positive_float, default=d.lr, help=f"learning rate ({d.lr:g})")
-    p.add_argument("--seed", type=seed_int, default=d.seed, help=f"random seed ({d.seed})")
+    p.add_argument("--seed", type=nonnegative_int, default=d.seed, help=f"random seed ({d.seed})")
     p.add_argument(
         "--hypotheses", type=positive_int, default=n.hypotheses,
         help=f"candidate layouts per polygon ({n.hypotheses})",
