@@ -866,8 +866,8 @@ def best_offset(
         value, _, d = _attained(poly, v, s_n, np.array([angle]), a, b)
     if not math.isfinite(value):
         raise NoTransectError(f"no transect crosses the polygon at spacing {spacing:g}")
-    _, offset = canonical(angle, d * frame.scale, spacing)
-    return offset, value
+    offset = float(np.mod(d * frame.scale, spacing))  # for ``angle`` as given, not mod pi
+    return (0.0 if offset >= spacing else offset), value
 
 
 def global_optimum(
@@ -931,7 +931,44 @@ def global_optimum(
     upper = search.upper_bound
     if not search.converged and not math.isfinite(upper):
         upper = a + b  # every length is at most the diameter (1) and std >= 0
+    # An independent spot check, exact fitness on a coarse grid: in degenerate configurations
+    # (a symmetric polygon whose width is a multiple of the spacing, to the last bits) the
+    # search's best value can be a limit that no layout attains, or float64 can misplace an
+    # event; the check then finds a better layout, and the result says it is not certified.
+    check_theta, check_d, check_value = _spot_check(v, s_n, a, b)
+    notes = []
+    if check_value > value + 1e-12:
+        with np.errstate(all="ignore"):
+            better, theta_b, d_b = _attained(poly, v, s_n, np.array([check_theta]), a, b)
+        if better >= check_value:
+            value, theta, d = better, theta_b, d_b
+        else:
+            value, theta, d = check_value, check_theta, check_d
+        notes.append("a spot check found a better layout than the search")
+    if value > upper + 1e-12:
+        notes.append(
+            "the upper bound is not valid here (float64 cannot resolve this degenerate "
+            "configuration)"
+        )
+        upper = value
+    elif upper - value > tol * (1 + 1e-9) and search.converged:
+        notes.append(
+            "the search's best value is a limit no layout attains (a transect grazing "
+            "a vertex); the layout returned is the best attained one found"
+        )
+    converged = search.converged and not notes
     angle, offset = canonical(theta, d * frame.scale, spacing)
+    info: dict[str, Any] = {
+        "events": search.events,
+        "rounds": search.rounds,
+        "converged": converged,
+        "tol": tol,
+        "a": a,
+        "b": b,
+        "closed_form_value": search.value,
+    }
+    if notes:
+        info["note"] = "; ".join(notes)
     return OptimizeResult(
         angle=angle,
         offset=offset,
@@ -941,16 +978,29 @@ def global_optimum(
         evaluations=search.evaluations,
         seconds=time.perf_counter() - t0,
         upper_bound=max(upper, value),
-        info={
-            "events": search.events,
-            "rounds": search.rounds,
-            "converged": search.converged,
-            "tol": tol,
-            "a": a,
-            "b": b,
-            "closed_form_value": search.value,
-        },
+        info=info,
     )
+
+
+def _spot_check(v: Array, s: float, a: float, b: float) -> tuple[float, float, float]:
+    """``(angle, offset, fitness)``, normalised frame: the best of the exact fitness over 90
+    angles, every edge's direction and its normal, and 9 offsets (0 included)."""
+    edges = np.roll(v, -1, axis=0) - v
+    edge_angles = np.mod(np.arctan2(edges[:, 1], edges[:, 0]), math.pi)
+    angles = np.concatenate(
+        [np.arange(90) * (math.pi / 90), edge_angles, np.mod(edge_angles + math.pi / 2, math.pi)]
+    )
+    offsets = np.arange(9) * (s / 9)
+    hp = halfplanes(Polygon(v))
+    values = evaluate_grid(
+        hp,
+        torch.as_tensor(angles, dtype=hp.normals.dtype),
+        torch.as_tensor(offsets, dtype=hp.normals.dtype),
+        s,
+        fitness=SmithFitness(a=a, b=b),
+    ).numpy()
+    i, j = np.unravel_index(int(np.argmax(values)), values.shape)
+    return float(angles[i]), float(offsets[j]), float(values[i, j])
 
 
 # --------------------------------------------------------------------------------------------

@@ -229,6 +229,9 @@ def run(args: argparse.Namespace) -> int:
         out.update(method=found.method, evaluations=found.evaluations, seconds=found.seconds)
         if found.upper_bound is not None:
             out.update(upper_bound=found.upper_bound, gap=found.gap, bound_model="exact")
+            out["certified"] = bool(found.info.get("converged", False))
+            if "note" in found.info:
+                out["note"] = found.info["note"]
         print_json(out)
     else:
         rows = score_rows(result)
@@ -242,6 +245,8 @@ def run(args: argparse.Namespace) -> int:
                 ("upper bound", f"{found.upper_bound:.9f} (exact model, whole polygon)"),
                 ("gap", f"{found.gap:.2e} (exact fitness {found.fitness:.9f})"),
             ]
+            if not found.info.get("converged", False):
+                rows.append(("certified", "no: " + str(found.info.get("note", "not converged"))))
         print_table(rows)
         if args.plot is not None:
             print(f"plot written to {args.plot}", file=sys.stderr)
