@@ -215,3 +215,28 @@ def test_reproduce_ignores_foreign_result_files(tmp_path, caplog):
             assert reproduce._read_json(str(tmp_path / f"{part}.json"), part) is None
         assert reproduce._read_json(str(tmp_path / "figures.json"), "figures") is None  # absent
     assert caplog.text.count("ignoring") == 2
+
+
+# -- the exact optimiser's work --------------------------------------------------------------
+def test_global_optimiser_refuses_work_beyond_its_limit():
+    from boustro import global_opt
+    from boustro.errors import ProblemTooLargeError
+
+    n = 40
+    ring = [(math.cos(2 * math.pi * k / n), math.sin(2 * math.pi * k / n)) for k in range(n)]
+    assert global_opt.global_work(ring, 0.02) > global_opt.WORK_LIMIT
+    assert global_opt.global_work(PENTAGON, 0.7) < global_opt.WORK_LIMIT
+    with pytest.raises(ProblemTooLargeError, match="hybrid"):
+        optimize(ring, 0.02, method="global")
+
+
+def test_plan_falls_back_to_hybrid_when_global_is_too_large(monkeypatch, caplog):
+    from boustro import geo, global_opt
+
+    monkeypatch.setattr(global_opt, "WORK_LIMIT", 10.0)
+    with caplog.at_level(logging.WARNING):
+        mission = geo.plan_area(PENTAGON, 0.7, crs=None)
+    assert mission.optimum.method == "hybrid"
+    assert "planning with the hybrid optimiser instead" in caplog.text
+    with pytest.raises(InvalidParameterError, match="units of work"):
+        geo.plan_area(PENTAGON, 0.7, crs=None, method="global")  # asked for: no fallback

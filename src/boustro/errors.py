@@ -15,6 +15,7 @@ __all__ = [
     "NoTransectError",
     "NonConvexPolygonError",
     "PolygonFileError",
+    "ProblemTooLargeError",
     "as_number",
 ]
 
@@ -33,6 +34,11 @@ class NonConvexPolygonError(InvalidPolygonError):
 
 class InvalidParameterError(BoustroError, ValueError):
     """A numeric parameter (spacing, temperature, angle, ...) is out of its valid range."""
+
+
+class ProblemTooLargeError(InvalidParameterError):
+    """The exact global optimiser would need more work than :data:`boustro.global_opt.WORK_LIMIT`
+    (many vertices at a small spacing); another method can take the problem."""
 
 
 class NoTransectError(BoustroError, ValueError):

@@ -41,6 +41,7 @@ from .errors import (
     InvalidParameterError,
     InvalidPolygonError,
     NonConvexPolygonError,
+    ProblemTooLargeError,
     as_number,
 )
 from .fitness import SmithFitness
@@ -72,6 +73,9 @@ log = logging.getLogger("boustro")
 #: The optimiser :func:`plan_area` uses unless told otherwise, and the options it passes to each
 #: method. Switching the default is this one line.
 DEFAULT_METHOD = "global"
+#: Used instead of the default when the global optimiser would take too long (many vertices at a
+#: small spacing; :data:`boustro.global_opt.WORK_LIMIT`).
+FALLBACK_METHOD = "hybrid"
 METHOD_OPTIONS: dict[str, dict[str, Any]] = {"grid": {"n_angles": 360, "n_offsets": 32}}
 
 #: Deepest pocket (metres) of a nearly convex area that is planned on its convex hull.
@@ -608,10 +612,16 @@ def plan_area(
     start_plan = ring_plan[0] if start is None else proj.to_plan(np.asarray(start, float))
     ground_area = proj.ground_area(ring_plan) - sum(proj.ground_area(h) for h in holes_plan)
     if region is None:
-        method = method or DEFAULT_METHOD
-        opts = dict(METHOD_OPTIONS.get(method, {}))
+        chosen = method or DEFAULT_METHOD
+        opts = dict(METHOD_OPTIONS.get(chosen, {}))
         opts.update(options or {})
-        optimum = optimize(poly, s_plan, method=method, fitness=fitness, **opts)
+        try:
+            optimum = optimize(poly, s_plan, method=chosen, fitness=fitness, **opts)
+        except ProblemTooLargeError as exc:
+            if method is not None:
+                raise
+            log.warning("%s; planning with the hybrid optimiser instead", exc)
+            optimum = optimize(poly, s_plan, method=FALLBACK_METHOD, fitness=fitness)
         plan = build_plan(
             poly,
             s_plan,
