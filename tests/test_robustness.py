@@ -240,3 +240,21 @@ def test_plan_falls_back_to_hybrid_when_global_is_too_large(monkeypatch, caplog)
     assert "planning with the hybrid optimiser instead" in caplog.text
     with pytest.raises(InvalidParameterError, match="units of work"):
         geo.plan_area(PENTAGON, 0.7, crs=None, method="global")  # asked for: no fallback
+
+
+@pytest.mark.parametrize("holes", [(), ([[4, 4], [6, 4], [6, 6], [4, 6]],)])
+def test_plan_starts_at_the_lane_end_nearest_the_start_in_concave_areas(holes, caplog):
+    from boustro import geo
+
+    shell = [[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]]  # an L
+    for start in ([19.5, 0.5], [0.5, 19.5]):  # lane ends that begin a chain
+        mission = geo.plan_area(shell, 1.0, crs=None, holes=holes, start=start)
+        wp, kinds = mission.plan.waypoints, np.asarray(mission.plan.kinds)
+        ends = wp[np.isin(kinds, ("start", "end"))]  # every lane end flown
+        nearest = np.min(np.hypot(*(ends - start).T))
+        # a chain of lanes starts at its first or last lane: within two spacings of the nearest
+        # lane end (before the fix: across the area, up to 20 spacings away)
+        assert np.hypot(*(wp[0] - start)) <= nearest + 2.0, (start, wp[0])
+    with caplog.at_level(logging.WARNING):
+        geo.plan_area(shell, 1.0, crs=None, start=[5000.0, 0.0])
+    assert "swapped longitude and latitude" in caplog.text

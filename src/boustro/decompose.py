@@ -945,10 +945,17 @@ def _hole_pass(hole: Polygon, max_options: int = 8) -> _Pass:
 
 
 def _order(
-    passes: list[_Pass], start: NDArray[np.float64], router: Router, budget: float = 0.25
+    passes: list[_Pass],
+    start: NDArray[np.float64],
+    router: Router,
+    budget: float = 0.25,
+    *,
+    force_start: bool = True,
 ) -> tuple[list[int], list[int]]:
-    """Order and driving option of every pass: greedy from ``start``, then 2-opt (within a time
-    budget, seconds) with the options chosen by dynamic programming."""
+    """Order and driving option of every pass. With ``force_start`` the first is the pass and
+    option whose entry (a lane end) is nearest ``start``; without, ``start`` only seeds the
+    greedy order and the tour begins where it is shortest. The rest greedy, then 2-opt (within
+    a time budget, seconds) with the options chosen by dynamic programming."""
     pts, entry_idx, exit_idx = [start], [], []
     for p in passes:
         e_i, x_i = [], []
@@ -961,10 +968,19 @@ def _order(
         exit_idx.append(np.array(x_i))
     dist = router.distances(np.asarray(pts))
     internal = [np.array([o[3] for o in p.options]) for p in passes]
+    # The first pass and its option: the entry nearest the start (ties: the first found).
+    first_pass, first_option = min(
+        ((k, j) for k in range(len(passes)) for j in range(len(entry_idx[k]))),
+        key=lambda kj: dist[0, entry_idx[kj[0]][kj[1]]],
+    )
+    forced = np.full(len(entry_idx[first_pass]), math.inf)
+    forced[first_option] = 0.0
 
     def cost(order: list[int]) -> tuple[float, list[int]]:
         first = order[0]
         acc = dist[0, entry_idx[first]] + internal[first]
+        if force_start:
+            acc = acc + forced
         back = []
         for prev, cur in itertools.pairwise(order):
             trans = dist[np.ix_(exit_idx[prev], entry_idx[cur])] + acc[:, None]
@@ -976,10 +992,10 @@ def _order(
             choice.append(int(arg[choice[-1]]))
         return float(acc.min()), choice[::-1]
 
-    # Greedy nearest pass.
-    remaining = set(range(len(passes)))
-    order: list[int] = []
-    here = np.array([0])
+    # Greedy nearest pass from the first pass's exit.
+    remaining = set(range(len(passes))) - {first_pass}
+    order: list[int] = [first_pass]
+    here = exit_idx[first_pass][first_option : first_option + 1]
     while remaining:
         best = (math.inf, -1, -1)
         for candidate in remaining:
@@ -995,7 +1011,7 @@ def _order(
     improved = len(order) > 2
     while improved and time.perf_counter() < t_end:
         improved = False
-        for i in range(len(order) - 1):
+        for i in range(int(force_start), len(order) - 1):  # a forced first pass stays first
             for j in range(i + 1, len(order)):
                 cand = order[:i] + order[i : j + 1][::-1] + order[j + 1 :]
                 c, ch = cost(cand)
@@ -1071,8 +1087,8 @@ def plan_region(
         n_angles, n_offsets: grid of :func:`optimize_region`.
         layout: ``"guaranteed"`` (default; with hole passes, every point of the area is within
             ``reach`` of a lane across it or of a hole pass) or ``"chords"``.
-        start: the path begins at the lane end nearest this point (default: the shell's first
-            vertex).
+        start: the path begins at the entry nearest this point of a chain of lanes (a chain
+            starts at its first or last lane's ends); default: where the tour is shortest.
         turnaround: run-in / run-out beyond each lane end (shortened where it would enter a
             hole), plan units.
         reach: half-width of each lane's band (default ``spacing / 2``).
@@ -1182,13 +1198,14 @@ def plan_region(
         )
 
     router = Router(r, reach=max(reach, turnaround))
+    force_start = start is not None
     if start is None:
         start_pt = r.shell.vertices[0]
     else:
         start_pt = np.asarray(start, dtype=np.float64).reshape(-1)
         if start_pt.shape != (2,) or not np.all(np.isfinite(start_pt)):
             raise InvalidParameterError(f"start must be a finite (x, y) pair, got {start!r}")
-    order, choice = _order(passes, start_pt, router)
+    order, choice = _order(passes, start_pt, router, force_start=force_start)
 
     # Waypoints.
     points: list[NDArray[np.float64]] = []

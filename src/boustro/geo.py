@@ -610,6 +610,16 @@ def plan_area(
         )
     s_plan = s_m * k_lo
     start_plan = ring_plan[0] if start is None else proj.to_plan(np.asarray(start, float))
+    if start is not None:
+        far = float(np.min(np.hypot(*(ring_plan - start_plan).T))) / k_lo
+        size = float(np.max(np.hypot(*(ring_plan - ring_plan.mean(axis=0)).T))) * 2 / k_lo
+        if far > 10 * size:
+            log.warning(
+                "the start is %.3g m from the area, %.0f times its size: swapped longitude and "
+                "latitude?",
+                far,
+                far / size,
+            )
     ground_area = proj.ground_area(ring_plan) - sum(proj.ground_area(h) for h in holes_plan)
     if region is None:
         chosen = method or DEFAULT_METHOD
@@ -653,7 +663,7 @@ def plan_area(
             sweep=None if sweep is None else math.radians(float(sweep)),
             fitness=fitness,
             layout=layout,  # type: ignore[arg-type]
-            start=start_plan,
+            start=None if start is None else start_plan,  # None: the shortest tour
             turnaround=float(turnaround) * k_hi,
             reach=reach_m * k_lo,
             nadir_gap=gap_m * k_hi,

@@ -135,8 +135,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--start",
         type=_point,
         metavar="X,Y",
-        help="start at the corner nearest this point, in AREA's coordinates (LON,LAT for "
-        "lon/lat); also the mission's home (default: AREA's first vertex)",
+        help="start at the lane end nearest this point, in AREA's coordinates (LON,LAT for "
+        "lon/lat); also the mission's home. Default: a convex area starts at the corner nearest "
+        "AREA's first vertex, a concave one where the tour is shortest; the home is then the "
+        "first waypoint",
     )
     path.add_argument(
         "--turnaround",
