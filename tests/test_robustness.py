@@ -258,3 +258,62 @@ def test_plan_starts_at_the_lane_end_nearest_the_start_in_concave_areas(holes, c
     with caplog.at_level(logging.WARNING):
         geo.plan_area(shell, 1.0, crs=None, start=[5000.0, 0.0])
     assert "swapped longitude and latitude" in caplog.text
+
+
+# -- small API contracts -----------------------------------------------------------------------
+def test_flags_are_not_numbers_and_options_are_checked():
+    hp = halfplanes(Polygon(PENTAGON))
+    with pytest.raises(InvalidParameterError, match="smoothing must be a number"):
+        smooth_lengths(hp, 0.5, 0.0, 0.1, smoothing=True)
+    with pytest.raises(InvalidParameterError, match="points_per_transect"):
+        PaperModel(points_per_transect="x")(hp, 0.5, 0.0, 0.1)
+    with pytest.raises(InvalidParameterError, match="no option 'bogus'"):
+        optimize(PENTAGON, 0.7, method="global", bogus=1)
+
+
+def test_smith_fitness_checks_its_weights_and_ignores_rounding_noise_chords():
+    import torch
+
+    from boustro.fitness import smith_fitness
+
+    with pytest.raises(InvalidParameterError, match="a must be"):
+        smith_fitness(torch.ones(3, dtype=torch.float64), a=-1.0)
+    with pytest.raises(InvalidParameterError, match="b must be"):
+        smith_fitness(torch.ones(3, dtype=torch.float64), b=math.nan)
+    lengths = torch.tensor([1.0, 0.8, 1.4e-17], dtype=torch.float64)  # a chord through a vertex
+    expect = smith_fitness(lengths[:2])
+    assert float(smith_fitness(lengths)) == pytest.approx(float(expect), abs=1e-15)
+
+
+def test_decompose_refuses_a_nan_sweep():
+    from boustro.decompose import decompose
+
+    with pytest.raises(InvalidParameterError, match="sweep"):
+        decompose(PENTAGON, math.nan)
+
+
+def test_python_dash_m_and_byte_order_mark(tmp_path):
+    import subprocess
+    import sys
+
+    path = tmp_path / "bom.json"
+    path.write_bytes(b"\xef\xbb\xbf" + json.dumps(PENTAGON).encode())
+    done = subprocess.run(
+        [sys.executable, "-m", "boustro", "score", str(path), "--spacing", "0.7", "--json"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["n_transects"] > 0
+
+
+def test_atomic_write_keeps_a_symlink_and_writes_its_target(tmp_path):
+    from boustro.io import atomic_write
+
+    target = tmp_path / "target.txt"
+    target.write_text("old")
+    link = tmp_path / "link.txt"
+    link.symlink_to(target)
+    atomic_write(link, "new")
+    assert link.is_symlink() and target.read_text() == "new"

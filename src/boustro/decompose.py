@@ -146,6 +146,7 @@ def trapezoids(
 ) -> Trapezoids:
     """The slab decomposition of ``region`` by lines of direction ``angle`` through its vertices."""
     r = as_region(region)
+    angle = _check_float("sweep angle", angle)
     o = r.centre if origin is None else np.asarray(origin, dtype=np.float64)
     u, n = _frame(angle)
     e = r.edges - o

@@ -54,6 +54,8 @@ def as_number(name: str, value: object) -> float:
 
     Callers check the range themselves, with a message that states it.
     """
+    if isinstance(value, bool):  # float(True) == 1.0: a flag is not a number
+        raise InvalidParameterError(f"{name} must be a number, got {value!r}")
     try:
         return float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):

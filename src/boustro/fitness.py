@@ -24,12 +24,13 @@ Degenerate cases are defined, never NaN: no transect that counts (``sum(w) == 0`
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal
 
 import torch
 
-from .errors import InvalidParameterError
+from .errors import InvalidParameterError, as_number
 from .models import TransectLengths
 
 __all__ = ["SmithFitness", "safe_sqrt", "smith_fitness", "transect_count"]
@@ -49,6 +50,17 @@ def transect_count(weights: torch.Tensor) -> torch.Tensor:
     return weights.sum(dim=-1)
 
 
+#: Default weights of :func:`smith_fitness` count a chord when it is longer than this fraction
+#: of the longest one: shorter ones are rounding noise (a transect through a vertex).
+NOISE = 1e-12
+
+
+def _check_weight(name: str, value: object) -> None:
+    v = as_number(name, value)
+    if not (v >= 0 and math.isfinite(v)):
+        raise InvalidParameterError(f"{name} must be finite and >= 0, got {value!r}")
+
+
 def smith_fitness(
     lengths: torch.Tensor,
     weights: torch.Tensor | None = None,
@@ -61,7 +73,8 @@ def smith_fitness(
 
     Args:
         lengths: ``(*, K)`` transect lengths (normalised frame for the paper's scale).
-        weights: ``(*, K)`` in ``[0, 1]``; default ``lengths > 0``.
+        weights: ``(*, K)`` in ``[0, 1]``; default: 1 for chords longer than :data:`NOISE` times
+            the longest, else 0.
         a, b: weights of the mean and of ``1 - std`` (the paper uses 0.5 and 0.5).
         statistics: ``"weighted"`` (default) or ``"paper"``; see the module docstring.
 
@@ -70,8 +83,12 @@ def smith_fitness(
     """
     if statistics not in ("weighted", "paper"):
         raise InvalidParameterError(f"statistics must be 'weighted' or 'paper', got {statistics!r}")
+    _check_weight("a", a)
+    _check_weight("b", b)
     if weights is None:
-        weights = (lengths > 0).to(lengths.dtype)
+        # counted: chords longer than rounding noise (the exact model's rule, relative here)
+        noise = NOISE * lengths.detach().abs().amax(dim=-1, keepdim=True)
+        weights = (lengths > noise).to(lengths.dtype)
     elif weights.shape != lengths.shape:
         raise InvalidParameterError(
             f"weights shape {tuple(weights.shape)} differs from lengths {tuple(lengths.shape)}"
@@ -99,9 +116,7 @@ class SmithFitness:
 
     def __post_init__(self) -> None:
         for key in ("a", "b"):
-            value = getattr(self, key)
-            if not (value >= 0 and value < float("inf")):
-                raise InvalidParameterError(f"{key} must be finite and >= 0, got {value!r}")
+            _check_weight(key, getattr(self, key))
 
     def __call__(self, tl: TransectLengths) -> torch.Tensor:
         return smith_fitness(tl.lengths, tl.weights, a=self.a, b=self.b, statistics=self.statistics)

@@ -190,7 +190,7 @@ def read_polygon(path: str | os.PathLike[str]) -> Polygon:
     """
     name = os.fspath(path)
     try:
-        with open(name, encoding="utf-8") as fh:
+        with open(name, encoding="utf-8-sig") as fh:  # a byte-order mark is not an error
             text = fh.read()
     except FileNotFoundError:
         raise PolygonFileError(f"{name}: no such file") from None
@@ -543,6 +543,8 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> None:
     is removed and ``path`` is left as it was. New files get the usual permissions (umask).
     """
     name = os.fspath(path)
+    if os.path.islink(name):  # write the link's target, keep the link
+        name = os.path.realpath(name)
     folder = os.path.dirname(os.path.abspath(name))
     if not os.path.isdir(folder):
         raise FileNotFoundError(errno.ENOENT, "no such folder", name)

@@ -803,8 +803,10 @@ def load_planner(path: str | Path | None = None) -> LearnedPlanner:
         meta = json.loads(json_path.read_text())
         state = torch.load(path, map_location="cpu", weights_only=True)
     except FileNotFoundError as exc:
+        missing = "its settings file " if exc.filename == str(json_path) else ""
         raise InvalidParameterError(
-            f"no learned planner at {exc.filename}: train one with 'boustro train'"
+            f"no learned planner at {path} ({missing}{exc.filename} is missing): train one with "
+            "'boustro train', which writes both files"
         ) from None
     model = LearnedPlanner(PlannerConfig(**meta["config"]))
     model.load_state_dict(state)

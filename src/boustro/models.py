@@ -585,10 +585,8 @@ def paper_lengths(
     Returns:
         :class:`TransectLengths` ``(*, K)``.
     """
-    if (
-        int(points_per_transect) != points_per_transect
-        or not 2 <= points_per_transect <= MAX_POINTS_PER_TRANSECT
-    ):
+    points = as_number("points_per_transect", points_per_transect)
+    if not (points == int(points) and 2 <= points <= MAX_POINTS_PER_TRANSECT):
         raise InvalidParameterError(
             f"points_per_transect must be an integer in [2, {MAX_POINTS_PER_TRANSECT}], got "
             f"{points_per_transect!r}"

@@ -28,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import math
+import re
 import sys
 import time
 from collections.abc import Callable
@@ -1184,4 +1185,13 @@ def optimize(
         raise InvalidParameterError(
             f"unknown method {method!r}; expected one of {', '.join(sorted(METHODS))}"
         )
-    return METHODS[method](polygon, spacing, fitness=fitness, **options)
+    try:
+        return METHODS[method](polygon, spacing, fitness=fitness, **options)
+    except TypeError as exc:  # a misspelt option: the library's error, naming it
+        match = re.search(r"unexpected keyword argument '(\w+)'", str(exc))
+        if match is None:
+            raise
+        raise InvalidParameterError(
+            f"method {method!r} takes no option {match.group(1)!r} (see its function's "
+            "documentation)"
+        ) from None

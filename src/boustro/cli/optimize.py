@@ -92,7 +92,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     grid.add_argument(
         "--paper-grid",
         action="store_true",
-        help="the paper's 200-sample grid: 14 angles x 14 offsets",
+        help="the paper's '200-sample' grid: 14 angles x 14 offsets (196)",
     )
     grad = p.add_argument_group("gradient (gradient, hybrid)")
     grad.add_argument(
@@ -169,6 +169,8 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
             options["temperature"] = args.schedule
         options["optimizer"] = args.optimizer
         options["momentum"] = args.momentum
+        if args.optimizer == "adam" and args.momentum != 0.8:
+            ignored.append("--momentum (SGD only)")
     else:
         for flag, value, default in (
             ("--starts", args.starts, None),
