@@ -317,3 +317,24 @@ def test_atomic_write_keeps_a_symlink_and_writes_its_target(tmp_path):
     link.symlink_to(target)
     atomic_write(link, "new")
     assert link.is_symlink() and target.read_text() == "new"
+
+
+def test_gml_axis_order_follows_the_srs_name_form():
+    from boustro.io import area_from_kml
+
+    def gml(srs: str, pairs: list[tuple[float, float]]) -> str:
+        pos = " ".join(f"{a} {b}" for a, b in pairs)
+        return (
+            f'<gml:Polygon xmlns:gml="http://www.opengis.net/gml/3.2" srsName="{srs}">'
+            "<gml:exterior><gml:LinearRing><gml:posList>"
+            f"{pos}</gml:posList></gml:LinearRing></gml:exterior></gml:Polygon>"
+        )
+
+    lonlat = [(10.0, 45.0), (10.01, 45.0), (10.01, 45.01), (10.0, 45.01), (10.0, 45.0)]
+    latlon = [(b, a) for a, b in lonlat]
+    short = area_from_kml(gml("EPSG:4326", lonlat))
+    for srs in ("urn:ogc:def:crs:EPSG::4326", "http://www.opengis.net/def/crs/EPSG/0/4326"):
+        np.testing.assert_array_equal(area_from_kml(gml(srs, latlon)).ring, short.ring)
+    assert short.ring[:, 0].max() < 11  # longitude first
+    projected = area_from_kml(gml("urn:ogc:def:crs:EPSG::28992", [(0, 0), (9, 0), (9, 9)]))
+    np.testing.assert_array_equal(projected.ring, [[0, 0], [9, 0], [9, 9]])  # easting first

@@ -341,7 +341,9 @@ def area_from_kml(text: str, where: str = "input", crs: str | None = None) -> Ar
     """An :class:`Area` from KML (first ``Polygon``) or an XML document with a GML polygon.
 
     KML coordinates are WGS 84 longitude, latitude; a GML ``srsName`` names the CRS of a GML
-    polygon (its coordinates are taken as ``x, y``, i.e. longitude first).
+    polygon. Its coordinates are taken as ``x, y`` (longitude first), except under a URN or URI
+    ``srsName`` of a latitude-first CRS (``urn:ogc:def:crs:EPSG::4326``), whose axis order they
+    follow.
     """
     try:
         root = ElementTree.fromstring(text)
@@ -371,7 +373,32 @@ def area_from_kml(text: str, where: str = "input", crs: str | None = None) -> Ar
             break
     srs = polygon.get("srsName")
     file_crs = _crs_name(srs) if srs else None
+    if srs and _north_first(srs):  # a URN/URI srsName: the CRS's own axis order, lat first
+        ring, holes = ring[:, ::-1], [h[:, ::-1] for h in holes]
     return Area(_close_open(ring, where), crs or file_crs or LONLAT, name, where, tuple(holes))
+
+
+def _north_first(srs: str) -> bool:
+    """True when a GML ``srsName`` in URN or URI form (``urn:ogc:def:crs:EPSG::4326``,
+    ``http://www.opengis.net/def/crs/EPSG/0/4326``) names a CRS whose first axis points north
+    (latitude first, as those forms require). The short form ``EPSG:4326`` keeps x, y
+    (longitude first), the common GIS convention."""
+    m = re.fullmatch(
+        r"(?:urn:ogc:def:crs:EPSG:[^:]*:|https?://www\.opengis\.net/def/crs/EPSG/0/)(\d+)",
+        srs.strip(),
+        flags=re.IGNORECASE,
+    )
+    if m is None:
+        return False
+    try:
+        import pyproj
+    except ImportError:  # pragma: no cover - pyproj comes with boustro's geo dependencies
+        return int(m.group(1)) in (4326, 4258, 4269, 4230)
+    try:
+        axes = pyproj.CRS.from_epsg(int(m.group(1))).axis_info
+    except pyproj.exceptions.CRSError:
+        return False
+    return bool(axes) and axes[0].direction.lower() in ("north", "south")
 
 
 _WKT_TYPES = frozenset(
