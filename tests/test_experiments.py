@@ -138,8 +138,9 @@ def test_batched_exact_fitness_equals_library_calls(samples, name):
 
 
 def test_authors_protocol_equals_a_direct_computation(samples):
-    """The 'paper' protocol (the authors' transects arange(-0.5, 0.5, s) + x_offset and step
-    1/points) against a plain numpy computation of Eq. 2-7 and a shapely discrete fitness."""
+    """The 'paper' protocol (Eq. 2 as printed, the authors' transects arange(-0.5, 0.5, s) +
+    x_offset and step 1/points) against a plain numpy computation of Eq. 2-7 and a shapely
+    discrete fitness."""
     protocol = ex.PROTOCOLS[0]
     assert protocol.name == "paper" and protocol.window == "authors"
     temperature, points = 100.0, 200
@@ -152,7 +153,11 @@ def test_authors_protocol_equals_a_direct_computation(samples):
         u, n = np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
         t = np.linspace(-0.5, 0.5, points)
         pts = c[:, None, None] * n + t[None, :, None] * u  # (K, P, 2)
-        normals, offsets = poly.halfplanes()
+        # Eq. 2 as printed: each edge's W has the edge's length (the authors' x1 - x2, y1 - y2,
+        # turned by 90 degrees into the inward normal of boustro's frame)
+        e = np.roll(poly.vertices, -1, axis=0) - poly.vertices
+        normals = np.stack([-e[:, 1], e[:, 0]], axis=1)  # CCW: inward, length |edge|
+        offsets = -np.einsum("ij,ij->i", normals, poly.vertices)
         v = pts @ normals.T + offsets
         p = np.exp(-np.logaddexp(0.0, -temperature * v).sum(axis=-1))  # Eq. 4
         p_sigma = 1 / (1 + np.exp(-temperature * (p - 0.5)))  # Eq. 5

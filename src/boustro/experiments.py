@@ -51,7 +51,7 @@ from numpy.typing import NDArray
 
 from .errors import InvalidParameterError, InvalidPolygonError
 from .fitness import smith_fitness
-from .geometry import Polygon, halfplanes
+from .geometry import HalfPlanes, Polygon, halfplanes
 from .models import PAPER_WINDOW
 
 __all__ = [
@@ -121,6 +121,7 @@ _CHUNK_ELEMENTS = 1 << 19
 Statistics = Literal["paper", "weighted"]
 Window = Literal["paper", "authors"]
 Trapezoid = Literal["library", "authors"]
+Eq2 = Literal["unit", "printed"]
 
 
 # -- samples ----------------------------------------------------------------------------------
@@ -264,6 +265,10 @@ class Protocol:
             ``False`` with ``clip=True`` scores the discrete side over the whole polygon at the
             same offset, as a discrete planner would.
         points: points per transect of the columns computed (the paper's three by default).
+        eq2: the magnitude of the edges' half-planes ``W x + B`` in Eq. 3: ``"unit"``, unit
+            normals (boustro's models), or ``"printed"``, Eq. 2 as printed and in the authors'
+            code, ``W = (x1 - x2, y1 - y2)`` of length ``|edge|``: each edge's sigmoid then has
+            the temperature ``T |edge|`` (softer on short edges). The exact side is the same.
     """
 
     name: str
@@ -275,6 +280,7 @@ class Protocol:
     trapezoid: Trapezoid = "library"
     discrete_clip: bool | None = None
     points: tuple[int, ...] = POINTS_PER_TRANSECT
+    eq2: Eq2 = "unit"
 
     def __post_init__(self) -> None:
         if self.statistics not in ("paper", "weighted"):
@@ -285,14 +291,16 @@ class Protocol:
             raise InvalidParameterError(f"trapezoid must be 'library' or 'authors', got {self}")
         if (self.window == "authors" or self.trapezoid == "authors") and not self.clip:
             raise InvalidParameterError("the authors' window and trapezoid step need clip=True")
+        if self.eq2 not in ("unit", "printed"):
+            raise InvalidParameterError(f"eq2 must be 'unit' or 'printed', got {self}")
         if self.discrete_clip is None:
             object.__setattr__(self, "discrete_clip", self.clip)
 
     @property
-    def layout(self) -> tuple[bool, str, float | None]:
+    def layout(self) -> tuple[bool, str, float | None, str]:
         """What decides the differentiable model's transects: protocols that share it share
         the (costly) soft lengths."""
-        return (self.clip, self.window if self.clip else "paper", self.spacing)
+        return (self.clip, self.window if self.clip else "paper", self.spacing, self.eq2)
 
     @property
     def variant(self) -> tuple[Statistics, Trapezoid]:
@@ -300,7 +308,7 @@ class Protocol:
         return (self.statistics, self.trapezoid)
 
     @property
-    def discrete_layout(self) -> tuple[bool, bool, str, float | None]:
+    def discrete_layout(self) -> tuple[bool, bool, str, float | None, str]:
         return (bool(self.discrete_clip), *self.layout)
 
 
@@ -310,9 +318,18 @@ class Protocol:
 PROTOCOLS: tuple[Protocol, ...] = (
     Protocol(
         "paper",
-        "the paper's text and the authors' code: spacing uniform in (0, 1/3), transects "
-        "arange(-0.5, 0.5, s) + x_offset integrated over [-0.5, 0.5] with step 1/points, the "
-        "authors' weighting of the statistics",
+        "the paper's text and the authors' code: Eq. 2 as printed (W of length |edge|), "
+        "spacing uniform in (0, 1/3), transects arange(-0.5, 0.5, s) + x_offset integrated "
+        "over [-0.5, 0.5] with step 1/points, the authors' weighting of the statistics",
+        clip=True,
+        statistics="paper",
+        window="authors",
+        trapezoid="authors",
+        eq2="printed",
+    ),
+    Protocol(
+        "paper-unit-normals",
+        "as 'paper' with unit normals (boustro's models): isolates Eq. 2's magnitude",
         clip=True,
         statistics="paper",
         window="authors",
@@ -326,6 +343,7 @@ PROTOCOLS: tuple[Protocol, ...] = (
         statistics="weighted",
         window="authors",
         trapezoid="authors",
+        eq2="printed",
     ),
     Protocol(
         "paper-step",
@@ -334,6 +352,7 @@ PROTOCOLS: tuple[Protocol, ...] = (
         clip=True,
         statistics="paper",
         window="authors",
+        eq2="printed",
     ),
     Protocol(
         "paper-whole-discrete",
@@ -344,6 +363,7 @@ PROTOCOLS: tuple[Protocol, ...] = (
         window="authors",
         trapezoid="authors",
         discrete_clip=False,
+        eq2="printed",
     ),
     Protocol(
         "authors-script",
@@ -354,6 +374,7 @@ PROTOCOLS: tuple[Protocol, ...] = (
         spacing=0.5,
         window="authors",
         trapezoid="authors",
+        eq2="printed",
     ),
     Protocol(
         "grid-window",
@@ -363,6 +384,7 @@ PROTOCOLS: tuple[Protocol, ...] = (
         statistics="paper",
         trapezoid="authors",
         points=(1000,),
+        eq2="printed",
     ),
     Protocol(
         "boustro-clip",
@@ -425,6 +447,7 @@ def _layouts(
     *,
     clip: bool,
     window: Window = "paper",
+    eq2: Eq2 = "unit",
     max_width: int = 1 << 18,
 ) -> list[_Group]:
     """Group the samples by edge count (and bounded size) and flatten their transects.
@@ -459,6 +482,7 @@ def _layouts(
                     radius,
                     pos,
                     counts,
+                    eq2,
                 )
             )
             start = stop
@@ -473,8 +497,17 @@ def _group(
     radius: NDArray[np.float64],
     pos: list[NDArray[np.float64]],
     counts: NDArray[np.int64],
+    eq2: Eq2 = "unit",
 ) -> _Group:
     hp = halfplanes(polys)
+    if eq2 == "printed":  # Eq. 2's W = (x1 - x2, y1 - y2): unit normals times |edge|
+        scale = torch.ones(hp.offsets.shape, dtype=torch.float64)  # padding stays as it is
+        for row, poly in enumerate(polys):
+            v = poly.normalised().vertices
+            scale[row, : len(v)] = torch.as_tensor(
+                np.linalg.norm(np.roll(v, -1, axis=0) - v, axis=1)
+            )
+        hp = HalfPlanes(hp.normals * scale[..., None], hp.offsets * scale, hp.radius)
     theta = torch.as_tensor(angle[index], dtype=torch.float64)
     # The same arithmetic as models._prepare: rotate the edges, keep the offsets.
     cos, sin = torch.cos(theta)[:, None], torch.sin(theta)[:, None]
@@ -843,6 +876,7 @@ def protocol_groups(samples: Samples, protocol: Protocol) -> list[_Group]:
         samples.phase,
         clip=protocol.clip,
         window=protocol.window,
+        eq2=protocol.eq2,
     )
 
 
@@ -1703,14 +1737,18 @@ PROTOCOL_NOTES = """\
   as `sum((S (L - mean))^2) / sum(S)` (`statistics="paper"`). At T = 1 every transect's weight S
   is about a quarter, the "mean" about 2 and the error about 0.5: that is Table I's first row.
   Weighted statistics (`paper-weighted`, `project`) do not have it.
-- **Trapezoid step.** The authors integrate with step `1 / points` although their points span
-  the window with step `1 / (points - 1)`: every length is `(points - 1) / points` of the
-  trapezoid value, 1% short at 100 points. boustro's model uses the right step (`paper-step`,
-  `boustro-clip`, `project`).
-- **Spacing.** The paper says spacing uniform in (0, 1/3); the authors' released script fixes it
-  at 0.5, which leaves one or two transects in the window (`authors-script`); compare its T = 1
-  and T = 10 rows with the paper's. Spacings near 0 give thousands of transects (the cost of a
-  sample grows as 1/s; all are evaluated).
+- **Trapezoid step.** The authors' points are `arange(-0.5, 0.5, 1 / points)` integrated with
+  step `1 / points`: a consistent step over the window less its last `1 / points`.
+  `trapezoid="authors"` (the `paper` protocol) approximates it with the library's points, which
+  span the whole window, and the step `1 / points`: every length `(points - 1) / points` of its
+  value, 1% short at 100 points; `paper-step` (the library's step `1 / (points - 1)`, as in
+  `boustro-clip` and `project`) is the closer reading of their code. The difference shows only
+  in the 100-PPT column at T >= 1000.
+- **Spacing.** The paper says the spacings are random; uniform in (0, 1/3) comes from the
+  authors' script (a commented-out line), which as released fixes the spacing at 0.5, leaving
+  one or two transects in the window (`authors-script`); compare its T = 1 and T = 10 rows with
+  the paper's. Spacings near 0 give thousands of transects (the cost of a sample grows as 1/s;
+  all are evaluated).
 - **Temperature.** The same temperature in Eq. 4/5 and Eq. 7, as in the authors' code.
 - **No value.** The authors' script silently redraws a sample whose fitness is NaN (in practice:
   no transect crosses the polygon in the window, so the discrete mean is undefined). Here such
@@ -1719,10 +1757,17 @@ PROTOCOL_NOTES = """\
   (`boustro.models.paper_lengths`); the batched evaluation agrees with one library call per
   sample to 1e-12 (tested), and points deep inside or outside the polygon (every edge's
   `T * distance` beyond 41) take the limits of Eq. 5, exact to below an ulp.
-- **Eq. 2.** As printed, Eq. 2 gives the edge direction, not its normal; boustro uses the normal.
-  Table I is unaffected (angles are uniform), but the figures' angle axis is boustro's: the
-  transect direction counter-clockwise from +x, which may be shifted or mirrored against the
-  paper's plots.
+- **Eq. 2.** As printed, and in the authors' code, Eq. 2's `W = (x1 - x2, y1 - y2)` is the edge
+  vector: not a normal (the polygon comes out turned by 90 degrees, which uniform angles do not
+  see) and not of unit length. The length is what matters: each edge's sigmoid in Eq. 3 gets the
+  temperature `T |edge|`, softer on short edges (a normalised polygon's edges are 0.1 to 1
+  long). The `paper` protocol and its one-change variants follow it (`eq2="printed"`);
+  `paper-unit-normals` (and boustro's models) use unit normals. With unit normals the rows
+  T = 10 to 1000 come out 1.6 to 5 times lower than the paper's; with Eq. 2 as printed they
+  are reproduced. (Found by an adversarial review of this reproduction, which re-implemented
+  the authors' arithmetic independently.) The figures' angle axis is boustro's: the transect
+  direction counter-clockwise from +x, which may be shifted or mirrored against the paper's
+  plots.
 """
 
 JSON_KEYS = """\

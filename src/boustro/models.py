@@ -87,9 +87,12 @@ class TransectModel(Protocol):
     ) -> TransectLengths: ...
 
 
-#: Most transects across one area that boustro plans or scores (a 10 km field at 10 cm): a
+#: Most transects across one area that boustro plans or scores (a 10 km field at 1 cm): a
 #: smaller spacing is refused with a clear error instead of exhausting memory.
-MAX_TRANSECTS = 100_000
+MAX_TRANSECTS = 1_000_000
+#: Most candidate transects of one (angle, offset) pair in a model's grid, which also covers the
+#: model's margin beyond the polygon (32 smoothing lengths for the smooth closed form).
+MAX_CANDIDATES = 4 * MAX_TRANSECTS
 
 
 #: Most integration points per transect of the paper's model (the paper uses 1000; 10^4 is
@@ -146,14 +149,14 @@ def grid_size(spacing: float, radius: float) -> tuple[int, int]:
     """``(K, m)``: the ``K`` lines ``d mod s + (k - m) s``, ``0 <= k < K``, cover +-radius.
 
     Raises:
-        InvalidParameterError: more than :data:`MAX_TRANSECTS` lines (a tiny spacing, or a
+        InvalidParameterError: more than :data:`MAX_CANDIDATES` lines (a tiny spacing, or a
             model whose margin, e.g. a huge smoothing, grows the disc by as much).
     """
-    if 2 * radius / spacing > MAX_TRANSECTS:
+    if 2 * radius / spacing > MAX_CANDIDATES:
         raise InvalidParameterError(
             f"{2 * radius / spacing:.3g} candidate transects at spacing {spacing:.6g} across a "
             f"disc of radius {radius:.6g} (the polygon's, grown by the model's margin): more "
-            f"than the {MAX_TRANSECTS} boustro handles; use a larger spacing (or smoothing "
+            f"than the {MAX_CANDIDATES} boustro handles; use a larger spacing (or a smoothing "
             "below the spacing)"
         )
     m = math.ceil(radius / spacing) + 1
