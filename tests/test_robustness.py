@@ -338,3 +338,45 @@ def test_gml_axis_order_follows_the_srs_name_form():
     assert short.ring[:, 0].max() < 11  # longitude first
     projected = area_from_kml(gml("urn:ogc:def:crs:EPSG::28992", [(0, 0), (9, 0), (9, 9)]))
     np.testing.assert_array_equal(projected.ring, [[0, 0], [9, 0], [9, 9]])  # easting first
+
+
+# -- the learned planner's files and refinement --------------------------------------------------
+def test_planner_files_errors_and_cache(tmp_path):
+    import torch
+
+    from boustro.learned import load_planner
+
+    planner = LearnedPlanner(PlannerConfig(hidden=8, hypotheses=2))
+    weights, _ = save_planner(planner, tmp_path / "p.pt")
+    first = load_planner(weights)
+    assert load_planner(weights) is first  # cached
+    other = LearnedPlanner(PlannerConfig(hidden=8, hypotheses=2))
+    with torch.no_grad():
+        for p in other.parameters():
+            p.add_(1.0)
+    save_planner(other, weights)  # the same name, new contents: not the cached network
+    second = load_planner(weights)
+    assert second is not first
+    for a, b in zip(second.parameters(), other.parameters(), strict=True):
+        torch.testing.assert_close(a, b.to(a.dtype))
+    for bad in (b"garbage", None):
+        broken = tmp_path / "broken.pt"
+        if bad is None:
+            torch.save(planner.state_dict(), broken)
+            broken.with_suffix(".json").write_text("{}")
+        else:
+            broken.write_bytes(bad)
+            broken.with_suffix(".json").write_text(json.dumps({"config": {}}))
+        with pytest.raises(InvalidParameterError, match="not a planner saved by boustro"):
+            load_planner(broken)
+
+
+def test_event_layouts_in_chunks_equal_one_batch(monkeypatch):
+    from boustro import learned
+
+    ring = [(math.cos(2 * math.pi * k / 12), math.sin(2 * math.pi * k / 12)) for k in range(12)]
+    whole = optimize(ring, 0.1, method="learned", refine=True)
+    monkeypatch.setattr(learned, "_EVENT_CHUNK_ELEMENTS", 1)  # one layout a chunk
+    chunked = optimize(ring, 0.1, method="learned", refine=True)
+    assert chunked.fitness == pytest.approx(whole.fitness, abs=1e-12)
+    assert chunked.angle == pytest.approx(whole.angle, abs=1e-9)

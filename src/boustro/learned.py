@@ -51,6 +51,7 @@ coarse-to-fine zoom). See ``docs/learned.md`` for the design, training and bench
 
 from __future__ import annotations
 
+import copy
 import inspect
 import io
 import json
@@ -788,28 +789,36 @@ def save_planner(
     return path, json_path
 
 
-_CACHE: dict[str, LearnedPlanner] = {}
+_CACHE: dict[tuple[tuple[str, int, int], ...], LearnedPlanner] = {}
 
 
 def load_planner(path: str | Path | None = None) -> LearnedPlanner:
     """Load a planner saved by :func:`save_planner` (default: the weights shipped in the
     package), with ``torch.load(..., weights_only=True)``; in eval mode, cached by path."""
     path = Path(DEFAULT_WEIGHTS if path is None else path)
-    key = str(path.resolve())
-    if key in _CACHE:
-        return _CACHE[key]
     json_path = path.with_suffix(".json")
-    try:
-        meta = json.loads(json_path.read_text())
-        state = torch.load(path, map_location="cpu", weights_only=True)
+    try:  # the cache knows a file by its name and its version on disk
+        key = tuple(
+            (str(f.resolve()), f.stat().st_mtime_ns, f.stat().st_size) for f in (path, json_path)
+        )
     except FileNotFoundError as exc:
         missing = "its settings file " if exc.filename == str(json_path) else ""
         raise InvalidParameterError(
             f"no learned planner at {path} ({missing}{exc.filename} is missing): train one with "
             "'boustro train', which writes both files"
         ) from None
-    model = LearnedPlanner(PlannerConfig(**meta["config"]))
-    model.load_state_dict(state)
+    if key in _CACHE:
+        return _CACHE[key]
+    try:
+        meta = json.loads(json_path.read_text())
+        state = torch.load(path, map_location="cpu", weights_only=True)
+        model = LearnedPlanner(PlannerConfig(**meta["config"]))
+        model.load_state_dict(state)
+    except Exception as exc:  # any malformed or foreign file: one clear error
+        raise InvalidParameterError(
+            f"{path} (with {json_path.name}) is not a planner saved by boustro: "
+            f"{type(exc).__name__}: {exc}"[:300]
+        ) from None
     model.eval()
     _CACHE[key] = model
     return model
@@ -1006,7 +1015,18 @@ def refine(
         best_o = torch.where(better, off, best_o)
     if o.events:
         pt, po, real = _event_layouts(batch)
-        pv = batch_objective(batch, pt, po, objective=obj)
+        # 2 N (N - 1) layouts a polygon: scored in chunks so that memory stays bounded for
+        # polygons of many vertices (each layout costs about K x E elements)
+        n_pairs, n_edges = batch.normals.shape[0], batch.normals.shape[-2]
+        k_est = int(2.0 / float(batch.spacing.min()) + 4.0)
+        chunk = max(1, _EVENT_CHUNK_ELEMENTS // max(1, n_pairs * n_edges * k_est))
+        pv = torch.cat(
+            [
+                batch_objective(batch, pt[:, i : i + chunk], po[:, i : i + chunk], objective=obj)
+                for i in range(0, pt.shape[1], chunk)
+            ],
+            dim=1,
+        )
         pv = torch.where(real, pv, -math.inf)
         best_v, best_t, best_o = (
             torch.cat(x, dim=1) for x in ((best_v, pv), (best_t, pt), (best_o, po))
@@ -1053,6 +1073,9 @@ def refine(
     k = best_v.argmax(dim=1, keepdim=True)
     return best_v.gather(1, k)[:, 0], best_t.gather(1, k)[:, 0], best_o.gather(1, k)[:, 0]
 
+
+#: Elements (layouts x transects x edges) of one chunk of event layouts in :func:`refine`.
+_EVENT_CHUNK_ELEMENTS = 1 << 23
 
 #: Offset nudge (in spacings) of the event layouts: far above rounding (1e-16), far below any
 #: difference that matters (the fitness moves by about this much).
@@ -1349,7 +1372,8 @@ def train_planner(
 
     Args:
         config: :class:`TrainConfig`.
-        planner: a network to continue training (default: a new one, seeded).
+        planner: a network to continue training from (copied: it is left unchanged; default:
+            a new one, seeded).
         planner_config: its hyperparameters when new.
         objective: the training objective (default Eq. 1), see :func:`as_plan_objective`.
         progress: tqdm bar on stderr: True, False, or None (if stderr is a TTY).
@@ -1364,7 +1388,8 @@ def train_planner(
     try:
         torch.manual_seed(cfg.seed)
         rng = np.random.default_rng(cfg.seed)
-        net = planner if planner is not None else LearnedPlanner(planner_config)
+        # a copy: the planner passed in (perhaps the shipped, cached one) stays as it was
+        net = copy.deepcopy(planner) if planner is not None else LearnedPlanner(planner_config)
         net.to(torch.float32).train()
         pool_polys = [random_convex_polygon(rng, int(rng.integers(3, 10))) for _ in range(cfg.pool)]
         pool = _from_normalised(
@@ -1426,13 +1451,13 @@ def train_planner(
                     if bar is not None:
                         bar.update(1)
                         if step % 10 == 0:
-                            bar.set_postfix(loss=f"{float(loss):.4f}", refresh=False)
+                            bar.set_postfix(loss=f"{float(loss.detach()):.4f}", refresh=False)
                 best, mean = _validate(net, val, obj)
                 history["val_fitness"].append(best)
                 history["val_mean_fitness"].append(mean)
                 history["epoch_seconds"].append(time.perf_counter() - t0)
                 if bar is not None:
-                    bar.set_postfix(loss=f"{float(loss):.4f}", val=f"{best:.4f}")
+                    bar.set_postfix(loss=f"{float(loss.detach()):.4f}", val=f"{best:.4f}")
                 if callback is not None:
                     callback(epoch, history)
         finally:

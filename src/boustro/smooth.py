@@ -308,7 +308,7 @@ def smooth_lengths(
     if h_min < floor:  # keeps every bound / h far below the clamp at sqrt(float max)
         raise InvalidParameterError(
             f"smoothing {h_min:g} is below {floor:.3g} ({across.dtype}, this polygon): "
-            "numerically the exact model; pass smoothing=0 for it"
+            "numerically the exact model: use smoothing=0 (or the exact model) for it"
         )
     margin = _MARGIN * h_max
     window = PAPER_WINDOW if clip else hp.radius + margin
