@@ -380,3 +380,28 @@ def test_event_layouts_in_chunks_equal_one_batch(monkeypatch):
     chunked = optimize(ring, 0.1, method="learned", refine=True)
     assert chunked.fitness == pytest.approx(whole.fitness, abs=1e-12)
     assert chunked.angle == pytest.approx(whole.angle, abs=1e-9)
+
+
+def test_holes_touching_the_shell_in_lon_lat_are_refused():
+    from boustro import geo
+
+    shell = [[5, 52], [5.01, 52], [5.01, 52.01], [5, 52.01]]
+    touching = [[5, 52.002], [5.003, 52.002], [5.003, 52.004], [5, 52.004]]
+    with pytest.raises(InvalidPolygonError, match="file's coordinates"):
+        geo.plan_area(shell, 20.0, crs="EPSG:4326", holes=[touching])
+    inside = [[5.001, 52.002], [5.003, 52.002], [5.003, 52.004], [5.001, 52.004]]
+    assert geo.plan_area(shell, 20.0, crs="EPSG:4326", holes=[inside]).plan.region is not None
+
+
+def test_concave_plans_do_not_depend_on_the_clock(monkeypatch):
+    import time
+
+    from boustro import geo
+
+    shell = [[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]]
+    holes = [[[2 + 4 * i, 2], [3 + 4 * i, 2], [3 + 4 * i, 3], [2 + 4 * i, 3]] for i in range(4)]
+    first = geo.plan_area(shell, 0.5, crs=None, holes=holes).plan.waypoints
+    slow = time.perf_counter
+    monkeypatch.setattr(time, "perf_counter", lambda: slow() * 1000.0)  # a very busy machine
+    again = geo.plan_area(shell, 0.5, crs=None, holes=holes).plan.waypoints
+    np.testing.assert_array_equal(first, again)

@@ -587,6 +587,14 @@ def plan_area(
         if not np.all(np.isfinite(hp)):
             raise InvalidPolygonError(f"{where}: hole {i} cannot be projected to {proj.plan_crs}")
         holes_plan.append(hp)
+    if holes_plan and proj.geographic:
+        # Validate the holes in the file's own coordinates too: a hole edge lying on the shell
+        # in the file (touching it) can come out a fraction of a millimetre inside it after the
+        # projection, above the tolerance, and would pass; messages then name the file's values.
+        try:
+            Region(Polygon(area.ring), [np.asarray(h, dtype=np.float64) for h in area.holes])
+        except InvalidPolygonError as exc:
+            raise InvalidPolygonError(f"{where}: {exc} (in the file's coordinates)") from None
     try:
         surveyed = Polygon(ring_plan)
         region = Region(surveyed, holes_plan) if holes_plan else None

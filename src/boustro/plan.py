@@ -671,7 +671,7 @@ def footprint(plan: Plan) -> tuple[Any, float]:
     holes = ~lane
     if holes.any():
         lines = shapely.linestrings(plan.transects[holes])
-        buffers = shapely.buffer(lines, plan.reach)
+        buffers = shapely.buffer(lines, plan.reach, quad_segs=64)  # round ends, not octagons
         swept += float(np.sum(shapely.area(buffers)))
         parts.append(shapely.union_all(buffers))
     return shapely.union_all(parts), swept

@@ -50,6 +50,10 @@ class Route(NamedTuple):
     found: bool = True
 
 
+#: Segment x edge pairs tested at once by the visibility test (memory: a few bytes each).
+_VISIBILITY_CHUNK = 1 << 22
+
+
 class Router:
     """Shortest connecting moves in a region (module docstring).
 
@@ -180,8 +184,13 @@ class Router:
         m = len(a)
         if m == 0:
             return np.zeros(0, dtype=bool)
-        tol = self.tol
         e1, e2 = self._e1, self._e2
+        chunk = max(1, _VISIBILITY_CHUNK // max(1, len(e1)))
+        if m > chunk:  # bounded memory: the (segments x edges) test in slices
+            return np.concatenate(
+                [self._visible_many(a[k : k + chunk], b[k : k + chunk]) for k in range(0, m, chunk)]
+            )
+        tol = self.tol
         lo, hi = np.minimum(a, b) - tol, np.maximum(a, b) + tol
         elo, ehi = np.minimum(e1, e2), np.maximum(e1, e2)
         cand = (
