@@ -405,3 +405,18 @@ def test_concave_plans_do_not_depend_on_the_clock(monkeypatch):
     monkeypatch.setattr(time, "perf_counter", lambda: slow() * 1000.0)  # a very busy machine
     again = geo.plan_area(shell, 0.5, crs=None, holes=holes).plan.waypoints
     np.testing.assert_array_equal(first, again)
+
+
+def test_kml_names_lanes_and_hole_passes_apart():
+    import re
+
+    from boustro import geo
+    from boustro.formats import render
+
+    shell = [[10, 45], [10.01, 45], [10.01, 45.01], [10, 45.01]]
+    hole = [[10.004, 45.004], [10.006, 45.004], [10.006, 45.006], [10.004, 45.006]]
+    mission = geo.plan_area(shell, 50.0, crs="EPSG:4326", holes=[hole])
+    names = re.findall(r"<name>(Transect|Hole pass) \d+</name>", render(mission, "kml"))
+    roles = mission.plan.role()
+    assert names.count("Transect") == roles.count("lane") > 0
+    assert names.count("Hole pass") == roles.count("hole") > 0

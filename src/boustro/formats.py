@@ -266,9 +266,12 @@ def to_kml(mission: Mission) -> str:
         + "</coordinates></LineString></Placemark>",
         "<Folder><name>Transects</name>",
     ]
-    for i, seg in enumerate(transects):
+    counts = {"lane": 0, "hole": 0}
+    for seg, role in zip(transects, mission.plan.role(), strict=True):
+        counts[role] = counts.get(role, 0) + 1
+        label = "Transect" if role == "lane" else "Hole pass"  # lanes and passes numbered apart
         out.append(
-            f"<Placemark><name>Transect {i + 1}</name><LineString><tessellate>1</tessellate>"
+            f"<Placemark><name>{label} {counts[role]}</name><LineString><tessellate>1</tessellate>"
             + mode
             + f"<coordinates>{_kml_coords(seg, alt)}</coordinates></LineString></Placemark>"
         )
