@@ -962,7 +962,7 @@ def global_optimum(
     # (a symmetric polygon whose width is a multiple of the spacing, to the last bits) the
     # search's best value can be a limit that no layout attains, or float64 can misplace an
     # event; the check then finds a better layout, and the result says it is not certified.
-    check_theta, check_d, check_value = _spot_check(v, s_n, a, b)
+    check_theta, check_d, check_value = _spot_check(poly, v, s_n, a, b)
     notes = []
     if check_value > value + 1e-12:
         with np.errstate(all="ignore"):
@@ -1009,16 +1009,19 @@ def global_optimum(
     )
 
 
-def _spot_check(v: Array, s: float, a: float, b: float) -> tuple[float, float, float]:
-    """``(angle, offset, fitness)``, normalised frame: the best of the exact fitness over 90
-    angles, every edge's direction and its normal, and 9 offsets (0 included)."""
+def _spot_check(
+    poly: Polygon, v: Array, s: float, a: float, b: float
+) -> tuple[float, float, float]:
+    """``(angle, offset, fitness)``, normalised frame (``v``: ``poly``'s vertices in it): the
+    best of the exact fitness over 90 angles, every edge's direction and its normal, and 9
+    offsets (0 included)."""
     edges = np.roll(v, -1, axis=0) - v
     edge_angles = np.mod(np.arctan2(edges[:, 1], edges[:, 0]), math.pi)
     angles = np.concatenate(
         [np.arange(90) * (math.pi / 90), edge_angles, np.mod(edge_angles + math.pi / 2, math.pi)]
     )
     offsets = np.arange(9) * (s / 9)
-    hp = halfplanes(Polygon(v))
+    hp = halfplanes(poly)  # normalised frame, as v
     values = evaluate_grid(
         hp,
         torch.as_tensor(angles, dtype=hp.normals.dtype),

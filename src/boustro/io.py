@@ -390,10 +390,8 @@ def _north_first(srs: str) -> bool:
     )
     if m is None:
         return False
-    try:
-        import pyproj
-    except ImportError:  # pragma: no cover - pyproj comes with boustro's geo dependencies
-        return int(m.group(1)) in (4326, 4258, 4269, 4230)
+    import pyproj  # a dependency of boustro; imported here, only for such files
+
     try:
         axes = pyproj.CRS.from_epsg(int(m.group(1))).axis_info
     except pyproj.exceptions.CRSError:

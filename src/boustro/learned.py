@@ -752,6 +752,18 @@ class LearnedPlanner(nn.Module):
         return Prediction(theta, offset, torch.stack([re, im], -1), torch.stack([ore, oim], -1))
 
 
+def check_weights_path(path: str | Path) -> Path:
+    """``path`` as a :class:`Path`, refused if it ends in ``.json``: the settings of the planner
+    are written beside the weights under that suffix (:func:`save_planner`)."""
+    path = Path(path)
+    if path.suffix.lower() == ".json":
+        raise InvalidParameterError(
+            f"weights file {path} must not end in .json: the settings are written beside it "
+            "with that suffix"
+        )
+    return path
+
+
 def save_planner(
     model: LearnedPlanner, path: str | Path, *, metadata: dict[str, Any] | None = None
 ) -> tuple[Path, Path]:
@@ -764,12 +776,7 @@ def save_planner(
         InvalidParameterError: ``path`` ends in ``.json`` (the settings' name), or a weight or a
             metadata number is not finite (a diverged training).
     """
-    path = Path(path)
-    if path.suffix.lower() == ".json":
-        raise InvalidParameterError(
-            f"weights file {path} must not end in .json: the settings are written beside it "
-            "with that suffix"
-        )
+    path = check_weights_path(path)
     state = {k: v.detach().to(torch.float32).clone() for k, v in model.state_dict().items()}
     if not all(bool(torch.isfinite(v).all()) for v in state.values()):
         raise InvalidParameterError("the planner's weights are not all finite; nothing saved")
@@ -798,9 +805,8 @@ def load_planner(path: str | Path | None = None) -> LearnedPlanner:
     path = Path(DEFAULT_WEIGHTS if path is None else path)
     json_path = path.with_suffix(".json")
     try:  # the cache knows a file by its name and its version on disk
-        key = tuple(
-            (str(f.resolve()), f.stat().st_mtime_ns, f.stat().st_size) for f in (path, json_path)
-        )
+        stats = [(f, f.stat()) for f in (path, json_path)]
+        key = tuple((str(f.resolve()), st.st_mtime_ns, st.st_size) for f, st in stats)
     except FileNotFoundError as exc:
         missing = "its settings file " if exc.filename == str(json_path) else ""
         raise InvalidParameterError(

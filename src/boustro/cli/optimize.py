@@ -68,6 +68,10 @@ def schedule_type(text: str) -> TemperatureSchedule:
     return TemperatureSchedule(*values)
 
 
+#: The paper's SGD momentum, the default of --momentum.
+PAPER_MOMENTUM = 0.8
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "optimize",
@@ -108,7 +112,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--optimizer", choices=("adam", "sgd"), default="adam", help="(default: adam)"
     )
     grad.add_argument(
-        "--momentum", type=float, default=0.8, help="SGD momentum (default: the paper's 0.8)"
+        "--momentum",
+        type=float,
+        default=PAPER_MOMENTUM,
+        help=f"SGD momentum (default: the paper's {PAPER_MOMENTUM:g})",
     )
     grad.add_argument(
         "--schedule",
@@ -169,7 +176,7 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
             options["temperature"] = args.schedule
         options["optimizer"] = args.optimizer
         options["momentum"] = args.momentum
-        if args.optimizer == "adam" and args.momentum != 0.8:
+        if args.optimizer == "adam" and args.momentum != PAPER_MOMENTUM:
             ignored.append("--momentum (SGD only)")
     else:
         for flag, value, default in (
@@ -177,7 +184,7 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
             ("--steps", args.steps, None),
             ("--schedule", args.schedule, None),
             ("--optimizer", args.optimizer, "adam"),
-            ("--momentum", args.momentum, 0.8),
+            ("--momentum", args.momentum, PAPER_MOMENTUM),
         ):
             if value != default:
                 ignored.append(flag)

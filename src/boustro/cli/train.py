@@ -8,7 +8,13 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InvalidParameterError
-from ..learned import PlannerConfig, TrainConfig, save_planner, train_planner
+from ..learned import (
+    PlannerConfig,
+    TrainConfig,
+    check_weights_path,
+    save_planner,
+    train_planner,
+)
 from ._common import (
     check_plot_target,
     nonnegative_int,
@@ -133,11 +139,7 @@ def plot_training(history: dict[str, list[float]], path: Path | None = None, *, 
 
 def _check_outputs(args: argparse.Namespace) -> None:
     """Fail before training if the results cannot be written."""
-    if args.out.suffix.lower() == ".json":
-        raise InvalidParameterError(
-            f"--out {args.out}: the weights file must not end in .json (its settings are written "
-            "beside it with that suffix); use e.g. .pt"
-        )
+    check_weights_path(args.out)
     if args.out.is_dir():
         raise InvalidParameterError(f"--out {args.out}: is a folder; give a file name")
     if args.plot is not None:
