@@ -13,7 +13,9 @@ Speed: forward + backward of Eq. 1 with respect to (angle, offset), batched over
 paper's parallelogram (Figure 1) at its spacing (0.5 units; 18 transects cross it), for the
 closed form and for the paper model at 1000 points per transect, each at several batch sizes;
 the ratios use each model's fastest batch, against the paper model evaluated at every point and
-against its band evaluation (the default, same values to rounding).
+against its band evaluation (the default, same values to rounding). On the CPU the closed form
+runs boustro's compiled kernels (``boustro._compiled``, numba), the path every CPU user gets;
+``--tensor`` times the tensor code instead (the path on other devices).
 
 Usage::
 
@@ -33,6 +35,7 @@ from datetime import datetime, timezone
 import numpy as np
 import torch
 
+from boustro import _compiled, smooth
 from boustro.fitness import smith_fitness
 from boustro.geometry import HalfPlanes, Polygon, halfplanes
 from boustro.io import PAPER_PARALLELOGRAM, PAPER_SPACING
@@ -222,30 +225,34 @@ def forward_backward(model, hp: HalfPlanes, spacing: float, pairs: int):
 
 def speed(quick: bool) -> list[tuple[str, int, float]]:
     """Best-of-runs seconds per pair, each model at several batch sizes (a model's cost per pair
-    depends on the batch: fixed costs are shared, band gathering pays off on large calls). The
-    runs of all setups are interleaved, so a machine that gets busier or quieter during the
-    benchmark affects them alike."""
+    depends on the batch: fixed costs are shared, band gathering pays off on large calls).
+
+    Rounds of short bursts: in each round every setup runs a few times in a row (its steady
+    state: caches warm with its own data, not with the previous setup's, which for the paper
+    model at every point is gigabytes), and the rounds repeat over all setups, so a machine
+    that gets busier or quieter during the benchmark affects them alike.
+    """
     poly = Polygon(PAPER_PARALLELOGRAM)
     hp = halfplanes(poly)
     spacing = PAPER_SPACING / poly.diameter
-    repeats = 3 if quick else 10
+    rounds, burst = (2, 3) if quick else (4, 4)
     closed = f"closed form, h = {DEFAULT_SMOOTHING:g}"
     models = [
-        (closed, SmoothModel(), (1, 64, 4096) if quick else (1, 64, 4096, 16384)),
+        (closed, SmoothModel(), (1, 64, 4096) if quick else (1, 64, 1024, 4096, 16384)),
         (PAPER_BAND, PaperModel(1e4, 1000), (16, 64) if quick else (64, 256, 1024)),
         (PAPER_FULL, PaperModel(1e4, 1000, band=False), (16,) if quick else (16, 64)),
         ("paper, 100 points/transect", PaperModel(1e4, 100), (64,) if quick else (64, 1024)),
     ]
     setups = [(label, model, pairs) for label, model, sizes in models for pairs in sizes]
     runs = [forward_backward(model, hp, spacing, pairs) for _, model, pairs in setups]
-    for run in runs:  # warm-up
-        run()
     best = [math.inf] * len(runs)
-    for _ in range(repeats):
+    for _ in range(rounds):
         for i, run in enumerate(runs):
-            t0 = time.perf_counter()
-            run()
-            best[i] = min(best[i], time.perf_counter() - t0)
+            run()  # warm-up: its own data back in the caches
+            for _ in range(burst):
+                t0 = time.perf_counter()
+                run()
+                best[i] = min(best[i], time.perf_counter() - t0)
     return [
         (label, pairs, sec / pairs) for (label, _, pairs), sec in zip(setups, best, strict=True)
     ]
@@ -280,15 +287,22 @@ def main(argv: list[str] | None = None) -> int:
         "uses 0/1 weights",
     )
     parser.add_argument("--threads", type=int, default=1, help="torch threads (1)")
+    parser.add_argument(
+        "--tensor",
+        action="store_true",
+        help="time the tensor code (the path on other devices) instead of the compiled CPU kernels",
+    )
     args = parser.parse_args(argv)
     torch.set_num_threads(args.threads)
+    smooth.COMPILED = not args.tensor
+    path = "tensor code" if args.tensor or _compiled.kernels() is None else "compiled kernels"
     n = 30 if args.quick else args.samples
     points = POINTS
 
     print(
         f"# boustro closed-form benchmark, {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC, "
         f"{platform.processor() or platform.machine()}, torch {torch.__version__}, "
-        f"{torch.get_num_threads()} threads"
+        f"{torch.get_num_threads()} threads, closed form and Eq. 1 by the {path}"
     )
     print(
         f"# fidelity: N = {n} samples a cell (the same samples in every cell), seed {args.seed}, "

@@ -122,10 +122,12 @@ def test_zero_smoothing_is_the_exact_model():
     assert SmoothModel(smoothing=0).temperature == math.inf
 
 
-@pytest.fixture(params=["whole", "sparse"])
+@pytest.fixture(params=["compiled", "whole", "sparse"])
 def kernel_path(request, monkeypatch):
-    """Both evaluations of the kernel: whole-tensor (small calls) and sparse tail with the
-    slot-by-slot backward (large calls), chosen by ``boustro.smooth._SPARSE_MIN``."""
+    """Every evaluation of the model: the compiled CPU kernels (``boustro._compiled``), and the
+    tensor code's whole-tensor (small calls) and sparse-tail (large calls) paths, chosen by
+    ``boustro.smooth._SPARSE_MIN``."""
+    monkeypatch.setattr(smooth_module, "COMPILED", request.param == "compiled")
     monkeypatch.setattr(smooth_module, "_SPARSE_MIN", 0 if request.param == "sparse" else 1 << 62)
     return request.param
 

@@ -26,10 +26,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import torch
 
+from . import _compiled
 from .errors import InvalidParameterError, as_number
 from .models import TransectLengths
 
@@ -93,6 +94,9 @@ def smith_fitness(
         raise InvalidParameterError(
             f"weights shape {tuple(weights.shape)} differs from lengths {tuple(lengths.shape)}"
         )
+    kernels = _compiled_kernels(lengths, weights) if statistics == "weighted" else None
+    if kernels is not None:
+        return _CompiledSmith.apply(lengths, weights, float(a), float(b), kernels)
     total = weights.sum(dim=-1)
     denom = torch.where(total > 0, total, torch.ones_like(total))
     if statistics == "weighted":
@@ -102,6 +106,65 @@ def smith_fitness(
         mean = torch.where(total > 0, lengths.sum(dim=-1) / denom, 0.0)
         var = ((weights * (lengths - mean[..., None])) ** 2).sum(dim=-1) / denom
     return a * mean + b * (1 - safe_sqrt(var))
+
+
+def _compiled_kernels(lengths: torch.Tensor, weights: torch.Tensor) -> _compiled.Kernels | None:
+    """The compiled kernels (:mod:`boustro._compiled`) if they apply: CPU, float32/64, a
+    non-empty last dimension and :data:`boustro.smooth.COMPILED` (read at call time)."""
+    from . import smooth  # the switch lives with the model it was made for
+
+    ok = lengths.device.type == "cpu" and lengths.dtype in (torch.float32, torch.float64)
+    if not (smooth.COMPILED and ok and weights.dtype == lengths.dtype and lengths.shape[-1]):
+        return None
+    return _compiled.kernels()
+
+
+class _CompiledSmith(torch.autograd.Function):
+    """Eq. 1 with weighted statistics by the compiled kernels, batched over leading dims."""
+
+    @staticmethod
+    def forward(
+        ctx: Any,
+        lengths: torch.Tensor,
+        weights: torch.Tensor,
+        a: float,
+        b: float,
+        kernels: _compiled.Kernels,
+    ) -> torch.Tensor:
+        lengths, weights = torch.broadcast_tensors(lengths, weights)
+        shape, k = lengths.shape[:-1], lengths.shape[-1]
+        flat = [x.detach().reshape(-1, k).contiguous() for x in (lengths, weights)]
+        tiny = torch.finfo(lengths.dtype).eps ** 2
+        out = torch.empty(flat[0].shape[0], dtype=lengths.dtype)
+        kernels.smith_forward(flat[0].numpy(), flat[1].numpy(), a, b, tiny, out.numpy())
+        ctx.save_for_backward(*flat)
+        ctx.constants = (a, b, tiny, kernels, lengths.shape)
+        return out.reshape(shape)
+
+    @staticmethod
+    def backward(ctx: Any, grad: torch.Tensor) -> tuple[torch.Tensor | None, ...]:
+        lengths, weights = ctx.saved_tensors
+        a, b, tiny, kernels, shape = ctx.constants
+        g = grad.detach().reshape(-1).contiguous().to(lengths.dtype)
+        g_lengths, g_weights = torch.empty_like(lengths), torch.empty_like(weights)
+        kernels.smith_backward(
+            lengths.numpy(),
+            weights.numpy(),
+            a,
+            b,
+            tiny,
+            g.numpy(),
+            g_lengths.numpy(),
+            g_weights.numpy(),
+        )
+        need = ctx.needs_input_grad
+        return (
+            g_lengths.reshape(shape) if need[0] else None,
+            g_weights.reshape(shape) if need[1] else None,
+            None,
+            None,
+            None,
+        )
 
 
 @dataclass(frozen=True)

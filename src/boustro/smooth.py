@@ -62,9 +62,11 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any
 
+import numpy as np
 import torch
 import torch.nn.functional as F
 
+from . import _compiled
 from .errors import InvalidParameterError, as_number
 from .geometry import HalfPlanes
 from .models import (
@@ -156,7 +158,8 @@ class _SoftChords(torch.autograd.Function):
     ``across_j c + along_j t + b_j >= 0``), positions ``c`` ``(N, K)``, the smoothing ``h`` (a
     float, or an ``(N, 1)`` tensor), and the slot layout: ``slot`` ``(N, E)`` puts each edge in
     a slot, lower edges in ``[0, n_low)``, upper ones in ``[n_low, S)``; ``windows`` lists the
-    slots that hold the window bound ``-window / h``; the rest are ``-inf``.
+    slots that hold the window bound ``-window / h``, each with the pairs it applies to
+    (``None``: all); the rest are ``-inf``.
 
     Per slot ``v[s, n, k] = alpha[s, n] + beta[s, n] c[n, k]`` with ``alpha = -b / (|along| h)``,
     ``beta = -across / (|along| h)``: the lower bound ``l / h`` of a lower edge, minus the upper
@@ -180,7 +183,7 @@ class _SoftChords(torch.autograd.Function):
         slot: torch.Tensor,
         n_low: int,
         n_slots: int,
-        windows: list[int],
+        windows: list[tuple[int, torch.Tensor | None]],
         window: float,
     ) -> tuple[torch.Tensor, torch.Tensor]:
         dtype = c.dtype
@@ -193,9 +196,11 @@ class _SoftChords(torch.autograd.Function):
         alpha = torch.full((n_slots, n_pairs), -math.inf, dtype=dtype, device=c.device)
         alpha.scatter_(0, slot.T, alpha_e.T)
         beta = torch.zeros_like(alpha).scatter_(0, slot.T, beta_e.T)
-        if windows:  # the window bound -W / h on each side (beta = 0)
-            w_h = torch.as_tensor(-window / h, dtype=dtype, device=c.device).reshape(-1)
-            alpha[windows] = torch.broadcast_to(w_h, (len(windows), n_pairs))
+        for index, where in windows:  # the window bound -W / h (beta = 0), where it applies
+            w_h = torch.broadcast_to(
+                torch.as_tensor(-window / h, dtype=dtype, device=c.device).reshape(-1), (n_pairs,)
+            )
+            alpha[index] = w_h if where is None else torch.where(where, w_h, -math.inf)
 
         v = torch.addcmul(alpha[:, :, None], beta[:, :, None], c)  # (S, N, K)
         lower, upper = v[:n_low], v[n_low:]
@@ -209,7 +214,7 @@ class _SoftChords(torch.autograd.Function):
         spread = sum_lower * sum_upper  # >= 1; exactly 1 where no bound competes
         if v.numel() < _SPARSE_MIN:  # small calls: fewer operations beat fewer elements
             z = z_hard - torch.log(spread)
-            soft, weight = F.softplus(z), torch.sigmoid(z)
+            soft, weight = F.softplus(z, threshold=_compiled.TAU), torch.sigmoid(z)
         else:
             soft = torch.relu(z_hard)
             weight = (z_hard > 0).to(dtype)
@@ -217,7 +222,7 @@ class _SoftChords(torch.autograd.Function):
             idx = near.view(-1).nonzero().squeeze(1)
             if idx.numel():
                 z = z_hard.view(-1)[idx] - torch.log(spread.view(-1)[idx])
-                soft.view(-1)[idx] = F.softplus(z)
+                soft.view(-1)[idx] = F.softplus(z, threshold=_compiled.TAU)
                 weight.view(-1)[idx] = torch.sigmoid(z)
         if any(ctx.needs_input_grad[:5]):
             lower.div_(sum_lower)  # softmax weights of each role
@@ -262,6 +267,77 @@ class _SoftChords(torch.autograd.Function):
         return gb * scale, grad_along.neg_(), ga * scale, grad_c, grad_h, *nothing
 
 
+#: Use the compiled CPU kernels (:mod:`boustro._compiled`) where they apply: CPU tensors of
+#: float32 or float64, numba installed. ``False`` forces the tensor code everywhere (tests hold
+#: the two to the same values and gradients).
+COMPILED = True
+
+
+def _compiled_kernels(x: torch.Tensor) -> _compiled.Kernels | None:
+    """The compiled kernels if they apply to tensors like ``x``, else ``None``."""
+    if not COMPILED or x.device.type != "cpu" or x.dtype not in (torch.float32, torch.float64):
+        return None
+    return _compiled.kernels()
+
+
+def _numpy(x: torch.Tensor) -> Any:
+    return x.detach().contiguous().numpy()
+
+
+class _CompiledChords(torch.autograd.Function):
+    """Soft lengths and weights ``(N, K)`` by the compiled kernels: the same model as
+    :class:`_SoftChords` (roles, clamps, windows), evaluated and differentiated per pair in one
+    loop. Inputs: ``cos, sin`` of the angles, wrapped offsets ``d`` and smoothing ``h``, all
+    ``(N,)``; each pair's polygon ``poly`` ``(N,)`` into ``normals`` ``(P, E, 2)`` and
+    ``offsets`` ``(P, E)`` (constants); the grid ``q`` ``(K,)``: transect ``k`` at
+    ``d + q_k``; ``windows = (clip, window, far)`` (:func:`smooth_lengths`)."""
+
+    @staticmethod
+    def forward(
+        ctx: Any,
+        cos: torch.Tensor,
+        sin: torch.Tensor,
+        d: torch.Tensor,
+        h: torch.Tensor,
+        poly: torch.Tensor,
+        normals: torch.Tensor,
+        offsets: torch.Tensor,
+        q: torch.Tensor,
+        windows: tuple[bool, float, float],
+        kernels: _compiled.Kernels,
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        info = torch.finfo(d.dtype)
+        geometry = tuple(_numpy(x) for x in (cos, sin, poly, normals, offsets, d, h, q))
+        settings = (*windows, info.eps, info.max**0.5)
+        length = torch.empty((d.shape[0], q.shape[0]), dtype=d.dtype)
+        weight = torch.empty_like(length)
+        # the largest bounds' edges (E: a window), -1 on the soft path
+        index = np.int8 if normals.shape[1] < 127 else np.int32
+        active = np.empty((2, *length.shape), dtype=index)
+        kernels.chords_forward(geometry, settings, length.numpy(), weight.numpy(), active)
+        ctx.geometry, ctx.settings, ctx.active, ctx.kernels = geometry, settings, active, kernels
+        ctx.save_for_backward(length, weight)
+        return length, weight
+
+    @staticmethod
+    def backward(
+        ctx: Any, grad_length: torch.Tensor, grad_weight: torch.Tensor
+    ) -> tuple[torch.Tensor | None, ...]:
+        length, weight = ctx.saved_tensors
+        grads = [torch.empty(length.shape[0], dtype=length.dtype) for _ in range(4)]
+        ctx.kernels.chords_backward(
+            ctx.geometry,
+            ctx.settings,
+            (length.numpy(), weight.numpy(), ctx.active),
+            _numpy(grad_length),
+            _numpy(grad_weight),
+            bool(ctx.needs_input_grad[3]),
+            tuple(g.numpy() for g in grads),  # cos, sin, d, h
+        )
+        need = ctx.needs_input_grad
+        return (*(g if n else None for g, n in zip(grads, need[:4], strict=True)), *(None,) * 6)
+
+
 def smooth_lengths(
     hp: HalfPlanes,
     theta: torch.Tensor | float,
@@ -299,36 +375,99 @@ def smooth_lengths(
         InvalidParameterError: bad spacing or smoothing.
     """
     spacing = check_spacing(spacing)
-    theta, offset, across, along, b = _prepare(hp, theta, offset)
-    h, h_max = _as_smoothing(smoothing, across)
+    dtype, device = hp.normals.dtype, hp.normals.device
+    theta_t = torch.as_tensor(theta, dtype=dtype, device=device)
+    offset_t = torch.as_tensor(offset, dtype=dtype, device=device)
+    h, h_max = _as_smoothing(smoothing, theta_t)
     if h_max == 0.0:  # a scalar 0: the exact model
-        return ExactModel(clip=clip)(hp, theta, offset, spacing)
+        return ExactModel(clip=clip)(hp, theta_t, offset_t, spacing)
     h_min = float(h.detach().min()) if isinstance(h, torch.Tensor) else h
-    floor = float(hp.radius) * torch.finfo(across.dtype).max ** -0.25
+    floor = float(hp.radius) * torch.finfo(dtype).max ** -0.25
     if h_min < floor:  # keeps every bound / h far below the clamp at sqrt(float max)
         raise InvalidParameterError(
-            f"smoothing {h_min:g} is below {floor:.3g} ({across.dtype}, this polygon): "
+            f"smoothing {h_min:g} is below {floor:.3g} ({dtype}, this polygon): "
             "numerically the exact model: use smoothing=0 (or the exact model) for it"
         )
     margin = _MARGIN * h_max
     window = PAPER_WINDOW if clip else hp.radius + margin
-    c = transect_positions(offset, spacing, window)  # (*B, K)
+    # Roles: an edge with |along| below machine epsilon is parallel to the transects (its
+    # bound -b / along would be rounding noise) and plays a lower bound with along = eps; its
+    # offset moves out by 4 eps (|b| + far), just above the rounding of b, so that a transect
+    # exactly on it is inside (as in exact_chords). With clip, the window bounds +-0.5 join
+    # both roles; without it, a window -W joins a role that some pair of the batch lacks (a
+    # sliver whose edges are all parallel to the transects up to eps).
+    far = window + 2.0 * margin
+    kernels = _compiled_kernels(theta_t)
+    if kernels is not None and not (hp.normals.requires_grad or hp.offsets.requires_grad):
+        theta_t, offset_t = torch.broadcast_tensors(theta_t, offset_t)
+        c = transect_positions(offset_t, spacing, window)  # (*B, K)
+        length, weight = _compiled_lengths(
+            kernels, hp, theta_t, offset_t, spacing, h, c.shape[-1], clip, window, far
+        )
+    else:
+        theta_t, offset_t, across, along, b = _prepare(hp, theta_t, offset_t)
+        c = transect_positions(offset_t, spacing, window)  # (*B, K)
+        length, weight = _tensor_lengths(across, along, b, c, h, clip, window, far)
+    mask = _window_mask(c, clip)
+    if mask is not None:
+        zero = torch.zeros_like(length)
+        length = torch.where(mask, length, zero)
+        weight = torch.where(mask, weight, zero)
+    return TransectLengths(length, weight, c)
+
+
+def _compiled_lengths(
+    kernels: _compiled.Kernels,
+    hp: HalfPlanes,
+    theta: torch.Tensor,
+    offset: torch.Tensor,
+    spacing: float,
+    h: torch.Tensor | float,
+    n_k: int,
+    clip: bool,
+    window: float,
+    far: float,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """:func:`smooth_lengths` by the compiled kernels (CPU): ``(lengths, weights)``."""
+    dtype = theta.dtype
+    polygons, n_edges = hp.offsets.shape[:-1], hp.offsets.shape[-1]
+    batch = torch.broadcast_shapes(theta.shape, polygons)
+    poly = torch.arange(math.prod(polygons)).reshape(polygons).expand(batch).reshape(-1)
+    normals = hp.normals.detach().reshape(-1, n_edges, 2).contiguous()
+    offsets = hp.offsets.detach().reshape(-1, n_edges).contiguous()
+    theta = theta.expand(batch).reshape(-1)
+    cos, sin = torch.cos(theta), torch.sin(theta)
+    d = torch.remainder(offset, spacing).expand(batch).reshape(-1)
+    h_n = torch.broadcast_to(torch.as_tensor(h, dtype=dtype), batch).reshape(-1)
+    q = (torch.arange(n_k, dtype=dtype) - n_k // 2) * spacing  # transect k at d + q_k
+    windows = (clip, window, far)
+    length, weight = _CompiledChords.apply(
+        cos, sin, d, h_n, poly, normals, offsets, q, windows, kernels
+    )
+    return length.reshape((*batch, n_k)), weight.reshape((*batch, n_k))
+
+
+def _tensor_lengths(
+    across: torch.Tensor,
+    along: torch.Tensor,
+    b: torch.Tensor,
+    c: torch.Tensor,
+    h: torch.Tensor | float,
+    clip: bool,
+    window: float,
+    far: float,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """:func:`smooth_lengths` by tensor operations (any device): ``(lengths, weights)``."""
     dtype, device = across.dtype, across.device
     batch, n_edges, n_k = across.shape[:-1], across.shape[-1], c.shape[-1]
-
-    # Roles (no gradient): an edge with |along| below machine epsilon is parallel to the
-    # transects (its bound -a / along would be rounding noise) and plays a lower bound with
-    # along = eps; its offset moves out by 4 eps (|b| + far), just above the rounding of a, so
-    # that a transect exactly on it is inside (as in exact_chords).
     eps = torch.finfo(dtype).eps
     with torch.no_grad():
         parallel = along.abs() < eps
         lower = (parallel | (along > 0)).reshape(-1, n_edges)
         n_pairs = lower.shape[0]
         n_lower_row = lower.sum(-1, keepdim=True)
-        # Slots per role: the batch's most edges of that role, then the window bound with clip
-        # (or where some pair has no edge of that role: a sliver whose edges are all parallel
-        # to the transects up to eps). Unused slots are -inf: nothing in a soft max.
+        # Slots per role: the batch's most edges of that role, then the window bound. Unused
+        # slots are -inf: nothing in a soft max.
         most_lower, least_lower, any_parallel = (
             torch.stack([n_lower_row.max(), n_lower_row.min(), parallel.sum()]).tolist()
             if n_pairs
@@ -341,23 +480,19 @@ def smooth_lengths(
         rank = torch.cumsum(lower, -1) - 1  # the lower edges fill slots 0.., the upper n_low..
         slot = torch.where(lower, rank, n_low - rank - 1 + torch.arange(n_edges, device=device))
     if any_parallel:
-        far = window + 2.0 * margin
         b = torch.where(parallel, b + 4.0 * eps * (b.abs() + far), b)
-    h_n = torch.broadcast_to(h, batch).reshape(-1, 1) if isinstance(h, torch.Tensor) else h
-    windows = [n_low - 1] * lower_window + [n_slots - 1] * upper_window
-    c_n = torch.broadcast_to(c, (*batch, n_k)).reshape(-1, n_k)
     across, along, b = (x.reshape(-1, n_edges) for x in (across, along, b))
+    h_n = torch.broadcast_to(h, batch).reshape(-1, 1) if isinstance(h, torch.Tensor) else h
+    windows: list[tuple[int, torch.Tensor | None]] = []
+    if lower_window:  # with clip for every pair, else for the pairs with no lower edge
+        windows.append((n_low - 1, None if clip else n_lower_row[:, 0] == 0))
+    if upper_window:
+        windows.append((n_slots - 1, None if clip else n_lower_row[:, 0] == n_edges))
+    c_n = torch.broadcast_to(c, (*batch, n_k)).reshape(-1, n_k)
     soft, weight = _SoftChords.apply(
         across, along, b, c_n, h_n, slot, n_low, n_slots, windows, window
     )
-    length = (soft * h_n).reshape((*batch, n_k))
-    weight = weight.reshape((*batch, n_k))
-    mask = _window_mask(c, clip)
-    if mask is not None:
-        zero = torch.zeros_like(length)
-        length = torch.where(mask, length, zero)
-        weight = torch.where(mask, weight, zero)
-    return TransectLengths(length, weight, c)
+    return (soft * h_n).reshape((*batch, n_k)), weight.reshape((*batch, n_k))
 
 
 @dataclass(frozen=True)
