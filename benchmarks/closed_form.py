@@ -353,7 +353,7 @@ def main(argv: list[str] | None = None) -> int:
         "speed: forward + backward of Eq. 1 w.r.t. (angle, offset), batched, on the paper's "
         f"parallelogram at spacing {PAPER_SPACING} (0.0559 normalised: the paper's 18 lines in "
         f"[-0.5, 0.5]); K = {k_count} candidate transects a pair for the paper model, "
-        f"{fewest}-{most} crossing; best of runs, interleaved"
+        f"{fewest}-{most} crossing; best of rounds of bursts (see speed())"
     )
     rows = speed(args.quick)
 

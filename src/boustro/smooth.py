@@ -24,18 +24,26 @@ frame, unit normals) switch over a width ``~1/T``; here the switch between two c
 ``sigmoid((l_1 - l_2) / h)`` and the switch of the weight is ``sigmoid(D / h)``, so ``h = 1 / T``
 makes the two models' logistic transitions the same width (see ``docs/closed_form.md``).
 
-Evaluation (``_SoftChords``, exact to rounding against the plain formula; a test compares
-them): the bounds of the lower edges and of the upper edges are sorted into two groups of
-"slots" per (angle, offset) pair, the slots laid out slot-major so that the soft maxima reduce
-over the outer dimension, and the backward pass is analytic (the softmax weights of the
-forward pass times the upstream gradient), so one forward + backward costs about ten passes over
-the ``(slots, pairs, K)`` tensor. Two shortcuts, both below rounding:
+Evaluation, two implementations of the same formula, exact to rounding against it (tests
+compare them with each other and with the formula written term by term):
 
-* exponents are floored at ``log(tiny) + 1`` (``-707`` in float64) before ``exp``: a term below
-  that adds nothing to a sum that contains ``1``, and ``exp`` of very negative numbers is slow;
-* ``softplus`` and ``sigmoid`` are evaluated only for transects whose two soft extrema have a
-  competing bound (a sum ``!= 1``) or whose chord is within ``707 h`` of empty; elsewhere they are
-  ``max(0, D / h)`` and the 0/1 step to the last bit.
+* on the CPU (float32/float64), the compiled kernels of :mod:`boustro._compiled` (numba): one
+  loop per (angle, offset) pair, the soft path only where a competing bound or an empty chord is
+  within ``TAU = 40`` smoothing lengths, an analytic backward; :data:`COMPILED` ``= False`` (or
+  the environment variable ``BOUSTRO_COMPILED=0``) turns them off;
+* elsewhere (other devices, half-planes that need a gradient), the tensor code
+  ``_SoftChords``: the bounds of the lower edges and of the upper edges are sorted into two
+  groups of "slots" per (angle, offset) pair, the slots laid out slot-major so that the soft
+  maxima reduce over the outer dimension, and the backward pass is analytic (the softmax weights
+  of the forward pass times the upstream gradient), so one forward + backward costs about ten
+  passes over the ``(slots, pairs, K)`` tensor. Two shortcuts, both below rounding:
+
+  * exponents are floored at ``log(tiny) + 1`` (``-707`` in float64) before ``exp``: a term
+    below that adds nothing to a sum that contains ``1``, and ``exp`` of very negative numbers
+    is slow;
+  * ``softplus`` and ``sigmoid`` are evaluated only for transects whose two soft extrema have a
+    competing bound (a sum ``!= 1``) or whose chord is within ``707 h`` of empty; elsewhere they
+    are ``max(0, D / h)`` and the 0/1 step to the last bit.
 
 Gradient safety (no ``inf`` or ``NaN`` in values or gradients, for any input):
 
@@ -47,7 +55,7 @@ Gradient safety (no ``inf`` or ``NaN`` in values or gradients, for any input):
   ``+-sqrt(float max)``, so ``v`` is finite for every ``h > 0``; a bound far outside the
   polygon has weight ``exp(floor)`` in its soft maximum, or empties its chord so that the
   length's gradient ``sigmoid(D / h)`` underflows to 0;
-* with ``clip`` the window bounds ``+-0.5`` are one more slot on each side; without it no
+* with ``clip`` the window bounds ``+-0.5`` are one more bound on each side; without it no
   window is needed (a bounded polygon has a lower and an upper edge in every direction), except
   for a pair with no edge of a role (a sliver all of whose edges are parallel to the transects
   up to ``eps``), which gets the bound ``-W`` (the polygon's disc grown by ``32 h``) there;
