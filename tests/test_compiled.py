@@ -25,6 +25,12 @@ from .test_smooth import batch
 F64 = torch.float64
 
 
+@pytest.fixture(autouse=True)
+def _every_call_compiled(monkeypatch):
+    """The kernels for every call size here (by default small calls keep the tensor code)."""
+    monkeypatch.setattr(smooth_module, "COMPILED_MIN", 0)
+
+
 def _both(monkeypatch, run):
     """``run()`` on the compiled path and on the tensor path."""
     results = []
@@ -37,13 +43,34 @@ def _both(monkeypatch, run):
 def test_numba_kernels_are_available():
     # numba is a dependency: on the CPU the compiled path is the one users get
     assert compiled.kernels() is not None
-    assert smooth_module._compiled_kernels(torch.zeros(1, dtype=F64)) is not None
-    assert smooth_module._compiled_kernels(torch.zeros(1, dtype=torch.float32)) is not None
+    assert smooth_module._compiled_kernels(torch.zeros(1, dtype=F64), 1) is not None
+    assert smooth_module._compiled_kernels(torch.zeros(1, dtype=torch.float32), 1) is not None
 
 
-def test_other_devices_and_dtypes_take_the_tensor_path():
-    assert smooth_module._compiled_kernels(torch.zeros(1, dtype=F64, device="meta")) is None
-    assert smooth_module._compiled_kernels(torch.zeros(1, dtype=torch.float16)) is None
+def test_other_devices_dtypes_and_small_calls_take_the_tensor_path(monkeypatch):
+    assert smooth_module._compiled_kernels(torch.zeros(1, dtype=F64, device="meta"), 1) is None
+    assert smooth_module._compiled_kernels(torch.zeros(1, dtype=torch.float16), 1) is None
+    monkeypatch.setattr(smooth_module, "COMPILED_MIN", 1000)
+    x = torch.zeros(1, dtype=F64)
+    assert smooth_module._compiled_kernels(x, 999) is None
+    assert smooth_module._compiled_kernels(x, 1000) is not None
+
+
+def test_small_calls_do_not_import_numba():
+    """``boustro plan``'s calls are small: the process never imports numba (0.5 s or more)."""
+    code = (
+        "import sys, torch;"
+        "from boustro.smooth import smooth_lengths;"
+        "from boustro.fitness import smith_fitness;"
+        "from boustro.geometry import Polygon, halfplanes;"
+        "hp = halfplanes(Polygon([(0, 0), (1, 0), (0, 1)]));"
+        "th = torch.rand(100, dtype=torch.float64, requires_grad=True);"
+        "tl = smooth_lengths(hp, th, 0.0, 0.1);"
+        "smith_fitness(tl.lengths, tl.weights).sum().backward();"
+        "assert 'numba' not in sys.modules, 'numba imported'"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
 
 
 @pytest.mark.grad
@@ -156,17 +183,30 @@ def test_compiled_fitness_gradcheck_and_layouts():
     L = lengths[1:3, :3].clone().requires_grad_(True)
     w = weights[1:3, :3].clone().requires_grad_(True)
     assert torch.autograd.gradcheck(lambda x, y: smith_fitness(x, y, a=0.3, b=0.7), (L, w))
-    # a transposed (non-contiguous) input gives the same values as a contiguous one
-    t = lengths[1].T.contiguous().T
+    # a transposed (non-contiguous) input gives the same values and gradient as a contiguous one
+    t = lengths[1].T.contiguous().T.requires_grad_(True)
+    c = lengths[1].clone().requires_grad_(True)
     assert not t.is_contiguous()
-    torch.testing.assert_close(smith_fitness(t, weights[1]), smith_fitness(lengths[1], weights[1]))
+    f_t, f_c = smith_fitness(t, weights[1]), smith_fitness(c, weights[1])
+    assert f_t.grad_fn is not None and "Compiled" in type(f_t.grad_fn).__name__
+    torch.testing.assert_close(f_t, f_c)
+    (g_t,), (g_c,) = torch.autograd.grad(f_t.sum(), t), torch.autograd.grad(f_c.sum(), c)
+    torch.testing.assert_close(g_t, g_c)
+
+
+def test_a_forward_pass_of_eq1_alone_keeps_the_tensor_code():
+    lengths, weights = _fitness_cases()
+    assert smith_fitness(lengths, weights).grad_fn is None
+    with torch.no_grad():
+        f = smith_fitness(lengths.clone().requires_grad_(True), weights)
+    torch.testing.assert_close(f, smith_fitness(lengths, weights))
 
 
 def test_environment_switch_turns_the_kernels_off():
     code = (
         "import torch, boustro._compiled as c, boustro.smooth as s;"
         "assert c.kernels() is None;"
-        "assert s._compiled_kernels(torch.zeros(1, dtype=torch.float64)) is None;"
+        "assert s._compiled_kernels(torch.zeros(1, dtype=torch.float64), 1 << 20) is None;"
         "from boustro.geometry import Polygon, halfplanes;"
         "tl = s.smooth_lengths(halfplanes(Polygon([(0,0),(1,0),(0,1)])), 0.2, 0.0, 0.1);"
         "print(float(tl.lengths.sum()))"

@@ -128,6 +128,7 @@ def kernel_path(request, monkeypatch):
     tensor code's whole-tensor (small calls) and sparse-tail (large calls) paths, chosen by
     ``boustro.smooth._SPARSE_MIN``."""
     monkeypatch.setattr(smooth_module, "COMPILED", request.param == "compiled")
+    monkeypatch.setattr(smooth_module, "COMPILED_MIN", 0)  # small test calls included
     monkeypatch.setattr(smooth_module, "_SPARSE_MIN", 0 if request.param == "sparse" else 1 << 62)
     return request.param
 

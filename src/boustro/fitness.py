@@ -109,14 +109,16 @@ def smith_fitness(
 
 
 def _compiled_kernels(lengths: torch.Tensor, weights: torch.Tensor) -> _compiled.Kernels | None:
-    """The compiled kernels (:mod:`boustro._compiled`) if they apply: CPU, float32/64, a
-    non-empty last dimension and :data:`boustro.smooth.COMPILED` (read at call time)."""
+    """The compiled kernels (:mod:`boustro._compiled`) if they apply: the rules of
+    :func:`boustro.smooth._compiled_kernels` (read at call time), weights like lengths, and a
+    gradient to compute (a forward pass alone is cheap either way; scoring a grid, as
+    ``boustro plan`` does, need not import numba)."""
     from . import smooth  # the switch lives with the model it was made for
 
-    ok = lengths.device.type == "cpu" and lengths.dtype in (torch.float32, torch.float64)
-    if not (smooth.COMPILED and ok and weights.dtype == lengths.dtype and lengths.shape[-1]):
+    grad = torch.is_grad_enabled() and (lengths.requires_grad or weights.requires_grad)
+    if not grad or weights.dtype != lengths.dtype or not lengths.shape[-1]:
         return None
-    return _compiled.kernels()
+    return smooth._compiled_kernels(lengths, lengths.numel())
 
 
 class _CompiledSmith(torch.autograd.Function):

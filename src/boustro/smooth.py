@@ -276,14 +276,24 @@ class _SoftChords(torch.autograd.Function):
 
 
 #: Use the compiled CPU kernels (:mod:`boustro._compiled`) where they apply: CPU tensors of
-#: float32 or float64, numba installed. ``False`` forces the tensor code everywhere (tests hold
-#: the two to the same values and gradients).
+#: float32 or float64, numba installed, calls of at least :data:`COMPILED_MIN` elements.
+#: ``False`` forces the tensor code everywhere (tests hold the two to the same values and
+#: gradients).
 COMPILED = True
 
+#: Smallest call, in (angle, offset) pairs x candidate transects, that takes the compiled
+#: kernels. Below it a call costs well under a millisecond either way, and a process that makes
+#: only such calls (``boustro plan``, scoring a layout) does not import numba (half a second,
+#: a few seconds the first time it compiles the kernels).
+COMPILED_MIN = 1 << 14
 
-def _compiled_kernels(x: torch.Tensor) -> _compiled.Kernels | None:
-    """The compiled kernels if they apply to tensors like ``x``, else ``None``."""
-    if not COMPILED or x.device.type != "cpu" or x.dtype not in (torch.float32, torch.float64):
+
+def _compiled_kernels(x: torch.Tensor, elements: int) -> _compiled.Kernels | None:
+    """The compiled kernels if they apply to a call on tensors like ``x`` with ``elements``
+    (pair, transect) elements, else ``None``."""
+    if not COMPILED or elements < COMPILED_MIN or x.device.type != "cpu":
+        return None
+    if x.dtype not in (torch.float32, torch.float64):
         return None
     return _compiled.kernels()
 
@@ -405,16 +415,16 @@ def smooth_lengths(
     # both roles; without it, a window -W joins a role that some pair of the batch lacks (a
     # sliver whose edges are all parallel to the transects up to eps).
     far = window + 2.0 * margin
-    kernels = _compiled_kernels(theta_t)
+    theta_t, offset_t = torch.broadcast_tensors(theta_t, offset_t)
+    c = transect_positions(offset_t, spacing, window)  # (*B, K)
+    pairs = math.prod(torch.broadcast_shapes(theta_t.shape, hp.offsets.shape[:-1]))
+    kernels = _compiled_kernels(theta_t, pairs * c.shape[-1])
     if kernels is not None and not (hp.normals.requires_grad or hp.offsets.requires_grad):
-        theta_t, offset_t = torch.broadcast_tensors(theta_t, offset_t)
-        c = transect_positions(offset_t, spacing, window)  # (*B, K)
         length, weight = _compiled_lengths(
             kernels, hp, theta_t, offset_t, spacing, h, c.shape[-1], clip, window, far
         )
     else:
-        theta_t, offset_t, across, along, b = _prepare(hp, theta_t, offset_t)
-        c = transect_positions(offset_t, spacing, window)  # (*B, K)
+        _, _, across, along, b = _prepare(hp, theta_t, offset_t)
         length, weight = _tensor_lengths(across, along, b, c, h, clip, window, far)
     mask = _window_mask(c, clip)
     if mask is not None:
