@@ -215,3 +215,73 @@ def test_environment_switch_turns_the_kernels_off():
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert float(out.stdout) > 0
+
+
+# -- found by review: each was a disagreement between the paths ---------------------------------
+@pytest.mark.grad
+@pytest.mark.parametrize("k", [500, 10_000])
+def test_equal_lengths_have_zero_std_and_its_gradient(monkeypatch, k):
+    """Thousands of equal lengths: a plain sum puts the mean ulps off and the variance above
+    eps^2; the refined mean makes it exactly 0, and dF/dL = a w / W on both paths."""
+    lengths = torch.full((8, k), 0.9567033908212682, dtype=F64)
+    weights = torch.ones(8, k, dtype=F64)
+
+    def run():
+        L = lengths.clone().requires_grad_(True)
+        f = smith_fitness(L, weights, a=0.5, b=0.5)
+        return f, torch.autograd.grad(f.sum(), L)[0]
+
+    for f, g in _both(monkeypatch, run):
+        torch.testing.assert_close(f, torch.full((8,), 0.5 * 0.9567033908212682 + 0.5, dtype=F64))
+        torch.testing.assert_close(g, torch.full((8, k), 0.5 / k, dtype=F64), atol=0, rtol=1e-12)
+
+
+def test_nan_angle_or_offset_gives_nan_on_both_paths(monkeypatch):
+    hp = halfplanes(Polygon([(0, 0), (3, 0), (1, 2)]))
+    for theta, offset in (([math.nan, 0.3], [0.01, 0.01]), ([0.3, 0.3], [math.nan, 0.01])):
+
+        def run(theta=theta, offset=offset):
+            th = torch.tensor(theta, dtype=F64, requires_grad=True)
+            off = torch.tensor(offset, dtype=F64, requires_grad=True)
+            tl = smooth_lengths(hp, th, off, 0.05, smoothing=1e-3)
+            f = smith_fitness(tl.lengths, tl.weights)
+            return (tl.lengths, tl.weights, f, *torch.autograd.grad(f.sum(), (th, off)))
+
+        for results in _both(monkeypatch, run):
+            for x in results:
+                assert torch.isnan(x[0]).all() and torch.isfinite(x[1]).all()
+
+
+def test_inplace_change_before_backward_is_an_error():
+    base = halfplanes(Polygon([(0, 0), (3, 0), (1, 2)]))
+    hp = HalfPlanes(base.normals.clone(), base.offsets.clone(), base.radius)
+    th = torch.tensor([0.3, 1.2], dtype=F64, requires_grad=True)
+    tl = smooth_lengths(hp, th, 0.01, 0.05, smoothing=1e-2)
+    hp.offsets.mul_(1.5)  # the caller reuses the buffer before the backward pass
+    with pytest.raises(RuntimeError, match="inplace"):
+        (tl.lengths.sum() + tl.weights.sum()).backward()
+
+
+@pytest.mark.grad
+def test_create_graph_differentiates_like_the_tensor_code(monkeypatch):
+    hp = halfplanes([Polygon([(0, 0), (3, 0), (1, 2)]), Polygon([(0, 0), (1, 0), (1, 1), (0, 1)])])
+
+    def run():
+        th = torch.tensor([0.3, 1.0], dtype=F64, requires_grad=True)
+        h = torch.tensor([1e-2, 2e-2], dtype=F64, requires_grad=True)
+        tl = smooth_lengths(hp, th, 0.01, 0.05, smoothing=h)
+        f = smith_fitness(tl.lengths, tl.weights).sum() + tl.lengths.sum()
+        g_th, g_h = torch.autograd.grad(f, (th, h), create_graph=True)
+        return (g_th, g_h, *torch.autograd.grad((g_th.sum() + g_h.sum()), (th, h)))
+
+    fast, reference = _both(monkeypatch, run)
+    for x, y in zip(fast, reference, strict=True):
+        torch.testing.assert_close(x, y, atol=1e-10, rtol=1e-10, equal_nan=True)
+
+
+def test_a_tensor_weight_that_needs_its_gradient_gets_it():
+    lengths, weights = _fitness_cases()
+    a = torch.tensor(0.3, dtype=F64, requires_grad=True)
+    f = smith_fitness(lengths.requires_grad_(True), weights, a=a, b=0.7)
+    (g,) = torch.autograd.grad(f.sum(), a)
+    assert float(g) > 0

@@ -74,6 +74,11 @@ def _edge(
     return parallel or along > 0, along, scale, alpha, slope
 
 
+def _finite(cos: float, sin: float, d: float, h: float) -> bool:
+    """Whether a pair's angle, offset and smoothing are finite numbers."""
+    return math.isfinite(cos) and math.isfinite(sin) and math.isfinite(d) and math.isfinite(h)
+
+
 def _windows(clip: bool, n_lower: int, n_edges: int, bound: float) -> tuple[float, float]:
     """The window bounds ``(w_low, w_up)`` of a pair's roles, ``bound = -window / h`` or
     ``-inf`` for none: both with ``clip``; otherwise only for a role the pair has no edge of
@@ -225,6 +230,13 @@ def chords_forward(
     for n in range(h.shape[0]):
         hn = h[n]
         p = poly[n]
+        if not _finite(cos[n], sin[n], d[n], hn):  # a NaN angle or offset: NaN, as it came
+            for k in range(n_k):
+                length[n, k] = np.nan
+                weight[n, k] = np.nan
+                active[0, n, k] = 0
+                active[1, n, k] = 0
+            continue
         w_low, w_up = _edges(cos[n], sin[n], normals[p], offsets[p], d[n], hn, settings, edges)
         _envelope(lower, shift, slope, q, w_low, w_up, ml, ml2, mu, mu2, il, iu)
         near = False
@@ -277,6 +289,9 @@ def chords_backward(
     for n in range(h.shape[0]):
         hn = h[n]
         p = poly[n]
+        if not _finite(cos[n], sin[n], d[n], hn):  # NaN in, NaN out
+            g_cos[n] = g_sin[n] = g_d[n] = g_h[n] = np.nan
+            continue
         w_low, w_up = _edges(cos[n], sin[n], normals[p], offsets[p], d[n], hn, settings, edges)
         any_grad = False
         for k in range(n_k):
@@ -360,14 +375,21 @@ def chords_backward(
 
 
 def _moments(lengths: np.ndarray, weights: np.ndarray, n: int) -> tuple[float, float, float]:
-    """``(W, mean, var)`` of row ``n``, weighted; ``W`` the weights' sum, 1 where it is 0."""
-    total = 0.0
-    first = 0.0
+    """``(W, mean, var)`` of row ``n``, weighted; ``W`` the weights' sum, 1 where it is 0.
+
+    The mean is refined once by the weighted mean of the residuals, as in
+    :func:`boustro.fitness._smith_tensor`: equal lengths give a variance of exactly 0.
+    """
+    total, first = 0.0, 0.0
     for k in range(lengths.shape[1]):
         total += weights[n, k]
         first += weights[n, k] * lengths[n, k]
     denom = total if total > 0 else 1.0
     mean = first / denom
+    residual = 0.0
+    for k in range(lengths.shape[1]):
+        residual += weights[n, k] * (lengths[n, k] - mean)
+    mean += residual / denom
     second = 0.0
     for k in range(lengths.shape[1]):
         r = lengths[n, k] - mean
@@ -376,20 +398,29 @@ def _moments(lengths: np.ndarray, weights: np.ndarray, n: int) -> tuple[float, f
 
 
 def smith_forward(
-    lengths: np.ndarray, weights: np.ndarray, a: float, b: float, tiny: float, out: np.ndarray
+    lengths: np.ndarray,
+    weights: np.ndarray,
+    a: float,
+    b: float,
+    tiny: float,
+    out: np.ndarray,
+    moments: np.ndarray,
 ) -> None:
     """Eq. 1 with weighted statistics per row of ``(M, K)`` lengths and weights (see
     :func:`boustro.fitness.smith_fitness`): ``a mean + b (1 - std)``, ``b`` where the weights
-    sum to 0, ``std = 0`` where ``var <= tiny``."""
+    sum to 0, ``std = 0`` where ``var <= tiny``; ``moments`` ``(3, M)`` receives each row's
+    ``(W, mean, var)`` for :func:`smith_backward`."""
     for n in range(lengths.shape[0]):
-        _, mean, var = _moments(lengths, weights, n)
+        denom, mean, var = _moments(lengths, weights, n)
         std = math.sqrt(var) if var > tiny else 0.0
         out[n] = a * mean + b * (1.0 - std)
+        moments[0, n], moments[1, n], moments[2, n] = denom, mean, var
 
 
 def smith_backward(
     lengths: np.ndarray,
     weights: np.ndarray,
+    moments: np.ndarray,
     a: float,
     b: float,
     tiny: float,
@@ -397,11 +428,12 @@ def smith_backward(
     g_lengths: np.ndarray,
     g_weights: np.ndarray,
 ) -> None:
-    """Gradients of ``sum(g * smith_forward(...))``: with ``r = L - mean``,
-    ``df/dL = (w / W) (a - b r / std)`` and ``df/dw = (a r - b (r^2 - var) / (2 std)) / W``
-    (``W`` the weights' sum, 1 where it is 0; the ``std`` terms vanish where ``var <= tiny``)."""
+    """Gradients of ``sum(g * smith_forward(...))``, from the forward pass's ``moments``: with
+    ``r = L - mean``, ``df/dL = (w / W) (a - b r / std)`` and
+    ``df/dw = (a r - b (r^2 - var) / (2 std)) / W`` (``W`` the weights' sum, 1 where it is 0;
+    the ``std`` terms vanish where ``var <= tiny``)."""
     for n in range(lengths.shape[0]):
-        denom, mean, var = _moments(lengths, weights, n)
+        denom, mean, var = moments[0, n], moments[1, n], moments[2, n]
         half_inv_std = 0.5 / math.sqrt(var) if var > tiny else 0.0
         c1 = a * g[n] / denom
         c3 = -b * half_inv_std * g[n] / denom
@@ -447,7 +479,7 @@ def kernels() -> Kernels | None:
     # The helpers first: the kernels call them by their module-level names, which from here on
     # are compiled functions (numba resolves those names when it compiles a kernel, on its
     # first call).
-    helpers = ("_edge", "_windows", "_envelope", "_is_near", "_tail", "_sums", "_softplus_sigmoid")
+    helpers = "_edge _finite _windows _envelope _is_near _tail _sums _softplus_sigmoid".split()
     for name in helpers:
         globals()[name] = jit(globals()[name])
     for name in ("_edges", "_moments"):  # inlined: faster loops in the kernels here

@@ -57,6 +57,7 @@ def as_number(name: str, value: object) -> float:
     if isinstance(value, bool):  # float(True) == 1.0: a flag is not a number
         raise InvalidParameterError(f"{name} must be a number, got {value!r}")
     try:
-        return float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
+        detach = getattr(value, "detach", None)  # a tensor (a gradient may flow through it)
+        return float(detach() if callable(detach) else value)  # type: ignore[arg-type]
+    except (TypeError, ValueError, RuntimeError):
         raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None

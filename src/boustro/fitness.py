@@ -20,6 +20,10 @@ soft model has the Eq. 7 indicator ``S``. Two ways to weight the statistics are 
 
 Degenerate cases are defined, never NaN: no transect that counts (``sum(w) == 0``) gives
 ``mean = std = 0`` and ``f = b``; equal lengths give ``std = 0`` with a finite (zero) gradient.
+The weighted mean is refined once by the weighted mean of the residuals, so that equal lengths
+give a variance of exactly 0 whatever their number (a plain sum of a few hundred equal lengths
+is a few ulps off their value, and its variance would then be rounding noise above ``eps^2``,
+with an ``O(1)`` std gradient).
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
+import numpy as np
 import torch
 
 from . import _compiled
@@ -94,13 +99,29 @@ def smith_fitness(
         raise InvalidParameterError(
             f"weights shape {tuple(weights.shape)} differs from lengths {tuple(lengths.shape)}"
         )
-    kernels = _compiled_kernels(lengths, weights) if statistics == "weighted" else None
-    if kernels is not None:
-        return _CompiledSmith.apply(lengths, weights, float(a), float(b), kernels)
+    numbers = not any(isinstance(x, torch.Tensor) for x in (a, b))  # else a gradient may be due
+    if statistics == "weighted" and numbers:
+        kernels = _compiled_kernels(lengths, weights)
+        if kernels is not None:
+            return _CompiledSmith.apply(lengths, weights, float(a), float(b), kernels)
+    return _smith_tensor(lengths, weights, a, b, statistics)
+
+
+def _smith_tensor(
+    lengths: torch.Tensor,
+    weights: torch.Tensor,
+    a: float | torch.Tensor,
+    b: float | torch.Tensor,
+    statistics: Statistics,
+) -> torch.Tensor:
+    """Eq. 1 by tensor operations (any device; differentiable to any order)."""
     total = weights.sum(dim=-1)
     denom = torch.where(total > 0, total, torch.ones_like(total))
     if statistics == "weighted":
         mean = (weights * lengths).sum(dim=-1) / denom
+        with torch.no_grad():  # refined once (module docstring); the gradient is that of mean
+            residual = (weights * (lengths - mean[..., None])).sum(dim=-1) / denom
+        mean = mean + residual
         var = (weights * (lengths - mean[..., None]) ** 2).sum(dim=-1) / denom
     else:
         mean = torch.where(total > 0, lengths.sum(dim=-1) / denom, 0.0)
@@ -122,7 +143,11 @@ def _compiled_kernels(lengths: torch.Tensor, weights: torch.Tensor) -> _compiled
 
 
 class _CompiledSmith(torch.autograd.Function):
-    """Eq. 1 with weighted statistics by the compiled kernels, batched over leading dims."""
+    """Eq. 1 with weighted statistics by the compiled kernels, batched over leading dims.
+
+    Its backward pass is the kernel's; asked for a differentiable gradient (``create_graph``),
+    it differentiates the tensor formula instead (:func:`_smith_tensor`, the same values).
+    """
 
     @staticmethod
     def forward(
@@ -133,25 +158,35 @@ class _CompiledSmith(torch.autograd.Function):
         b: float,
         kernels: _compiled.Kernels,
     ) -> torch.Tensor:
+        ctx.save_for_backward(lengths, weights)
         lengths, weights = torch.broadcast_tensors(lengths, weights)
         shape, k = lengths.shape[:-1], lengths.shape[-1]
         flat = [x.detach().reshape(-1, k).contiguous() for x in (lengths, weights)]
         tiny = torch.finfo(lengths.dtype).eps ** 2
         out = torch.empty(flat[0].shape[0], dtype=lengths.dtype)
-        kernels.smith_forward(flat[0].numpy(), flat[1].numpy(), a, b, tiny, out.numpy())
-        ctx.save_for_backward(*flat)
-        ctx.constants = (a, b, tiny, kernels, lengths.shape)
+        moments = np.empty((3, out.shape[0]), dtype=flat[0].numpy().dtype)  # W, mean, var
+        kernels.smith_forward(flat[0].numpy(), flat[1].numpy(), a, b, tiny, out.numpy(), moments)
+        ctx.constants = (a, b, tiny, kernels, moments)
         return out.reshape(shape)
 
     @staticmethod
     def backward(ctx: Any, grad: torch.Tensor) -> tuple[torch.Tensor | None, ...]:
         lengths, weights = ctx.saved_tensors
-        a, b, tiny, kernels, shape = ctx.constants
+        a, b, tiny, kernels, moments = ctx.constants
+        need = ctx.needs_input_grad[:2]
+        if torch.is_grad_enabled():  # create_graph: a gradient that is itself differentiable
+            inputs = [x for x, n in zip((lengths, weights), need, strict=True) if n]
+            f = _smith_tensor(lengths, weights, a, b, "weighted")
+            grads = iter(torch.autograd.grad(f, inputs, grad, create_graph=True))
+            return (*(next(grads) if n else None for n in need), None, None, None)
+        full, k = torch.broadcast_shapes(lengths.shape, weights.shape), lengths.shape[-1]
+        flat = [x.detach().expand(full).reshape(-1, k).contiguous() for x in (lengths, weights)]
         g = grad.detach().reshape(-1).contiguous().to(lengths.dtype)
-        g_lengths, g_weights = torch.empty_like(lengths), torch.empty_like(weights)
+        g_lengths, g_weights = torch.empty_like(flat[0]), torch.empty_like(flat[1])
         kernels.smith_backward(
-            lengths.numpy(),
-            weights.numpy(),
+            flat[0].numpy(),
+            flat[1].numpy(),
+            moments,
             a,
             b,
             tiny,
@@ -159,14 +194,12 @@ class _CompiledSmith(torch.autograd.Function):
             g_lengths.numpy(),
             g_weights.numpy(),
         )
-        need = ctx.needs_input_grad
-        return (
-            g_lengths.reshape(shape) if need[0] else None,
-            g_weights.reshape(shape) if need[1] else None,
-            None,
-            None,
-            None,
-        )
+        out = [g_lengths.reshape(full), g_weights.reshape(full)]
+        # an input broadcast in the forward pass gets the sum over the broadcast dimensions
+        for i, x in enumerate((lengths, weights)):
+            if x.shape != full:
+                out[i] = out[i].sum_to_size(x.shape)
+        return (*(o if n else None for o, n in zip(out, need, strict=True)), None, None, None)
 
 
 @dataclass(frozen=True)

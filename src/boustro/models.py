@@ -137,12 +137,21 @@ def _prepare(
     theta_t = torch.as_tensor(theta, dtype=dtype, device=device)
     offset_t = torch.as_tensor(offset, dtype=dtype, device=device)
     theta_t, offset_t = torch.broadcast_tensors(theta_t, offset_t)
-    cos, sin = torch.cos(theta_t)[..., None], torch.sin(theta_t)[..., None]
-    nx, ny = hp.normals[..., 0], hp.normals[..., 1]
+    across, along, b = _components(torch.cos(theta_t), torch.sin(theta_t), hp.normals, hp.offsets)
+    return theta_t, offset_t, across, along, b
+
+
+def _components(
+    cos: torch.Tensor, sin: torch.Tensor, normals: torch.Tensor, offsets: torch.Tensor
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """``(across, along, b)`` ``(*, E)``: ``across = n_j . n``, ``along = n_j . u`` of edges
+    ``normals (*, E, 2)``, ``offsets (*, E)`` seen from transects at angles ``(cos, sin)``
+    ``(*)`` (broadcasting), and the offsets broadcast to their shape."""
+    nx, ny = normals[..., 0], normals[..., 1]
+    cos, sin = cos[..., None], sin[..., None]
     across = -nx * sin + ny * cos
     along = nx * cos + ny * sin
-    b = torch.broadcast_to(hp.offsets, across.shape)
-    return theta_t, offset_t, across, along, b
+    return across, along, torch.broadcast_to(offsets, across.shape)
 
 
 def grid_size(spacing: float, radius: float) -> tuple[int, int]:

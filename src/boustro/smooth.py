@@ -81,6 +81,7 @@ from .models import (
     PAPER_WINDOW,
     ExactModel,
     TransectLengths,
+    _components,
     _prepare,
     _window_mask,
     check_spacing,
@@ -308,7 +309,12 @@ class _CompiledChords(torch.autograd.Function):
     loop. Inputs: ``cos, sin`` of the angles, wrapped offsets ``d`` and smoothing ``h``, all
     ``(N,)``; each pair's polygon ``poly`` ``(N,)`` into ``normals`` ``(P, E, 2)`` and
     ``offsets`` ``(P, E)`` (constants); the grid ``q`` ``(K,)``: transect ``k`` at
-    ``d + q_k``; ``windows = (clip, window, far)`` (:func:`smooth_lengths`)."""
+    ``d + q_k``; ``windows = (clip, window, far)`` (:func:`smooth_lengths`).
+
+    Every input is saved (an in-place change before the backward pass is an error, as for any
+    autograd function). Asked for a differentiable gradient (``create_graph``), the backward
+    pass differentiates the tensor code on the same inputs instead.
+    """
 
     @staticmethod
     def forward(
@@ -325,35 +331,47 @@ class _CompiledChords(torch.autograd.Function):
         kernels: _compiled.Kernels,
     ) -> tuple[torch.Tensor, torch.Tensor]:
         info = torch.finfo(d.dtype)
-        geometry = tuple(_numpy(x) for x in (cos, sin, poly, normals, offsets, d, h, q))
         settings = (*windows, info.eps, info.max**0.5)
         length = torch.empty((d.shape[0], q.shape[0]), dtype=d.dtype)
         weight = torch.empty_like(length)
         # the largest bounds' edges (E: a window), -1 on the soft path
         index = np.int8 if normals.shape[1] < 127 else np.int32
         active = np.empty((2, *length.shape), dtype=index)
+        inputs = (cos, sin, poly, normals, offsets, d, h, q)
+        geometry = tuple(_numpy(x) for x in inputs)
         kernels.chords_forward(geometry, settings, length.numpy(), weight.numpy(), active)
-        ctx.geometry, ctx.settings, ctx.active, ctx.kernels = geometry, settings, active, kernels
-        ctx.save_for_backward(length, weight)
+        ctx.save_for_backward(*inputs, length, weight)
+        ctx.settings, ctx.active, ctx.kernels = settings, active, kernels
         return length, weight
 
     @staticmethod
     def backward(
         ctx: Any, grad_length: torch.Tensor, grad_weight: torch.Tensor
     ) -> tuple[torch.Tensor | None, ...]:
-        length, weight = ctx.saved_tensors
-        grads = [torch.empty(length.shape[0], dtype=length.dtype) for _ in range(4)]
+        *inputs, length, weight = ctx.saved_tensors
+        cos, sin, poly, normals, offsets, d, h, q = inputs
+        need = ctx.needs_input_grad[:4]  # cos, sin, d, h
+        if torch.is_grad_enabled():  # create_graph: a gradient that is itself differentiable
+            along_with = [x for x, n in zip((cos, sin, d, h), need, strict=True) if n]
+            across, along, b = _components(cos, sin, normals[poly], offsets[poly])
+            clip, window, far = ctx.settings[:3]
+            outputs = _tensor_lengths(across, along, b, d[:, None] + q, h, clip, window, far)
+            grads = torch.autograd.grad(
+                outputs, along_with, (grad_length, grad_weight), create_graph=True
+            )
+            found = iter(grads)
+            return (*(next(found) if n else None for n in need), *(None,) * 6)
+        out = [torch.empty(length.shape[0], dtype=length.dtype) for _ in range(4)]
         ctx.kernels.chords_backward(
-            ctx.geometry,
+            tuple(_numpy(x) for x in inputs),
             ctx.settings,
             (length.numpy(), weight.numpy(), ctx.active),
             _numpy(grad_length),
             _numpy(grad_weight),
-            bool(ctx.needs_input_grad[3]),
-            tuple(g.numpy() for g in grads),  # cos, sin, d, h
+            bool(need[3]),
+            tuple(g.numpy() for g in out),  # cos, sin, d, h
         )
-        need = ctx.needs_input_grad
-        return (*(g if n else None for g, n in zip(grads, need[:4], strict=True)), *(None,) * 6)
+        return (*(g if n else None for g, n in zip(out, need, strict=True)), *(None,) * 6)
 
 
 def smooth_lengths(
