@@ -95,14 +95,14 @@ def _edges(
     offsets: np.ndarray,
     d: float,
     h: float,
-    settings: tuple[bool, float, float, float, float, float],
+    settings: tuple[bool, float, float, float, float],
     edges: tuple[np.ndarray, ...],
 ) -> tuple[float, float]:
     """A pair's edges (:func:`_edge`) into ``edges = (lower, along, scale, alpha, slope,
     shift)``, ``(E,)`` each, ``shift = alpha + slope d``; returns its window bounds
     (:func:`_windows`)."""
     lower, along, scale, alpha, slope, shift = edges
-    clip, window, far, eps, big, _ = settings
+    clip, window, far, eps, big = settings
     n_lower = 0
     for e in range(normals.shape[0]):
         low, al, sc, a0, s1 = _edge(
@@ -201,7 +201,7 @@ def _softplus_sigmoid(z: float, h: float) -> tuple[float, float]:
 
 def chords_forward(
     geometry: tuple[np.ndarray, ...],
-    settings: tuple[bool, float, float, float, float, float],
+    settings: tuple[bool, float, float, float, float],
     length: np.ndarray,
     weight: np.ndarray,
     active: np.ndarray,
@@ -210,7 +210,7 @@ def chords_forward(
 
     ``geometry = (cos, sin, poly, normals, offsets, d, h, q)``: the pairs' angles, polygon
     (``normals[poly], offsets[poly]``), wrapped offset and smoothing ``(N,)``, and the grid
-    ``q`` ``(K,)``; ``settings = (clip, window, far, eps, big, tiny)`` (:func:`_edge`,
+    ``q`` ``(K,)``; ``settings = (clip, window, far, eps, big)`` (:func:`_edge`,
     :func:`_windows`). With the edges' bounds ``v = alpha + slope (d + q)`` of :func:`_edge`
     and the windows' ``-window / h``, ``z = -(lse(lower v) + lse(upper v))``, the length is
     ``h softplus(z)`` and the weight ``sigmoid(z)``. ``active[0, n, k]`` and
@@ -258,9 +258,10 @@ def chords_forward(
 
 def chords_backward(
     geometry: tuple[np.ndarray, ...],
-    settings: tuple[bool, float, float, float, float, float],
+    settings: tuple[bool, float, float, float, float],
     outputs: tuple[np.ndarray, np.ndarray, np.ndarray],
-    upstream: tuple[np.ndarray, np.ndarray, bool, np.ndarray, float, float, np.ndarray],
+    g_length: np.ndarray,
+    g_weight: np.ndarray,
     need_h: bool,
     grads: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
 ) -> None:
@@ -270,18 +271,10 @@ def chords_backward(
     -softmax`` of the role (one-hot at the largest bounds off the soft path),
     ``d length / dz = h weight``, ``d weight / dz = weight (1 - weight)``,
     ``d length / dh = length / h`` at fixed ``z``, and the chain rule through the clamps (zero
-    where a clamp holds) as in :class:`boustro.smooth._SoftChords`.
-
-    ``upstream = (g_length, g_weight, fitness, moments, a, b, g)``: with ``fitness`` false the
-    upstream gradients are the arrays ``g_length, g_weight`` ``(N, K)``; with it true they are
-    those of ``sum(g * smith(length, weight))``, Eq. 1 with weighted statistics per pair
-    (:func:`smith_backward`, from the ``moments`` ``(3, N)`` of :func:`smith_forward` and
-    ``g`` ``(N,)``), computed here transect by transect instead of read from memory.
-    """
+    where a clamp holds) as in :class:`boustro.smooth._SoftChords`."""
     cos, sin, poly, normals, offsets, d, h, q = geometry
     bound, eps, big = -settings[1], settings[3], settings[4]
     length, weight, active = outputs
-    g_length, g_weight, fitness, moments, a, b, g_fit = upstream
     g_cos, g_sin, g_d, g_h = grads
     n_edges, n_k = normals.shape[1], q.shape[0]
     gz, gh_k = np.empty(n_k, dtype=q.dtype), np.empty(n_k, dtype=q.dtype)
@@ -301,27 +294,14 @@ def chords_backward(
             continue
         w_low, w_up = _edges(cos[n], sin[n], normals[p], offsets[p], d[n], hn, settings, edges)
         any_grad = False
+        for k in range(n_k):
+            w = weight[n, k]
+            gz[k] = (g_length[n, k] * hn + g_weight[n, k] * (1.0 - w)) * w
+            any_grad |= gz[k] != 0.0
         explicit_h = 0.0  # d length / d h at fixed z: length / h
-        if fitness:  # Eq. 1's gradient, transect by transect (smith_backward)
-            mean, var = moments[1, n], moments[2, n]
-            c1 = a * g_fit[n] / moments[0, n]
-            c3 = -b * (0.5 / math.sqrt(var) if var > settings[5] else 0.0) * g_fit[n]
-            c3 /= moments[0, n]
+        if need_h:
             for k in range(n_k):
-                w = weight[n, k]
-                r = length[n, k] - mean
-                gl = w * (c1 + 2.0 * c3 * r)
-                gz[k] = (gl * hn + (c1 * r + c3 * (r * r - var)) * (1.0 - w)) * w
-                any_grad |= gz[k] != 0.0
-                explicit_h += gl * length[n, k]
-        else:
-            for k in range(n_k):
-                w = weight[n, k]
-                gz[k] = (g_length[n, k] * hn + g_weight[n, k] * (1.0 - w)) * w
-                any_grad |= gz[k] != 0.0
-            if need_h:
-                for k in range(n_k):
-                    explicit_h += g_length[n, k] * length[n, k]
+                explicit_h += g_length[n, k] * length[n, k]
         g_window = 0.0
         for e in range(n_edges):
             g_shift[e] = 0.0

@@ -35,7 +35,7 @@ from typing import Any, Literal
 import numpy as np
 import torch
 
-from . import _compiled, smooth
+from . import _compiled
 from .errors import InvalidParameterError, as_number
 from .models import TransectLengths
 
@@ -103,12 +103,6 @@ def smith_fitness(
     if statistics == "weighted" and numbers:
         kernels = _compiled_kernels(lengths, weights)
         if kernels is not None:
-            chords = smooth._chords_of(lengths, weights)  # the smooth model's own outputs
-            if chords is not None:
-                cos, sin, _, _, _, d, h, _ = chords.inputs
-                # (lengths and weights as data: the gradient goes to cos, sin, d, h directly)
-                args = (lengths.detach(), weights.detach(), chords, float(a), float(b))
-                return _CompiledChordsSmith.apply(cos, sin, d, h, *args)
             return _CompiledSmith.apply(lengths, weights, float(a), float(b), kernels)
     return _smith_tensor(lengths, weights, a, b, statistics)
 
@@ -140,6 +134,8 @@ def _compiled_kernels(lengths: torch.Tensor, weights: torch.Tensor) -> _compiled
     :func:`boustro.smooth._compiled_kernels` (read at call time), weights like lengths, and a
     gradient to compute (a forward pass alone is cheap either way; scoring a grid, as
     ``boustro plan`` does, need not import numba)."""
+    from . import smooth  # the switch lives with the model it was made for
+
     grad = torch.is_grad_enabled() and (lengths.requires_grad or weights.requires_grad)
     if not grad or weights.dtype != lengths.dtype or not lengths.shape[-1]:
         return None
@@ -204,53 +200,6 @@ class _CompiledSmith(torch.autograd.Function):
             if x.shape != full:
                 out[i] = out[i].sum_to_size(x.shape)
         return (*(o if n else None for o, n in zip(out, need, strict=True)), None, None, None)
-
-
-class _CompiledChordsSmith(torch.autograd.Function):
-    """Eq. 1 with weighted statistics of a compiled call's unchanged outputs, its gradient
-    fused into the kernel's backward pass: Eq. 1's gradient with respect to the lengths and
-    weights is computed transect by transect there instead of written to memory and read back
-    (:func:`boustro._compiled.chords_backward`). The gradient flows to the call's ``cos, sin,
-    d, h`` directly; the lengths and weights get none through this function (their other uses,
-    if any, go through the call's own backward pass)."""
-
-    @staticmethod
-    def forward(
-        ctx: Any,
-        cos: torch.Tensor,
-        sin: torch.Tensor,
-        d: torch.Tensor,
-        h: torch.Tensor,
-        length: torch.Tensor,
-        weight: torch.Tensor,
-        record: smooth._Chords,
-        a: float,
-        b: float,
-    ) -> torch.Tensor:
-        flat = [x.detach().reshape(-1, x.shape[-1]) for x in (length, weight)]
-        out = torch.empty(flat[0].shape[0], dtype=length.dtype)
-        moments = np.empty((3, out.shape[0]), dtype=flat[0].numpy().dtype)  # W, mean, var
-        tiny = record.settings[5]
-        record.kernels.smith_forward(*(x.numpy() for x in flat), a, b, tiny, out.numpy(), moments)
-        ctx.save_for_backward(*record.inputs, *flat)
-        ctx.record, ctx.constants = record, (a, b, moments)
-        return out.reshape(length.shape[:-1])
-
-    @staticmethod
-    def backward(ctx: Any, grad: torch.Tensor) -> tuple[torch.Tensor | None, ...]:
-        *inputs, length, weight = ctx.saved_tensors
-        a, b, moments = ctx.constants
-        need = ctx.needs_input_grad[:4]  # cos, sin, d, h
-        nothing = (None,) * 5  # length, weight, record, a, b
-        if torch.is_grad_enabled():  # create_graph: differentiate the tensor code
-            chords = smooth._tensor_chords(inputs, ctx.record.settings)
-            f = _smith_tensor(*chords, a, b, "weighted")
-            return (*smooth._grads((f,), inputs, need, (grad.reshape(-1),)), *nothing)
-        g = grad.detach().reshape(-1).contiguous().to(length.dtype).numpy()
-        unused = np.empty((1, 1), dtype=g.dtype)
-        upstream = (unused, unused, True, moments, a, b, g)
-        grads = smooth._chords_backward(ctx.record, inputs, length, weight, upstream, need)
-        return (*grads, *nothing)
 
 
 @dataclass(frozen=True)

@@ -303,53 +303,13 @@ def _numpy(x: torch.Tensor) -> Any:
     return x.detach().contiguous().numpy()
 
 
-class _Chords:
-    """A compiled call's inputs and what its backward pass needs, kept on its two outputs
-    (``_boustro_chords``) so that :func:`boustro.fitness.smith_fitness` can fuse Eq. 1's
-    gradient into the kernel's backward pass (:class:`_CompiledChordsSmith`) while the outputs
-    are unchanged (their versions are recorded)."""
-
-    __slots__ = ("active", "ids", "inputs", "kernels", "settings", "shape", "versions")
-
-    def __init__(
-        self, inputs: tuple[torch.Tensor, ...], windows: tuple[bool, float, float], kernels: Any
-    ) -> None:
-        info = torch.finfo(inputs[0].dtype)
-        self.inputs = inputs  # cos, sin, poly, normals, offsets, d, h, q
-        self.settings = (*windows, info.eps, info.max**0.5, info.eps**2)
-        self.kernels = kernels
-        self.active: np.ndarray | None = None
-        self.versions: tuple[int, int] | None = None
-        self.ids: tuple[int, int] = (0, 0)
-        self.shape: tuple[int, ...] = ()
-
-    def attach(self, length: torch.Tensor, weight: torch.Tensor) -> None:
-        """Mark the outputs handed to the caller as this call's."""
-        self.versions, self.shape = (length._version, weight._version), tuple(length.shape)
-        self.ids = (id(length), id(weight))  # which is which
-        length._boustro_chords = self  # type: ignore[attr-defined]
-        weight._boustro_chords = self  # type: ignore[attr-defined]
-
-
-def _chords_of(length: torch.Tensor, weight: torch.Tensor) -> _Chords | None:
-    """The record of the compiled call that produced ``(length, weight)``, if they are its
-    outputs unchanged, else None."""
-    record = getattr(length, "_boustro_chords", None)
-    if not isinstance(record, _Chords):
-        return None
-    same = record.ids == (id(length), id(weight))
-    same &= record.versions == (length._version, weight._version)
-    return record if same and tuple(length.shape) == record.shape else None
-
-
 class _CompiledChords(torch.autograd.Function):
     """Soft lengths and weights ``(N, K)`` by the compiled kernels: the same model as
     :class:`_SoftChords` (roles, clamps, windows), evaluated and differentiated per pair in one
     loop. Inputs: ``cos, sin`` of the angles, wrapped offsets ``d`` and smoothing ``h``, all
     ``(N,)``; each pair's polygon ``poly`` ``(N,)`` into ``normals`` ``(P, E, 2)`` and
     ``offsets`` ``(P, E)`` (constants); the grid ``q`` ``(K,)``: transect ``k`` at
-    ``d + q_k``; the call's :class:`_Chords` record (``windows = (clip, window, far)`` of
-    :func:`smooth_lengths`).
+    ``d + q_k``; ``windows = (clip, window, far)`` (:func:`smooth_lengths`).
 
     Every input is saved (an in-place change before the backward pass is an error, as for any
     autograd function). Asked for a differentiable gradient (``create_graph``), the backward
@@ -367,20 +327,21 @@ class _CompiledChords(torch.autograd.Function):
         normals: torch.Tensor,
         offsets: torch.Tensor,
         q: torch.Tensor,
-        record: _Chords,
+        windows: tuple[bool, float, float],
+        kernels: _compiled.Kernels,
     ) -> tuple[torch.Tensor, torch.Tensor]:
+        info = torch.finfo(d.dtype)
+        settings = (*windows, info.eps, info.max**0.5)
         length = torch.empty((d.shape[0], q.shape[0]), dtype=d.dtype)
         weight = torch.empty_like(length)
         # the largest bounds' edges (E: a window), -1 on the soft path
         index = np.int8 if normals.shape[1] < 127 else np.int32
-        record.active = np.empty((2, *length.shape), dtype=index)
+        active = np.empty((2, *length.shape), dtype=index)
         inputs = (cos, sin, poly, normals, offsets, d, h, q)
         geometry = tuple(_numpy(x) for x in inputs)
-        record.kernels.chords_forward(
-            geometry, record.settings, length.numpy(), weight.numpy(), record.active
-        )
+        kernels.chords_forward(geometry, settings, length.numpy(), weight.numpy(), active)
         ctx.save_for_backward(*inputs, length, weight)
-        ctx.record = record
+        ctx.settings, ctx.active, ctx.kernels = settings, active, kernels
         return length, weight
 
     @staticmethod
@@ -388,61 +349,29 @@ class _CompiledChords(torch.autograd.Function):
         ctx: Any, grad_length: torch.Tensor, grad_weight: torch.Tensor
     ) -> tuple[torch.Tensor | None, ...]:
         *inputs, length, weight = ctx.saved_tensors
+        cos, sin, poly, normals, offsets, d, h, q = inputs
         need = ctx.needs_input_grad[:4]  # cos, sin, d, h
         if torch.is_grad_enabled():  # create_graph: a gradient that is itself differentiable
-            outputs = _tensor_chords(inputs, ctx.record.settings)
-            return (*_grads(outputs, inputs, need, (grad_length, grad_weight)), *(None,) * 5)
-        upstream = (_numpy(grad_length), _numpy(grad_weight), False, *_NO_FITNESS)
-        return (*_chords_backward(ctx.record, inputs, length, weight, upstream, need), *(None,) * 5)
-
-
-#: The upstream gradients' fitness part, unused (``fitness`` false; see ``chords_backward``).
-_NO_FITNESS = (np.empty((3, 1)), 0.0, 0.0, np.empty(1))
-
-
-def _chords_backward(
-    record: _Chords,
-    inputs: list[torch.Tensor],
-    length: torch.Tensor,
-    weight: torch.Tensor,
-    upstream: tuple[Any, ...],
-    need: tuple[bool, ...],
-) -> list[torch.Tensor | None]:
-    """The compiled backward pass: gradients for ``cos, sin, d, h`` (``None`` where not
-    needed)."""
-    out = [torch.empty(length.shape[0], dtype=length.dtype) for _ in range(4)]
-    record.kernels.chords_backward(
-        tuple(_numpy(x) for x in inputs),
-        record.settings,
-        (length.numpy(), weight.numpy(), record.active),
-        upstream,
-        bool(need[3]),
-        tuple(g.numpy() for g in out),  # cos, sin, d, h
-    )
-    return [g if n else None for g, n in zip(out, need, strict=True)]
-
-
-def _tensor_chords(
-    inputs: list[torch.Tensor], settings: tuple[Any, ...]
-) -> tuple[torch.Tensor, torch.Tensor]:
-    """The tensor code on a compiled call's inputs (differentiable to any order)."""
-    cos, sin, poly, normals, offsets, d, h, q = inputs
-    across, along, b = _components(cos, sin, normals[poly], offsets[poly])
-    clip, window, far = settings[:3]
-    return _tensor_lengths(across, along, b, d[:, None] + q, h, clip, window, far)
-
-
-def _grads(
-    outputs: tuple[torch.Tensor, ...],
-    inputs: list[torch.Tensor],
-    need: tuple[bool, ...],
-    upstream: tuple[torch.Tensor, ...],
-) -> list[torch.Tensor | None]:
-    """Differentiable gradients of ``outputs`` for ``cos, sin, d, h`` (``inputs[0, 1, 5, 6]``)
-    where ``need`` says so."""
-    wrt = [inputs[i] for i, n in zip((0, 1, 5, 6), need, strict=True) if n]
-    found = iter(torch.autograd.grad(outputs, wrt, upstream, create_graph=True))
-    return [next(found) if n else None for n in need]
+            along_with = [x for x, n in zip((cos, sin, d, h), need, strict=True) if n]
+            across, along, b = _components(cos, sin, normals[poly], offsets[poly])
+            clip, window, far = ctx.settings[:3]
+            outputs = _tensor_lengths(across, along, b, d[:, None] + q, h, clip, window, far)
+            grads = torch.autograd.grad(
+                outputs, along_with, (grad_length, grad_weight), create_graph=True
+            )
+            found = iter(grads)
+            return (*(next(found) if n else None for n in need), *(None,) * 6)
+        out = [torch.empty(length.shape[0], dtype=length.dtype) for _ in range(4)]
+        ctx.kernels.chords_backward(
+            tuple(_numpy(x) for x in inputs),
+            ctx.settings,
+            (length.numpy(), weight.numpy(), ctx.active),
+            _numpy(grad_length),
+            _numpy(grad_weight),
+            bool(need[3]),
+            tuple(g.numpy() for g in out),  # cos, sin, d, h
+        )
+        return (*(g if n else None for g, n in zip(out, need, strict=True)), *(None,) * 6)
 
 
 def smooth_lengths(
@@ -547,12 +476,11 @@ def _compiled_lengths(
     d = torch.remainder(offset, spacing).expand(batch).reshape(-1)
     h_n = torch.broadcast_to(torch.as_tensor(h, dtype=dtype), batch).reshape(-1)
     q = (torch.arange(n_k, dtype=dtype) - n_k // 2) * spacing  # transect k at d + q_k
-    record = _Chords((cos, sin, poly, normals, offsets, d, h_n, q), (clip, window, far), kernels)
-    length, weight = _CompiledChords.apply(cos, sin, d, h_n, poly, normals, offsets, q, record)
-    length, weight = length.reshape((*batch, n_k)), weight.reshape((*batch, n_k))
-    if not clip:  # (with clip the window mask makes new tensors)
-        record.attach(length, weight)
-    return length, weight
+    windows = (clip, window, far)
+    length, weight = _CompiledChords.apply(
+        cos, sin, d, h_n, poly, normals, offsets, q, windows, kernels
+    )
+    return length.reshape((*batch, n_k)), weight.reshape((*batch, n_k))
 
 
 def _tensor_lengths(
