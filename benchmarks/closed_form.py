@@ -373,7 +373,7 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"closed form at its best batch: {closed * 1e6:.2f} us per pair, {full / closed:.0f}x "
         f"faster than the paper model at 1000 points evaluated at every point "
-        f"({full * 1e6:.0f} us), {band / closed:.0f}x faster than the same model with the band "
+        f"({full * 1e6:.0f} us), {band / closed:.1f}x faster than the same model with the band "
         f"evaluation ({band * 1e6:.1f} us); target 100x"
     )
     return 0
