@@ -7,7 +7,7 @@ tens of memory passes per element. These kernels compute the same formulas in on
 
 * :func:`chords_forward` / :func:`chords_backward`: the transect lengths
   ``h softplus(z)`` and weights ``sigmoid(z)`` of :mod:`boustro.smooth` and their gradients
-  with respect to the edges' components, the grid offset and the smoothing ``h``;
+  with respect to the angle's cosine and sine, the grid offset and the smoothing ``h``;
 * :func:`smith_forward` / :func:`smith_backward`: Eq. 1 with weighted statistics
   (:func:`boustro.fitness.smith_fitness`) and its gradient.
 

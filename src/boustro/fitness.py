@@ -35,7 +35,7 @@ from typing import Any, Literal
 import numpy as np
 import torch
 
-from . import _compiled
+from . import _compiled, smooth
 from .errors import InvalidParameterError, as_number
 from .models import TransectLengths
 
@@ -134,8 +134,6 @@ def _compiled_kernels(lengths: torch.Tensor, weights: torch.Tensor) -> _compiled
     :func:`boustro.smooth._compiled_kernels` (read at call time), weights like lengths, and a
     gradient to compute (a forward pass alone is cheap either way; scoring a grid, as
     ``boustro plan`` does, need not import numba)."""
-    from . import smooth  # the switch lives with the model it was made for
-
     grad = torch.is_grad_enabled() and (lengths.requires_grad or weights.requires_grad)
     if not grad or weights.dtype != lengths.dtype or not lengths.shape[-1]:
         return None

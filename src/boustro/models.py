@@ -178,10 +178,17 @@ def transect_positions(offset: torch.Tensor, spacing: float, radius: float) -> t
     The offset is wrapped into ``[0, spacing)`` first (``torch.remainder``, whose gradient is 1),
     so any offset, however far it has drifted, gives the same static ``K``.
     """
+    d, q = _grid(offset, spacing, radius)
+    return d[..., None] + q
+
+
+def _grid(offset: torch.Tensor, spacing: float, radius: float) -> tuple[torch.Tensor, torch.Tensor]:
+    """``(d, q)``: the wrapped offset ``(*)`` and the lines' places ``(K,)`` relative to it, so
+    that :func:`transect_positions` is ``d[..., None] + q``."""
     spacing = check_spacing(spacing)
     k_count, m = grid_size(spacing, radius)
     k = torch.arange(k_count, dtype=offset.dtype, device=offset.device) - m
-    return torch.remainder(offset, spacing)[..., None] + k * spacing
+    return torch.remainder(offset, spacing), k * spacing
 
 
 def _window_mask(positions: torch.Tensor, clip: bool) -> torch.Tensor | None:

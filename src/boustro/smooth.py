@@ -82,10 +82,10 @@ from .models import (
     ExactModel,
     TransectLengths,
     _components,
+    _grid,
     _prepare,
     _window_mask,
     check_spacing,
-    transect_positions,
 )
 
 __all__ = [
@@ -205,10 +205,9 @@ class _SoftChords(torch.autograd.Function):
         alpha = torch.full((n_slots, n_pairs), -math.inf, dtype=dtype, device=c.device)
         alpha.scatter_(0, slot.T, alpha_e.T)
         beta = torch.zeros_like(alpha).scatter_(0, slot.T, beta_e.T)
-        for index, where in windows:  # the window bound -W / h (beta = 0), where it applies
-            w_h = torch.broadcast_to(
-                torch.as_tensor(-window / h, dtype=dtype, device=c.device).reshape(-1), (n_pairs,)
-            )
+        w_h = torch.as_tensor(-window / h, dtype=dtype, device=c.device).reshape(-1)
+        w_h = torch.broadcast_to(w_h, (n_pairs,))  # the window bound -W / h (beta = 0)
+        for index, where in windows:  # the pairs it applies to (None: all)
             alpha[index] = w_h if where is None else torch.where(where, w_h, -math.inf)
 
         v = torch.addcmul(alpha[:, :, None], beta[:, :, None], c)  # (S, N, K)
@@ -430,17 +429,16 @@ def smooth_lengths(
     # bound -b / along would be rounding noise) and plays a lower bound with along = eps; its
     # offset moves out by 4 eps (|b| + far), just above the rounding of b, so that a transect
     # exactly on it is inside (as in exact_chords). With clip, the window bounds +-0.5 join
-    # both roles; without it, a window -W joins a role that some pair of the batch lacks (a
-    # sliver whose edges are all parallel to the transects up to eps).
+    # both roles of every pair; without it, a window -W joins the role of a pair that has no
+    # edge of it (a sliver whose edges are all parallel to the transects up to eps).
     far = window + 2.0 * margin
     theta_t, offset_t = torch.broadcast_tensors(theta_t, offset_t)
-    c = transect_positions(offset_t, spacing, window)  # (*B, K)
+    d, q = _grid(offset_t, spacing, window)
+    c = d[..., None] + q  # (*B, K): transect_positions
     pairs = math.prod(torch.broadcast_shapes(theta_t.shape, hp.offsets.shape[:-1]))
     kernels = _compiled_kernels(theta_t, pairs * c.shape[-1])
     if kernels is not None and not (hp.normals.requires_grad or hp.offsets.requires_grad):
-        length, weight = _compiled_lengths(
-            kernels, hp, theta_t, offset_t, spacing, h, c.shape[-1], clip, window, far
-        )
+        length, weight = _compiled_lengths(kernels, hp, theta_t, d, q, h, clip, window, far)
     else:
         _, _, across, along, b = _prepare(hp, theta_t, offset_t)
         length, weight = _tensor_lengths(across, along, b, c, h, clip, window, far)
@@ -456,16 +454,16 @@ def _compiled_lengths(
     kernels: _compiled.Kernels,
     hp: HalfPlanes,
     theta: torch.Tensor,
-    offset: torch.Tensor,
-    spacing: float,
+    d: torch.Tensor,
+    q: torch.Tensor,
     h: torch.Tensor | float,
-    n_k: int,
     clip: bool,
     window: float,
     far: float,
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """:func:`smooth_lengths` by the compiled kernels (CPU): ``(lengths, weights)``."""
-    dtype = theta.dtype
+    """:func:`smooth_lengths` by the compiled kernels (CPU): ``(lengths, weights)``, for the
+    grid of ``models._grid`` (wrapped offsets ``d``, transect ``k`` at ``d + q_k``)."""
+    dtype, n_k = theta.dtype, q.shape[0]
     polygons, n_edges = hp.offsets.shape[:-1], hp.offsets.shape[-1]
     batch = torch.broadcast_shapes(theta.shape, polygons)
     poly = torch.arange(math.prod(polygons)).reshape(polygons).expand(batch).reshape(-1)
@@ -473,9 +471,8 @@ def _compiled_lengths(
     offsets = hp.offsets.detach().reshape(-1, n_edges).contiguous()
     theta = theta.expand(batch).reshape(-1)
     cos, sin = torch.cos(theta), torch.sin(theta)
-    d = torch.remainder(offset, spacing).expand(batch).reshape(-1)
+    d = d.expand(batch).reshape(-1)
     h_n = torch.broadcast_to(torch.as_tensor(h, dtype=dtype), batch).reshape(-1)
-    q = (torch.arange(n_k, dtype=dtype) - n_k // 2) * spacing  # transect k at d + q_k
     windows = (clip, window, far)
     length, weight = _CompiledChords.apply(
         cos, sin, d, h_n, poly, normals, offsets, q, windows, kernels
