@@ -26,26 +26,73 @@ REGENERATE = os.environ.get("BOUSTRO_REGENERATE_GOLDEN") == "1"
 
 # Keys whose values depend on the machine, the clock or the paths of this run.
 VOLATILE = {
-    "seconds", "total_seconds", "date", "load_start", "command", "boustro", "torch", "threads",
-    "cpus", "weights", "config", "plot", "written", "median_ms", "ms", "time_ms",
+    "seconds",
+    "total_seconds",
+    "date",
+    "load_start",
+    "command",
+    "boustro",
+    "torch",
+    "threads",
+    "cpus",
+    "weights",
+    "config",
+    "plot",
+    "written",
+    "median_ms",
+    "ms",
+    "time_ms",
 }
 
 # A concave area with a hole, in plain planar coordinates (an L with a square pond).
-L_WITH_HOLE = (
-    "POLYGON ((0 0, 60 0, 60 20, 25 20, 25 50, 0 50, 0 0), (5 5, 15 5, 15 15, 5 15, 5 5))"
-)
+L_WITH_HOLE = "POLYGON ((0 0, 60 0, 60 20, 25 20, 25 50, 0 50, 0 0), (5 5, 15 5, 15 15, 5 15, 5 5))"
 
 CASES: dict[str, list[str]] = {
     "plan_embedded": ["plan", "--json", "--out", "{tmp}/plan.geojson"],
-    "plan_embedded_qgc": ["plan", "--json", "--altitude", "30", "--speed", "5", "--turn-time", "8",
-                          "--out", "{tmp}/mission.plan"],
-    "plan_embedded_wpl": ["plan", "--json", "--altitude", "30", "--objective", "fewest-transects",
-                          "--out", "{tmp}/mission.waypoints"],
+    "plan_embedded_qgc": [
+        "plan",
+        "--json",
+        "--altitude",
+        "30",
+        "--speed",
+        "5",
+        "--turn-time",
+        "8",
+        "--out",
+        "{tmp}/mission.plan",
+    ],
+    "plan_embedded_wpl": [
+        "plan",
+        "--json",
+        "--altitude",
+        "30",
+        "--objective",
+        "fewest-transects",
+        "--out",
+        "{tmp}/mission.waypoints",
+    ],
     "plan_embedded_hybrid": ["plan", "--json", "--method", "hybrid", "--spacing", "12"],
-    "plan_concave": ["plan", "{tmp}/area.wkt", "--crs", "planar", "--spacing", "4", "--json",
-                     "--out", "{tmp}/concave.geojson"],
-    "plan_concave_decompose": ["plan", "{tmp}/area.wkt", "--crs", "planar", "--spacing", "4",
-                               "--decompose", "--json"],
+    "plan_concave": [
+        "plan",
+        "{tmp}/area.wkt",
+        "--crs",
+        "planar",
+        "--spacing",
+        "4",
+        "--json",
+        "--out",
+        "{tmp}/concave.geojson",
+    ],
+    "plan_concave_decompose": [
+        "plan",
+        "{tmp}/area.wkt",
+        "--crs",
+        "planar",
+        "--spacing",
+        "4",
+        "--decompose",
+        "--json",
+    ],
     "optimize_global": ["optimize", "--json", "--method", "global"],
     "optimize_grid": ["optimize", "--json", "--method", "grid"],
     "optimize_hybrid": ["optimize", "--json", "--method", "hybrid"],
@@ -53,11 +100,35 @@ CASES: dict[str, list[str]] = {
     "optimize_learned": ["optimize", "--json", "--method", "learned", "--refine"],
     "optimize_paper_grid": ["optimize", "--json", "--method", "grid", "--paper-grid"],
     "score_exact": ["score", "--json", "--angle", "30", "--offset", "0.1"],
-    "score_paper": ["score", "--json", "--angle", "30", "--offset", "0.1", "--model", "paper",
-                    "--temperature", "1000"],
+    "score_paper": [
+        "score",
+        "--json",
+        "--angle",
+        "30",
+        "--offset",
+        "0.1",
+        "--model",
+        "paper",
+        "--temperature",
+        "1000",
+    ],
     "score_soft": ["score", "--json", "--angle", "30", "--offset", "0.1", "--model", "soft"],
-    "train_tiny": ["train", "--epochs", "1", "--steps-per-epoch", "2", "--batch-size", "8",
-                   "--pool", "64", "--validation", "16", "--json", "--out", "{tmp}/w.pt"],
+    "train_tiny": [
+        "train",
+        "--epochs",
+        "1",
+        "--steps-per-epoch",
+        "2",
+        "--batch-size",
+        "8",
+        "--pool",
+        "64",
+        "--validation",
+        "16",
+        "--json",
+        "--out",
+        "{tmp}/w.pt",
+    ],
     "reproduce_quick": ["reproduce", "--quick", "--out", "{tmp}/rq"],
 }
 
@@ -102,7 +173,7 @@ def _compare(got, want, where: str = "$") -> None:
             _compare(got[key], want[key], f"{where}.{key}")
     elif isinstance(want, list):
         assert isinstance(got, list) and len(got) == len(want), f"{where}: length differs"
-        for i, (g, w) in enumerate(zip(got, want)):
+        for i, (g, w) in enumerate(zip(got, want, strict=True)):
             _compare(g, w, f"{where}[{i}]")
     elif isinstance(want, bool) or want is None:
         assert got == want, f"{where}: {got!r} != {want!r}"

@@ -33,9 +33,9 @@ from xml.sax.saxutils import escape, quoteattr
 import numpy as np
 from numpy.typing import NDArray
 
+from ._files import atomic_write
 from ._version import __version__
 from .errors import InvalidParameterError
-from .io import atomic_write
 
 if TYPE_CHECKING:
     from .geo import Mission

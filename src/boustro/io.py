@@ -22,12 +22,10 @@ polygon.
 
 from __future__ import annotations
 
-import errno
 import json
 import logging
 import os
 import re
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
@@ -37,6 +35,7 @@ from xml.etree import ElementTree
 import numpy as np
 from numpy.typing import NDArray
 
+from ._files import atomic_write
 from .errors import InvalidPolygonError, PolygonFileError
 from .geometry import Polygon
 
@@ -559,40 +558,3 @@ def embedded_field() -> Area:
     text = (resources.files("boustro") / "data" / EMBEDDED_FIELD).read_text("utf-8")
     area = area_from_text(text, "<embedded field>", None, "json")
     return Area(area.ring, area.crs, area.name or "test parcel", "<embedded>")
-
-
-def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> None:
-    """Write ``data`` to ``path`` atomically: a temporary file in the same folder, then rename.
-
-    Readers see either the old file or the complete new one; on any error the temporary file
-    is removed and ``path`` is left as it was. New files get the usual permissions (umask).
-    """
-    name = os.fspath(path)
-    if os.path.islink(name):  # write the link's target, keep the link
-        name = os.path.realpath(name)
-    folder = os.path.dirname(os.path.abspath(name))
-    if not os.path.isdir(folder):
-        raise FileNotFoundError(errno.ENOENT, "no such folder", name)
-    if os.path.isdir(name):
-        raise IsADirectoryError(errno.EISDIR, "is a folder", name)
-    payload = data.encode("utf-8") if isinstance(data, str) else data
-    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(name)}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(payload)
-            fh.flush()
-            os.fsync(fh.fileno())
-        try:
-            mode = os.stat(name).st_mode & 0o777
-        except FileNotFoundError:
-            umask = os.umask(0)
-            os.umask(umask)
-            mode = 0o666 & ~umask
-        os.chmod(tmp, mode)
-        os.replace(tmp, name)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise

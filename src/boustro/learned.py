@@ -68,10 +68,10 @@ import torch
 from numpy.typing import ArrayLike, NDArray
 from torch import nn
 
+from ._files import atomic_write
 from .errors import InvalidParameterError, NoTransectError
 from .fitness import SmithFitness
 from .geometry import PAD_OFFSET, HalfPlanes, Polygon, random_convex_polygon
-from .io import atomic_write
 from .models import TransectLengths, _prepare, check_spacing, transect_positions
 from .optimize import OptimizeResult, canonical
 from .scoring import as_polygon

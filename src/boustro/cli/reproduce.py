@@ -22,8 +22,8 @@ import numpy as np
 import torch
 
 from .. import experiments as ex
+from .._files import atomic_write
 from .._version import __version__
-from ..io import atomic_write
 from ._common import nonnegative_int, positive_int
 
 log = logging.getLogger(__name__)
