@@ -449,3 +449,34 @@ def test_global_method_dispatches_on_the_objective():
     fewest = optimize(poly, 0.5, method="global", fitness=FewestTransects())
     assert fewest.method == "fewest_transects" and fewest.fitness == 8  # width 4 / 0.5
     assert optimize(poly, 0.5, method="global", fitness=ShortestPath()).method == "shortest_path"
+
+
+class _CountUS:
+    """Transect count with the US spelling of the direction flag (issue 15, defect 1)."""
+
+    maximize = False
+
+    def __call__(self, tl):
+        return tl.weights.sum(dim=-1)
+
+
+def test_us_spelt_minimise_flag_is_honoured(parallelogram):
+    from boustro.objectives import FewestTransects
+    from boustro.optimize import grid_search
+
+    us = grid_search(parallelogram, 0.5, fitness=_CountUS(), n_angles=90, n_offsets=8)
+    uk = grid_search(parallelogram, 0.5, fitness=FewestTransects(), n_angles=90, n_offsets=8)
+    assert us.fitness == uk.fitness  # the fewest transects, not the most
+    assert us.fitness <= 9
+
+
+@pytest.mark.parametrize(
+    "flags",
+    [{"maximise": True, "minimize": True}, {"sense": "down"}, {"maximise": "no"}],
+)
+def test_contradictory_or_malformed_direction_is_refused(parallelogram, flags):
+    from boustro.optimize import grid_search
+
+    objective = type("Odd", (), {"__call__": lambda self, tl: tl.weights.sum(-1), **flags})()
+    with pytest.raises(InvalidParameterError, match="objective"):
+        grid_search(parallelogram, 0.5, fitness=objective, n_angles=8, n_offsets=4)

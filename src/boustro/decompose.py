@@ -56,6 +56,7 @@ from .errors import InvalidParameterError, InvalidPolygonError, NoTransectError,
 from .fitness import SmithFitness
 from .geometry import Polygon
 from .models import check_spacing
+from .objectives import objective_sign
 from .optimize import OptimizeResult, grid_search
 from .plan import KINDS, Plan, PlanCell, PlanStats
 from .regions import Region, as_region, evaluate_region_grid, points_in_ring, segment_moments
@@ -586,7 +587,7 @@ def optimize_region(
     r = as_region(region)
     s = check_spacing(spacing, extent=r.diameter)
     fitness = SmithFitness() if fitness is None else fitness
-    sign = 1.0 if getattr(fitness, "maximise", True) else -1.0
+    sign = objective_sign(fitness)
     if s >= r.diameter:
         v = r.shell.vertices
         dif = v[:, None] - v[None]

@@ -73,6 +73,7 @@ from .errors import InvalidParameterError, NoTransectError
 from .fitness import SmithFitness
 from .geometry import PAD_OFFSET, HalfPlanes, Polygon, random_convex_polygon
 from .models import TransectLengths, _prepare, check_spacing, transect_positions
+from .objectives import objective_sign
 from .optimize import OptimizeResult, canonical
 from .scoring import as_polygon
 from .smooth import smooth_lengths
@@ -165,7 +166,7 @@ class LengthObjective:
         spacing: torch.Tensor,
     ) -> torch.Tensor:
         value = self.objective(tl)
-        return value if getattr(self.objective, "maximise", True) else -value
+        return value if objective_sign(self.objective) > 0 else -value
 
 
 @dataclass(frozen=True)
@@ -244,7 +245,7 @@ def as_plan_objective(objective: Any = None) -> PlanObjective:
             continue
         if kind == "lengths":
             return LengthObjective(objective)
-        if getattr(objective, "maximise", True):
+        if objective_sign(objective) > 0:
             return objective
         return _Negated(objective)
     raise InvalidParameterError(
@@ -1241,7 +1242,7 @@ def learned(
             "planner found"
         )
     angle, off = canonical(float(t), float(o) * poly.diameter, spacing)
-    sign = 1.0 if getattr(fitness, "maximise", True) else -1.0
+    sign = objective_sign(fitness)
     hyp_angles, hyp_offsets = _canonical_arrays(
         theta[0], offset[0] * poly.diameter, torch.tensor(spacing, dtype=theta.dtype)
     )

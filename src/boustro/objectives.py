@@ -47,12 +47,61 @@ __all__ = [
     "SmithFitness",
     "coverage_count",
     "get_objective",
+    "objective_sense",
+    "objective_sign",
     "path_length",
 ]
 
 #: Chords at most this long (relative to the frame's radius 1) are a transect grazing a vertex,
 #: not a transect: the same rule as :class:`~boustro.models.ExactModel`.
 GRAZE = 1e-12
+
+
+# Attributes that say an objective's direction, and the sense each means when True.
+_DIRECTION_FLAGS = {"maximise": "max", "maximize": "max", "minimise": "min", "minimize": "min"}
+
+
+def objective_sense(objective: object) -> Literal["max", "min"]:
+    """Whether ``objective`` is maximised (``"max"``) or minimised (``"min"``).
+
+    Read from its ``sense`` attribute (``"max"`` or ``"min"``) or from a boolean flag spelt
+    ``maximise``, ``maximize``, ``minimise`` or ``minimize``; a plain function with none of
+    these is maximised. Flags that disagree, a ``sense`` other than ``"max"``/``"min"`` and a
+    flag that is not a bool are errors: an objective is never optimised in the wrong direction.
+
+    >>> from boustro.objectives import FewestTransects, objective_sense
+    >>> objective_sense(FewestTransects()), objective_sense(lambda lengths: lengths.sum())
+    ('min', 'max')
+    """
+    senses: dict[str, str] = {}
+    sense = getattr(objective, "sense", None)
+    if sense is not None:
+        if sense not in ("max", "min"):
+            raise InvalidParameterError(
+                f"an objective's sense must be 'max' or 'min', got {sense!r}"
+            )
+        senses["sense"] = sense
+    for flag, when_true in _DIRECTION_FLAGS.items():
+        value = getattr(objective, flag, None)
+        if value is None:
+            continue
+        if not isinstance(value, bool):
+            raise InvalidParameterError(
+                f"an objective's {flag!r} must be True or False, got {value!r}"
+            )
+        senses[flag] = when_true if value else ("min" if when_true == "max" else "max")
+    if len(set(senses.values())) > 1:
+        said = ", ".join(f"{k} -> {v}" for k, v in senses.items())
+        raise InvalidParameterError(f"the objective's direction flags disagree ({said})")
+    return "min" if "min" in senses.values() else "max"
+
+
+def objective_sign(objective: object) -> float:
+    """``+1.0`` for a maximised objective, ``-1.0`` for a minimised one.
+
+    See :func:`objective_sense`.
+    """
+    return 1.0 if objective_sense(objective) == "max" else -1.0
 
 
 @runtime_checkable

@@ -44,6 +44,7 @@ from .fitness import SmithFitness
 from .geometry import HalfPlanes, Polygon, halfplanes
 from .models import ExactModel, PaperModel, TransectLengths, TransectModel, check_spacing
 from .models import grid_size as _grid_size
+from .objectives import objective_sign
 from .scoring import as_polygon
 
 __all__ = [
@@ -175,7 +176,7 @@ def _problem(
             "no boustrophedon layout to optimise"
         )
     fitness = SmithFitness() if fitness is None else fitness
-    sign = 1.0 if getattr(fitness, "maximise", True) else -1.0
+    sign = objective_sign(fitness)
     frame = poly.frame
     return _Problem(
         poly, spacing, spacing / frame.scale, frame.scale, halfplanes(poly), fitness, sign
@@ -232,7 +233,7 @@ def evaluate_grid(
     """
     model = ExactModel() if model is None else model
     fitness = SmithFitness() if fitness is None else fitness
-    sign = 1.0 if getattr(fitness, "maximise", True) else -1.0
+    sign = objective_sign(fitness)
     k_count, _ = _grid_size(spacing, hp.radius)
     per_angle = max(1, len(offsets) * k_count * hp.normals.shape[-2])
     chunk = max(1, _CHUNK_ELEMENTS // per_angle)
@@ -270,7 +271,7 @@ def evaluate_pairs(
     """
     model = ExactModel() if model is None else model
     fitness = SmithFitness() if fitness is None else fitness
-    sign = 1.0 if getattr(fitness, "maximise", True) else -1.0
+    sign = objective_sign(fitness)
     k_count, _ = _grid_size(spacing, hp.radius)
     chunk = max(1, _CHUNK_ELEMENTS // max(1, k_count * hp.normals.shape[-2]))
     out = []

@@ -83,6 +83,7 @@ from .errors import InvalidParameterError, InvalidPolygonError, as_number
 from .fitness import SmithFitness
 from .geometry import Frame, Polygon, random_convex_polygon
 from .models import TransectLengths, check_spacing, transect_positions
+from .objectives import objective_sign
 
 __all__ = [
     "TOUCH_TOLERANCE",
@@ -607,7 +608,7 @@ def evaluate_region_grid(
     """
     fitness = SmithFitness() if fitness is None else fitness
     model = RegionExactModel() if model is None else model
-    sign = 1.0 if getattr(fitness, "maximise", True) else -1.0
+    sign = objective_sign(fitness)
     if isinstance(edges, RegionEdges):
         e = torch.stack([edges.starts, edges.ends], dim=-2).detach().cpu().numpy()
         radius = edges.radius
