@@ -52,7 +52,6 @@ coarse-to-fine zoom). See ``docs/learned.md`` for the design, training and bench
 from __future__ import annotations
 
 import copy
-import inspect
 import io
 import json
 import math
@@ -61,7 +60,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, NamedTuple, Protocol, cast, runtime_checkable
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 import torch
@@ -70,10 +69,15 @@ from torch import nn
 
 from ._files import atomic_write
 from .errors import InvalidParameterError, NoTransectError
-from .fitness import SmithFitness
 from .geometry import PAD_OFFSET, HalfPlanes, Polygon, random_convex_polygon
 from .models import TransectLengths, _prepare, check_spacing, transect_positions
-from .objectives import objective_sign
+from .objectives import (
+    LengthObjective,
+    PlanObjective,
+    PreferredAngle,
+    as_plan_objective,
+    objective_sign,
+)
 from .optimize import OptimizeResult, canonical
 from .scoring import as_polygon
 from .smooth import smooth_lengths
@@ -108,150 +112,6 @@ __all__ = [
 DEFAULT_WEIGHTS = Path(__file__).parent / "data" / "learned_planner.pt"
 
 _TWO_PI = 2.0 * math.pi
-
-
-# =============================================================================================
-# User-defined objectives (item 4 of issue 8)
-# =============================================================================================
-
-
-@runtime_checkable
-class PlanObjective(Protocol):
-    """A differentiable objective of the soft lengths AND the plan parameters, maximised.
-
-    ``objective(tl, theta, offset, spacing) -> values``, everything in the normalised frame
-    (polygon diameter 1):
-
-    * ``tl``: :class:`~boustro.models.TransectLengths` ``(*, K)`` (soft or exact lengths and
-      weights, transect positions);
-    * ``theta``: ``(*)`` transect directions, radians (period pi with the offset's sign flip);
-    * ``offset``: ``(*)`` grid offsets (period ``spacing``);
-    * ``spacing``: ``(*)`` or broadcastable, the spacing of each layout;
-
-    and returns ``(*)`` values, MAXIMISED. Any torch function of these works (it must be
-    differentiable for training and gradient refinement; exact scoring only evaluates it). An
-    attribute ``maximise = False`` turns it into a cost (minimised). Objectives of the lengths
-    alone (:class:`~boustro.fitness.SmithFitness`, anything ``f(tl)``) are wrapped by
-    :func:`as_plan_objective`.
-    """
-
-    def __call__(
-        self,
-        tl: TransectLengths,
-        theta: torch.Tensor,
-        offset: torch.Tensor,
-        spacing: torch.Tensor,
-    ) -> torch.Tensor: ...
-
-
-@dataclass(frozen=True)
-class LengthObjective:
-    """A :class:`PlanObjective` from an objective of the lengths alone, ``f(tl) -> (*)``.
-
-    Honours ``maximise = False`` on the wrapped objective by negating it, so the result is
-    always maximised.
-    """
-
-    objective: Callable[[TransectLengths], torch.Tensor]
-
-    @property
-    def name(self) -> str:
-        return str(getattr(self.objective, "name", type(self.objective).__name__))
-
-    def __call__(
-        self,
-        tl: TransectLengths,
-        theta: torch.Tensor,
-        offset: torch.Tensor,
-        spacing: torch.Tensor,
-    ) -> torch.Tensor:
-        value = self.objective(tl)
-        return value if objective_sign(self.objective) > 0 else -value
-
-
-@dataclass(frozen=True)
-class _Negated:
-    objective: Callable[..., torch.Tensor]
-
-    def __call__(
-        self,
-        tl: TransectLengths,
-        theta: torch.Tensor,
-        offset: torch.Tensor,
-        spacing: torch.Tensor,
-    ) -> torch.Tensor:
-        return -self.objective(tl, theta, offset, spacing)
-
-
-@dataclass(frozen=True)
-class PreferredAngle:
-    """Example plan objective: ``base`` minus ``weight * sin^2(theta - angle)``.
-
-    Rewards transects near a preferred direction (crop rows, wind, the long side of a field),
-    period pi like the layouts. ``base`` is any objective :func:`as_plan_objective` accepts
-    (default: Eq. 1).
-    """
-
-    angle: float
-    weight: float = 0.05
-    base: Any = None
-
-    def __call__(
-        self,
-        tl: TransectLengths,
-        theta: torch.Tensor,
-        offset: torch.Tensor,
-        spacing: torch.Tensor,
-    ) -> torch.Tensor:
-        base = as_plan_objective(self.base)(tl, theta, offset, spacing)
-        return base - self.weight * torch.sin(theta - self.angle) ** 2
-
-
-def as_plan_objective(objective: Any = None) -> PlanObjective:
-    """The :class:`PlanObjective` (maximised) for ``objective``.
-
-    * ``None``: Eq. 1 (:class:`~boustro.fitness.SmithFitness`, ``a = b = 0.5``);
-    * a callable taking ``(tl, theta, offset, spacing)``: used as it is (negated if it has
-      ``maximise = False``);
-    * a callable taking ``(tl)`` only (``SmithFitness``, optimize's objectives): wrapped by
-      :class:`LengthObjective`.
-
-    Raises:
-        InvalidParameterError: not callable, or with another signature.
-    """
-    if objective is None:
-        return LengthObjective(SmithFitness())
-    if isinstance(objective, (LengthObjective, _Negated)):
-        return objective
-    if not callable(objective):
-        raise InvalidParameterError(
-            f"an objective must be callable as f(tl) or f(tl, theta, offset, spacing), "
-            f"got {objective!r}"
-        )
-    if getattr(objective, "needs_chords", False):
-        raise InvalidParameterError(
-            f"the {getattr(objective, 'name', type(objective).__name__)} objective needs the "
-            "exact chords' ends, which the learned planner's soft lengths do not have; use an "
-            "objective of the transect lengths"
-        )
-    try:
-        sig = inspect.signature(objective)
-    except (TypeError, ValueError):  # builtins without a signature: assume lengths only
-        return LengthObjective(objective)
-    for args, kind in ((4, "plan"), (1, "lengths")):
-        try:
-            sig.bind(*range(args))
-        except TypeError:
-            continue
-        if kind == "lengths":
-            return LengthObjective(objective)
-        if objective_sign(objective) > 0:
-            return objective
-        return _Negated(objective)
-    raise InvalidParameterError(
-        f"an objective must be callable as f(tl) or f(tl, theta, offset, spacing); "
-        f"{getattr(objective, '__name__', objective)!r} has signature {sig}"
-    )
 
 
 # =============================================================================================
