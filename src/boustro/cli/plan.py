@@ -8,12 +8,11 @@ import math
 import os
 from typing import Any
 
+from .. import objectives
 from ..errors import InvalidParameterError
-from ..fitness import SmithFitness
 from ..formats import FORMATS, atomic_write, format_for, render
 from ..geo import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission, plan_area
 from ..io import Area, embedded_field, read_area
-from ..objectives import FewestTransects
 from ..sensors import Camera, Swath
 from ._common import (
     check_output_path,
@@ -24,14 +23,24 @@ from ._common import (
     print_table,
 )
 
-#: Objectives by name (maximised or minimised as each says); add entries here.
-# ShortestPath is not offered here: it scores the chords of the layout, and the
-# coverage-guaranteed lanes that a plan flies can add a lane and length, so its optimum is not
-# the shortest flown path (see README, "Known limitations").
-OBJECTIVES: dict[str, Any] = {
-    "smith": SmithFitness,
-    "fewest-transects": FewestTransects,
-}
+
+#: Objectives by name on the command line: the library's registry
+#: (:data:`boustro.objectives.OBJECTIVES`) in kebab case. Objectives that score the chords' ends
+#: (``needs_chords``, e.g. ShortestPath) are not offered: the coverage-guaranteed lanes that a
+#: plan flies can add a lane and length, so their optimum is not the shortest flown path (see
+#: README, "Known limitations").
+def cli_objectives() -> dict[str, Any]:
+    """The objectives ``--objective`` offers, read from the registry when called."""
+    return {
+        name.replace("_", "-"): factory
+        for name, factory in objectives.OBJECTIVES.items()
+        if not getattr(factory, "needs_chords", False)
+    }
+
+
+#: The objectives at import time (compatibility; the parser reads :func:`cli_objectives`).
+OBJECTIVES: dict[str, Any] = cli_objectives()
+
 
 #: Spacing used for the embedded field when none is given, metres.
 EMBEDDED_SPACING = 10.0
@@ -124,7 +133,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     opt.add_argument("--method", default=None, help=f"optimiser (default: {DEFAULT_METHOD})")
     opt.add_argument(
         "--objective",
-        choices=sorted(OBJECTIVES),
+        choices=sorted(cli_objectives()),
         default="smith",
         help="what the optimiser seeks: smith (Eq. 1 of the paper, maximised; default), "
         "or fewest-transects (fewest lanes, i.e. turns, for full coverage: the minimum-width "
@@ -382,7 +391,7 @@ def run(args: argparse.Namespace) -> int:
         check_plot_target(args.plot)
     area = _load(args)
     spacing = _spacing(args, embedded=args.area is None)
-    fitness = OBJECTIVES[args.objective]()
+    fitness = cli_objectives()[args.objective]()
     mission = plan_area(
         area,
         spacing,
