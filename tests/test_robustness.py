@@ -231,9 +231,10 @@ def test_global_optimiser_refuses_work_beyond_its_limit():
 
 
 def test_plan_falls_back_to_hybrid_when_global_is_too_large(monkeypatch, caplog):
-    from boustro import geo, global_opt
+    from boustro import geo
+    from boustro.optimize.exact import structure
 
-    monkeypatch.setattr(global_opt, "WORK_LIMIT", 10.0)
+    monkeypatch.setattr(structure, "WORK_LIMIT", 10.0)  # its home (global_opt re-exports it)
     with caplog.at_level(logging.WARNING):
         mission = geo.plan_area(PENTAGON, 0.7, crs=None)
     assert mission.optimum.method == "hybrid"

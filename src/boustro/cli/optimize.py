@@ -11,6 +11,7 @@ from typing import Any
 from ..errors import InvalidParameterError
 from ..fitness import SmithFitness
 from ..optimize import GRID_200, OptimizeResult, TemperatureSchedule, optimize
+from ..optimize import METHODS as _REGISTRY
 from ..scoring import score
 from ._common import (
     add_polygon_argument,
@@ -33,7 +34,9 @@ from .score import (
 
 log = logging.getLogger("boustro")
 
-METHODS = ("grid", "gradient", "hybrid", "global", "learned")
+#: The method names at import time (compatibility): the parser reads the registry,
+#: :data:`boustro.optimize.METHODS`, when it is built, so registered methods are offered too.
+METHODS = tuple(_REGISTRY)
 
 EPILOG = (
     CONVENTIONS
@@ -84,7 +87,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_polygon_argument(p)
     add_layout_arguments(p)
     p.add_argument(
-        "--method", choices=METHODS, default="hybrid", help="search method (default: hybrid)"
+        "--method",
+        choices=tuple(_REGISTRY),
+        default="hybrid",
+        help="search method (default: hybrid)",
     )
     grid = p.add_argument_group("grid (grid, hybrid)")
     grid.add_argument(
