@@ -9,9 +9,10 @@ import sys
 from typing import Any
 
 from ..errors import InvalidParameterError
-from ..fitness import SmithFitness
+from ..objectives import SmithFitness
 from ..optimize import GRID_200, OptimizeResult, TemperatureSchedule, optimize
 from ..optimize import METHODS as _REGISTRY
+from ..plot import plot_layout
 from ..scoring import score
 from ._common import (
     add_polygon_argument,
@@ -212,9 +213,7 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _save_plot(path: str, polygon, result, found: OptimizeResult) -> None:
-    from matplotlib.figure import Figure
-
-    from ..plot import plot_layout
+    from matplotlib.figure import Figure  # lazy: matplotlib only when a plot is asked for
 
     fig = Figure(figsize=(6, 6))
     ax = fig.add_subplot()

@@ -7,7 +7,8 @@ import math
 from typing import Any
 
 from ..errors import InvalidParameterError
-from ..fitness import SmithFitness
+from ..io import PAPER_SPACING
+from ..objectives import SmithFitness
 from ..scoring import Score, make_model, score
 from ..smooth import DEFAULT_SMOOTHING
 from ._common import (
@@ -106,8 +107,6 @@ def resolve_spacing(args: argparse.Namespace) -> float:
     if args.spacing is not None:
         return float(args.spacing)
     if args.polygon is None:
-        from ..io import PAPER_SPACING
-
         return PAPER_SPACING
     raise InvalidParameterError("--spacing is required with a POLYGON file")
 

@@ -180,7 +180,7 @@ def optimize(
 
     >>> r = optimize([(0, 0), (2, 0), (2, 1), (0, 1)], 0.25, method="grid", n_angles=4)
     >>> r.method, round(r.angle, 4), round(r.fitness, 4)
-    ('grid', 0.0, 1.0)
+    ('grid', 0.0, 0.9472)
     """
     function = resolve_method(method)
     _check_options(method, function, {"fitness": fitness, **options})

@@ -83,6 +83,98 @@ class _Descent(NamedTuple):
     temperature: float | None
 
 
+class _Tracker:
+    """The exact scores of a descent's iterates: the best overall, each start's best, the
+    history of the best so far, and the steps since it last improved."""
+
+    def __init__(self, p: _Problem, theta: torch.Tensor, offset: torch.Tensor) -> None:
+        self.p = p
+        self.n_starts = int(theta.shape[0])
+        self.best = (-math.inf, float(theta.detach()[0]), float(offset.detach()[0]))
+        self.history: list[tuple[float, float, float]] = []
+        self.start_best = torch.full((self.n_starts, 3), -math.inf, dtype=theta.dtype)
+        self.since_improved = 0
+
+    def check(self, trajectory: list[torch.Tensor]) -> None:
+        """Score the iterates since the last check; update the bests, history, since_improved."""
+        p, history = self.p, self.history
+        pending = torch.stack(trajectory[len(history) :])  # (n, S, 2)
+        values = p.sign * evaluate_pairs(
+            p.hp, pending[..., 0].flatten(), pending[..., 1].flatten(), p.s_n, fitness=p.fitness
+        ).reshape(pending.shape[:2])
+        top, when = values.max(dim=0)
+        better = top > self.start_best[:, 0]
+        found = torch.cat([top[:, None], pending[when, torch.arange(self.n_starts)]], dim=1)
+        self.start_best[better] = found[better]
+        per_step, which = values.max(dim=1)
+        for i in range(len(per_step)):
+            if float(per_step[i]) > self.best[0] + 1e-9:
+                k = int(which[i])
+                self.best = (
+                    float(per_step[i]),
+                    float(pending[i, k, 0]),
+                    float(pending[i, k, 1]),
+                )
+                self.since_improved = 0
+            elif history:
+                self.since_improved += 1
+            history.append(self.best)
+
+
+def _start(
+    p: _Problem, theta0: torch.Tensor, offset0: torch.Tensor, settings: DescentSettings
+) -> tuple[torch.Tensor, torch.Tensor, torch.optim.Optimizer]:
+    """The parameters (wrapped) and their optimizer; a start that no transect crosses has no
+    gradient to follow: it is moved to offset 0, whose transect crosses the vertex mean."""
+    theta = theta0.detach().clone().requires_grad_(True)
+    offset = offset0.detach().clone().requires_grad_(True)
+    groups = [
+        {"params": [theta], "lr": settings.lr_angle},
+        {"params": [offset], "lr": settings.lr_offset},
+    ]
+    if settings.optimizer == "sgd":
+        opt: torch.optim.Optimizer = torch.optim.SGD(groups, momentum=settings.momentum)
+    else:
+        opt = torch.optim.Adam(groups)
+    _wrap_(theta, offset, p.s_n, opt)
+    with torch.no_grad():
+        empty = ~torch.isfinite(evaluate_pairs(p.hp, theta, offset, p.s_n, fitness=p.fitness))
+        if bool(empty.any()):
+            offset.copy_(torch.where(empty, torch.zeros_like(offset), offset))
+    return theta, offset, opt
+
+
+def _step(
+    p: _Problem,
+    theta: torch.Tensor,
+    offset: torch.Tensor,
+    opt: torch.optim.Optimizer,
+    settings: DescentSettings,
+    step: int,
+) -> float | None:
+    """One gradient step of every start (then wrapped); returns the guide's temperature."""
+    steps, temperature = settings.steps, None
+    if settings.lr_decay != 1.0 and steps > 1:
+        factor = settings.lr_decay ** (step / (steps - 1))
+        lrs = (settings.lr_angle, settings.lr_offset)
+        for group, lr in zip(opt.param_groups, lrs, strict=True):
+            group["lr"] = lr * factor
+    guide = settings.model
+    if settings.schedule is not None:
+        temperature = settings.schedule(step, steps)
+        guide = _with_temperature(settings.model, temperature)
+    opt.zero_grad(set_to_none=True)
+    objective = p.sign * p.fitness(guide(p.hp, theta, offset, p.s_n))
+    (-objective.sum()).backward()  # starts are independent: each gets its own gradient
+    for param in (theta, offset):  # a NaN gradient would poison the momentum
+        if param.grad is None:  # a guide that ignores this parameter
+            param.grad = torch.zeros_like(param)
+        torch.nan_to_num_(param.grad, nan=0.0, posinf=0.0, neginf=0.0)
+    opt.step()
+    _wrap_(theta, offset, p.s_n, opt)
+    return temperature
+
+
 def _descend(
     p: _Problem,
     theta0: torch.Tensor,
@@ -99,100 +191,45 @@ def _descend(
     ``patience`` steps, or when no start moved more than ``tol`` (radians, and fractions of the
     spacing) in the last step.
     """
-    model, optimizer, steps, lr_angle, lr_offset, lr_decay, momentum = settings[:7]
-    schedule, patience, tol, check_every, progress = settings[7:]
-    n_starts = theta0.shape[0]
-    theta = theta0.detach().clone().requires_grad_(True)
-    offset = offset0.detach().clone().requires_grad_(True)
-    groups = [{"params": [theta], "lr": lr_angle}, {"params": [offset], "lr": lr_offset}]
-    if optimizer == "sgd":
-        opt: torch.optim.Optimizer = torch.optim.SGD(groups, momentum=momentum)
-    else:
-        opt = torch.optim.Adam(groups)
-    _wrap_(theta, offset, p.s_n, opt)
-
-    with torch.no_grad():  # a start that no transect crosses has no gradient to follow:
-        empty = ~torch.isfinite(evaluate_pairs(p.hp, theta, offset, p.s_n, fitness=p.fitness))
-        if bool(empty.any()):  # move it to offset 0, whose transect crosses the vertex mean
-            offset.copy_(torch.where(empty, torch.zeros_like(offset), offset))
+    theta, offset, opt = _start(p, theta0, offset0, settings)
     trajectory = [torch.stack([theta.detach(), offset.detach()], dim=-1).clone()]
-    best = (-math.inf, float(theta.detach()[0]), float(offset.detach()[0]))
-    history: list[tuple[float, float, float]] = []
-    start_best = torch.full((n_starts, 3), -math.inf, dtype=theta.dtype)
-    since_improved = 0
-    stopped = "steps"
-    temperature = None
-
-    def check() -> None:
-        """Score the iterates since the last check; update the bests, history, since_improved."""
-        nonlocal best, since_improved
-        pending = torch.stack(trajectory[len(history) :])  # (n, S, 2)
-        values = p.sign * evaluate_pairs(
-            p.hp, pending[..., 0].flatten(), pending[..., 1].flatten(), p.s_n, fitness=p.fitness
-        ).reshape(pending.shape[:2])
-        top, when = values.max(dim=0)
-        better = top > start_best[:, 0]
-        found = torch.cat([top[:, None], pending[when, torch.arange(n_starts)]], dim=1)
-        start_best[better] = found[better]
-        per_step, which = values.max(dim=1)
-        for i in range(len(per_step)):
-            if float(per_step[i]) > best[0] + 1e-9:
-                k = int(which[i])
-                best = (float(per_step[i]), float(pending[i, k, 0]), float(pending[i, k, 1]))
-                since_improved = 0
-            elif history:
-                since_improved += 1
-            history.append(best)
-
-    bar = _progress_bar(steps, progress, "gradient")
+    track = _Tracker(p, theta, offset)
+    stopped, temperature = "steps", None
+    steps, tol, check_every = settings.steps, settings.tol, settings.check_every
+    bar = _progress_bar(steps, settings.progress, "gradient")
     try:
         for step in range(steps):
             if step % check_every == 0:
-                check()
-                if since_improved >= patience:
+                track.check(trajectory)
+                if track.since_improved >= settings.patience:
                     stopped = "patience"
                     break
-            if lr_decay != 1.0 and steps > 1:
-                factor = lr_decay ** (step / (steps - 1))
-                for group, lr in zip(opt.param_groups, (lr_angle, lr_offset), strict=True):
-                    group["lr"] = lr * factor
-            guide = model
-            if schedule is not None:
-                temperature = schedule(step, steps)
-                guide = _with_temperature(model, temperature)
-            opt.zero_grad(set_to_none=True)
-            objective = p.sign * p.fitness(guide(p.hp, theta, offset, p.s_n))
-            (-objective.sum()).backward()  # starts are independent: each gets its own gradient
-            for param in (theta, offset):  # a NaN gradient would poison the momentum
-                if param.grad is None:  # a guide that ignores this parameter
-                    param.grad = torch.zeros_like(param)
-                torch.nan_to_num_(param.grad, nan=0.0, posinf=0.0, neginf=0.0)
-            opt.step()
-            _wrap_(theta, offset, p.s_n, opt)
+            temperature = _step(p, theta, offset, opt, settings, step)
             trajectory.append(torch.stack([theta.detach(), offset.detach()], dim=-1).clone())
             if bar is not None:
                 bar.update(1)
                 if step % check_every == 0:
-                    bar.set_postfix(fitness=f"{p.sign * best[0]:.5f}", refresh=False)
+                    bar.set_postfix(fitness=f"{p.sign * track.best[0]:.5f}", refresh=False)
             if tol > 0:
                 moved = _circular_distance(trajectory[-1], trajectory[-2], [math.pi, p.s_n])
                 if float((moved / moved.new_tensor([1.0, p.s_n])).max()) < tol:
                     stopped = "converged"
                     break
-        if len(history) < len(trajectory):
-            check()
+        if len(track.history) < len(trajectory):
+            track.check(trajectory)
     finally:
         if bar is not None:
             bar.close()
     n_steps = len(trajectory) - 1
+    best = track.best
     return _Descent(
         best_score=best[0],
         best_angle=best[1],
         best_offset=best[2],
-        evaluations=n_starts * (2 * n_steps + 2),  # a guided gradient, an exact score a step
-        history=np.array(history)[:, [1, 2, 0]] * np.array([1.0, 1.0, p.sign]),
+        evaluations=track.n_starts * (2 * n_steps + 2),  # a guided gradient, an exact score a step
+        history=np.array(track.history)[:, [1, 2, 0]] * np.array([1.0, 1.0, p.sign]),
         trajectory=torch.stack(trajectory).numpy(),
-        start_best=start_best,
+        start_best=track.start_best,
         steps=n_steps,
         stopped=stopped,
         temperature=temperature,

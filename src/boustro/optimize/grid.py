@@ -39,6 +39,10 @@ def grid_search(
     Raises:
         NoTransectError: the spacing is not smaller than the polygon's diameter, or no grid
             point has a transect crossing the polygon.
+
+    >>> r = grid_search([(0, 0), (2, 0), (2, 1), (0, 1)], 0.25, n_angles=4, n_offsets=4)
+    >>> r.method, r.evaluations, round(r.angle, 4), round(r.fitness, 4)
+    ('grid', 16, 0.0, 0.9472)
     """
     t0 = time.perf_counter()
     p = _problem(polygon, spacing, fitness, "grid search")

@@ -100,6 +100,11 @@ def hybrid(
     Raises:
         NoTransectError: the spacing is not smaller than the polygon's diameter, or no grid
             point has a transect crossing the polygon.
+
+    >>> rectangle = [(0, 0), (2, 0), (2, 1), (0, 1)]
+    >>> r = hybrid(rectangle, 0.25, steps=10)
+    >>> r.method, r.fitness >= r.info["grid_fitness"], round(r.fitness, 4)
+    ('hybrid', True, 0.9497)
     """
     t0 = time.perf_counter()
     p = _problem(polygon, spacing, fitness, "hybrid search")

@@ -29,6 +29,10 @@ class OptimizeResult:
             gives one (``global``); else ``None``.
         history: optional ``(steps, 3)`` array of (angle, offset, fitness) of the best so far.
         info: method-specific extras (e.g. the number of starts).
+
+    >>> r = OptimizeResult(0.5, 0.1, 0.9, 0.25, "demo", 1, 0.0, upper_bound=0.95)
+    >>> round(r.gap, 4)
+    0.05
     """
 
     angle: float
