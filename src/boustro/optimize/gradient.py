@@ -63,8 +63,40 @@ _REFINE_LR = {"adam": (0.01, 0.05), "sgd": (0.06, 0.002)}
 
 @dataclass(frozen=True)
 class GradientOptions:
-    """The settings of the gradient stage, as given to :func:`gradient_descent` and
-    :func:`~boustro.optimize.hybrid` (see there); :meth:`resolve` validates them."""
+    """The settings of the gradient stage of :func:`gradient_descent` and
+    :func:`~boustro.optimize.hybrid` (their keyword arguments); :meth:`resolve` validates them.
+    The defaults are :func:`gradient_descent`'s; :func:`~boustro.optimize.hybrid` refines with
+    ``steps=30``, ``patience=25`` and smaller default learning rates (``refine=True``).
+
+    Attributes:
+        model: differentiable guiding model (default :data:`DEFAULT_GUIDE`, the paper's model
+            with 64 points per transect); anything with the
+            :class:`~boustro.models.TransectModel` interface, e.g. a smooth closed form.
+        optimizer: ``"adam"`` (default) or ``"sgd"`` (with ``momentum``).
+        steps: most gradient steps.
+        lr_angle: learning rate of the angle, radians (default 0.05 for Adam, whose step is
+            about ``lr``; 0.3 for SGD).
+        lr_offset: learning rate of the offset, normalised-frame units (polygon diameter 1).
+            Default for Adam ``0.05 * spacing`` (a twentieth of the offset's period per
+            step); for SGD 0.01.
+        lr_decay: the learning rates fall geometrically to ``lr_decay`` times their initial
+            value at the last step (1: constant).
+        momentum: SGD momentum (the paper's 0.8).
+        temperature: the guiding model's temperature: a number (constant), ``(T0, T1)``
+            (annealed geometrically over ``steps``, the paper's Sec. VI suggestion), a
+            :class:`TemperatureSchedule`, or ``None`` to keep the model's own temperature
+            (required for a model without one). Default :data:`DEFAULT_SCHEDULE`, 50 to 200.
+        patience: stop when the best exact fitness has not improved for this many steps
+            (``None``: never).
+        tol: stop when no start moved more than this (radians; fractions of the spacing) in a
+            step.
+        check_every: score the iterates exactly in batches of this many steps (the patience
+            is checked then).
+        progress: tqdm bar on stderr: ``True``, ``False`` (default), or ``None`` (if a TTY).
+
+    >>> GradientOptions(steps=30).resolve(0.25, refine=True).lr_angle
+    0.01
+    """
 
     model: TransectModel | None = None
     optimizer: str = "adam"
@@ -213,32 +245,11 @@ def gradient_descent(
         polygon: convex polygon, user units.
         spacing: transect spacing, user units, smaller than the polygon's diameter.
         fitness: objective (default Eq. 1, a = b = 0.5).
-        model: differentiable guiding model (default :data:`DEFAULT_GUIDE`, the paper's model
-            with 64 points per transect); anything with the
-            :class:`~boustro.models.TransectModel` interface, e.g. a smooth closed form.
-        optimizer: ``"adam"`` (default) or ``"sgd"`` (with ``momentum``).
-        steps: most gradient steps.
         starts: number of starts descended together (ignored with ``init``).
         screen: number of seeded random layouts the starts are picked from.
         init: explicit starts ``(angles, offsets)``, radians and user units, broadcastable 1-D.
-        lr_angle: learning rate of the angle, radians (default 0.05 for Adam, whose step is
-            about ``lr``; 0.3 for SGD).
-        lr_offset: learning rate of the offset, normalised-frame units (polygon diameter 1).
-            Default for Adam ``0.05 * spacing`` (a twentieth of the offset's period per
-            step); for SGD 0.01.
-        lr_decay: the learning rates fall geometrically to ``lr_decay`` times their initial
-            value at the last step (1: constant).
-        momentum: SGD momentum (the paper's 0.8).
-        temperature: the guiding model's temperature: a number (constant), ``(T0, T1)``
-            (annealed geometrically over ``steps``, the paper's Sec. VI suggestion), a
-            :class:`TemperatureSchedule`, or ``None`` to keep the model's own temperature
-            (required for a model without one). Default :data:`DEFAULT_SCHEDULE`, 50 to 200.
-        patience: stop when the best exact fitness has not improved for this many steps
-            (``None``: never).
-        tol: stop when no start moved more than this (radians; fractions of the spacing) in a
-            step.
-        check_every: score the iterates exactly in batches of this many steps (the patience
-            is checked then).
+        model, optimizer, steps, lr_angle, lr_offset, lr_decay, momentum, temperature,
+            patience, tol, check_every: the gradient stage, see :class:`GradientOptions`.
         zoom_levels, zoom_points: the final zoom; its first window spans :data:`ZOOM_ANGLE`
             radians and :data:`ZOOM_OFFSET` spacings either side of each start's best iterate.
         seed: seed of the random starts.

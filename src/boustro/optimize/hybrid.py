@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from typing import NamedTuple
 
 import torch
 from numpy.typing import ArrayLike
@@ -16,7 +17,7 @@ from ..models import (
 from ..objectives import Objective
 from .descent import _descend, _result_from_descent, _zoom_descent
 from .gradient import GradientOptions, _describe
-from .problem import _check_count, _grid, _no_transect, _problem, evaluate_grid
+from .problem import _check_count, _grid, _no_transect, _Problem, _problem, evaluate_grid
 from .result import OptimizeResult
 from .schedule import DEFAULT_SCHEDULE, TemperatureSchedule
 
@@ -50,6 +51,28 @@ def _grid_peaks(values: torch.Tensor, k: int, sign: float) -> torch.Tensor:
     rest = torch.argsort(flat, descending=True, stable=True)
     ranked = torch.cat([order[peak[order]], rest[~peak[rest] & torch.isfinite(flat[rest])]])
     return ranked[:k]
+
+
+class _GridStarts(NamedTuple):
+    """The grid stage's answer: the starts of the refinement, best first."""
+
+    angles: torch.Tensor  # (k,)
+    offsets: torch.Tensor  # (k,) normalised
+    best: float  # sign * fitness of the best grid point
+
+
+def _grid_starts(
+    p: _Problem, n_angles: int, n_offsets: int, top_k: int, progress: bool | None
+) -> _GridStarts:
+    """One batched exact evaluation of the grid; its local maxima, best first, as starts."""
+    angles, offsets = _grid(p, n_angles, n_offsets)
+    values = evaluate_grid(p.hp, angles, offsets, p.s_n, fitness=p.fitness, progress=progress)
+    chosen = _grid_peaks(values, top_k, p.sign)
+    if len(chosen) == 0:
+        raise _no_transect(p, "on any grid point")
+    rows, cols = chosen // n_offsets, chosen % n_offsets
+    best = p.sign * float(values[rows[0], cols[0]])
+    return _GridStarts(angles[rows], offsets[cols], best)
 
 
 def hybrid(
@@ -127,26 +150,20 @@ def hybrid(
         check_every=check_every,
         progress=progress,
     ).resolve(p.s_n, refine=True)
-    angles, offsets = _grid(p, n_angles, n_offsets)
-    values = evaluate_grid(p.hp, angles, offsets, p.s_n, fitness=p.fitness, progress=progress)
-    chosen = _grid_peaks(values, top_k, p.sign)
-    if len(chosen) == 0:
-        raise _no_transect(p, "on any grid point")
-    rows, cols = chosen // n_offsets, chosen % n_offsets
-    grid_best = p.sign * float(values[rows[0], cols[0]])
-    descent = _descend(p, angles[rows], offsets[cols], options)
+    starts = _grid_starts(p, n_angles, n_offsets, top_k, progress)
+    descent = _descend(p, starts.angles, starts.offsets, options)
     evaluations = n_angles * n_offsets + descent.evaluations
-    if descent.best_score < grid_best:  # cannot happen (the grid's best is a start): a guard
+    if descent.best_score < starts.best:  # cannot happen (the grid's best is a start): a guard
         descent = descent._replace(
-            best_score=grid_best,
-            best_angle=float(angles[rows[0]]),
-            best_offset=float(offsets[cols[0]]),
+            best_score=starts.best,
+            best_angle=float(starts.angles[0]),
+            best_offset=float(starts.offsets[0]),
         )
     info = {
         "n_angles": n_angles,
         "n_offsets": n_offsets,
-        "top_k": len(chosen),
-        "grid_fitness": p.sign * grid_best,
+        "top_k": len(starts.angles),
+        "grid_fitness": p.sign * starts.best,
         "descent_fitness": p.sign * descent.best_score,
         **_describe(options),
     }

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import torch
@@ -20,7 +20,7 @@ from ...scoring import as_polygon
 from ..problem import evaluate_grid
 from ..result import OptimizeResult, canonical
 from .bounds import _evaluate_smith, _smith_pieces
-from .search import _branch_and_bound, _check_count, _check_tol
+from .search import _branch_and_bound, _check_count, _check_tol, _Search
 from .structure import Array, _check_work, _structure
 
 __all__ = ["best_offset", "global_optimum"]
@@ -187,31 +187,8 @@ def global_optimum(
     upper = search.upper_bound
     if not search.converged and not math.isfinite(upper):
         upper = a + b  # every length is at most the diameter (1) and std >= 0
-    # An independent spot check, exact fitness on a coarse grid: in degenerate configurations
-    # (a symmetric polygon whose width is a multiple of the spacing, to the last bits) the
-    # search's best value can be a limit that no layout attains, or float64 can misplace an
-    # event; the check then finds a better layout, and the result says it is not certified.
-    check_theta, check_d, check_value = _spot_check(poly, v, s_n, a, b)
-    notes = []
-    if check_value > value + 1e-12:
-        with np.errstate(all="ignore"):
-            better, theta_b, d_b = _attained(poly, v, s_n, np.array([check_theta]), a, b)
-        if better >= check_value:
-            value, theta, d = better, theta_b, d_b
-        else:
-            value, theta, d = check_value, check_theta, check_d
-        notes.append("a spot check found a better layout than the search")
-    if value > upper + 1e-12:
-        notes.append(
-            "the upper bound is not valid here (float64 cannot resolve this degenerate "
-            "configuration)"
-        )
-        upper = value
-    elif upper - value > tol * (1 + 1e-9) and search.converged:
-        notes.append(
-            "the search's best value is a limit no layout attains (a transect grazing "
-            "a vertex); the layout returned is the best attained one found"
-        )
+    answer = _reconcile(poly, v, s_n, a, b, search, tol, upper, (value, theta, d))
+    value, theta, d, upper, notes = answer
     converged = search.converged and not notes
     angle, offset = canonical(theta, d * frame.scale, spacing)
     info: dict[str, Any] = {
@@ -236,6 +213,59 @@ def global_optimum(
         upper_bound=max(upper, value),
         info=info,
     )
+
+
+class _Answer(NamedTuple):
+    """The layout a global search returns, its bound, and what keeps it from being certified."""
+
+    value: float
+    theta: float
+    d: float  # normalised offset
+    upper: float
+    notes: list[str]
+
+
+def _reconcile(
+    poly: Polygon,
+    v: Array,
+    s_n: float,
+    a: float,
+    b: float,
+    search: _Search,
+    tol: float,
+    upper: float,
+    attained: tuple[float, float, float],
+) -> _Answer:
+    """The search's attained layout checked against an independent spot check.
+
+    An independent spot check, exact fitness on a coarse grid: in degenerate configurations
+    (a symmetric polygon whose width is a multiple of the spacing, to the last bits) the
+    search's best value can be a limit that no layout attains, or float64 can misplace an
+    event; the check then finds a better layout, and the result says it is not certified.
+    """
+    value, theta, d = attained
+    check_theta, check_d, check_value = _spot_check(poly, v, s_n, a, b)
+    notes = []
+    if check_value > value + 1e-12:
+        with np.errstate(all="ignore"):
+            better, theta_b, d_b = _attained(poly, v, s_n, np.array([check_theta]), a, b)
+        if better >= check_value:
+            value, theta, d = better, theta_b, d_b
+        else:
+            value, theta, d = check_value, check_theta, check_d
+        notes.append("a spot check found a better layout than the search")
+    if value > upper + 1e-12:
+        notes.append(
+            "the upper bound is not valid here (float64 cannot resolve this degenerate "
+            "configuration)"
+        )
+        upper = value
+    elif upper - value > tol * (1 + 1e-9) and search.converged:
+        notes.append(
+            "the search's best value is a limit no layout attains (a transect grazing "
+            "a vertex); the layout returned is the best attained one found"
+        )
+    return _Answer(value, theta, d, upper, notes)
 
 
 def _spot_check(
