@@ -171,6 +171,7 @@ def test_exact_table_is_keyed_by_objective_type():
         pass
 
     assert exact_solver(Tweaked()) is None  # a subclass may compute something else
+    assert exact_solver(FewestTransects(maximise=True)) is None  # not what its solver does
 
 
 # -- the method registry reaches `boustro optimize` (defect 4), lazy "learned" -------------
@@ -206,3 +207,20 @@ def test_learned_is_a_declared_lazy_entry():
     import boustro.learned
 
     assert resolve_method("learned") is boustro.learned.learned
+
+
+def test_boustro_plan_with_a_registered_objective_falls_back_to_hybrid(capsys, caplog):
+    import json
+
+    from boustro.cli import main
+
+    register_objective("length-sum-test", lambda: _sum_of_lengths)
+    try:
+        with caplog.at_level("WARNING", logger="boustro"):
+            code = main(["plan", "--objective", "length-sum-test", "--json"])
+    finally:
+        OBJECTIVES.pop("length_sum_test")
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert json.loads(captured.out)["method"] == "hybrid"  # was refused with advice for Eq. 1
+    assert "no exact optimiser" in caplog.text

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from ...objectives import FewestTransects, ShortestPath, SmithFitness
+from ...objectives import FewestTransects, ShortestPath, SmithFitness, objective_sense
 from ..result import OptimizeResult
 from .path import shortest_path_optimum
 from .smith import best_offset, global_optimum
@@ -41,10 +41,14 @@ EXACT: dict[type, ExactSolver] = {
 
 def exact_solver(objective: Any) -> ExactSolver | None:
     """The exact optimiser of ``objective``'s type (not of a subclass, which may compute
-    something else), or ``None``.
+    something else), or ``None``; also ``None`` when the objective's sense is not the one its
+    type's solver optimises (e.g. ``FewestTransects(maximise=True)``).
 
     >>> from boustro.objectives import FewestTransects
     >>> exact_solver(FewestTransects()).__name__
     'fewest_transects_optimum'
     """
-    return EXACT.get(type(objective))
+    solver = EXACT.get(type(objective))
+    if solver is None or objective_sense(objective) != objective_sense(type(objective)()):
+        return None
+    return solver
