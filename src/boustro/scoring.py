@@ -14,25 +14,14 @@ import numpy as np
 import torch
 from numpy.typing import ArrayLike, NDArray
 
+from ._validate import check_finite, check_spacing
 from .errors import InvalidParameterError, NoTransectError
 from .fitness import SmithFitness
-from .geometry import Polygon, halfplanes
-from .models import (
-    ExactModel,
-    PaperModel,
-    TransectModel,
-    check_finite,
-    check_spacing,
-    exact_chords,
-)
-from .smooth import DEFAULT_SMOOTHING, SmoothModel
+from .geometry import Polygon, as_polygon, halfplanes
+from .models import ExactModel, PaperModel, TransectModel, exact_chords
+from .models.smooth import DEFAULT_SMOOTHING, SmoothModel
 
 __all__ = ["Score", "Segments", "as_polygon", "make_model", "score", "transect_segments"]
-
-
-def as_polygon(polygon: Polygon | ArrayLike) -> Polygon:
-    """Accept a :class:`Polygon` or anything :class:`Polygon` accepts."""
-    return polygon if isinstance(polygon, Polygon) else Polygon(polygon)
 
 
 def make_model(
