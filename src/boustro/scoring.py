@@ -154,6 +154,11 @@ def score(
     Raises:
         InvalidPolygonError, NonConvexPolygonError, InvalidParameterError: bad input.
         NoTransectError: with the exact model, when no transect crosses the polygon.
+
+    Example:
+        >>> s = score([(0, 0), (4, 0), (4, 3), (0, 3)], spacing=1.0, angle=0.0, offset=0.5)
+        >>> round(s.fitness, 4), s.n_transects, s.total_length
+        (0.9, 2, 8.0)
     """
     poly = as_polygon(polygon)
     model_: TransectModel = ExactModel() if model is None else model

@@ -72,6 +72,11 @@ def halfplanes(
     Raises:
         NonConvexPolygonError: a polygon is concave (half-planes would describe its hull's
             intersection, not the polygon).
+
+    Example:
+        >>> hp = halfplanes(Polygon([(0, 0), (4, 0), (4, 3), (0, 3)]))  # normalised: 0.8 x 0.6
+        >>> tuple(hp.normals.shape), hp.radius
+        ((4, 2), 0.5)
     """
     single = isinstance(polygons, Polygon)
     items: list[Polygon] = [polygons] if isinstance(polygons, Polygon) else list(polygons)

@@ -181,7 +181,7 @@ def exact_chords(
     Example:
         >>> from boustro.geometry import Polygon, halfplanes
         >>> hp = halfplanes(Polygon([(0, 0), (4, 0), (4, 3), (0, 3)]))  # diameter 1
-        >>> ch = exact_chords(hp, 0.0, 0.1, 0.2)
+        >>> ch = exact_chords(hp, 0.0, 0.05, 0.2)
         >>> [round(x, 4) for x in ch.lengths[ch.lengths > 0].tolist()]
         [0.8, 0.8, 0.8]
     """
@@ -205,7 +205,7 @@ class ExactModel:
     Example:
         >>> from boustro.geometry import Polygon, halfplanes
         >>> hp = halfplanes(Polygon([(0, 0), (4, 0), (4, 3), (0, 3)]))
-        >>> out = ExactModel()(hp, torch.tensor(0.0), torch.tensor(0.1), 0.2)
+        >>> out = ExactModel()(hp, torch.tensor(0.0), torch.tensor(0.05), 0.2)
         >>> int(out.weights.sum()), round(float(out.lengths.sum()), 4)
         (3, 2.4)
     """

@@ -435,7 +435,16 @@ def paper_lengths(
 
 @dataclass(frozen=True)
 class PaperModel:
-    """The paper's sigmoid-integral model (Eq. 2-7) with its settings; see :func:`paper_lengths`."""
+    """The paper's sigmoid-integral model (Eq. 2-7) with its settings; see :func:`paper_lengths`.
+
+    Example:
+        >>> from boustro.geometry import Polygon, halfplanes
+        >>> hp = halfplanes(Polygon([(0, 0), (4, 0), (4, 3), (0, 3)]))  # normalised: 0.8 x 0.6
+        >>> model = PaperModel(points_per_transect=200)
+        >>> out = model(hp, torch.tensor(0.0), torch.tensor(0.05), 0.2)
+        >>> [round(x, 3) for x in out.lengths[out.weights > 0.5].tolist()]
+        [0.804, 0.804, 0.804]
+    """
 
     temperature: float = 1000.0
     points_per_transect: int = 1000

@@ -167,6 +167,13 @@ def region_segments(
         theta: transect direction(s), radians.
         offset: grid offset(s), same frame as the edges.
         spacing: transect spacing, same frame, > 0.
+
+    Example:
+        >>> from boustro.geometry import Region
+        >>> r = Region([(0, 0), (4, 0), (4, 4), (0, 4)], holes=[[(1, 1), (3, 1), (3, 3), (1, 3)]])
+        >>> seg = region_segments(region_edges(r, normalise=False), 0.0, 0.5, 1.0)
+        >>> seg.lengths[seg.n_segments > 0].tolist()  # the hole cuts the middle lines in two
+        [[4.0, 0.0], [1.0, 1.0], [1.0, 1.0], [4.0, 0.0]]
     """
     spacing = check_spacing(spacing)
     theta, offset = _as_tensors(edges, theta, offset)

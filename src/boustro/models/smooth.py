@@ -346,6 +346,13 @@ def smooth_lengths(
 
     Raises:
         InvalidParameterError: bad spacing or smoothing.
+
+    Example:
+        >>> from boustro.geometry import Polygon, halfplanes
+        >>> hp = halfplanes(Polygon([(0, 0), (4, 0), (4, 3), (0, 3)]))  # normalised: 0.8 x 0.6
+        >>> out = smooth_lengths(hp, 0.0, 0.05, 0.2, smoothing=1e-3)
+        >>> [round(x, 4) for x in out.lengths[out.weights > 0.5].tolist()]
+        [0.8, 0.8, 0.8]
     """
     spacing = check_spacing(spacing)
     dtype, device = hp.normals.dtype, hp.normals.device
@@ -475,6 +482,13 @@ class SmoothModel:
             the diameter), ``>= 0``; ``0`` is the exact model. ``h = 1 / T`` for the paper's
             temperature ``T`` (:meth:`from_temperature`).
         clip: the paper's window (reproduction only).
+
+    Example:
+        >>> from boustro.geometry import Polygon, halfplanes
+        >>> hp = halfplanes(Polygon([(0, 0), (4, 0), (4, 3), (0, 3)]))  # normalised: 0.8 x 0.6
+        >>> out = SmoothModel(smoothing=1e-3)(hp, torch.tensor(0.0), torch.tensor(0.05), 0.2)
+        >>> [round(x, 4) for x in out.lengths[out.weights > 0.5].tolist()]
+        [0.8, 0.8, 0.8]
     """
 
     smoothing: float = DEFAULT_SMOOTHING
