@@ -1,5 +1,5 @@
 """Compatibility path: ``boustro.regions`` re-exports :mod:`boustro.geometry.region` (the
-regions) and :mod:`boustro.models.region` (their transect models)."""
+regions), :mod:`boustro.models.region`, ``region_grid`` and ``region_soft`` (their models)."""
 
 # ruff: noqa: F401 (private names are re-exported for the old import paths; __all__ is public)
 
@@ -17,23 +17,24 @@ from .geometry.region import (
     segment_distances,
 )
 from .models.region import (
-    _CHUNK_CROSSINGS,
     Per,
     RegionEdges,
     RegionExactModel,
     RegionSegments,
-    RegionSoftModel,
     _as_tensors,
-    _check_smoothing,
-    _g,
     _project,
     _segments_at,
-    _Trapezoids,
-    _trapezoids,
-    evaluate_region_grid,
     region_edges,
     region_segments,
     segment_moments,
+)
+from .models.region_grid import _CHUNK_CROSSINGS, evaluate_region_grid
+from .models.region_soft import (
+    RegionSoftModel,
+    _check_smoothing,
+    _g,
+    _Trapezoids,
+    _trapezoids,
     soft_indicator,
     soft_region_lengths,
 )

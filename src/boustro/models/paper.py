@@ -337,6 +337,44 @@ def _sigmoid_integrand(
     return torch.sigmoid(temp[rows, None, None] * (p - 0.5)), p, sig
 
 
+def _autograd_lengths(
+    lhs: torch.Tensor, slope: torch.Tensor, t: torch.Tensor, temp_kp: torch.Tensor, dx: float
+) -> torch.Tensor:
+    """Eq. 4-6 by plain autograd (gradients reach the temperature too), Eq. 4 in log space."""
+    tv = lhs[..., :, None, :] + slope[..., None, None, :] * t[:, None]
+    log_p = F.logsigmoid(tv).sum(dim=-1)  # (*, K, P)
+    p_sigma = torch.sigmoid(temp_kp * (torch.exp(log_p) - 0.5))  # Eq. 5
+    return torch.trapezoid(p_sigma, dx=dx, dim=-1)
+
+
+def _fused_lengths(
+    lhs: torch.Tensor,
+    slope: torch.Tensor,
+    t: torch.Tensor,
+    temp: torch.Tensor,
+    dx: float,
+    *,
+    band: bool,
+    half: float,
+) -> torch.Tensor:
+    """Eq. 4-6 by :class:`_SigmoidIntegral` (chunked, analytic backward, band where it pays)."""
+    batch = lhs.shape[:-2]
+    work = lhs.numel() * len(t)  # sigmoids of the every-point evaluation
+    # The band's planning costs ~1 ms a call and pays off only where the band is a small
+    # share of the points (about 8 tau / (T * 2 half) of them): measured crossover.
+    use_band = (
+        band and work >= _BAND_MIN_WORK and float(temp.min()) * 2 * half >= 8 * _band_tau(lhs.dtype)
+    )
+    return _SigmoidIntegral.apply(
+        lhs.reshape(-1, *lhs.shape[-2:]),
+        torch.broadcast_to(slope, (*batch, slope.shape[-1])).reshape(-1, slope.shape[-1]),
+        t,
+        torch.broadcast_to(temp, batch).reshape(-1),
+        dx,
+        use_band,
+    ).reshape(*batch, lhs.shape[-2])
+
+
 def paper_lengths(
     hp: HalfPlanes,
     theta: torch.Tensor | float,
@@ -402,29 +440,9 @@ def paper_lengths(
     lhs = (temp_e * across)[..., None, :] * c[..., :, None] + (temp_e * b)[..., None, :]
     slope = temp_e * along  # (*, E)
     if isinstance(temperature, torch.Tensor) and temperature.requires_grad:
-        # Plain autograd (gradients reach the temperature too); Eq. 4 in log space.
-        tv = lhs[..., :, None, :] + slope[..., None, None, :] * t[:, None]
-        log_p = F.logsigmoid(tv).sum(dim=-1)  # (*, K, P)
-        p_sigma = torch.sigmoid(temp_kp * (torch.exp(log_p) - 0.5))  # Eq. 5
-        length = torch.trapezoid(p_sigma, dx=dx, dim=-1)
+        length = _autograd_lengths(lhs, slope, t, temp_kp, dx)
     else:
-        batch = lhs.shape[:-2]
-        work = lhs.numel() * len(t)  # sigmoids of the every-point evaluation
-        # The band's planning costs ~1 ms a call and pays off only where the band is a small
-        # share of the points (about 8 tau / (T * 2 half) of them): measured crossover.
-        use_band = (
-            band
-            and work >= _BAND_MIN_WORK
-            and float(temp.min()) * 2 * half >= 8 * _band_tau(lhs.dtype)
-        )
-        length = _SigmoidIntegral.apply(
-            lhs.reshape(-1, *lhs.shape[-2:]),
-            torch.broadcast_to(slope, (*batch, slope.shape[-1])).reshape(-1, slope.shape[-1]),
-            t,
-            torch.broadcast_to(temp, batch).reshape(-1),
-            dx,
-            use_band,
-        ).reshape(*batch, lhs.shape[-2])
+        length = _fused_lengths(lhs, slope, t, temp, dx, band=band, half=half)
     mask = _window_mask(c, clip)
     if mask is not None:
         length = torch.where(mask, length, torch.zeros_like(length))
