@@ -237,6 +237,121 @@ def chords_forward(
                     active[0, n, k] = -1
 
 
+def _hard_grads(
+    active: np.ndarray,
+    n: int,
+    gz: np.ndarray,
+    q: np.ndarray,
+    edges: tuple[np.ndarray, ...],
+    windows: bool,
+    scratch: tuple[np.ndarray, np.ndarray, np.ndarray],
+    edge_grads: tuple[np.ndarray, np.ndarray],
+) -> tuple[bool, float]:
+    """The hard path of :func:`chords_backward` for pair ``n``: one-hot at the largest bounds,
+    summed edge by edge (branch-free) into ``edge_grads``; returns (any transect on the soft
+    path, the window bounds' gradient)."""
+    lower = edges[0]
+    gh_k, gq_k, top = scratch
+    g_shift, g_slope = edge_grads
+    n_edges, n_k = lower.shape[0], q.shape[0]
+    soft = False
+    g_window = 0.0
+    for k in range(n_k):
+        low, up = active[0, n, k], active[1, n, k]
+        soft |= low < 0
+        gh_k[k] = gz[k] if low >= 0 else 0.0
+        gq_k[k] = gh_k[k] * q[k]
+        top[0, k] = low
+        top[1, k] = up
+    for role in range(2):
+        for e in range(n_edges + windows):
+            if e < n_edges and lower[e] != (role == 0):
+                continue
+            acc, acc_q, index = 0.0, 0.0, float(e)
+            for k in range(n_k):
+                hit = top[role, k] == index
+                acc += gh_k[k] if hit else 0.0
+                acc_q += gq_k[k] if hit else 0.0
+            if e < n_edges:
+                g_shift[e] -= acc
+                g_slope[e] -= acc_q
+            else:
+                g_window -= acc
+    return soft, g_window
+
+
+def _soft_grads(
+    active: np.ndarray,
+    n: int,
+    gz: np.ndarray,
+    q: np.ndarray,
+    edges: tuple[np.ndarray, ...],
+    windows: tuple[float, float],
+    edge_grads: tuple[np.ndarray, np.ndarray],
+    g_window: float,
+) -> float:
+    """The soft path of :func:`chords_backward` for pair ``n``: the softmax weights of each
+    role, into ``edge_grads``; returns the window bounds' gradient, ``g_window`` updated."""
+    lower, shift, slope = edges[0], edges[5], edges[4]
+    w_low, w_up = windows
+    g_shift, g_slope = edge_grads
+    n_edges = lower.shape[0]
+    for k in range(q.shape[0]):
+        g = gz[k]
+        if active[0, n, k] >= 0 or g == 0.0:
+            continue
+        qk = q[k]
+        ml, mu = w_low, w_up
+        for e in range(n_edges):
+            x = shift[e] + slope[e] * qk
+            if lower[e]:
+                ml = max(ml, x)
+            else:
+                mu = max(mu, x)
+        sl, su = _sums(lower, shift, slope, qk, w_low, w_up, ml, mu)
+        for e in range(n_edges):
+            x = shift[e] + slope[e] * qk
+            share = g * (_tail(x - ml) / sl if lower[e] else _tail(x - mu) / su)
+            g_shift[e] -= share
+            g_slope[e] -= share * qk
+        g_window -= g * (_tail(w_low - ml) / sl + _tail(w_up - mu) / su)
+    return g_window
+
+
+def _chain_grads(
+    edges: tuple[np.ndarray, ...],
+    edge_grads: tuple[np.ndarray, np.ndarray],
+    normals: np.ndarray,
+    d: float,
+    hn: float,
+    gh: float,
+    limits: tuple[float, float],
+) -> tuple[float, float, float, float]:
+    """``(g_cos, g_sin, g_d, g_h)`` of one pair from the edges' gradients: ``v = shift + slope q``
+    with ``shift = alpha + slope d``, then through the clamps, and ``across = -nx sin + ny cos``,
+    ``along = nx cos + ny sin``. ``gh`` starts at the window bounds' share (``-window / h`` is
+    proportional to ``1 / h``)."""
+    _, along, scale, alpha, slope, _ = edges
+    g_shift, g_slope = edge_grads
+    eps, big = limits
+    gd = 0.0
+    gc = 0.0
+    gs = 0.0
+    for e in range(along.shape[0]):
+        gd += g_shift[e] * slope[e]
+        ga = g_shift[e] if abs(alpha[e]) < big else 0.0
+        gb = g_slope[e] + g_shift[e] * d
+        gb = gb if abs(slope[e]) < big else 0.0
+        terms = ga * alpha[e] + gb * slope[e]
+        g_across = gb * scale[e]
+        g_along = -terms / along[e] if abs(along[e]) >= eps else 0.0
+        nx, ny = normals[e, 0], normals[e, 1]
+        gc += g_across * ny + g_along * nx
+        gs += -g_across * nx + g_along * ny
+        gh += terms
+    return gc, gs, gd, gh
+
+
 def chords_backward(
     geometry: tuple[np.ndarray, ...],
     settings: tuple[bool, float, float, float, float],
@@ -267,6 +382,8 @@ def chords_backward(
     shift = np.empty(n_edges, dtype=q.dtype)
     edges = (lower, along, scale, alpha, slope, shift)
     g_shift, g_slope = np.empty(n_edges, dtype=q.dtype), np.empty(n_edges, dtype=q.dtype)
+    edge_grads = (g_shift, g_slope)
+    scratch = (gh_k, gq_k, top)
     for n in range(h.shape[0]):
         hn = h[n]
         p = poly[n]
@@ -289,66 +406,13 @@ def chords_backward(
             g_slope[e] = 0.0
         soft = False
         if any_grad:
-            # the hard path: one-hot at the largest bounds, summed edge by edge (branch-free)
-            for k in range(n_k):
-                low, up = active[0, n, k], active[1, n, k]
-                soft |= low < 0
-                gh_k[k] = gz[k] if low >= 0 else 0.0
-                gq_k[k] = gh_k[k] * q[k]
-                top[0, k] = low
-                top[1, k] = up
             windows = w_low > -np.inf or w_up > -np.inf
-            for role in range(2):
-                for e in range(n_edges + windows):
-                    if e < n_edges and lower[e] != (role == 0):
-                        continue
-                    acc, acc_q, index = 0.0, 0.0, float(e)
-                    for k in range(n_k):
-                        hit = top[role, k] == index
-                        acc += gh_k[k] if hit else 0.0
-                        acc_q += gq_k[k] if hit else 0.0
-                    if e < n_edges:
-                        g_shift[e] -= acc
-                        g_slope[e] -= acc_q
-                    else:
-                        g_window -= acc
-        for k in range(n_k if soft else 0):  # the soft path: softmax weights of each role
-            g = gz[k]
-            if active[0, n, k] >= 0 or g == 0.0:
-                continue
-            qk = q[k]
-            ml, mu = w_low, w_up
-            for e in range(n_edges):
-                x = shift[e] + slope[e] * qk
-                if lower[e]:
-                    ml = max(ml, x)
-                else:
-                    mu = max(mu, x)
-            sl, su = _sums(lower, shift, slope, qk, w_low, w_up, ml, mu)
-            for e in range(n_edges):
-                x = shift[e] + slope[e] * qk
-                share = g * (_tail(x - ml) / sl if lower[e] else _tail(x - mu) / su)
-                g_shift[e] -= share
-                g_slope[e] -= share * qk
-            g_window -= g * (_tail(w_low - ml) / sl + _tail(w_up - mu) / su)
-        # v = shift + slope q with shift = alpha + slope d; then through the clamps, and
-        # across = -nx sin + ny cos, along = nx cos + ny sin
-        gd = 0.0
-        gh = g_window * bound / hn  # the window bound -window / h is proportional to 1/h
-        gc = 0.0
-        gs = 0.0
-        for e in range(n_edges):
-            gd += g_shift[e] * slope[e]
-            ga = g_shift[e] if abs(alpha[e]) < big else 0.0
-            gb = g_slope[e] + g_shift[e] * d[n]
-            gb = gb if abs(slope[e]) < big else 0.0
-            terms = ga * alpha[e] + gb * slope[e]
-            g_across = gb * scale[e]
-            g_along = -terms / along[e] if abs(along[e]) >= eps else 0.0
-            nx, ny = normals[p, e, 0], normals[p, e, 1]
-            gc += g_across * ny + g_along * nx
-            gs += -g_across * nx + g_along * ny
-            gh += terms
+            soft, g_window = _hard_grads(active, n, gz, q, edges, windows, scratch, edge_grads)
+        if soft:
+            g_window = _soft_grads(active, n, gz, q, edges, (w_low, w_up), edge_grads, g_window)
+        gc, gs, gd, gh = _chain_grads(
+            edges, edge_grads, normals[p], d[n], hn, g_window * bound / hn, (eps, big)
+        )
         g_cos[n] = gc
         g_sin[n] = gs
         g_d[n] = gd
@@ -463,7 +527,8 @@ def kernels() -> Kernels | None:
     helpers = "_edge _finite _windows _envelope _is_near _tail _sums _softplus_sigmoid".split()
     for name in helpers:
         globals()[name] = jit(globals()[name])
-    for name in ("_edges", "_moments"):  # inlined: faster loops in the kernels here
+    inlined = ("_edges", "_moments", "_hard_grads", "_soft_grads", "_chain_grads")
+    for name in inlined:  # inlined: faster loops in the kernels here
         globals()[name] = jit(globals()[name], inline="always")
     functions = (chords_forward, chords_backward, smith_forward, smith_backward)
     return Kernels(*(jit(f) for f in functions))
