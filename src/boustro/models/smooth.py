@@ -311,6 +311,18 @@ class _CompiledChords(torch.autograd.Function):
         return (*(g if n else None for g, n in zip(out, need, strict=True)), *(None,) * 6)
 
 
+def _check_smoothing_floor(h: torch.Tensor | float, radius: float, dtype: torch.dtype) -> None:
+    """Refuse a smoothing so small that it is numerically the exact model: the floor keeps every
+    bound / h far below the clamp at sqrt(float max)."""
+    h_min = float(h.detach().min()) if isinstance(h, torch.Tensor) else h
+    floor = float(radius) * torch.finfo(dtype).max ** -0.25
+    if h_min < floor:
+        raise InvalidParameterError(
+            f"smoothing {h_min:g} is below {floor:.3g} ({dtype}, this polygon): "
+            "numerically the exact model: use smoothing=0 (or the exact model) for it"
+        )
+
+
 def smooth_lengths(
     hp: HalfPlanes,
     theta: torch.Tensor | float,
@@ -361,13 +373,7 @@ def smooth_lengths(
     h, h_max = _as_smoothing(smoothing, theta_t)
     if h_max == 0.0:  # a scalar 0: the exact model
         return ExactModel(clip=clip)(hp, theta_t, offset_t, spacing)
-    h_min = float(h.detach().min()) if isinstance(h, torch.Tensor) else h
-    floor = float(hp.radius) * torch.finfo(dtype).max ** -0.25
-    if h_min < floor:  # keeps every bound / h far below the clamp at sqrt(float max)
-        raise InvalidParameterError(
-            f"smoothing {h_min:g} is below {floor:.3g} ({dtype}, this polygon): "
-            "numerically the exact model: use smoothing=0 (or the exact model) for it"
-        )
+    _check_smoothing_floor(h, hp.radius, dtype)
     margin = _MARGIN * h_max
     window = PAPER_WINDOW if clip else hp.radius + margin
     # Roles: an edge with |along| below machine epsilon is parallel to the transects (its
