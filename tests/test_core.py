@@ -110,13 +110,40 @@ def test_chords_at_serves_the_learned_planners_copy():
     assert torch.equal(ours.lengths, expected)
 
 
-def test_exact_model_matches_the_learned_planners_fused_copy():
+def test_fused_exact_model_is_the_learned_planners_fused_copy():
     hp = _batch(2)
     theta, offset = torch.tensor([0.2, 1.0, -0.4, 3.0]), torch.tensor([0.0, 0.01, 0.02, -0.01])
-    ours = ExactModel()(hp, theta, offset, 0.04)
+    ours = ExactModel(fused=True)(hp, theta, offset, 0.04)
     theirs = learned._exact_lengths(hp, theta, offset, 0.04)
-    torch.testing.assert_close(ours.lengths, theirs.lengths, rtol=1e-13, atol=1e-15)
-    assert torch.equal(ours.positions, theirs.positions)
+    for mine, copy in zip(ours, theirs, strict=True):
+        assert torch.equal(mine, copy)
+    plain = ExactModel()(hp, theta, offset, 0.04)
+    torch.testing.assert_close(plain.lengths, theirs.lengths, rtol=1e-13, atol=1e-15)
+
+
+@pytest.mark.parametrize("clip", [False, True])
+def test_fused_and_divided_chords_agree_and_differentiate_alike(clip):
+    hp = _batch(5, (3, 4, 9, 6, 5, 12))
+    g = torch.Generator().manual_seed(3)
+    theta = (torch.rand(6, 20, generator=g, dtype=torch.float64) * 7 - 3.5).requires_grad_()
+    offset = torch.rand(6, 20, generator=g, dtype=torch.float64) * 0.03
+    hp = HalfPlanes(hp.normals[:, None], hp.offsets[:, None], hp.radius)
+    results = []
+    for fused in (False, True):
+        ch = exact_chords(hp, theta, offset, 0.03, clip=clip, fused=fused)
+        (grad,) = torch.autograd.grad(ch.lengths.pow(2).sum(), theta)
+        results.append((ch.lengths.detach(), grad))
+    (a, ga), (b, gb) = results
+    torch.testing.assert_close(a, b, rtol=1e-12, atol=1e-13)
+    torch.testing.assert_close(ga, gb, rtol=1e-9, atol=1e-11)
+
+
+def test_axis_parallel_edges_block_the_same_lines_in_both_forms():
+    square = halfplanes(Polygon([(0, 0), (1, 0), (1, 1), (0, 1)]), normalise=False)
+    c = torch.tensor([-0.5, 0.0, 0.5, 1.0, 1.5], dtype=torch.float64)
+    for fused in (False, True):
+        out = chords_at(square, 0.0, c, fused=fused).lengths
+        assert out.tolist() == [0.0, 1.0, 1.0, 1.0, 0.0]
 
 
 @pytest.mark.parametrize("clip", [False, True])

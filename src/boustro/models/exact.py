@@ -103,6 +103,7 @@ def line_chords(
     positions: torch.Tensor,
     *,
     clip: bool = False,
+    fused: bool = False,
 ) -> Chords:
     """Exact chords of the lines at ``positions`` ``(*, K)`` given the edges' components.
 
@@ -112,10 +113,16 @@ def line_chords(
             leading dimensions).
         positions: ``(*, K)`` the lines' signed distances ``c`` from the origin along ``n``.
         clip: clamp ``t`` to the paper's window ``[-0.5, 0.5]`` (the positions are not masked).
+        fused: write each edge's bound as ``slope * c + intercept`` (one fused multiply-add and
+            one reduction per role: about twice as fast on large batches, measured); the same
+            chords to rounding (1e-13 relative), not bit for bit. Default: one division per
+            (line, edge), the arithmetic boustro has always used.
 
     Returns:
         :class:`Chords` ``(*, K)``: ``lengths`` is 0 for a line that misses the polygon.
     """
+    if fused:
+        return _fused_chords(across, along, b, positions, clip)
     across, along, b = across[..., None, :], along[..., None, :], b[..., None, :]
     lhs = across * positions[..., :, None] + b  # (*, K, E): edge j holds iff lhs + along t >= 0
     lower, upper, blocked = chord_bounds(lhs, along)
@@ -126,12 +133,49 @@ def line_chords(
     return Chords(torch.broadcast_to(positions, length.shape), lower, upper, length)
 
 
+def _fused_chords(
+    across: torch.Tensor,
+    along: torch.Tensor,
+    b: torch.Tensor,
+    positions: torch.Tensor,
+    clip: bool,
+) -> Chords:
+    """:func:`line_chords` with ``fused=True``: bounds ``slope_j c + intercept_j``, the edges of
+    the other role given slope 0 and intercept ``-+inf``, so each max and min is one
+    ``addcmul`` and one reduction."""
+    parallel = along == 0
+    inv = 1.0 / torch.where(parallel, torch.ones_like(along), along)
+    slope, intercept = -across * inv, -b * inv  # edge j bounds t by slope_j c + intercept_j
+    inf = torch.as_tensor(math.inf, dtype=positions.dtype, device=positions.device)
+    is_lower, is_upper = along > 0, along < 0
+    cc = positions[..., :, None]
+    lower = torch.addcmul(
+        torch.where(is_lower, intercept, -inf)[..., None, :],
+        torch.where(is_lower, slope, 0.0)[..., None, :],
+        cc,
+    ).amax(dim=-1)
+    upper = torch.addcmul(
+        torch.where(is_upper, intercept, inf)[..., None, :],
+        torch.where(is_upper, slope, 0.0)[..., None, :],
+        cc,
+    ).amin(dim=-1)
+    if clip:
+        lower = lower.clamp(min=-PAPER_WINDOW)
+        upper = upper.clamp(max=PAPER_WINDOW)
+    length = (upper - lower).clamp(min=0.0)
+    if bool(parallel.any()):  # an edge parallel to the transects empties the chords beyond it
+        lhs = across[..., None, :] * cc + b[..., None, :]
+        length = torch.where((parallel[..., None, :] & (lhs < 0)).any(dim=-1), 0.0, length)
+    return Chords(torch.broadcast_to(positions, length.shape), lower, upper, length)
+
+
 def chords_at(
     hp: HalfPlanes,
     theta: torch.Tensor | float,
     positions: torch.Tensor,
     *,
     clip: bool = False,
+    fused: bool = False,
 ) -> Chords:
     """Exact chords of the lines ``n(theta) . p = c`` for given ``c``: ``positions`` ``(*B, K)``.
 
@@ -140,6 +184,7 @@ def chords_at(
         theta: transect direction(s) ``(*B)`` in radians.
         positions: ``(*B, K)`` line positions in the half-planes' frame.
         clip: clamp ``t`` to the paper's window ``[-0.5, 0.5]``.
+        fused: the fused arithmetic of :func:`line_chords`.
 
     Example:
         >>> from boustro.geometry import Polygon, halfplanes
@@ -151,7 +196,7 @@ def chords_at(
     dtype, device = hp.normals.dtype, hp.normals.device
     theta_t = torch.as_tensor(theta, dtype=dtype, device=device)
     across, along, b = _components(torch.cos(theta_t), torch.sin(theta_t), hp.normals, hp.offsets)
-    return line_chords(across, along, b, positions, clip=clip)
+    return line_chords(across, along, b, positions, clip=clip, fused=fused)
 
 
 def exact_chords(
@@ -161,6 +206,7 @@ def exact_chords(
     spacing: float,
     *,
     clip: bool = False,
+    fused: bool = False,
 ) -> Chords:
     """Exact chords of a convex polygon's transect grid, in closed form (module docstring).
 
@@ -173,6 +219,7 @@ def exact_chords(
         offset: grid offset(s) in the half-planes' frame, ``(*B)``.
         spacing: transect spacing in the same frame, > 0.
         clip: restrict to the paper's window (``|c| <= 0.5`` and ``t`` in ``[-0.5, 0.5]``).
+        fused: the fused arithmetic of :func:`line_chords` (faster on large batches).
 
     Returns:
         :class:`Chords` with tensors ``(*, K)``; transects missing the polygon have length 0 and
@@ -187,7 +234,7 @@ def exact_chords(
     """
     theta, offset, across, along, b = _prepare(hp, theta, offset)
     c = transect_positions(offset, spacing, PAPER_WINDOW if clip else hp.radius)
-    chords = line_chords(across, along, b, c, clip=clip)
+    chords = line_chords(across, along, b, c, clip=clip, fused=fused)
     mask = _window_mask(c, clip)
     if mask is None:
         return chords
@@ -200,7 +247,8 @@ class ExactModel:
     """Exact chord lengths (closed form); weights are 1 for transects of positive length.
 
     Differentiable almost everywhere, but its gradient ignores transects entering or leaving
-    the polygon: use it to score, and a soft model to descend.
+    the polygon: use it to score, and a soft model to descend. ``fused=True`` takes the fused
+    arithmetic of :func:`line_chords` (same lengths to 1e-13, faster on large batches).
 
     Example:
         >>> from boustro.geometry import Polygon, halfplanes
@@ -212,11 +260,12 @@ class ExactModel:
 
     clip: bool = False
     name: str = "exact"
+    fused: bool = False
 
     def __call__(
         self, hp: HalfPlanes, theta: torch.Tensor, offset: torch.Tensor, spacing: float
     ) -> TransectLengths:
-        ch = exact_chords(hp, theta, offset, spacing, clip=self.clip)
+        ch = exact_chords(hp, theta, offset, spacing, clip=self.clip, fused=self.fused)
         # A chord shorter than this is a transect grazing a vertex: rounding, not a transect.
         tiny = 1e-12 * max(hp.radius, 1e-300)
         return TransectLengths(ch.lengths, (ch.lengths > tiny).to(ch.lengths.dtype), ch.positions)
