@@ -367,7 +367,7 @@ def chords_backward(
     -softmax`` of the role (one-hot at the largest bounds off the soft path),
     ``d length / dz = h weight``, ``d weight / dz = weight (1 - weight)``,
     ``d length / dh = length / h`` at fixed ``z``, and the chain rule through the clamps (zero
-    where a clamp holds) as in :class:`boustro.smooth._SoftChords`."""
+    where a clamp holds) as in :class:`boustro.models.smooth._SoftChords`."""
     cos, sin, poly, normals, offsets, d, h, q = geometry
     bound, eps, big = -settings[1], settings[3], settings[4]
     length, weight, active = outputs

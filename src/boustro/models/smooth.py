@@ -213,7 +213,7 @@ class _SoftChords(torch.autograd.Function):
         return gb * scale, grad_along.neg_(), ga * scale, grad_c, grad_h, *nothing
 
 
-#: Use the compiled CPU kernels (:mod:`boustro._compiled`) where they apply: CPU tensors of
+#: Use the compiled CPU kernels (:mod:`boustro.models._kernels`) where they apply: CPU tensors of
 #: float32 or float64, numba installed, calls of at least :data:`COMPILED_MIN` elements.
 #: ``False`` forces the tensor code everywhere (tests hold the two to the same values and
 #: gradients).
