@@ -1,9 +1,8 @@
-"""The library's error hierarchy.
+"""The library's error hierarchy: every error bad input can cause derives from BoustroError.
 
-Every error that bad input can cause derives from :class:`BoustroError` and also from the
-built-in exception a caller would naturally catch (``ValueError`` for bad values), so both
-``except boustro.BoustroError`` and ``except ValueError`` work. Messages say what was expected
-and what came.
+Each also derives from the built-in exception a caller would naturally catch (``ValueError``
+for bad values), so both ``except boustro.BoustroError`` and ``except ValueError`` work.
+Messages say what was expected and what came.
 """
 
 from __future__ import annotations
@@ -12,11 +11,12 @@ __all__ = [
     "BoustroError",
     "InvalidParameterError",
     "InvalidPolygonError",
+    "MissingDependencyError",
     "NoTransectError",
     "NonConvexPolygonError",
     "PolygonFileError",
     "ProblemTooLargeError",
-    "as_number",
+    "as_number",  # noqa: F822 (served lazily by __getattr__)
 ]
 
 
@@ -49,15 +49,15 @@ class PolygonFileError(BoustroError, ValueError):
     """A polygon file is missing, unreadable, or holds no usable polygon."""
 
 
-def as_number(name: str, value: object) -> float:
-    """``float(value)``, or :class:`InvalidParameterError` ``"<name> must be a number, got ..."``.
+class MissingDependencyError(BoustroError, ImportError):
+    """An optional dependency that this operation needs is not installed."""
 
-    Callers check the range themselves, with a message that states it.
-    """
-    if isinstance(value, bool):  # float(True) == 1.0: a flag is not a number
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}")
-    try:
-        detach = getattr(value, "detach", None)  # a tensor (a gradient may flow through it)
-        return float(detach() if callable(detach) else value)  # type: ignore[arg-type]
-    except (TypeError, ValueError, RuntimeError):
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
+
+def __getattr__(name: str) -> object:
+    """Lazy compatibility entry: ``as_number`` lives in :mod:`boustro._validate` (which imports
+    this module, so importing it here at load time would make a cycle)."""
+    if name == "as_number":
+        from ._validate import as_number  # declared lazy entry (no cycle at load)
+
+        return as_number
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -14,25 +14,14 @@ import numpy as np
 import torch
 from numpy.typing import ArrayLike, NDArray
 
+from ._validate import check_finite, check_spacing
 from .errors import InvalidParameterError, NoTransectError
 from .fitness import SmithFitness
-from .geometry import Polygon, halfplanes
-from .models import (
-    ExactModel,
-    PaperModel,
-    TransectModel,
-    check_finite,
-    check_spacing,
-    exact_chords,
-)
-from .smooth import DEFAULT_SMOOTHING, SmoothModel
+from .geometry import Polygon, as_polygon, halfplanes
+from .models import ExactModel, PaperModel, TransectModel, exact_chords
+from .models.smooth import DEFAULT_SMOOTHING, SmoothModel
 
 __all__ = ["Score", "Segments", "as_polygon", "make_model", "score", "transect_segments"]
-
-
-def as_polygon(polygon: Polygon | ArrayLike) -> Polygon:
-    """Accept a :class:`Polygon` or anything :class:`Polygon` accepts."""
-    return polygon if isinstance(polygon, Polygon) else Polygon(polygon)
 
 
 def make_model(
@@ -165,6 +154,11 @@ def score(
     Raises:
         InvalidPolygonError, NonConvexPolygonError, InvalidParameterError: bad input.
         NoTransectError: with the exact model, when no transect crosses the polygon.
+
+    Example:
+        >>> s = score([(0, 0), (4, 0), (4, 3), (0, 3)], spacing=1.0, angle=0.0, offset=0.5)
+        >>> round(s.fitness, 4), s.n_transects, s.total_length
+        (0.9, 2, 8.0)
     """
     poly = as_polygon(polygon)
     model_: TransectModel = ExactModel() if model is None else model

@@ -1,249 +1,26 @@
-"""Transect-length models: the exact chords and the paper's differentiable sigmoid integral.
-
-Every model maps (polygon half-planes, angle ``theta``, offset ``d``, spacing ``s``) to the lengths
-of the transects of a grid and to a weight per transect saying whether it counts. They share one
-interface, :class:`TransectModel`, so the fitness functions and the optimisers take any of them.
-
-Transect grid convention (the same in every frame):
-
-* ``theta`` is the transect DIRECTION in radians, counter-clockwise from ``+x``. Its unit vector
-  is ``u = (cos theta, sin theta)``; the transects' left normal is ``n = (-sin theta, cos theta)``.
-* Transect ``k`` is the line ``{p : n . p = d + k s}``, ``k`` any integer: ``d`` is the signed
-  distance of the grid from the origin (the polygon's vertex mean in the normalised frame) along
-  ``n``. The set of lines is periodic in ``d`` with period ``s``, and ``(theta + pi, -d)`` is the
-  same set as ``(theta, d)``.
-* A point of transect ``k`` is ``p = (d + k s) n + t u``; ``t`` is the along-transect coordinate.
-
-Tensors: ``theta`` and ``offset`` broadcast together to the batch shape ``(*B)``; half-planes may
-carry their own leading polygon dimensions ``(*P)`` that broadcast with ``(*B)``. Outputs have shape
-``(*, K)`` with ``K`` candidate transects per grid (those that miss the polygon have length 0 and
-weight 0, so ``K`` is static and batches stack). dtype and device follow the half-planes.
-"""
+"""The paper's differentiable transect model: the sigmoid integral of Eq. 3-7 (PaperModel)."""
 
 from __future__ import annotations
 
 import bisect
 import math
 from dataclasses import dataclass
-from typing import Any, NamedTuple, Protocol, runtime_checkable
+from typing import Any, NamedTuple
 
 import torch
 import torch.nn.functional as F
 from torch.autograd.function import once_differentiable
 
-from .errors import InvalidParameterError, as_number
-from .geometry import HalfPlanes
+from .._validate import as_number
+from ..errors import InvalidParameterError
+from ..geometry import HalfPlanes
+from .base import PAPER_WINDOW, TransectLengths, _prepare, _window_mask, transect_positions
 
-__all__ = [
-    "PAPER_WINDOW",
-    "Chords",
-    "ExactModel",
-    "PaperModel",
-    "TransectLengths",
-    "TransectModel",
-    "exact_chords",
-    "paper_lengths",
-    "transect_positions",
-]
-
-#: Half-width of the paper's transect window: transects at ``|n . p| <= 0.5`` only, integrated
-#: over ``t`` in ``[-0.5, 0.5]`` (used with ``clip=True`` for faithful reproduction).
-PAPER_WINDOW = 0.5
-
-
-class TransectLengths(NamedTuple):
-    """What a model says about the grid of transects.
-
-    Attributes:
-        lengths: ``(*, K)`` transect lengths, in the units of the half-planes' frame.
-        weights: ``(*, K)`` in ``[0, 1]``: how much each transect counts as "shown" (exact: 0 or
-            1; soft: the paper's Eq. 7 indicator).
-        positions: ``(*, K)`` signed distance ``d + k s`` of each transect from the origin.
-    """
-
-    lengths: torch.Tensor
-    weights: torch.Tensor
-    positions: torch.Tensor
-
-
-class Chords(NamedTuple):
-    """Exact chords of the transect grid: transect ``k`` spans ``t`` in ``[lower, upper]``."""
-
-    positions: torch.Tensor
-    lower: torch.Tensor
-    upper: torch.Tensor
-    lengths: torch.Tensor
-
-
-@runtime_checkable
-class TransectModel(Protocol):
-    """Anything that turns (half-planes, theta, offset, spacing) into :class:`TransectLengths`."""
-
-    @property
-    def name(self) -> str: ...
-
-    def __call__(
-        self, hp: HalfPlanes, theta: torch.Tensor, offset: torch.Tensor, spacing: float
-    ) -> TransectLengths: ...
-
-
-#: Most transects across one area that boustro plans or scores (a 10 km field at 1 cm): a
-#: smaller spacing is refused with a clear error instead of exhausting memory.
-MAX_TRANSECTS = 1_000_000
-#: Most candidate transects of one (angle, offset) pair in a model's grid, which also covers the
-#: model's margin beyond the polygon (32 smoothing lengths for the smooth closed form).
-MAX_CANDIDATES = 4 * MAX_TRANSECTS
-
+__all__ = ["MAX_POINTS_PER_TRANSECT", "PAPER_WINDOW", "PaperModel", "paper_lengths"]
 
 #: Most integration points per transect of the paper's model (the paper uses 1000; 10^4 is
 #: already exact to its temperature's resolution in every benchmark here).
 MAX_POINTS_PER_TRANSECT = 1_000_000
-
-
-def check_spacing(spacing: float, extent: float | None = None) -> float:
-    """Return ``spacing`` as a float, or raise if it is not a finite positive number, or (with
-    ``extent``, the width to cover in the same units) if more than :data:`MAX_TRANSECTS`
-    transects would be needed."""
-    s = as_number("spacing", spacing)
-    if not math.isfinite(s) or s <= 0:
-        raise InvalidParameterError(f"spacing must be a finite number > 0, got {spacing!r}")
-    if extent is not None and extent / s > MAX_TRANSECTS:
-        raise InvalidParameterError(
-            f"spacing {s:.6g} is too small for an area {extent:.6g} across: about "
-            f"{extent / s:.3g} transects, more than the {MAX_TRANSECTS} boustro handles"
-        )
-    return s
-
-
-def check_finite(name: str, value: float) -> float:
-    """Return ``value`` as a float, or raise if it is not a finite number."""
-    v = as_number(name, value)
-    if not math.isfinite(v):
-        raise InvalidParameterError(f"{name} must be a finite number, got {value!r}")
-    return v
-
-
-def _prepare(
-    hp: HalfPlanes, theta: torch.Tensor | float, offset: torch.Tensor | float
-) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
-    """Angle and offset as tensors of the half-planes' dtype/device, and the per-edge components.
-
-    Returns ``(theta, offset, across, along, b)`` where ``across = n_j . n`` and
-    ``along = n_j . u`` have shape ``(*, E)``: edge ``j`` holds at ``(c, t)`` iff
-    ``across_j c + along_j t + b_j >= 0``. Rotating the edges instead of the transects is the
-    paper's "rotate W, keep B".
-    """
-    dtype, device = hp.normals.dtype, hp.normals.device
-    theta_t = torch.as_tensor(theta, dtype=dtype, device=device)
-    offset_t = torch.as_tensor(offset, dtype=dtype, device=device)
-    theta_t, offset_t = torch.broadcast_tensors(theta_t, offset_t)
-    across, along, b = _components(torch.cos(theta_t), torch.sin(theta_t), hp.normals, hp.offsets)
-    return theta_t, offset_t, across, along, b
-
-
-def _components(
-    cos: torch.Tensor, sin: torch.Tensor, normals: torch.Tensor, offsets: torch.Tensor
-) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """``(across, along, b)`` ``(*, E)``: ``across = n_j . n``, ``along = n_j . u`` of edges
-    ``normals (*, E, 2)``, ``offsets (*, E)`` seen from transects at angles ``(cos, sin)``
-    ``(*)`` (broadcasting), and the offsets broadcast to their shape."""
-    nx, ny = normals[..., 0], normals[..., 1]
-    cos, sin = cos[..., None], sin[..., None]
-    across = -nx * sin + ny * cos
-    along = nx * cos + ny * sin
-    return across, along, torch.broadcast_to(offsets, across.shape)
-
-
-def grid_size(spacing: float, radius: float) -> tuple[int, int]:
-    """``(K, m)``: the ``K`` lines ``d mod s + (k - m) s``, ``0 <= k < K``, cover +-radius.
-
-    Raises:
-        InvalidParameterError: more than :data:`MAX_CANDIDATES` lines (a tiny spacing, or a
-            model whose margin, e.g. a huge smoothing, grows the disc by as much).
-    """
-    if 2 * radius / spacing > MAX_CANDIDATES:
-        raise InvalidParameterError(
-            f"{2 * radius / spacing:.3g} candidate transects at spacing {spacing:.6g} across a "
-            f"disc of radius {radius:.6g} (the polygon's, grown by the model's margin): more "
-            f"than the {MAX_CANDIDATES} boustro handles; use a larger spacing (or a smoothing "
-            "below the spacing)"
-        )
-    m = math.ceil(radius / spacing) + 1
-    return 2 * m, m
-
-
-def transect_positions(offset: torch.Tensor, spacing: float, radius: float) -> torch.Tensor:
-    """Positions ``(*, K)`` of every grid line that can meet a disc of ``radius`` at the origin.
-
-    The offset is wrapped into ``[0, spacing)`` first (``torch.remainder``, whose gradient is 1),
-    so any offset, however far it has drifted, gives the same static ``K``.
-    """
-    d, q = _grid(offset, spacing, radius)
-    return d[..., None] + q
-
-
-def _grid(offset: torch.Tensor, spacing: float, radius: float) -> tuple[torch.Tensor, torch.Tensor]:
-    """``(d, q)``: the wrapped offset ``(*)`` and the lines' places ``(K,)`` relative to it, so
-    that :func:`transect_positions` is ``d[..., None] + q``."""
-    spacing = check_spacing(spacing)
-    k_count, m = grid_size(spacing, radius)
-    k = torch.arange(k_count, dtype=offset.dtype, device=offset.device) - m
-    return torch.remainder(offset, spacing), k * spacing
-
-
-def _window_mask(positions: torch.Tensor, clip: bool) -> torch.Tensor | None:
-    if not clip:
-        return None
-    return (positions >= -PAPER_WINDOW) & (positions < PAPER_WINDOW)
-
-
-def exact_chords(
-    hp: HalfPlanes,
-    theta: torch.Tensor | float,
-    offset: torch.Tensor | float,
-    spacing: float,
-    *,
-    clip: bool = False,
-) -> Chords:
-    """Exact chords of a convex polygon's transect grid, in closed form (DESIGN.md sec. 4).
-
-    For transect position ``c`` each edge bounds ``t``: ``t >= -(across c + b) / along`` where
-    ``along > 0`` (lower bounds) and ``<=`` where ``along < 0`` (upper bounds); an edge parallel
-    to the transects (``along == 0``) either holds for every ``t`` or empties the chord. The chord
-    is ``[max lower, min upper]``, its length ``max(0, upper - lower)``: O(E) per transect.
-
-    Differentiable almost everywhere in ``theta`` and ``offset`` (not at transects through
-    vertices); denominators are made safe before ``torch.where`` so gradients stay finite.
-
-    Args:
-        hp: half-planes ``(*P, E, 2)``, see :func:`boustro.geometry.halfplanes`.
-        theta: transect direction(s) in radians, ``(*B)``.
-        offset: grid offset(s) in the half-planes' frame, ``(*B)``.
-        spacing: transect spacing in the same frame, > 0.
-        clip: restrict to the paper's window (``|c| <= 0.5`` and ``t`` in ``[-0.5, 0.5]``).
-
-    Returns:
-        :class:`Chords` with tensors ``(*, K)``; transects missing the polygon have length 0 and
-        ``lower == upper`` undefined (do not use their endpoints).
-    """
-    theta, offset, across, along, b = _prepare(hp, theta, offset)
-    c = transect_positions(offset, spacing, PAPER_WINDOW if clip else hp.radius)
-    across, along, b = across[..., None, :], along[..., None, :], b[..., None, :]
-    lhs = across * c[..., :, None] + b  # (*, K, E): edge j holds iff lhs + along t >= 0
-    parallel = along == 0
-    bound = -lhs / torch.where(parallel, torch.ones_like(along), along)
-    inf = torch.as_tensor(math.inf, dtype=c.dtype, device=c.device)
-    lower = torch.where(along > 0, bound, -inf).amax(dim=-1)
-    upper = torch.where(along < 0, bound, inf).amin(dim=-1)
-    if clip:
-        lower = lower.clamp(min=-PAPER_WINDOW)
-        upper = upper.clamp(max=PAPER_WINDOW)
-    blocked = (parallel & (lhs < 0)).any(dim=-1)
-    length = torch.where(blocked, torch.zeros_like(lower), (upper - lower).clamp(min=0))
-    mask = _window_mask(c, clip)
-    if mask is not None:
-        length = torch.where(mask, length, torch.zeros_like(length))
-    return Chords(torch.broadcast_to(c, length.shape), lower, upper, length)
 
 
 def _as_temperature(temperature: torch.Tensor | float, like: torch.Tensor) -> torch.Tensor:
@@ -560,6 +337,44 @@ def _sigmoid_integrand(
     return torch.sigmoid(temp[rows, None, None] * (p - 0.5)), p, sig
 
 
+def _autograd_lengths(
+    lhs: torch.Tensor, slope: torch.Tensor, t: torch.Tensor, temp_kp: torch.Tensor, dx: float
+) -> torch.Tensor:
+    """Eq. 4-6 by plain autograd (gradients reach the temperature too), Eq. 4 in log space."""
+    tv = lhs[..., :, None, :] + slope[..., None, None, :] * t[:, None]
+    log_p = F.logsigmoid(tv).sum(dim=-1)  # (*, K, P)
+    p_sigma = torch.sigmoid(temp_kp * (torch.exp(log_p) - 0.5))  # Eq. 5
+    return torch.trapezoid(p_sigma, dx=dx, dim=-1)
+
+
+def _fused_lengths(
+    lhs: torch.Tensor,
+    slope: torch.Tensor,
+    t: torch.Tensor,
+    temp: torch.Tensor,
+    dx: float,
+    *,
+    band: bool,
+    half: float,
+) -> torch.Tensor:
+    """Eq. 4-6 by :class:`_SigmoidIntegral` (chunked, analytic backward, band where it pays)."""
+    batch = lhs.shape[:-2]
+    work = lhs.numel() * len(t)  # sigmoids of the every-point evaluation
+    # The band's planning costs ~1 ms a call and pays off only where the band is a small
+    # share of the points (about 8 tau / (T * 2 half) of them): measured crossover.
+    use_band = (
+        band and work >= _BAND_MIN_WORK and float(temp.min()) * 2 * half >= 8 * _band_tau(lhs.dtype)
+    )
+    return _SigmoidIntegral.apply(
+        lhs.reshape(-1, *lhs.shape[-2:]),
+        torch.broadcast_to(slope, (*batch, slope.shape[-1])).reshape(-1, slope.shape[-1]),
+        t,
+        torch.broadcast_to(temp, batch).reshape(-1),
+        dx,
+        use_band,
+    ).reshape(*batch, lhs.shape[-2])
+
+
 def paper_lengths(
     hp: HalfPlanes,
     theta: torch.Tensor | float,
@@ -625,29 +440,9 @@ def paper_lengths(
     lhs = (temp_e * across)[..., None, :] * c[..., :, None] + (temp_e * b)[..., None, :]
     slope = temp_e * along  # (*, E)
     if isinstance(temperature, torch.Tensor) and temperature.requires_grad:
-        # Plain autograd (gradients reach the temperature too); Eq. 4 in log space.
-        tv = lhs[..., :, None, :] + slope[..., None, None, :] * t[:, None]
-        log_p = F.logsigmoid(tv).sum(dim=-1)  # (*, K, P)
-        p_sigma = torch.sigmoid(temp_kp * (torch.exp(log_p) - 0.5))  # Eq. 5
-        length = torch.trapezoid(p_sigma, dx=dx, dim=-1)
+        length = _autograd_lengths(lhs, slope, t, temp_kp, dx)
     else:
-        batch = lhs.shape[:-2]
-        work = lhs.numel() * len(t)  # sigmoids of the every-point evaluation
-        # The band's planning costs ~1 ms a call and pays off only where the band is a small
-        # share of the points (about 8 tau / (T * 2 half) of them): measured crossover.
-        use_band = (
-            band
-            and work >= _BAND_MIN_WORK
-            and float(temp.min()) * 2 * half >= 8 * _band_tau(lhs.dtype)
-        )
-        length = _SigmoidIntegral.apply(
-            lhs.reshape(-1, *lhs.shape[-2:]),
-            torch.broadcast_to(slope, (*batch, slope.shape[-1])).reshape(-1, slope.shape[-1]),
-            t,
-            torch.broadcast_to(temp, batch).reshape(-1),
-            dx,
-            use_band,
-        ).reshape(*batch, lhs.shape[-2])
+        length = _fused_lengths(lhs, slope, t, temp, dx, band=band, half=half)
     mask = _window_mask(c, clip)
     if mask is not None:
         length = torch.where(mask, length, torch.zeros_like(length))
@@ -657,28 +452,17 @@ def paper_lengths(
 
 
 @dataclass(frozen=True)
-class ExactModel:
-    """Exact chord lengths (closed form); weights are 1 for transects of positive length.
-
-    Differentiable almost everywhere, but its gradient ignores transects entering or leaving
-    the polygon: use it to score, and a soft model to descend.
-    """
-
-    clip: bool = False
-    name: str = "exact"
-
-    def __call__(
-        self, hp: HalfPlanes, theta: torch.Tensor, offset: torch.Tensor, spacing: float
-    ) -> TransectLengths:
-        ch = exact_chords(hp, theta, offset, spacing, clip=self.clip)
-        # A chord shorter than this is a transect grazing a vertex: rounding, not a transect.
-        tiny = 1e-12 * max(hp.radius, 1e-300)
-        return TransectLengths(ch.lengths, (ch.lengths > tiny).to(ch.lengths.dtype), ch.positions)
-
-
-@dataclass(frozen=True)
 class PaperModel:
-    """The paper's sigmoid-integral model (Eq. 2-7) with its settings; see :func:`paper_lengths`."""
+    """The paper's sigmoid-integral model (Eq. 2-7) with its settings; see :func:`paper_lengths`.
+
+    Example:
+        >>> from boustro.geometry import Polygon, halfplanes
+        >>> hp = halfplanes(Polygon([(0, 0), (4, 0), (4, 3), (0, 3)]))  # normalised: 0.8 x 0.6
+        >>> model = PaperModel(points_per_transect=200)
+        >>> out = model(hp, torch.tensor(0.0), torch.tensor(0.05), 0.2)
+        >>> [round(x, 3) for x in out.lengths[out.weights > 0.5].tolist()]
+        [0.804, 0.804, 0.804]
+    """
 
     temperature: float = 1000.0
     points_per_transect: int = 1000

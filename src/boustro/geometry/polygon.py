@@ -1,43 +1,28 @@
-"""Validated polygons, the paper's normalised frame, and inward half-planes.
+"""Validated simple polygons (:class:`Polygon`) and the paper's normalised frame (:class:`Frame`).
 
-Conventions used throughout boustro:
-
-* Vertices are ``(x, y)`` pairs in the user's planar units. A :class:`Polygon` stores them
-  counter-clockwise (CCW), without a closing vertex, without duplicate or collinear vertices.
-* Angles are radians inside the library, counter-clockwise from ``+x``; degrees appear only at
-  the command line and in files.
-* The *normalised frame* (paper, Sec. III-B.1) centres the polygon on the mean of its vertices and
-  scales it so that its largest vertex-to-vertex distance (its *diameter*) is 1. Lengths in that
-  frame are user lengths divided by the diameter.
-* A half-plane is ``n . p + b >= 0`` with ``n`` the unit INWARD normal of a CCW edge
-  ``(x1, y1) -> (x2, y2)``: ``n = [y1 - y2, x2 - x1] / |edge|`` and
-  ``b = (x1*y2 - x2*y1) / |edge|``.
-
-  The paper's Eq. 2 as printed gives ``W = [x1 - x2, y1 - y2]``, the edge's *direction* rather
-  than its normal; the region it describes is the true polygon rotated by +90 degrees about the
-  origin (the authors' discrete code compensates by rotating by ``theta + 90``). boustro uses the
-  correct normal; :func:`paper_eq2_halfplanes` gives the printed form for comparison.
+Vertices are ``(x, y)`` in user units, stored counter-clockwise; angles are radians,
+counter-clockwise from ``+x``. The normalised frame centres a polygon on its vertex mean and
+scales its diameter to 1.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from typing import NamedTuple
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import InvalidPolygonError, NonConvexPolygonError
+from ..errors import InvalidPolygonError, NonConvexPolygonError
 
 __all__ = [
+    "COORDINATE_LIMIT",
+    "MIN_RELATIVE_EXTENT",
+    "RELATIVE_TOLERANCE",
     "Frame",
-    "HalfPlanes",
     "Polygon",
-    "halfplanes",
-    "paper_eq2_halfplanes",
-    "random_convex_polygon",
+    "as_polygon",
     "rotation_matrix",
 ]
 
@@ -50,10 +35,6 @@ COORDINATE_LIMIT = 1e100
 #: Smallest extent of a polygon relative to its largest coordinate: below it the vertices have
 #: fewer than ~4 significant digits in float64.
 MIN_RELATIVE_EXTENT = 1e-12
-
-#: Offset given to padding half-planes when polygons with different vertex counts are batched:
-#: ``0 . p + PAD_OFFSET >= 0`` holds everywhere, and ``logsigmoid(T * PAD_OFFSET) == 0``.
-PAD_OFFSET = 1.0e6
 
 
 def rotation_matrix(angle: float) -> NDArray[np.float64]:
@@ -348,109 +329,11 @@ class Polygon:
         return float(np.max(np.linalg.norm(self._vertices - self.centre, axis=1)))
 
 
-def paper_eq2_halfplanes(polygon: Polygon) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Eq. 2 of the paper exactly as printed: ``W = [x1 - x2, y1 - y2]``, ``B = x1*y2 - x2*y1``.
+def as_polygon(polygon: Polygon | ArrayLike) -> Polygon:
+    """Accept a :class:`Polygon` or anything :class:`Polygon` accepts.
 
-    ``W`` is minus the edge direction, i.e. the inward normal rotated by +90 degrees, so the
-    region ``W . X + B >= 0`` is the polygon rotated by +90 degrees about the origin. Kept for
-    documentation and tests; the models use :meth:`Polygon.halfplanes`.
+    Example:
+        >>> as_polygon([(0, 0), (1, 0), (0, 1)]).area
+        0.5
     """
-    p1 = polygon.vertices
-    p2 = np.roll(p1, -1, axis=0)
-    return p1 - p2, p1[:, 0] * p2[:, 1] - p2[:, 0] * p1[:, 1]
-
-
-class HalfPlanes(NamedTuple):
-    """Polygons as tensors of inward half-planes, ready for the transect models.
-
-    Attributes:
-        normals: ``(*P, E, 2)`` unit inward normals. Polygons with fewer than ``E`` edges are
-            padded with the always-true half-plane ``0 . p + PAD_OFFSET >= 0``.
-        offsets: ``(*P, E)``; a point ``p`` is inside iff ``normals . p + offsets >= 0`` for all E.
-        radius: a bound on the distance of every vertex from the origin, over the whole batch.
-    """
-
-    normals: torch.Tensor
-    offsets: torch.Tensor
-    radius: float
-
-
-def halfplanes(
-    polygons: Polygon | Sequence[Polygon],
-    *,
-    normalise: bool = True,
-    dtype: torch.dtype = torch.float64,
-    device: torch.device | str | None = None,
-) -> HalfPlanes:
-    """Tensor half-planes of one convex polygon, or of a batch of them (padded to equal E).
-
-    Args:
-        polygons: a convex :class:`Polygon` or a sequence of them.
-        normalise: take each polygon in its normalised frame (default), as the paper does.
-        dtype, device: of the returned tensors (float64 by default).
-
-    Returns:
-        :class:`HalfPlanes` with ``normals`` ``(E, 2)`` for one polygon or ``(P, E, 2)`` for P.
-
-    Raises:
-        NonConvexPolygonError: a polygon is concave (half-planes would describe its hull's
-            intersection, not the polygon).
-    """
-    single = isinstance(polygons, Polygon)
-    items: list[Polygon] = [polygons] if isinstance(polygons, Polygon) else list(polygons)
-    if not items:
-        raise InvalidPolygonError("expected at least one polygon, got an empty sequence")
-    items = [p.require_convex("the half-plane representation") for p in items]
-    if normalise:
-        items = [p.normalised() for p in items]
-    n_edges = max(len(p) for p in items)
-    normals = np.zeros((len(items), n_edges, 2))
-    offsets = np.full((len(items), n_edges), PAD_OFFSET)
-    for k, p in enumerate(items):
-        n, b = p.halfplanes()
-        normals[k, : len(p)] = n
-        offsets[k, : len(p)] = b
-    radius = max(float(np.max(np.linalg.norm(p.vertices, axis=1))) for p in items)
-    hp = HalfPlanes(
-        torch.as_tensor(normals, dtype=dtype, device=device),
-        torch.as_tensor(offsets, dtype=dtype, device=device),
-        radius,
-    )
-    if single:
-        return HalfPlanes(hp.normals[0], hp.offsets[0], radius)
-    return hp
-
-
-def random_convex_polygon(rng: np.random.Generator, n_vertices: int) -> Polygon:
-    """A random convex polygon with exactly ``n_vertices`` vertices (Valtr's algorithm).
-
-    The same construction as the ``polygenerator`` package that the paper used: random x and y
-    coordinates are split into two chains each, turned into edge vectors, sorted by angle and
-    chained. Returned in the normalised frame (centred on the vertex mean, diameter 1). The rare
-    draw whose vertices are collinear after rounding is redrawn from ``rng``.
-    """
-    if int(n_vertices) != n_vertices or n_vertices < 3:
-        raise InvalidPolygonError(f"n_vertices must be an integer >= 3, got {n_vertices!r}")
-    n = int(n_vertices)
-    while True:
-
-        def chains(values: NDArray[np.float64]) -> NDArray[np.float64]:
-            values = np.sort(values)
-            lo, hi = values[0], values[-1]
-            side = rng.random(n - 2) < 0.5
-            inner = values[1:-1]
-            a = np.concatenate([[lo], inner[side], [hi]])
-            b = np.concatenate([[lo], inner[~side], [hi]])
-            return np.concatenate([np.diff(a), -np.diff(b)])
-
-        dx, dy = chains(rng.random(n)), chains(rng.random(n))
-        rng.shuffle(dy)
-        vec = np.stack([dx, dy], axis=1)
-        vec = vec[np.argsort(np.arctan2(vec[:, 1], vec[:, 0]))]
-        pts = np.cumsum(vec, axis=0)
-        try:
-            poly = Polygon(pts)
-        except InvalidPolygonError:
-            continue
-        if len(poly) == n:
-            return poly.normalised()
+    return polygon if isinstance(polygon, Polygon) else Polygon(polygon)

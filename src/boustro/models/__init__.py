@@ -1,0 +1,65 @@
+"""Transect-length models behind one interface: exact chords, paper sigmoids, smooth form."""
+
+# ruff: noqa: F401 (private names are re-exported for the old import paths; __all__ is public)
+
+from .._validate import MAX_TRANSECTS, check_finite, check_spacing
+from .base import (
+    MAX_CANDIDATES,
+    PAPER_WINDOW,
+    Chords,
+    TransectLengths,
+    TransectModel,
+    _components,
+    _grid,
+    _prepare,
+    _window_mask,
+    grid_size,
+    transect_positions,
+)
+from .exact import ChordBounds, ExactModel, chord_bounds, chords_at, exact_chords, line_chords
+from .paper import (
+    _BAND_MIN_WORK,
+    _TARGET,
+    MAX_POINTS_PER_TRANSECT,
+    PaperModel,
+    _as_temperature,
+    _Band,
+    _band,
+    _band_integrand,
+    _band_tau,
+    _chunks,
+    _full_grads,
+    _full_lengths,
+    _Group,
+    _group_points,
+    _items,
+    _sigmoid_integrand,
+    _SigmoidIntegral,
+    _trapezoid_weights,
+    paper_lengths,
+)
+from .smooth import SmoothModel, smooth_lengths
+
+__all__ = [
+    "MAX_CANDIDATES",
+    "MAX_POINTS_PER_TRANSECT",
+    "MAX_TRANSECTS",
+    "PAPER_WINDOW",
+    "ChordBounds",
+    "Chords",
+    "ExactModel",
+    "PaperModel",
+    "SmoothModel",
+    "TransectLengths",
+    "TransectModel",
+    "check_finite",
+    "check_spacing",
+    "chord_bounds",
+    "chords_at",
+    "exact_chords",
+    "grid_size",
+    "line_chords",
+    "paper_lengths",
+    "smooth_lengths",
+    "transect_positions",
+]
