@@ -348,3 +348,20 @@ def test_bad_input():
         learned(Polygon([(0, 0), (1, 0), (0, 1)]), -1.0)
     with pytest.raises(InvalidParameterError):
         learned_batch([Polygon([(0, 0), (1, 0), (0, 1)])])
+
+
+def test_learned_is_loaded_lazily_and_stays_below_the_io_edge():
+    # issue 15, defect 5: the learned planner must not pull in the I/O edge (atomic_write comes
+    # from boustro._files), and neither boustro nor boustro.optimize may load the network
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, boustro, boustro.optimize; "
+        "early = [m for m in sys.modules if m.startswith('boustro.learned')]; "
+        "import boustro.learned; "
+        "bad = [m for m in ('boustro.io', 'boustro.cli', 'boustro.experiments', 'matplotlib', "
+        "'shapely', 'pyproj') if m in sys.modules]; print(early, bad)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[] []"
