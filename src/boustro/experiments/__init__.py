@@ -28,6 +28,7 @@ from .optimizers import (
     optimizer_specs,
 )
 from .paper_batched import BAND_Z, paper_model_fitness
+from .paper_batched import Method as Method  # the type aliases, defined here before
 from .report import JSON_KEYS, PROTOCOL_NOTES, render_report
 from .samples import (
     POINTS_PER_TRANSECT,
@@ -38,6 +39,10 @@ from .samples import (
     draw_samples,
     polygenerator_convex_polygon,
 )
+from .samples import Eq2 as Eq2
+from .samples import Statistics as Statistics
+from .samples import Trapezoid as Trapezoid
+from .samples import Window as Window
 from .table1 import PAPER_TABLE1, Table1, smooth_model_fitness, smooth_table1, table1
 
 __all__ = [

@@ -12,6 +12,7 @@ from ..objectives import LengthObjective, PlanObjective, PreferredAngle, as_plan
 from .batch import PlanBatch, batch_lengths, batch_objective, make_batch, random_batch
 from .infer import BatchResult, learned, learned_batch, warm_start
 from .network import LearnedPlanner, PlannerConfig, Prediction
+from .refine import NUDGE as NUDGE  # defined here before, not in __all__
 from .refine import RefineOptions, refine
 from .train import TrainConfig, TrainResult, train_planner
 from .weights import DEFAULT_WEIGHTS, check_weights_path, load_planner, save_planner
