@@ -113,25 +113,34 @@ def test_batch_objective_matches_evaluate_pairs():
         torch.testing.assert_close(values[i], expected)
 
 
-def test_fast_exact_lengths_match_exact_model(square):
-    from boustro.learned import _exact_lengths
+def test_batch_lengths_are_the_exact_models(square):
+    # one chord kernel (issue 15, defect 6): the batched scoring IS ExactModel's, bit for bit
+    from boustro.learned import batch_lengths
     from boustro.models import ExactModel
 
     batch = random_batch(np.random.default_rng(8), 6)
-    hp = halfplanes(_polygons_of(batch))
     theta = torch.rand(6, 40, dtype=torch.float64) * math.pi
     offset = torch.rand(6, 40, dtype=torch.float64) * 0.2
-    hp = hp._replace(normals=hp.normals[:, None], offsets=hp.offsets[:, None])
-    ours, ref = _exact_lengths(hp, theta, offset, 0.07), ExactModel()(hp, theta, offset, 0.07)
-    torch.testing.assert_close(ours.lengths, ref.lengths, rtol=0, atol=1e-13)
-    assert torch.equal(ours.weights, ref.weights) and torch.equal(ours.positions, ref.positions)
-    # transects parallel to two edges (along == 0 exactly), through and beside them
+    ours = batch_lengths(batch, torch.arange(6), theta, offset, None)
+    for i, poly in enumerate(_polygons_of(batch)):
+        s = float(batch.spacing[i])
+        ref = ExactModel()(halfplanes(poly), theta[i], offset[i], s)
+        for j in range(40):  # the grids differ in their empty candidates only
+            mine = ours.lengths[i, j][ours.weights[i, j] > 0]
+            theirs = ref.lengths[j][ref.weights[j] > 0]
+            torch.testing.assert_close(mine, theirs, rtol=1e-12, atol=1e-13)
+
+
+def test_chords_at_is_the_library_kernel_at_any_position(square):
+    from boustro.learned.batch import chords_at
+    from boustro.models import exact_chords
+
     hp = halfplanes(square)
-    for off in (0.0, 0.05, 0.5, 0.51, -0.5):
-        ours = _exact_lengths(hp, torch.tensor(0.0, dtype=torch.float64), off, 0.25)
-        ref = ExactModel()(hp, torch.tensor(0.0, dtype=torch.float64), off, 0.25)
-        torch.testing.assert_close(ours.lengths, ref.lengths, rtol=0, atol=1e-13)
-        assert torch.equal(ours.weights, ref.weights)
+    theta = torch.tensor([0.0, 0.3, 1.2], dtype=torch.float64)
+    for clip in (False, True):
+        ref = exact_chords(hp, theta, 0.05, 0.25, clip=clip)  # (3, K)
+        ours = chords_at(hp.normals, hp.offsets, theta[:, None], ref.positions, clip=clip)
+        assert torch.equal(ours, ref.lengths)
 
 
 def test_smooth_batch_objective_tends_to_exact():
@@ -339,3 +348,20 @@ def test_bad_input():
         learned(Polygon([(0, 0), (1, 0), (0, 1)]), -1.0)
     with pytest.raises(InvalidParameterError):
         learned_batch([Polygon([(0, 0), (1, 0), (0, 1)])])
+
+
+def test_learned_is_loaded_lazily_and_stays_below_the_io_edge():
+    # issue 15, defect 5: the learned planner must not pull in the I/O edge (atomic_write comes
+    # from boustro._files), and neither boustro nor boustro.optimize may load the network
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, boustro, boustro.optimize; "
+        "early = [m for m in sys.modules if m.startswith('boustro.learned')]; "
+        "import boustro.learned; "
+        "bad = [m for m in ('boustro.io', 'boustro.cli', 'boustro.experiments', 'matplotlib', "
+        "'shapely', 'pyproj') if m in sys.modules]; print(early, bad)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[] []"

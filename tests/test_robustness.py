@@ -373,11 +373,13 @@ def test_planner_files_errors_and_cache(tmp_path):
 
 
 def test_event_layouts_in_chunks_equal_one_batch(monkeypatch):
-    from boustro import learned
+    import importlib
+
+    refine_module = importlib.import_module("boustro.learned.refine")  # its function shadows it
 
     ring = [(math.cos(2 * math.pi * k / 12), math.sin(2 * math.pi * k / 12)) for k in range(12)]
     whole = optimize(ring, 0.1, method="learned", refine=True)
-    monkeypatch.setattr(learned, "_EVENT_CHUNK_ELEMENTS", 1)  # one layout a chunk
+    monkeypatch.setattr(refine_module, "_EVENT_CHUNK_ELEMENTS", 1)  # one layout a chunk
     chunked = optimize(ring, 0.1, method="learned", refine=True)
     assert chunked.fitness == pytest.approx(whole.fitness, abs=1e-12)
     assert chunked.angle == pytest.approx(whole.angle, abs=1e-9)
