@@ -7,7 +7,7 @@ import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -271,16 +271,92 @@ def plan_area(
 
     Raises:
         InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError.
+
+    Example:
+        >>> from boustro.io import embedded_field
+        >>> mission = plan_area(embedded_field(), 10.0)
+        >>> mission.plan.stats.n_transects, round(mission.bearing, 2)
+        (19, 68.43)
     """
+    area = _as_area(area, crs, holes)
+    sensor = _Sensor(*_sensor_spacing(spacing))
+    frame = _project(area, sensor, hull_tolerance, decompose, start)
+    if frame.region is None:
+        planned = _plan_convex(
+            frame,
+            method=method,
+            fitness=fitness,
+            options=options,
+            layout=layout,
+            turnaround=turnaround,
+            speed=speed,
+            turn_time=turn_time,
+            check_coverage=check_coverage,
+        )
+    else:
+        planned = _plan_concave(
+            frame,
+            method=method,
+            fitness=fitness,
+            options=options,
+            layout=layout,
+            turnaround=turnaround,
+            speed=speed,
+            turn_time=turn_time,
+            check_coverage=check_coverage,
+            decompose=decompose,
+            sweep=sweep,
+        )
+    return _map_back(frame, planned, altitude=altitude, turnaround=turnaround)
+
+
+class _Sensor(NamedTuple):
+    """The spacing and footprint asked for, on the ground (metres, or planar units)."""
+
+    spacing: float
+    reach: float
+    nadir_gap: float
+    altitude: float | None
+    text: str | None
+
+
+class _Frame(NamedTuple):
+    """Step 1: the area projected into the plan frame, with what the plan needs."""
+
+    area: Area
+    sensor: _Sensor
+    proj: Projection
+    ring: NDArray[np.float64]
+    holes: list[NDArray[np.float64]]
+    surveyed: Polygon
+    poly: Polygon
+    region: Region | None
+    depth: float
+    start: NDArray[np.float64]
+    given_start: bool
+    ground_area: float
+
+
+class _Planned(NamedTuple):
+    """Step 2: the plan (plan frame), its optimum and its coverage."""
+
+    plan: Plan
+    optimum: OptimizeResult
+    coverage: Coverage | None
+
+
+def _as_area(area: Area | ArrayLike, crs: str | None, holes: Sequence[ArrayLike]) -> Area:
+    """An :class:`Area` with one spelling of its CRS ("EPSG:n", or None for planar)."""
     if not isinstance(area, Area):
         hole_rings = tuple(np.asarray(h, dtype=np.float64) for h in holes)
-        area = Area(np.asarray(area, dtype=np.float64), parse_crs(crs), "", "<array>", hole_rings)
-    else:  # one spelling of the CRS from here on ("EPSG:n", or None for planar)
-        area = dataclasses.replace(area, crs=parse_crs(area.crs))
+        return Area(np.asarray(area, dtype=np.float64), parse_crs(crs), "", "<array>", hole_rings)
+    return dataclasses.replace(area, crs=parse_crs(area.crs))
+
+
+# -- step 1: project --------------------------------------------------------------------------
+def _project_holes(area: Area, proj: Projection) -> list[NDArray[np.float64]]:
+    """The holes in the plan frame, checked."""
     where = area.source
-    s_m, reach_m, gap_m, sensor_altitude, sensor_text = _sensor_spacing(spacing)
-    proj = projection_for(area.ring, area.crs, where)
-    ring_plan = proj.to_plan(area.ring)
     holes_plan = []
     for i, hole in enumerate(area.holes):
         if proj.geographic:
@@ -297,12 +373,27 @@ def plan_area(
             Region(Polygon(area.ring), [np.asarray(h, dtype=np.float64) for h in area.holes])
         except InvalidPolygonError as exc:
             raise InvalidPolygonError(f"{where}: {exc} (in the file's coordinates)") from None
+    return holes_plan
+
+
+def _project(
+    area: Area,
+    sensor: _Sensor,
+    hull_tolerance: float,
+    decompose: bool | None,
+    start: ArrayLike | None,
+) -> _Frame:
+    """Project the area, decide convex (possibly its hull) or region, place the start."""
+    where = area.source
+    proj = projection_for(area.ring, area.crs, where)
+    ring_plan = proj.to_plan(area.ring)
+    holes_plan = _project_holes(area, proj)
     try:
         surveyed = Polygon(ring_plan)
         region = Region(surveyed, holes_plan) if holes_plan else None
     except InvalidPolygonError as exc:
         raise InvalidPolygonError(f"{where}: {exc}") from None
-    k_lo, k_hi = proj.scale_min, proj.scale_max
+    k_lo = proj.scale_min
     depth = 0.0
     poly = surveyed
     if region is None and (decompose is None or surveyed.is_convex):
@@ -318,120 +409,181 @@ def plan_area(
             "planning the hull",
             depth / k_lo,
         )
-    s_plan = s_m * k_lo
     start_plan = ring_plan[0] if start is None else proj.to_plan(np.asarray(start, float))
     if start is not None:
-        far = float(np.min(np.hypot(*(ring_plan - start_plan).T))) / k_lo
-        size = float(np.max(np.hypot(*(ring_plan - ring_plan.mean(axis=0)).T))) * 2 / k_lo
-        if far > 10 * size:
-            log.warning(
-                "the start is %.3g m from the area, %.0f times its size: swapped longitude and "
-                "latitude?",
-                far,
-                far / size,
-            )
+        _warn_far_start(ring_plan, start_plan, k_lo)
     ground_area = proj.ground_area(ring_plan) - sum(proj.ground_area(h) for h in holes_plan)
-    if region is None:
-        chosen = method or DEFAULT_METHOD
-        opts = dict(METHOD_OPTIONS.get(chosen, {}))
-        opts.update(options or {})
-        try:
-            optimum = optimize(poly, s_plan, method=chosen, fitness=fitness, **opts)
-        except ProblemTooLargeError as exc:
-            if method is not None:
-                raise
-            log.warning("%s; planning with the hybrid optimiser instead", exc)
-            optimum = optimize(poly, s_plan, method=FALLBACK_METHOD, fitness=fitness)
-        plan = build_plan(
-            poly,
-            s_plan,
-            optimum.angle,
-            optimum.offset,
-            layout=layout,  # type: ignore[arg-type]
-            start=start_plan,
-            turnaround=float(turnaround) * k_hi,
-            reach=reach_m * k_lo,
-            nadir_gap=gap_m * k_hi,
-            ground_scale=proj.scale,
-            speed=speed,
-            turn_time=turn_time,
-            area=ground_area,
+    return _Frame(
+        area=area,
+        sensor=sensor,
+        proj=proj,
+        ring=ring_plan,
+        holes=holes_plan,
+        surveyed=surveyed,
+        poly=poly,
+        region=region,
+        depth=depth,
+        start=start_plan,
+        given_start=start is not None,
+        ground_area=ground_area,
+    )
+
+
+def _warn_far_start(ring: NDArray[np.float64], start: NDArray[np.float64], k_lo: float) -> None:
+    far = float(np.min(np.hypot(*(ring - start).T))) / k_lo
+    size = float(np.max(np.hypot(*(ring - ring.mean(axis=0)).T))) * 2 / k_lo
+    if far > 10 * size:
+        log.warning(
+            "the start is %.3g m from the area, %.0f times its size: swapped longitude and "
+            "latitude?",
+            far,
+            far / size,
         )
-        cov = coverage(plan, surveyed) if check_coverage else None
-    else:
-        if method not in (None, DEFAULT_METHOD, "grid", "region-grid"):
-            raise InvalidParameterError(
-                f"method {method!r} optimises convex areas only; a concave area or one with "
-                "holes is optimised by grid search over its segments (leave --method out)"
-            )
-        opts = dict(REGION_OPTIONS)
-        opts.update({k: v for k, v in (options or {}).items() if k in ("n_angles", "n_offsets")})
-        plan = plan_region(
-            region,
-            s_plan,
-            decompose_area="auto" if decompose is None else bool(decompose),
-            sweep=None if sweep is None else math.radians(float(sweep)),
-            fitness=fitness,
-            layout=layout,  # type: ignore[arg-type]
-            start=None if start is None else start_plan,  # None: the shortest tour
-            turnaround=float(turnaround) * k_hi,
-            reach=reach_m * k_lo,
-            nadir_gap=gap_m * k_hi,
-            ground_scale=proj.scale,
-            speed=speed,
-            turn_time=turn_time,
-            area=ground_area,
-            **opts,
+
+
+# -- step 2: plan -----------------------------------------------------------------------------
+def _path_options(frame: _Frame, turnaround: float, speed: Any, turn_time: float) -> dict:
+    """The options of the path that both planners take, scaled to the plan frame."""
+    proj, sensor = frame.proj, frame.sensor
+    return {
+        "turnaround": float(turnaround) * proj.scale_max,
+        "reach": sensor.reach * proj.scale_min,
+        "nadir_gap": sensor.nadir_gap * proj.scale_max,
+        "ground_scale": proj.scale,
+        "speed": speed,
+        "turn_time": turn_time,
+        "area": frame.ground_area,
+    }
+
+
+def _plan_convex(
+    frame: _Frame,
+    *,
+    method: str | None,
+    fitness: Any,
+    options: dict[str, Any] | None,
+    layout: str,
+    turnaround: float,
+    speed: float | None,
+    turn_time: float,
+    check_coverage: bool,
+) -> _Planned:
+    """A convex area (or the hull of a nearly convex one): optimise, then build the plan."""
+    s_plan = frame.sensor.spacing * frame.proj.scale_min
+    chosen = method or DEFAULT_METHOD
+    opts = dict(METHOD_OPTIONS.get(chosen, {}))
+    opts.update(options or {})
+    try:
+        optimum = optimize(frame.poly, s_plan, method=chosen, fitness=fitness, **opts)
+    except ProblemTooLargeError as exc:
+        if method is not None:
+            raise
+        log.warning("%s; planning with the hybrid optimiser instead", exc)
+        optimum = optimize(frame.poly, s_plan, method=FALLBACK_METHOD, fitness=fitness)
+    plan = build_plan(
+        frame.poly,
+        s_plan,
+        optimum.angle,
+        optimum.offset,
+        layout=layout,  # type: ignore[arg-type]
+        start=frame.start,
+        **_path_options(frame, turnaround, speed, turn_time),
+    )
+    cov = coverage(plan, frame.surveyed) if check_coverage else None
+    return _Planned(plan, optimum, cov)
+
+
+def _plan_concave(
+    frame: _Frame,
+    *,
+    method: str | None,
+    fitness: Any,
+    options: dict[str, Any] | None,
+    layout: str,
+    turnaround: float,
+    speed: float | None,
+    turn_time: float,
+    check_coverage: bool,
+    decompose: bool | None,
+    sweep: float | None,
+) -> _Planned:
+    """A concave area or one with holes: cells, lanes and a tour (:func:`plan_region`)."""
+    if method not in (None, DEFAULT_METHOD, "grid", "region-grid"):
+        raise InvalidParameterError(
+            f"method {method!r} optimises convex areas only; a concave area or one with "
+            "holes is optimised by grid search over its segments (leave --method out)"
         )
-        optimum = _region_optimum(plan, s_plan)
-        cov = coverage(plan, region) if check_coverage else None
-    if proj.planar:
-        wp_ll = tr_ll = area_ll = None
-        holes_ll: tuple[NDArray[np.float64], ...] = ()
-        u = np.array([math.cos(plan.angle), math.sin(plan.angle)])
-        bearing = math.degrees(math.atan2(u[0], u[1])) % 180.0
-    else:
-        wp_ll = proj.to_lonlat(plan.waypoints)
-        tr_ll = proj.to_lonlat(plan.transects)
-        area_ll = proj.to_lonlat(ring_plan)
-        holes_ll = tuple(proj.to_lonlat(h) for h in holes_plan)
-        c = poly.centre if region is None else plan.cells[_main_cell(plan)].polygon.centre
-        u = np.array([math.cos(plan.angle), math.sin(plan.angle)])
-        a, b = proj.to_lonlat(np.stack([c - 5 * u, c + 5 * u]))
-        azimuth, _, _ = proj._geod.inv(a[0], a[1], b[0], b[1])
-        bearing = float(azimuth) % 180.0
+    s_plan = frame.sensor.spacing * frame.proj.scale_min
+    opts = dict(REGION_OPTIONS)
+    opts.update({k: v for k, v in (options or {}).items() if k in ("n_angles", "n_offsets")})
+    plan = plan_region(
+        frame.region,  # type: ignore[arg-type]
+        s_plan,
+        decompose_area="auto" if decompose is None else bool(decompose),
+        sweep=None if sweep is None else math.radians(float(sweep)),
+        fitness=fitness,
+        layout=layout,  # type: ignore[arg-type]
+        start=frame.start if frame.given_start else None,  # None: the shortest tour
+        **_path_options(frame, turnaround, speed, turn_time),
+        **opts,
+    )
+    optimum = _region_optimum(plan, s_plan)
+    cov = coverage(plan, frame.region) if check_coverage else None
+    return _Planned(plan, optimum, cov)
+
+
+# -- step 3: map back -------------------------------------------------------------------------
+def _bearing(frame: _Frame, plan: Plan) -> float:
+    """The transects' bearing, degrees clockwise from north (from the plan frame's y axis)."""
+    u = np.array([math.cos(plan.angle), math.sin(plan.angle)])
+    if frame.proj.planar:
+        return math.degrees(math.atan2(u[0], u[1])) % 180.0
+    main = plan.cells[_main_cell(plan)].polygon if frame.region is not None else frame.poly
+    c = main.centre
+    a, b = frame.proj.to_lonlat(np.stack([c - 5 * u, c + 5 * u]))
+    azimuth, _, _ = frame.proj._geod.inv(a[0], a[1], b[0], b[1])
+    return float(azimuth) % 180.0
+
+
+def _map_back(
+    frame: _Frame, planned: _Planned, *, altitude: float | None, turnaround: float
+) -> Mission:
+    """The :class:`Mission`: the plan's coordinates in the area's CRS and in lon/lat."""
+    proj, plan, sensor = frame.proj, planned.plan, frame.sensor
+    bearing = _bearing(frame, plan)
     if altitude is None:
-        altitude = sensor_altitude
+        altitude = sensor.altitude
     else:
         value = as_number("altitude", altitude)
         if not (math.isfinite(value) and value >= 0):
             raise InvalidParameterError(
                 f"altitude must be a finite number >= 0 (metres above take-off), got {altitude!r}"
             )
-    home_plan = plan.waypoints[0] if start is None else start_plan
+    home_plan = frame.start if frame.given_start else plan.waypoints[0]
+    lonlat = None if proj.planar else proj.to_lonlat
     return Mission(
-        name=area.name,
-        area=area,
+        name=frame.area.name,
+        area=frame.area,
         projection=proj,
         plan=plan,
-        optimum=optimum,
-        spacing=s_m,
-        reach=reach_m,
-        nadir_gap=gap_m,
+        optimum=planned.optimum,
+        spacing=sensor.spacing,
+        reach=sensor.reach,
+        nadir_gap=sensor.nadir_gap,
         turnaround=float(turnaround),
-        hull_depth=depth / k_lo,
+        hull_depth=frame.depth / proj.scale_min,
         altitude=None if altitude is None else float(altitude),
-        coverage=cov,
-        sensor=sensor_text,
+        coverage=planned.coverage,
+        sensor=sensor.text,
         waypoints=proj.to_source(plan.waypoints),
         transects=proj.to_source(plan.transects),
-        waypoints_lonlat=wp_ll,
-        transects_lonlat=tr_ll,
-        area_lonlat=area_ll,
+        waypoints_lonlat=None if lonlat is None else lonlat(plan.waypoints),
+        transects_lonlat=None if lonlat is None else lonlat(plan.transects),
+        area_lonlat=None if lonlat is None else lonlat(frame.ring),
         bearing=bearing,
         home=proj.to_source(home_plan),
-        home_lonlat=None if proj.planar else proj.to_lonlat(home_plan),
-        holes_lonlat=holes_ll,
+        home_lonlat=None if lonlat is None else lonlat(home_plan),
+        holes_lonlat=() if lonlat is None else tuple(lonlat(h) for h in frame.holes),
     )
 
 

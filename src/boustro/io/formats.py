@@ -1,23 +1,4 @@
-"""Mission files: GeoJSON, KML, GPX, CSV, QGroundControl ``.plan``, MAVLink ``QGC WPL 110``.
-
-An edge of the system: each writer turns a :class:`boustro.geo.Mission` into text, and
-:func:`write_mission` writes it atomically (a temporary file in the same folder, then a rename),
-so an error never leaves a half-written mission behind; everything is rendered before the target
-is touched.
-
-Coordinates:
-
-* GeoJSON holds the area's own coordinates (RFC 7946 longitude/latitude for geographic input;
-  for a projected CRS the coordinates stay in it and a GeoJSON 2008 ``crs`` member names it,
-  which GDAL honours; planar input is written as it is, without a CRS).
-* KML, GPX, ``.plan`` and ``QGC WPL`` are WGS 84 longitude/latitude by definition; they need
-  geographic or projected input.
-* CSV holds the area's coordinates and, where known, longitude/latitude.
-
-Altitudes in ``.plan`` and ``QGC WPL`` files are metres above the take-off (home) position
-(``MAV_FRAME_GLOBAL_RELATIVE_ALT``); those two formats need an altitude (0 for a ground or surface
-vehicle). GPX and KML carry no altitude unless one is given (KML: ``relativeToGround``).
-"""
+"""Mission files (GeoJSON, KML, GPX, CSV, QGroundControl ``.plan``, MAVLink ``QGC WPL 110``)."""
 
 from __future__ import annotations
 
@@ -446,8 +427,8 @@ def to_wpl(mission: Mission) -> str:
 
 
 # -- registry and atomic writing ------------------------------------------------------------
-#: name -> (file extensions, renderer).
-FORMATS: dict[str, tuple[tuple[str, ...], Callable[[Mission], str]]] = {
+#: name -> (file extensions, renderer); a renderer returns text, or bytes for a binary format.
+FORMATS: dict[str, tuple[tuple[str, ...], Callable[[Mission], str | bytes]]] = {
     "geojson": ((".geojson", ".json"), to_geojson),
     "kml": ((".kml",), to_kml),
     "gpx": ((".gpx",), to_gpx),
@@ -476,8 +457,17 @@ def format_for(path: str | os.PathLike[str], fmt: str | None = None) -> str:
     )
 
 
-def render(mission: Mission, fmt: str) -> str:
-    """The text of ``mission`` in format ``fmt`` (a key of :data:`FORMATS`)."""
+def render(mission: Mission, fmt: str) -> str | bytes:
+    """The text (or bytes) of ``mission`` in format ``fmt`` (a key of :data:`FORMATS`).
+
+    Example:
+        >>> from boustro.io import embedded_field
+        >>> from boustro.mission import plan_area
+        >>> sorted(FORMATS)
+        ['csv', 'geojson', 'gpx', 'kml', 'plan', 'wpl']
+        >>> render(plan_area(embedded_field(), 10.0), "csv").splitlines()[0]
+        'seq,kind,transect,lon,lat'
+    """
     return FORMATS[format_for("", fmt)][1](mission)
 
 

@@ -515,6 +515,12 @@ def read_area(path: str | os.PathLike[str], crs: str | None = None) -> Area:
 
     Raises:
         PolygonFileError: missing or unreadable file, malformed content, no polygon.
+
+    Example:
+        >>> from importlib import resources
+        >>> area = read_area(resources.files("boustro") / "data" / EMBEDDED_FIELD)
+        >>> area.name, area.crs, len(area.ring)
+        ('test parcel', 'EPSG:4326', 19)
     """
     name = os.fspath(path)
     try:

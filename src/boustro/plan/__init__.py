@@ -7,7 +7,7 @@ from .convex import build_plan, edge_offset, guaranteed_segments
 from .coverage import Coverage, coverage, footprint, swath_polygons
 from .hull import convex_hull, hull_depth, nearly_convex
 from .lanes import Lanes, region_lanes
-from .region import plan_region
+from .region import PlanOptions, plan_region
 from .region_opt import SWEEP_SEARCH, choose_sweep, optimize_region
 from .routing import Route, Router
 from .types import KINDS, Plan, PlanCell, PlanStats
@@ -20,6 +20,7 @@ __all__ = [
     "Lanes",
     "Plan",
     "PlanCell",
+    "PlanOptions",
     "PlanStats",
     "Route",
     "Router",

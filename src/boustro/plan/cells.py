@@ -347,6 +347,11 @@ def decompose(
             a few spacings: the cells that wiggles of the boundary cut off) into the neighbour
             it shares the longest boundary with; such merged cells need not be monotone.
         polygons: build the cells' regions (``False``: only membership and widths, faster).
+
+    Example:
+        >>> u_shape = [(0, 0), (9, 0), (9, 9), (6, 9), (6, 3), (3, 3), (3, 9), (0, 9)]
+        >>> [round(cell.area, 3) for cell in decompose(u_shape, 0.0).cells]
+        [45.0, 18.0]
     """
     r = as_region(region)
     tr = trapezoids(r, sweep)

@@ -93,6 +93,11 @@ def guaranteed_segments(
     Raises:
         NonConvexPolygonError: the polygon is concave.
         InvalidParameterError: bad spacing, angle, offset or reach.
+
+    Example:
+        >>> seg = guaranteed_segments([(0, 0), (10, 0), (10, 10), (0, 10)], 2.0, 0.0, 0.0)
+        >>> len(seg.segments), seg.segments[0].tolist()
+        (5, [[0.0, 1.0], [10.0, 1.0]])
     """
     poly = as_polygon(polygon).require_convex("coverage-guaranteed transects")
     spacing = check_spacing(spacing, extent=poly.diameter)
@@ -182,6 +187,37 @@ def _orient(
     return candidates[int(np.argmin(np.linalg.norm(firsts - start, axis=1)))]
 
 
+def _start_point(start: ArrayLike | None, default: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``start`` checked as a finite ``(x, y)`` pair, or ``default``."""
+    if start is None:
+        return default
+    start_pt = np.asarray(start, dtype=np.float64).reshape(-1)
+    if start_pt.shape != (2,) or not np.all(np.isfinite(start_pt)):
+        raise InvalidParameterError(f"start must be a finite (x, y) pair, got {start!r}")
+    return start_pt
+
+
+def _waypoints(
+    transects: NDArray[np.float64], travel: NDArray[np.float64], turnaround: float
+) -> tuple[NDArray[np.float64], list[str], list[int]]:
+    """Waypoints, their kinds and transect indices of oriented transects driven in order."""
+    points: list[NDArray[np.float64]] = []
+    kinds: list[str] = []
+    lane: list[int] = []
+    for i, seg in enumerate(transects):
+        step = turnaround * travel[i]
+        if turnaround > 0:
+            points.append(seg[0] - step)
+            kinds.append("run_in")
+        points += [seg[0], seg[1]]
+        kinds += ["start", "end"]
+        if turnaround > 0:
+            points.append(seg[1] + step)
+            kinds.append("run_out")
+        lane += [i] * (4 if turnaround > 0 else 2)
+    return np.array(points), kinds, lane
+
+
 def build_plan(
     polygon: Polygon | ArrayLike,
     spacing: float,
@@ -222,6 +258,11 @@ def build_plan(
     Raises:
         NonConvexPolygonError, InvalidParameterError: bad input.
         NoTransectError: no transect crosses the polygon (chords layout only).
+
+    Example:
+        >>> plan = build_plan([(0, 0), (10, 0), (10, 10), (0, 10)], 2.0, 0.0, 0.0)
+        >>> plan.stats.n_transects, plan.stats.path_length, plan.kinds[:2]
+        (5, 58.0, ('start', 'end'))
     """
     poly = as_polygon(polygon).require_convex("a boustrophedon plan")
     spacing = check_spacing(spacing, extent=poly.diameter)
@@ -248,31 +289,12 @@ def build_plan(
             f"no transect crosses the polygon at spacing {spacing:g}, angle "
             f"{math.degrees(angle):g} deg, offset {offset:g}"
         )
-    if start is None:
-        start_pt = poly.vertices[0]
-    else:
-        start_pt = np.asarray(start, dtype=np.float64).reshape(-1)
-        if start_pt.shape != (2,) or not np.all(np.isfinite(start_pt)):
-            raise InvalidParameterError(f"start must be a finite (x, y) pair, got {start!r}")
+    start_pt = _start_point(start, poly.vertices[0])
     n = np.array([-math.sin(angle), math.cos(angle)])
     transects = _orient(segs.segments, start_pt, turnaround)
     travel = _travel_directions(transects)
     positions = (transects[:, 0] - poly.centre) @ n
-    points: list[NDArray[np.float64]] = []
-    kinds: list[str] = []
-    lane: list[int] = []
-    for i, seg in enumerate(transects):
-        step = turnaround * travel[i]
-        if turnaround > 0:
-            points.append(seg[0] - step)
-            kinds.append("run_in")
-        points += [seg[0], seg[1]]
-        kinds += ["start", "end"]
-        if turnaround > 0:
-            points.append(seg[1] + step)
-            kinds.append("run_out")
-        lane += [i] * (4 if turnaround > 0 else 2)
-    waypoints = np.array(points)
+    waypoints, kinds, lane = _waypoints(transects, travel, turnaround)
     transect_length = float(np.linalg.norm(transects[:, 1] - transects[:, 0], axis=1).sum())
     path_length = float(np.linalg.norm(np.diff(waypoints, axis=0), axis=1).sum())
     n_t = len(transects)

@@ -41,12 +41,8 @@ def swath_polygons(plan: Plan) -> NDArray[np.float64]:
     seg = plan.transects.copy()
     backwards = np.einsum("ij,ij->i", seg[:, 1] - seg[:, 0], u) < 0
     seg[backwards] = seg[backwards, ::-1]  # along +u, so that every rectangle is CCW
-    if plan.nadir_gap > 0:
-        sides = [(-plan.reach, -plan.nadir_gap / 2), (plan.nadir_gap / 2, plan.reach)]
-    else:
-        sides = [(-plan.reach, plan.reach)]
     rects = []
-    for a, b in sides:
+    for a, b in _sides(plan):
         rects.append(
             np.stack(
                 [seg[:, 0] + a * n, seg[:, 1] + a * n, seg[:, 1] + b * n, seg[:, 0] + b * n],
@@ -92,38 +88,49 @@ def coverage(plan: Plan, region: Polygon | Region | ArrayLike | None = None) -> 
     measured the same way per lane direction (:func:`footprint`), the unions are mapped back to
     the plan frame and joined with the footprints of the passes around holes; ``region`` may
     then be a :class:`~boustro.regions.Region` (default: the plan's).
+
+    Example:
+        >>> from boustro.plan import build_plan
+        >>> plan = build_plan([(0, 0), (10, 0), (10, 10), (0, 10)], 2.0, 0.0, 0.0)
+        >>> c = coverage(plan)
+        >>> round(c.covered_share, 4), round(c.overlap_share, 4)
+        (1.0, 0.0)
     """
     if plan.transect_angles is not None or plan.region is not None or _has_holes(region):
         return _coverage_general(plan, region)
     import shapely
 
     ring = plan.polygon.vertices if region is None else as_polygon(region).vertices  # type: ignore[arg-type]
-    u = np.array([math.cos(plan.angle), math.sin(plan.angle)])
-    n = np.array([-math.sin(plan.angle), math.cos(plan.angle)])
+    u, n = _axes(plan.angle)
     origin = plan.polygon.centre
     target = shapely.Polygon(np.stack([(ring - origin) @ u, (ring - origin) @ n], axis=1))
-    t = (plan.transects - origin) @ u  # (T, 2)
-    c = ((plan.transects - origin) @ n).mean(axis=1)
-    if plan.nadir_gap > 0:
-        sides = [(-plan.reach, -plan.nadir_gap / 2), (plan.nadir_gap / 2, plan.reach)]
-    else:
-        sides = [(-plan.reach, plan.reach)]
-    lo = np.concatenate([c + a for a, _ in sides])
-    hi = np.concatenate([c + b for _, b in sides])
-    t_lo = np.tile(t.min(axis=1), len(sides))
-    t_hi = np.tile(t.max(axis=1), len(sides))
-    # One float per shared edge: merge edge coordinates that differ by rounding only.
-    edges = np.unique(np.concatenate([lo, hi]))
-    merged = edges.copy()
-    for i in range(1, len(edges)):
-        if edges[i] - merged[i - 1] <= 1e-9 * plan.spacing:
-            merged[i] = merged[i - 1]
-    lo = merged[np.searchsorted(edges, lo)]
-    hi = merged[np.searchsorted(edges, hi)]
-    boxes = shapely.box(t_lo, lo, t_hi, hi)
+    t_lo, lo, t_hi, hi = _aligned_boxes(
+        plan.transects, plan.angle, origin, _sides(plan), plan.spacing
+    )
     swept = float(np.sum((t_hi - t_lo) * (hi - lo)))
     real = (t_hi > t_lo) & (hi > lo)
-    union = shapely.union_all(boxes[real])
+    union = shapely.union_all(shapely.box(t_lo, lo, t_hi, hi)[real])
+    return _measure(target, union, swept)
+
+
+def _axes(angle: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Unit vectors along (``u``) and across (``n``, to the left) lanes at ``angle``."""
+    u = np.array([math.cos(angle), math.sin(angle)])
+    n = np.array([-math.sin(angle), math.cos(angle)])
+    return u, n
+
+
+def _sides(plan: Plan) -> list[tuple[float, float]]:
+    """The footprint across a transect: ``[-reach, reach]``, or two strips beside a nadir gap."""
+    if plan.nadir_gap > 0:
+        return [(-plan.reach, -plan.nadir_gap / 2), (plan.nadir_gap / 2, plan.reach)]
+    return [(-plan.reach, plan.reach)]
+
+
+def _measure(target: Any, union: Any, swept: float) -> Coverage:
+    """The :class:`Coverage` of ``target`` by the footprints ``union`` (``swept``: their areas)."""
+    import shapely
+
     covered = float(shapely.area(shapely.intersection(target, union)))
     area = float(target.area)
     return Coverage(
@@ -150,8 +157,7 @@ def _aligned_boxes(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """``(t_lo, c_lo, t_hi, c_hi)`` of every footprint box in the lanes' frame, with box edges
     that differ by rounding only merged (see :func:`coverage`)."""
-    u = np.array([math.cos(angle), math.sin(angle)])
-    n = np.array([-math.sin(angle), math.cos(angle)])
+    u, n = _axes(angle)
     t = (transects - origin) @ u
     c = ((transects - origin) @ n).mean(axis=1)
     lo = np.concatenate([c + a for a, _ in sides])
@@ -178,10 +184,7 @@ def footprint(plan: Plan) -> tuple[Any, float]:
     origin = plan.polygon.centre
     angles = plan.transect_angle()
     lane = np.array(plan.role()) == "lane"
-    if plan.nadir_gap > 0:
-        sides = [(-plan.reach, -plan.nadir_gap / 2), (plan.nadir_gap / 2, plan.reach)]
-    else:
-        sides = [(-plan.reach, plan.reach)]
+    sides = _sides(plan)
     parts = []
     swept = 0.0
     for angle in np.unique(angles[lane]):
@@ -192,8 +195,7 @@ def footprint(plan: Plan) -> tuple[Any, float]:
         swept += float(np.sum((t_hi - t_lo) * (hi - lo)))
         real = (t_hi > t_lo) & (hi > lo)
         union = shapely.union_all(shapely.box(t_lo, lo, t_hi, hi)[real])
-        u = np.array([math.cos(angle), math.sin(angle)])
-        n = np.array([-math.sin(angle), math.cos(angle)])
+        u, n = _axes(float(angle))
         parts.append(
             shapely.transform(union, lambda p, u=u, n=n: origin + p[:, :1] * u + p[:, 1:] * n)
         )
@@ -218,12 +220,4 @@ def _coverage_general(plan: Plan, region: Any) -> Coverage:
     else:
         target = shapely.Polygon(as_polygon(region).vertices)
     union, swept = footprint(plan)
-    covered = float(shapely.area(shapely.intersection(target, union)))
-    area = float(target.area)
-    return Coverage(
-        area=area,
-        covered_area=covered,
-        covered_share=min(1.0, covered / area),
-        swept_area=swept,
-        overlap_share=(swept - covered) / area,
-    )
+    return _measure(target, union, swept)

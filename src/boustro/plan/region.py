@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from dataclasses import dataclass
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,9 +21,7 @@ from .routing import Router
 from .tour import _chain_pass, _chains, _hole_pass, _order, _Pass
 from .types import KINDS, Layout, Plan, PlanCell, PlanStats
 
-__all__ = [
-    "plan_region",
-]
+__all__ = ["PlanOptions", "plan_region"]
 
 
 # -- plans ------------------------------------------------------------------------------------
@@ -35,6 +34,71 @@ def _extension_end(
     if len(bad) == 0:
         return q
     return p + br[bad[0]] * (q - p)
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """The options of :func:`plan_region`, checked (plan units; see its arguments)."""
+
+    spacing: float
+    reach: float
+    turnaround: float = 0.0
+    nadir_gap: float = 0.0
+    turn_time: float = 0.0
+    ground_scale: float = 1.0
+    speed: float | None = None
+    layout: Layout = "guaranteed"
+    decompose_area: bool | Literal["auto"] = "auto"
+    min_width: float = 0.0
+    sweep: float | None = None
+    angle: float | None = None
+    offset: float | None = None
+    fitness: Any = None
+    n_angles: int = 90
+    n_offsets: int = 16
+    start: ArrayLike | None = None
+    hole_passes: bool = True
+    area: float | None = None
+    merge_angle: float = math.radians(15.0)
+
+
+class _Cells(NamedTuple):
+    """Step 2: the cells (or the whole area) and their optima (``None``: the given grid)."""
+
+    regions: list[Region]
+    optima: list[OptimizeResult | None]
+
+
+class _CellLanes(NamedTuple):
+    """Step 3: every cell with its grid and its lanes."""
+
+    cells: list[PlanCell]
+    lanes: list[Lanes]
+
+
+class _Tour(NamedTuple):
+    """Step 4: the passes (chains of lanes, hole passes), their order and driving options."""
+
+    passes: list[_Pass]
+    order: list[int]
+    choice: list[int]
+    router: Router
+
+
+class _Path(NamedTuple):
+    """Step 5: the waypoints and transects of the tour (plan units)."""
+
+    waypoints: NDArray[np.float64]
+    kinds: tuple[str, ...]
+    lane: NDArray[np.int64]
+    transects: NDArray[np.float64]
+    angles: NDArray[np.float64]
+    roles: tuple[str, ...]
+    cells: NDArray[np.int64]
+    positions: NDArray[np.float64]
+    outside: float
+    hole_length: float
+    blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]]
 
 
 def plan_region(
@@ -98,233 +162,358 @@ def plan_region(
 
     Raises:
         InvalidParameterError: bad parameters. NoTransectError: nothing to plan.
+
+    Example:
+        >>> from boustro.plan import coverage
+        >>> u_shape = [(0, 0), (9, 0), (9, 9), (6, 9), (6, 3), (3, 3), (3, 9), (0, 9)]
+        >>> plan = plan_region(u_shape, 1.0)
+        >>> plan.stats.n_transects, round(coverage(plan).covered_share, 4)
+        (12, 1.0)
     """
     r = as_region(region)
+    opts = _check_options(
+        r,
+        spacing,
+        decompose_area=decompose_area,
+        sweep=sweep,
+        angle=angle,
+        offset=offset,
+        fitness=fitness,
+        n_angles=n_angles,
+        n_offsets=n_offsets,
+        layout=layout,
+        start=start,
+        turnaround=turnaround,
+        reach=reach,
+        nadir_gap=nadir_gap,
+        hole_passes=hole_passes,
+        ground_scale=ground_scale,
+        speed=speed,
+        turn_time=turn_time,
+        area=area,
+        min_width=min_width,
+        merge_angle=merge_angle,
+    )
+    notes: list[str] = []
+    cells = _plan_cells(r, opts, notes)
+    cell_lanes = _plan_lanes(r, cells, opts)
+    tour = _plan_tour(r, cell_lanes, opts, notes)
+    path = _drive(tour, cell_lanes, opts)
+    return _assemble(r, cell_lanes, tour, path, opts, notes)
+
+
+# -- step 1: check ----------------------------------------------------------------------------
+def _check_options(r: Region, spacing: float, **kw: Any) -> PlanOptions:
+    """The options checked, in the order the errors are reported."""
     s = check_spacing(spacing, extent=r.diameter)
-    reach = s / 2 if reach is None else _check_float("reach", reach)
+    reach = s / 2 if kw["reach"] is None else _check_float("reach", kw["reach"])
     if reach < s / 2 * (1 - 1e-12):
         raise InvalidParameterError(
             f"reach must be >= spacing / 2 = {s / 2:g} for the bands to tile the area, "
             f"got {reach:g}"
         )
-    turnaround = _check_float("turnaround", turnaround, 0.0)
-    nadir_gap = _check_float("nadir_gap", nadir_gap, 0.0)
-    turn_time = _check_float("turn_time", turn_time, 0.0)
-    ground_scale = _check_float("ground_scale", ground_scale)
+    turnaround = _check_float("turnaround", kw["turnaround"], 0.0)
+    nadir_gap = _check_float("nadir_gap", kw["nadir_gap"], 0.0)
+    turn_time = _check_float("turn_time", kw["turn_time"], 0.0)
+    ground_scale = _check_float("ground_scale", kw["ground_scale"])
     if ground_scale <= 0:
-        raise InvalidParameterError(f"ground_scale must be > 0, got {ground_scale!r}")
+        raise InvalidParameterError(f"ground_scale must be > 0, got {kw['ground_scale']!r}")
+    speed = kw["speed"]
     if speed is not None and _check_float("speed", speed) <= 0:
         raise InvalidParameterError(f"speed must be > 0, got {speed!r}")
+    layout = kw["layout"]
     if layout not in ("guaranteed", "chords"):
         raise InvalidParameterError(f"layout must be 'guaranteed' or 'chords', got {layout!r}")
-    if nadir_gap > 0 and r.n_holes and hole_passes and layout == "guaranteed":
+    if nadir_gap > 0 and r.n_holes and kw["hole_passes"] and layout == "guaranteed":
         raise InvalidParameterError(
             "a nadir gap is not supported with holes: the passes around holes would not cover "
             "their own blind strip"
         )
-    tol = _TOL * r.diameter
-    notes: list[str] = []
-
-    # Cells and their grids.
-    if decompose_area not in (True, False, "auto"):
+    if kw["decompose_area"] not in (True, False, "auto"):
         raise InvalidParameterError(
-            f"decompose_area must be True, False or 'auto', got {decompose_area!r}"
+            f"decompose_area must be True, False or 'auto', got {kw['decompose_area']!r}"
         )
+    min_width = kw["min_width"]
     min_width = 2 * s if min_width is None else _check_float("min_width", min_width, 0.0)
-    options = {"n_angles": n_angles, "n_offsets": n_offsets, "fitness": fitness}
-    cell_regions: list[Region] = [r]
-    optima: list[OptimizeResult | None] = [None]
-    if angle is None:
-        optima = [optimize_region(r, s, **options)]
-    if decompose_area and not r.is_convex and angle is None:
-        if sweep is None:
-            sweep_angle, estimate = choose_sweep(
-                r, s, min_width=min_width, merge_angle=merge_angle, fitness=fitness
-            )
-        else:
-            sweep_angle, estimate = _check_float("sweep", sweep), (-math.inf, -math.inf)
-        single = _estimate([r], optima, s)  # type: ignore[arg-type]
-        if decompose_area is True or estimate < single:
-            try:
-                cell_regions, cells_opt = _cells_for_sweep(
-                    r, s, sweep_angle, min_width=min_width, merge_angle=merge_angle, options=options
-                )
-            except InvalidPolygonError as exc:
-                notes.append(f"the decomposition failed ({exc}); the area is planned as one cell")
-                cell_regions, cells_opt = [r], optima  # type: ignore[assignment]
-            if len(cell_regions) > 1 and (
-                decompose_area is True or _estimate(cell_regions, cells_opt, s) < single
-            ):
-                optima = list(cells_opt)
-            else:  # one cell after all: the whole area, as planned without decomposition
-                cell_regions = [r]
-    cells: list[PlanCell] = []
-    lanes_by_cell: list[Lanes] = []
-    for cell, opt in zip(cell_regions, optima, strict=True):
+    kw.update(
+        spacing=s,
+        reach=reach,
+        turnaround=turnaround,
+        nadir_gap=nadir_gap,
+        turn_time=turn_time,
+        ground_scale=ground_scale,
+        min_width=min_width,
+    )
+    return PlanOptions(**kw)
+
+
+# -- step 2: cells ----------------------------------------------------------------------------
+def _plan_cells(r: Region, opts: PlanOptions, notes: list[str]) -> _Cells:
+    """The cells and their optima: the whole area, or its decomposition where that promises
+    fewer turns (or on a tie less lane length); a given ``angle`` is planned as it is."""
+    s = opts.spacing
+    options = {"n_angles": opts.n_angles, "n_offsets": opts.n_offsets, "fitness": opts.fitness}
+    whole = _Cells([r], [None])
+    if opts.angle is not None:
+        return whole
+    optima: list[OptimizeResult | None] = [optimize_region(r, s, **options)]
+    whole = _Cells([r], optima)
+    if not opts.decompose_area or r.is_convex:
+        return whole
+    if opts.sweep is None:
+        sweep_angle, estimate = choose_sweep(
+            r, s, min_width=opts.min_width, merge_angle=opts.merge_angle, fitness=opts.fitness
+        )
+    else:
+        sweep_angle, estimate = _check_float("sweep", opts.sweep), (-math.inf, -math.inf)
+    single = _estimate([r], optima, s)  # type: ignore[arg-type]
+    if not (opts.decompose_area is True or estimate < single):
+        return whole
+    try:
+        cell_regions, cells_opt = _cells_for_sweep(
+            r,
+            s,
+            sweep_angle,
+            min_width=opts.min_width,
+            merge_angle=opts.merge_angle,
+            options=options,
+        )
+    except InvalidPolygonError as exc:
+        notes.append(f"the decomposition failed ({exc}); the area is planned as one cell")
+        return whole
+    if len(cell_regions) > 1 and (
+        opts.decompose_area is True or _estimate(cell_regions, cells_opt, s) < single
+    ):
+        return _Cells(cell_regions, list(cells_opt))
+    return whole  # one cell after all: the whole area, as planned without decomposition
+
+
+# -- step 3: lanes ----------------------------------------------------------------------------
+def _plan_lanes(r: Region, cells: _Cells, opts: PlanOptions) -> _CellLanes:
+    """The lanes of every cell at its angle and offset (the optimum, or the given grid)."""
+    out = _CellLanes([], [])
+    for cell, opt in zip(cells.regions, cells.optima, strict=True):
         if opt is None:
-            cell_angle = _check_float("angle", angle)
-            cell_offset = 0.0 if offset is None else _check_float("offset", offset)
+            cell_angle = _check_float("angle", opts.angle)
+            cell_offset = 0.0 if opts.offset is None else _check_float("offset", opts.offset)
             value = math.nan
         else:
             cell_angle, cell_offset, value = opt.angle, opt.offset, opt.fitness
         lanes = region_lanes(
-            cell, s, cell_angle, cell_offset, reach=reach, holes=r.holes, layout=layout
+            cell,
+            opts.spacing,
+            cell_angle,
+            cell_offset,
+            reach=opts.reach,
+            holes=r.holes,
+            layout=opts.layout,
         )
-        lanes_by_cell.append(lanes)
-        cells.append(PlanCell(cell, cell_angle, cell_offset, value, len(lanes.k), opt))
-    if sum(len(lanes.k) for lanes in lanes_by_cell) == 0:
-        raise NoTransectError(f"no lane crosses the area at spacing {s:g}")
+        out.lanes.append(lanes)
+        out.cells.append(PlanCell(cell, cell_angle, cell_offset, value, len(lanes.k), opt))
+    if sum(len(lanes.k) for lanes in out.lanes) == 0:
+        raise NoTransectError(f"no lane crosses the area at spacing {opts.spacing:g}")
+    return out
 
+
+# -- step 4: tour -----------------------------------------------------------------------------
+def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -> _Tour:
+    """Chains of lanes and hole passes, ordered from the start (or where the tour is shortest)."""
+    tol = _TOL * r.diameter
     passes: list[_Pass] = []
-    for ci, lanes in enumerate(lanes_by_cell):
+    for ci, lanes in enumerate(cl.lanes):
         for chain in _chains(lanes, tol):
             passes.append(_chain_pass(lanes, chain, ci))
-    cut = set().union(*(lanes.cut for lanes in lanes_by_cell))
-    if layout == "guaranteed" and hole_passes:
+    cut = set().union(*(lanes.cut for lanes in cl.lanes))
+    if opts.layout == "guaranteed" and opts.hole_passes:
         for hi in sorted(cut):
             passes.append(_hole_pass(r.holes[hi]))
-    elif cut and layout == "guaranteed":
+    elif cut and opts.layout == "guaranteed":
         notes.append(
             f"{len(cut)} hole(s) cut lanes and hole passes are off: the area along their edges "
             "is not fully covered"
         )
-
-    router = Router(r, reach=max(reach, turnaround))
-    force_start = start is not None
+    router = Router(r, reach=max(opts.reach, opts.turnaround))
+    start = opts.start
     if start is None:
         start_pt = r.shell.vertices[0]
     else:
         start_pt = np.asarray(start, dtype=np.float64).reshape(-1)
         if start_pt.shape != (2,) or not np.all(np.isfinite(start_pt)):
             raise InvalidParameterError(f"start must be a finite (x, y) pair, got {start!r}")
-    order, choice = _order(passes, start_pt, router, force_start=force_start)
+    order, choice = _order(passes, start_pt, router, force_start=start is not None)
+    return _Tour(passes, order, choice, router)
 
-    # Waypoints.
-    points: list[NDArray[np.float64]] = []
-    kinds: list[str] = []
-    lane_of: list[int] = []
-    transects: list[NDArray[np.float64]] = []
-    angles_t: list[float] = []
-    roles: list[str] = []
-    cells_t: list[int] = []
-    positions: list[float] = []
-    outside = 0.0
-    hole_length = 0.0
-    blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
 
-    def move_to(target: NDArray[np.float64], next_transect: int) -> None:
-        nonlocal outside
-        if not points:
+# -- step 5: drive ----------------------------------------------------------------------------
+class _Driver:
+    """Collects the waypoints and transects while the tour is driven pass by pass."""
+
+    def __init__(self, router: Router, turnaround: float) -> None:
+        self.router = router
+        self.turnaround = turnaround
+        self.points: list[NDArray[np.float64]] = []
+        self.kinds: list[str] = []
+        self.lane_of: list[int] = []
+        self.transects: list[NDArray[np.float64]] = []
+        self.angles: list[float] = []
+        self.roles: list[str] = []
+        self.cells: list[int] = []
+        self.positions: list[float] = []
+        self.outside = 0.0
+        self.hole_length = 0.0
+        self.blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
+
+    def point(self, p: NDArray[np.float64], kind: str, transect: int) -> None:
+        self.points.append(p)
+        self.kinds.append(kind)
+        self.lane_of.append(transect)
+
+    def transect(
+        self,
+        a: NDArray[np.float64],
+        b: NDArray[np.float64],
+        angle: float,
+        role: str,
+        cell: int,
+        position: float,
+    ) -> None:
+        self.transects.append(np.stack([a, b]))
+        self.angles.append(angle)
+        self.roles.append(role)
+        self.cells.append(cell)
+        self.positions.append(position)
+
+    def move_to(self, target: NDArray[np.float64], next_transect: int) -> None:
+        """The connecting move from the last waypoint (its corners become ``via`` points)."""
+        if not self.points:
             return
-        route = router.path(points[-1], target)
-        outside += route.outside
+        route = self.router.path(self.points[-1], target)
+        self.outside += route.outside
         if not route.found:
-            blocked.append((points[-1], target))
+            self.blocked.append((self.points[-1], target))
         for p in route.points[1:-1]:
-            points.append(p)
-            kinds.append("via")
-            lane_of.append(next_transect)
+            self.point(p, "via", next_transect)
 
-    for pi, oi in zip(order, choice, strict=True):
-        p = passes[pi]
+    def chain(
+        self, pts: NDArray[np.float64], angle: float, cell: int, origin: NDArray[np.float64]
+    ) -> None:
+        """A chain of lanes driven back and forth, with run-in and run-out."""
+        u, n = _frame(angle)
+        t = self.turnaround
+        for j in range(0, len(pts), 2):
+            a, b = pts[j], pts[j + 1]
+            ti = len(self.transects)
+            d = b - a
+            length = float(np.linalg.norm(d))
+            direction = d / length if length > 0 else (u if j % 4 == 0 else -u)
+            run_in = _extension_end(self.router, a, a - t * direction) if t else a
+            self.move_to(run_in, ti)
+            if t:
+                self.point(run_in, "run_in", ti)
+            self.point(a, "start", ti)
+            self.point(b, "end", ti)
+            if t:
+                self.point(_extension_end(self.router, b, b + t * direction), "run_out", ti)
+            self.transect(a, b, angle, "lane", cell, float((a - origin) @ n))
+
+    def hole(self, pts: NDArray[np.float64]) -> None:
+        """A pass around a hole: one transect per edge of the loop."""
+        ti = len(self.transects)
+        self.move_to(pts[0], ti)
+        for j in range(len(pts) - 1):
+            a, b = pts[j], pts[j + 1]
+            d = b - a
+            self.transect(a, b, math.atan2(d[1], d[0]), "hole", -1, math.nan)
+            self.hole_length += float(np.linalg.norm(d))
+        self.point(pts[0], "start", ti)
+        for j in range(1, len(pts) - 1):
+            self.point(pts[j], "loop", ti + j)
+        self.point(pts[-1], "end", ti + len(pts) - 2)
+
+    def result(self) -> _Path:
+        assert set(self.kinds) <= set(KINDS)
+        return _Path(
+            waypoints=np.asarray(self.points),
+            kinds=tuple(self.kinds),
+            lane=np.asarray(self.lane_of, dtype=np.int64),
+            transects=np.asarray(self.transects),
+            angles=np.asarray(self.angles),
+            roles=tuple(self.roles),
+            cells=np.asarray(self.cells, dtype=np.int64),
+            positions=np.asarray(self.positions),
+            outside=self.outside,
+            hole_length=self.hole_length,
+            blocked=self.blocked,
+        )
+
+
+def _drive(tour: _Tour, cl: _CellLanes, opts: PlanOptions) -> _Path:
+    """The waypoints of the tour: every pass in order, joined by connecting moves."""
+    driver = _Driver(tour.router, opts.turnaround)
+    for pi, oi in zip(tour.order, tour.choice, strict=True):
+        p = tour.passes[pi]
         _, _, pts, _ = p.options[oi]
         if p.kind == "chain":
-            u, n = _frame(p.angle)
-            origin = lanes_by_cell[p.cell].origin
-            for j in range(0, len(pts), 2):
-                a, b = pts[j], pts[j + 1]
-                ti = len(transects)
-                d = b - a
-                length = float(np.linalg.norm(d))
-                direction = d / length if length > 0 else (u if j % 4 == 0 else -u)
-                run_in = _extension_end(router, a, a - turnaround * direction) if turnaround else a
-                move_to(run_in, ti)
-                if turnaround:
-                    points.append(run_in)
-                    kinds.append("run_in")
-                    lane_of.append(ti)
-                points += [a, b]
-                kinds += ["start", "end"]
-                lane_of += [ti, ti]
-                if turnaround:
-                    points.append(_extension_end(router, b, b + turnaround * direction))
-                    kinds.append("run_out")
-                    lane_of.append(ti)
-                transects.append(np.stack([a, b]))
-                angles_t.append(p.angle)
-                roles.append("lane")
-                cells_t.append(p.cell)
-                positions.append(float((a - origin) @ n))
+            driver.chain(pts, p.angle, p.cell, cl.lanes[p.cell].origin)
         else:
-            ti = len(transects)
-            move_to(pts[0], ti)
-            for j in range(len(pts) - 1):
-                a, b = pts[j], pts[j + 1]
-                transects.append(np.stack([a, b]))
-                d = b - a
-                angles_t.append(math.atan2(d[1], d[0]))
-                roles.append("hole")
-                cells_t.append(-1)
-                positions.append(math.nan)
-                hole_length += float(np.linalg.norm(d))
-            points.append(pts[0])
-            kinds.append("start")
-            lane_of.append(ti)
-            for j in range(1, len(pts) - 1):
-                points.append(pts[j])
-                kinds.append("loop")
-                lane_of.append(ti + j)
-            points.append(pts[-1])
-            kinds.append("end")
-            lane_of.append(ti + len(pts) - 2)
-    assert set(kinds) <= set(KINDS)
-    waypoints = np.asarray(points)
-    tr = np.asarray(transects)
-    lane_role = np.array(roles) == "lane"
+            driver.hole(pts)
+    return driver.result()
+
+
+# -- step 6: assemble -------------------------------------------------------------------------
+def _assemble(
+    r: Region, cl: _CellLanes, tour: _Tour, path: _Path, opts: PlanOptions, notes: list[str]
+) -> Plan:
+    """The :class:`Plan` with its statistics (ground units) and notes."""
+    tr = path.transects
+    lane_role = np.array(path.roles) == "lane"
     transect_length = float(np.linalg.norm(tr[:, 1] - tr[:, 0], axis=1)[lane_role].sum())
-    path_length = float(np.linalg.norm(np.diff(waypoints, axis=0), axis=1).sum())
+    path_length = float(np.linalg.norm(np.diff(path.waypoints, axis=0), axis=1).sum())
     n_lanes = int(lane_role.sum())
-    n_turns = n_lanes + sum(1 for p in passes if p.kind == "hole") - 1  # passes - 1
-    for a, b in blocked:
+    n_turns = n_lanes + sum(1 for p in tour.passes if p.kind == "hole") - 1  # passes - 1
+    for a, b in path.blocked:
         notes.append(
             f"no connecting move inside the area from {a.round(3).tolist()} to "
             f"{b.round(3).tolist()}: the straight line is used"
         )
-    duration = None if speed is None else path_length / ground_scale / speed + n_turns * turn_time
+    scale = opts.ground_scale
+    speed = opts.speed
+    duration = None if speed is None else path_length / scale / speed + n_turns * opts.turn_time
+    cells = cl.cells
     stats = PlanStats(
         n_transects=n_lanes,
         n_turns=n_turns,
-        transect_length=transect_length / ground_scale,
-        path_length=path_length / ground_scale,
-        area=r.area / ground_scale**2 if area is None else float(area),
+        transect_length=transect_length / scale,
+        path_length=path_length / scale,
+        area=r.area / scale**2 if opts.area is None else float(opts.area),
         speed=speed,
-        turn_time=turn_time,
+        turn_time=opts.turn_time,
         duration=duration,
         n_cells=len(cells),
-        hole_pass_length=hole_length / ground_scale,
-        outside_length=outside / ground_scale,
+        hole_pass_length=path.hole_length / scale,
+        outside_length=path.outside / scale,
     )
     main = max(range(len(cells)), key=lambda i: cells[i].polygon.area)
     return Plan(
         polygon=r.shell,
-        spacing=s,
+        spacing=opts.spacing,
         angle=cells[main].angle,
         offset=cells[main].offset,
-        layout=layout,
-        reach=float(reach),
-        nadir_gap=nadir_gap,
-        turnaround=turnaround,
-        positions=np.asarray(positions),
+        layout=opts.layout,
+        reach=float(opts.reach),
+        nadir_gap=opts.nadir_gap,
+        turnaround=opts.turnaround,
+        positions=path.positions,
         transects=tr,
-        waypoints=waypoints,
-        kinds=tuple(kinds),
-        lane=np.asarray(lane_of, dtype=np.int64),
-        ground_scale=ground_scale,
+        waypoints=path.waypoints,
+        kinds=path.kinds,
+        lane=path.lane,
+        ground_scale=scale,
         stats=stats,
         region=r,
         cells=tuple(cells),
-        transect_angles=np.asarray(angles_t),
-        roles=tuple(roles),
-        transect_cells=np.asarray(cells_t, dtype=np.int64),
+        transect_angles=path.angles,
+        roles=path.roles,
+        transect_cells=path.cells,
         notes=tuple(notes),
     )

@@ -1,24 +1,4 @@
-"""Connecting moves inside an area with holes: a visibility graph and shortest paths.
-
-Core (numpy only). A :class:`Router` answers "how does the vehicle get from the end of one
-transect to the start of the next" for a :class:`~boustro.regions.Region`:
-
-* A straight move is used when it enters no hole and every part of it outside the shell stays
-  within ``reach`` of the shell (the lanes of a coverage-guaranteed plan already end up to
-  ``reach`` outside the area, measured across the lanes; moving between two such ends along the
-  boundary is the usual boustrophedon turn). Holes are exact: a move never passes through a
-  hole's interior. The outside test samples the move every ``reach / 16``, so "within reach"
-  holds to ``reach / 32``.
-* Otherwise the move goes from its start to the nearest point of the area (for an end outside
-  the shell), follows the shortest path inside the closed area (shell minus the holes' interiors)
-  and leaves it to the target. Shortest paths in a polygon with holes bend only at vertices where
-  the free space is reflex (shell vertices with an interior angle over 180 degrees, convex
-  vertices of holes); the visibility graph between those vertices is built once (all pairs,
-  Floyd-Warshall) and each query adds its two ends.
-
-The length of a move outside the area is reported (:attr:`Route.outside`), so a plan can say
-where it leaves the area.
-"""
+"""Connecting moves inside an area with holes: a visibility graph and shortest paths."""
 
 from __future__ import annotations
 

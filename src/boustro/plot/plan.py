@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -54,13 +54,37 @@ def plot_plan(
         ``transects``, ``path``, ``arrows``, ``start``, ``end``, ``scalebar``, ``north``.
     """
     import matplotlib.pyplot as plt
-    from matplotlib.collections import LineCollection, PolyCollection
-    from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
-    mission = None if isinstance(plan, Plan) else plan
-    core: Plan = plan if isinstance(plan, Plan) else plan.plan
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 8))
+    scene = _scene(plan, ax)
+    artists: dict[str, Any] = {}
+    _draw_area(scene, artists)
+    _draw_path(scene, artists, swaths=swaths)
+    _draw_scale(scene, artists)
+    _draw_labels(scene, title=title)
+    return artists
+
+
+class _Scene(NamedTuple):
+    """What every drawing step needs: the axes, the plan, and the local frame of the figure."""
+
+    ax: Any
+    core: Plan
+    mission: Mission | None
+    area: NDArray[np.float64]
+    holes: list[NDArray[np.float64]]
+    origin: NDArray[np.float64]
+    georeferenced: bool
+
+    def local(self, points: Any) -> NDArray[np.float64]:
+        """Points in the figure's frame (metres from the south-west corner if georeferenced)."""
+        return np.asarray(points, dtype=np.float64) - self.origin
+
+
+def _scene(plan: Plan | Mission, ax: Any) -> _Scene:
+    mission = None if isinstance(plan, Plan) else plan
+    core: Plan = plan if isinstance(plan, Plan) else plan.plan
     georeferenced = mission is not None and not mission.projection.planar
     if mission is not None:
         area = mission.projection.to_plan(mission.area.ring)
@@ -69,51 +93,66 @@ def plot_plan(
         area = core.polygon.vertices
         holes = [h.vertices for h in core.region.holes] if core.region is not None else []
     origin = area.min(axis=0) if georeferenced else np.zeros(2)
+    return _Scene(ax, core, mission, area, holes, origin, georeferenced)
 
-    def local(points: NDArray[np.float64]) -> NDArray[np.float64]:
-        return np.asarray(points, dtype=np.float64) - origin
 
-    artists: dict[str, Any] = {}
+def _draw_area(sc: _Scene, artists: dict[str, Any]) -> None:
+    """The area, its holes, the cells of a decomposed plan, the hull of a nearly convex one."""
+    ax, local = sc.ax, sc.local
     artists["area"] = ax.fill(
-        *local(area).T, facecolor="#d9ead3", edgecolor="#38761d", lw=1.5, label="area", zorder=1
+        *local(sc.area).T, facecolor="#d9ead3", edgecolor="#38761d", lw=1.5, label="area", zorder=1
     )[0]
     artists["holes"] = [
         ax.fill(
             *local(h).T, facecolor="white", edgecolor="#38761d", lw=1.2, hatch="xx", zorder=1.5
         )[0]
-        for h in holes
+        for h in sc.holes
     ]
-    if holes:
+    if sc.holes:
         artists["holes"][0].set_label("hole")
-    artists["cells"] = []
-    if len(core.cells) > 1:
-        for i, cell in enumerate(core.cells):
-            for k, ring in enumerate(
-                [cell.region.shell.vertices] + [h.vertices for h in cell.region.holes]
-            ):
-                closed = local(np.concatenate([ring, ring[:1]]))
-                line = ax.plot(*closed.T, ls="--", lw=1.0, color="#b45f06", zorder=2.5)[0]
-                if i == 0 and k == 0:
-                    line.set_label("cells")
-                artists["cells"].append(line)
-            label = local(cell.region.shell.vertices).mean(axis=0)
-            artists["cells"].append(
-                ax.annotate(
-                    f"{i + 1}: {math.degrees(cell.angle):.0f}°",
-                    xy=label,
-                    ha="center",
-                    va="center",
-                    fontsize="small",
-                    color="#b45f06",
-                    bbox={"boxstyle": "round", "fc": "white", "ec": "#b45f06", "alpha": 0.8},
-                    zorder=7,
-                )
-            )
-    if mission is not None and mission.hull_depth > 0:
-        hull = np.concatenate([core.polygon.vertices, core.polygon.vertices[:1]])
+    artists["cells"] = _draw_cells(sc) if len(sc.core.cells) > 1 else []
+    if sc.mission is not None and sc.mission.hull_depth > 0:
+        vertices = sc.core.polygon.vertices
+        hull = np.concatenate([vertices, vertices[:1]])
         artists["hull"] = ax.plot(
             *local(hull).T, ls="--", lw=0.8, color="#38761d", label="convex hull planned"
         )[0]
+
+
+def _draw_cells(sc: _Scene) -> list[Any]:
+    """The cells dashed, each labelled with its number and angle."""
+    ax, local = sc.ax, sc.local
+    out = []
+    for i, cell in enumerate(sc.core.cells):
+        for k, ring in enumerate(
+            [cell.region.shell.vertices] + [h.vertices for h in cell.region.holes]
+        ):
+            closed = local(np.concatenate([ring, ring[:1]]))
+            line = ax.plot(*closed.T, ls="--", lw=1.0, color="#b45f06", zorder=2.5)[0]
+            if i == 0 and k == 0:
+                line.set_label("cells")
+            out.append(line)
+        label = local(cell.region.shell.vertices).mean(axis=0)
+        out.append(
+            ax.annotate(
+                f"{i + 1}: {math.degrees(cell.angle):.0f}°",
+                xy=label,
+                ha="center",
+                va="center",
+                fontsize="small",
+                color="#b45f06",
+                bbox={"boxstyle": "round", "fc": "white", "ec": "#b45f06", "alpha": 0.8},
+                zorder=7,
+            )
+        )
+    return out
+
+
+def _draw_path(sc: _Scene, artists: dict[str, Any], *, swaths: bool) -> None:
+    """The footprints, the path, the transects with their direction, the start and the end."""
+    from matplotlib.collections import LineCollection, PolyCollection
+
+    ax, local, core = sc.ax, sc.local, sc.core
     if swaths:
         rects = swath_polygons(core).reshape(-1, 4, 2)
         artists["swaths"] = ax.add_collection(
@@ -150,12 +189,19 @@ def plot_plan(
     artists["end"] = ax.plot(
         *wp[-1], marker="s", ms=9, color="#cc0000", mec="k", ls="none", label="end", zorder=6
     )[0]
+
+
+def _draw_scale(sc: _Scene, artists: dict[str, Any]) -> None:
+    """A scale bar and, for geographic missions, an arrow to true north."""
+    from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
+
+    ax, mission = sc.ax, sc.mission
     ax.set_aspect("equal")
     ax.autoscale_view()
-    pts = np.concatenate([local(area), wp])
+    pts = np.concatenate([sc.local(sc.area), sc.local(sc.core.waypoints)])
     span = float(np.max(np.ptp(pts, axis=0)))
     length = nice_length(float(np.ptp(pts[:, 0])) or span)
-    unit = " m" if (georeferenced or mission is not None) else ""
+    unit = " m" if (sc.georeferenced or mission is not None) else ""
     bar = AnchoredSizeBar(
         ax.transData,
         length,
@@ -170,8 +216,8 @@ def plot_plan(
     bar.patch.set_alpha(0.8)
     artists["scalebar"] = ax.add_artist(bar)
     artists["north"] = None
-    if georeferenced and mission is not None and mission.projection.geographic:
-        centre = core.polygon.centre
+    if sc.georeferenced and mission is not None and mission.projection.geographic:
+        centre = sc.core.polygon.centre
         lon, lat = mission.projection.to_source(centre)
         north = mission.projection.to_plan(np.array([lon, lat + 1e-4])) - centre
         north /= np.linalg.norm(north)
@@ -185,28 +231,33 @@ def plot_plan(
             arrowprops={"arrowstyle": "-|>", "color": "k", "lw": 1.5},
             zorder=7,
         )
-    if georeferenced:
+
+
+def _draw_labels(sc: _Scene, *, title: bool) -> None:
+    """Axis labels, the legend and (``title``) a title with the main statistics."""
+    ax, core, mission = sc.ax, sc.core, sc.mission
+    if sc.georeferenced:
         ax.set_xlabel("easting from the area's south-west corner (m)")
         ax.set_ylabel("northing from the area's south-west corner (m)")
     else:
         ax.set_xlabel("x")
         ax.set_ylabel("y")
     ax.legend(loc="upper left", fontsize="small", framealpha=0.85)
-    if title:
-        s = core.stats
-        if mission is not None:
-            text = (
-                f"{mission.name or 'plan'}: {s.n_transects} transects at {mission.spacing:.3g} m, "
-                f"bearing {mission.bearing:.1f}°, path {s.path_length:.0f} m"
-            )
-            if mission.coverage is not None:
-                text += f", {100 * mission.coverage.covered_share:.2f}% covered"
-            if len(core.cells) > 1:
-                text += f", {len(core.cells)} cells"
-        else:
-            text = (
-                f"{s.n_transects} transects at {core.spacing:.3g}, "
-                f"angle {math.degrees(core.angle):.1f}°, path {s.path_length:.3g}"
-            )
-        ax.set_title(text, fontsize="medium")
-    return artists
+    if not title:
+        return
+    s = core.stats
+    if mission is not None:
+        text = (
+            f"{mission.name or 'plan'}: {s.n_transects} transects at {mission.spacing:.3g} m, "
+            f"bearing {mission.bearing:.1f}°, path {s.path_length:.0f} m"
+        )
+        if mission.coverage is not None:
+            text += f", {100 * mission.coverage.covered_share:.2f}% covered"
+        if len(core.cells) > 1:
+            text += f", {len(core.cells)} cells"
+    else:
+        text = (
+            f"{s.n_transects} transects at {core.spacing:.3g}, "
+            f"angle {math.degrees(core.angle):.1f}°, path {s.path_length:.3g}"
+        )
+    ax.set_title(text, fontsize="medium")
