@@ -54,7 +54,7 @@ METHOD_OPTIONS: dict[str, dict[str, Any]] = {"grid": {"n_angles": 360, "n_offset
 DEFAULT_HULL_TOLERANCE = 0.5
 
 #: Grid of the optimiser for concave areas and areas with holes
-#: (:func:`boustro.decompose.optimize_region`; a cell or the whole area), overridden by
+#: (:func:`boustro.plan.optimize_region`; a cell or the whole area), overridden by
 #: ``options``.
 REGION_OPTIONS: dict[str, Any] = {"n_angles": 90, "n_offsets": 16}
 
@@ -248,7 +248,7 @@ def plan_area(
             WGS 84 longitude/latitude, ``None`` for planar.
         method: optimiser (default :data:`DEFAULT_METHOD`), see :func:`boustro.optimize.optimize`;
             ``options`` override :data:`METHOD_OPTIONS`. Concave areas and areas with holes
-            are optimised by :func:`boustro.decompose.optimize_region` (a grid search with the
+            are optimised by :func:`boustro.plan.optimize_region` (a grid search with the
             exact per-segment fitness, :data:`REGION_OPTIONS`, ``options`` override it).
         fitness: the objective (default Eq. 1).
         start: ``(x, y)`` in the area's coordinates; the path starts at the corner nearest it
@@ -264,10 +264,10 @@ def plan_area(
         holes: holes of a bare ring (an :class:`Area` carries its own), in ``crs``.
         decompose: for a concave area or one with holes: ``None`` (default) decomposes into
             cells when that promises fewer turns, ``True`` always, ``False`` plans one angle
-            with lines cut at the boundary and the holes (:func:`boustro.decompose.plan_region`).
+            with lines cut at the boundary and the holes (:func:`boustro.plan.plan_region`).
             Given, it also turns off the convex-hull rule for nearly convex areas.
         sweep: sweep direction of the decomposition, degrees in the plan frame (default:
-            chosen by :func:`boustro.decompose.choose_sweep`).
+            chosen by :func:`boustro.plan.choose_sweep`).
 
     Raises:
         InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError.

@@ -201,7 +201,7 @@ class Area:
     Attributes:
         ring: ``(N, 2)`` vertices ``(x, y)`` in file order (longitude, latitude for
             geographic CRSs), without a repeated closing vertex. Not yet validated as a
-            polygon: :mod:`boustro.geo` projects it first.
+            polygon: :mod:`boustro.mission` projects it first.
         crs: the CRS, e.g. ``"EPSG:4326"``, or ``None`` for plain planar coordinates.
         name: a name for the area (placemark or feature name, else the file's stem).
         source: where it came from (a path, or ``"<embedded>"``).

@@ -84,7 +84,7 @@ def coverage(plan: Plan, region: Polygon | Region | ArrayLike | None = None) -> 
     differ by rounding only, < 1e-9 spacing, are merged): GEOS's union of many rotated rectangles
     with nearly coincident edges was seen to lose whole rectangles (GEOS 3.14).
 
-    Plans over concave areas, cells or holes (:func:`boustro.decompose.plan_region`) are
+    Plans over concave areas, cells or holes (:func:`boustro.plan.plan_region`) are
     measured the same way per lane direction (:func:`footprint`), the unions are mapped back to
     the plan frame and joined with the footprints of the passes around holes; ``region`` may
     then be a :class:`~boustro.regions.Region` (default: the plan's).

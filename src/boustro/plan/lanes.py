@@ -127,52 +127,101 @@ def region_lanes(
     s = check_spacing(spacing, extent=r.diameter)
     reach = s / 2 if reach is None else float(reach)
     o = r.centre if origin is None else np.asarray(origin, dtype=np.float64)
-    u, n = _frame(angle)
+    _, n = _frame(angle)
     tol = _TOL * r.diameter
     vc = (r.vertices - o) @ n
     k_min = math.floor((vc.min() - reach - offset) / s) - 1
     k_max = math.ceil((vc.max() + reach - offset) / s) + 1
     ks = np.arange(k_min, k_max + 1)
-    cs = offset + ks * s
     if layout == "guaranteed":
-        tr = trapezoids(r, angle, o)
-        lo_k = np.floor((tr.a - reach - offset) / s).astype(np.int64) + 1
-        hi_k = np.ceil((tr.b + reach - offset) / s).astype(np.int64) - 1
-        counts = np.maximum(hi_k - lo_k + 1, 0)
-        which = np.repeat(np.arange(len(tr.a)), counts)
-        first = np.repeat(np.cumsum(counts) - counts, counts)
-        k = lo_k[which] + (np.arange(len(which)) - first)
-        c = offset + k * s
-        alpha = np.maximum(tr.a[which], c - reach)
-        beta = np.minimum(tr.b[which], c + reach)
-        ok = beta - alpha > tol
-        which, k, alpha, beta = which[ok], k[ok], alpha[ok], beta[ok]
-        width = np.where(tr.b - tr.a > 0, tr.b - tr.a, 1.0)[which]
-        fa, fb = (alpha - tr.a[which]) / width, (beta - tr.a[which]) / width
-        te = lambda f: tr.te_a[which] + (tr.te_b[which] - tr.te_a[which]) * f  # noqa: E731
-        tx = lambda f: tr.tx_a[which] + (tr.tx_b[which] - tr.tx_a[which]) * f  # noqa: E731
-        lo = np.minimum(te(fa), te(fb))
-        hi = np.maximum(tx(fa), tx(fb))
-        key, lo, hi = _merge_intervals(k, lo, hi, tol)
+        key, lo, hi = _band_intervals(r, angle, o, s, offset, reach)
     elif layout == "chords":
-        rows = _intervals_on_lines(r.edges - o, u, n, cs)
-        key_l, lo_l, hi_l = [], [], []
-        for kk, row in zip(ks, rows, strict=True):
-            for a, b in row:
-                if b - a > tol:
-                    key_l.append(int(kk))
-                    lo_l.append(a)
-                    hi_l.append(b)
-        key, lo, hi = np.array(key_l, dtype=np.int64), np.array(lo_l), np.array(hi_l)
+        key, lo, hi = _chord_intervals(r, angle, o, ks, offset + ks * s)
     else:
         raise InvalidParameterError(f"layout must be 'guaranteed' or 'chords', got {layout!r}")
-    # Cut out the parts of each line inside a hole, where the lines at c - eps and c + eps are
-    # inside it too (a line along a hole's edge, or through its extreme vertex, is not cut).
-    cut: set[int] = set()
-    lines = np.unique(key)
-    per_line: dict[int, list[tuple[float, float]]] = {int(kk): [] for kk in lines}
+    per_line: dict[int, list[tuple[float, float]]] = {int(kk): [] for kk in np.unique(key)}
     for kk, a, b in zip(key, lo, hi, strict=True):
         per_line[int(kk)].append((float(a), float(b)))
+    cut = _cut_holes(per_line, holes, angle, o, s, offset, tol)
+    out_k, out_lo, out_hi = [], [], []
+    for kk in sorted(per_line):
+        for a, b in sorted(per_line[kk]):
+            out_k.append(kk)
+            out_lo.append(a)
+            out_hi.append(b)
+    k_arr = np.array(out_k, dtype=np.int64)
+    return Lanes(
+        float(angle),
+        o,
+        k_arr,
+        np.asarray(offset + k_arr * s, dtype=np.float64),
+        np.array(out_lo, dtype=np.float64),
+        np.array(out_hi, dtype=np.float64),
+        frozenset(cut),
+    )
+
+
+Intervals = tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]
+
+
+def _band_intervals(
+    r: Region, angle: float, o: NDArray[np.float64], s: float, offset: float, reach: float
+) -> Intervals:
+    """``(line index, t_lo, t_hi)`` of the guaranteed layout: each lane spans the projection of
+    its band ∩ cover onto its line (from the trapezoids, in closed form), merged per line."""
+    tol = _TOL * r.diameter
+    tr = trapezoids(r, angle, o)
+    lo_k = np.floor((tr.a - reach - offset) / s).astype(np.int64) + 1
+    hi_k = np.ceil((tr.b + reach - offset) / s).astype(np.int64) - 1
+    counts = np.maximum(hi_k - lo_k + 1, 0)
+    which = np.repeat(np.arange(len(tr.a)), counts)
+    first = np.repeat(np.cumsum(counts) - counts, counts)
+    k = lo_k[which] + (np.arange(len(which)) - first)
+    c = offset + k * s
+    alpha = np.maximum(tr.a[which], c - reach)
+    beta = np.minimum(tr.b[which], c + reach)
+    ok = beta - alpha > tol
+    which, k, alpha, beta = which[ok], k[ok], alpha[ok], beta[ok]
+    width = np.where(tr.b - tr.a > 0, tr.b - tr.a, 1.0)[which]
+    fa, fb = (alpha - tr.a[which]) / width, (beta - tr.a[which]) / width
+    te = lambda f: tr.te_a[which] + (tr.te_b[which] - tr.te_a[which]) * f  # noqa: E731
+    tx = lambda f: tr.tx_a[which] + (tr.tx_b[which] - tr.tx_a[which]) * f  # noqa: E731
+    lo = np.minimum(te(fa), te(fb))
+    hi = np.maximum(tx(fa), tx(fb))
+    return _merge_intervals(k, lo, hi, tol)
+
+
+def _chord_intervals(
+    r: Region, angle: float, o: NDArray[np.float64], ks: NDArray[np.int64], cs: NDArray[np.float64]
+) -> Intervals:
+    """``(line index, t_lo, t_hi)`` of the chords layout: the lines' segments inside the cover."""
+    tol = _TOL * r.diameter
+    u, n = _frame(angle)
+    rows = _intervals_on_lines(r.edges - o, u, n, cs)
+    key_l, lo_l, hi_l = [], [], []
+    for kk, row in zip(ks, rows, strict=True):
+        for a, b in row:
+            if b - a > tol:
+                key_l.append(int(kk))
+                lo_l.append(a)
+                hi_l.append(b)
+    return np.array(key_l, dtype=np.int64), np.array(lo_l), np.array(hi_l)
+
+
+def _cut_holes(
+    per_line: dict[int, list[tuple[float, float]]],
+    holes: Sequence[Polygon],
+    angle: float,
+    o: NDArray[np.float64],
+    s: float,
+    offset: float,
+    tol: float,
+) -> set[int]:
+    """Cut out (in place) the parts of each line inside a hole, where the lines at c - eps and
+    c + eps are inside it too (a line along a hole's edge, or through its extreme vertex, is not
+    cut). Returns the indices of the holes that cut a lane."""
+    u, n = _frame(angle)
+    cut: set[int] = set()
     eps = 1e-7 * max(s, tol)
     for h_index, hole in enumerate(holes):
         he = np.stack([hole.vertices, np.roll(hole.vertices, -1, axis=0)], axis=1) - o
@@ -195,19 +244,4 @@ def region_lanes(
                 per_line[kk], changed = _subtract(per_line[kk], gaps, tol)
                 if changed:
                     cut.add(h_index)
-    out_k, out_lo, out_hi = [], [], []
-    for kk in sorted(per_line):
-        for a, b in sorted(per_line[kk]):
-            out_k.append(kk)
-            out_lo.append(a)
-            out_hi.append(b)
-    k_arr = np.array(out_k, dtype=np.int64)
-    return Lanes(
-        float(angle),
-        o,
-        k_arr,
-        np.asarray(offset + k_arr * s, dtype=np.float64),
-        np.array(out_lo, dtype=np.float64),
-        np.array(out_hi, dtype=np.float64),
-        frozenset(cut),
-    )
+    return cut

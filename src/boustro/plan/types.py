@@ -116,7 +116,7 @@ class Plan:
             factor for a map projection); statistics are divided by it.
         stats: :class:`PlanStats`.
         region: for an area with a concave boundary or holes
-            (:func:`boustro.decompose.plan_region`), the area planned; ``polygon`` is its shell.
+            (:func:`boustro.plan.plan_region`), the area planned; ``polygon`` is its shell.
         cells: the cells of a decomposed plan (:class:`PlanCell`), or the whole area as one cell.
         transect_angles: ``(T,)`` lane direction of each transect where they differ (cells,
             passes around holes), else ``None`` (all at ``angle``).

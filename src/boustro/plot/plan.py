@@ -35,7 +35,7 @@ def plot_plan(
     swaths: bool = True,
     title: bool = True,
 ) -> dict[str, Any]:
-    """Draw a plan (or a :class:`~boustro.geo.Mission`) in its metric plan frame.
+    """Draw a plan (or a :class:`~boustro.mission.Mission`) in its metric plan frame.
 
     The area with its holes (and, for a nearly convex area planned on its hull, the hull
     dashed; for a decomposed plan, the cells dashed and labelled with their angles), the sensor
@@ -44,7 +44,7 @@ def plot_plan(
     are drawn in metres from the area's south-west corner with an arrow to true north.
 
     Args:
-        plan: a :class:`~boustro.plan.Plan` or a :class:`~boustro.geo.Mission`.
+        plan: a :class:`~boustro.plan.Plan` or a :class:`~boustro.mission.Mission`.
         ax: matplotlib axes (default: a new figure's).
         swaths: shade the footprints.
         title: set a title with the main statistics.
