@@ -13,7 +13,7 @@ from .plan.cells import (
     trapezoids,
 )
 from .plan.lanes import Lanes, region_lanes
-from .plan.region import _check_float, _extension_end, plan_region
+from .plan.region import _check_float, plan_region
 from .plan.region_opt import (
     SWEEP_SEARCH,
     _cells_for_sweep,
@@ -22,7 +22,7 @@ from .plan.region_opt import (
     choose_sweep,
     optimize_region,
 )
-from .plan.tour import ORDER_BUDGET, _chain_pass, _chains, _hole_pass, _order, _Pass
+from .plan.tour import ORDER_BUDGET, _chain_pass, _chains, _extension_end, _hole_pass, _order, _Pass
 from .plan.types import Layout
 
 __all__ = [

@@ -328,6 +328,31 @@ def _links(tr: Trapezoids, tol: float) -> list[tuple[float, int, int, bool]]:
     return out
 
 
+def _membership(tr: Trapezoids, roots: list[int]) -> NDArray[np.int64]:
+    """The cell of every trapezoid, cells ordered by their lowest slab, then along the lines."""
+    labels = np.array(roots, dtype=np.int64)
+    _, membership = np.unique(labels, return_inverse=True)
+    n_cells = int(membership.max()) + 1 if len(roots) else 0
+    first = [np.flatnonzero(membership == k)[0] for k in range(n_cells)]
+    rank = np.lexsort(([tr.te_a[i] for i in first], [tr.slab[i] for i in first]))
+    remap = np.empty_like(rank)
+    remap[rank] = np.arange(n_cells)
+    return remap[membership]
+
+
+def _shared_lengths(
+    links: list[tuple[float, int, int, bool]], membership: NDArray[np.int64], n_cells: int
+) -> NDArray[np.float64]:
+    """``(C, C)`` length of the boundary each pair of cells shares."""
+    shared_m = np.zeros((n_cells, n_cells))
+    for overlap, i, j, _ in links:
+        ci, cj = membership[i], membership[j]
+        if ci != cj:
+            shared_m[ci, cj] += overlap
+            shared_m[cj, ci] += overlap
+    return shared_m
+
+
 def decompose(
     region: Region | Polygon | ArrayLike,
     sweep: float,
@@ -410,25 +435,13 @@ def decompose(
                     break
             if not done:
                 break
-    labels = np.array([uf.find(i) for i in range(q)], dtype=np.int64)
-    _, membership = np.unique(labels, return_inverse=True)
+    membership = _membership(tr, [uf.find(i) for i in range(q)])
     n_cells = int(membership.max()) + 1 if q else 0
-    # Order the cells by their lowest slab, then along the sweep lines.
-    first = [np.flatnonzero(membership == k)[0] for k in range(n_cells)]
-    rank = np.lexsort(([tr.te_a[i] for i in first], [tr.slab[i] for i in first]))
-    remap = np.empty_like(rank)
-    remap[rank] = np.arange(n_cells)
-    membership = remap[membership]
     lo = np.full(n_cells, np.inf)
     hi = np.full(n_cells, -np.inf)
     np.minimum.at(lo, membership, tr.a)
     np.maximum.at(hi, membership, tr.b)
-    shared_m = np.zeros((n_cells, n_cells))
-    for overlap, i, j, _ in links:
-        ci, cj = membership[i], membership[j]
-        if ci != cj:
-            shared_m[ci, cj] += overlap
-            shared_m[cj, ci] += overlap
+    shared_m = _shared_lengths(links, membership, n_cells)
     cells: tuple[Region, ...] = ()
     if polygons:
         cells = tuple(

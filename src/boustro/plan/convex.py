@@ -218,6 +218,28 @@ def _waypoints(
     return np.array(points), kinds, lane
 
 
+def _convex_stats(
+    n_t: int,
+    transect_length: float,
+    path_length: float,
+    area: float,
+    speed: float | None,
+    turn_time: float,
+) -> PlanStats:
+    """Statistics of a single-grid plan (ground units): one turn between consecutive transects."""
+    duration = None if speed is None else path_length / speed + (n_t - 1) * turn_time
+    return PlanStats(
+        n_transects=n_t,
+        n_turns=n_t - 1,
+        transect_length=transect_length,
+        path_length=path_length,
+        area=area,
+        speed=speed,
+        turn_time=turn_time,
+        duration=duration,
+    )
+
+
 def build_plan(
     polygon: Polygon | ArrayLike,
     spacing: float,
@@ -297,19 +319,13 @@ def build_plan(
     waypoints, kinds, lane = _waypoints(transects, travel, turnaround)
     transect_length = float(np.linalg.norm(transects[:, 1] - transects[:, 0], axis=1).sum())
     path_length = float(np.linalg.norm(np.diff(waypoints, axis=0), axis=1).sum())
-    n_t = len(transects)
-    transect_length /= ground_scale
-    path_length /= ground_scale
-    duration = None if speed is None else path_length / speed + (n_t - 1) * turn_time
-    stats = PlanStats(
-        n_transects=n_t,
-        n_turns=n_t - 1,
-        transect_length=transect_length,
-        path_length=path_length,
-        area=poly.area / ground_scale**2 if area is None else float(area),
-        speed=speed,
-        turn_time=turn_time,
-        duration=duration,
+    stats = _convex_stats(
+        len(transects),
+        transect_length / ground_scale,
+        path_length / ground_scale,
+        poly.area / ground_scale**2 if area is None else float(area),
+        speed,
+        turn_time,
     )
     return Plan(
         polygon=poly,

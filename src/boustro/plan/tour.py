@@ -1,17 +1,20 @@
-"""The tour: chains of lanes, passes around holes, and their order (greedy, 2-opt, DP)."""
+"""The tour: chains of lanes, passes around holes, their order (greedy, 2-opt, DP), the drive."""
 
 from __future__ import annotations
 
 import itertools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..geometry import Polygon
+from .cells import _frame
 from .lanes import Lanes
 from .routing import Router
+from .types import KINDS
 
 __all__ = [
     "ORDER_BUDGET",
@@ -178,3 +181,133 @@ def _order(
             if left <= 0:
                 break
     return order, choice
+
+
+# -- driving the tour ------------------------------------------------------------------------
+def _extension_end(
+    router: Router, p: NDArray[np.float64], q: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``q``, or the point where ``p -> q`` first enters a hole (run-ins never enter holes)."""
+    br, cls = router._pieces(p, q)
+    bad = np.flatnonzero(cls == 1)
+    if len(bad) == 0:
+        return q
+    return p + br[bad[0]] * (q - p)
+
+
+class _Path(NamedTuple):
+    """Step 5: the waypoints and transects of the tour (plan units)."""
+
+    waypoints: NDArray[np.float64]
+    kinds: tuple[str, ...]
+    lane: NDArray[np.int64]
+    transects: NDArray[np.float64]
+    angles: NDArray[np.float64]
+    roles: tuple[str, ...]
+    cells: NDArray[np.int64]
+    positions: NDArray[np.float64]
+    outside: float
+    hole_length: float
+    blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]]
+
+
+class _Driver:
+    """Collects the waypoints and transects while the tour is driven pass by pass."""
+
+    def __init__(self, router: Router, turnaround: float) -> None:
+        self.router = router
+        self.turnaround = turnaround
+        self.points: list[NDArray[np.float64]] = []
+        self.kinds: list[str] = []
+        self.lane_of: list[int] = []
+        self.transects: list[NDArray[np.float64]] = []
+        self.angles: list[float] = []
+        self.roles: list[str] = []
+        self.cells: list[int] = []
+        self.positions: list[float] = []
+        self.outside = 0.0
+        self.hole_length = 0.0
+        self.blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
+
+    def point(self, p: NDArray[np.float64], kind: str, transect: int) -> None:
+        self.points.append(p)
+        self.kinds.append(kind)
+        self.lane_of.append(transect)
+
+    def transect(
+        self,
+        a: NDArray[np.float64],
+        b: NDArray[np.float64],
+        angle: float,
+        role: str,
+        cell: int,
+        position: float,
+    ) -> None:
+        self.transects.append(np.stack([a, b]))
+        self.angles.append(angle)
+        self.roles.append(role)
+        self.cells.append(cell)
+        self.positions.append(position)
+
+    def move_to(self, target: NDArray[np.float64], next_transect: int) -> None:
+        """The connecting move from the last waypoint (its corners become ``via`` points)."""
+        if not self.points:
+            return
+        route = self.router.path(self.points[-1], target)
+        self.outside += route.outside
+        if not route.found:
+            self.blocked.append((self.points[-1], target))
+        for p in route.points[1:-1]:
+            self.point(p, "via", next_transect)
+
+    def chain(
+        self, pts: NDArray[np.float64], angle: float, cell: int, origin: NDArray[np.float64]
+    ) -> None:
+        """A chain of lanes driven back and forth, with run-in and run-out."""
+        u, n = _frame(angle)
+        t = self.turnaround
+        for j in range(0, len(pts), 2):
+            a, b = pts[j], pts[j + 1]
+            ti = len(self.transects)
+            d = b - a
+            length = float(np.linalg.norm(d))
+            direction = d / length if length > 0 else (u if j % 4 == 0 else -u)
+            run_in = _extension_end(self.router, a, a - t * direction) if t else a
+            self.move_to(run_in, ti)
+            if t:
+                self.point(run_in, "run_in", ti)
+            self.point(a, "start", ti)
+            self.point(b, "end", ti)
+            if t:
+                self.point(_extension_end(self.router, b, b + t * direction), "run_out", ti)
+            self.transect(a, b, angle, "lane", cell, float((a - origin) @ n))
+
+    def hole(self, pts: NDArray[np.float64]) -> None:
+        """A pass around a hole: one transect per edge of the loop."""
+        ti = len(self.transects)
+        self.move_to(pts[0], ti)
+        for j in range(len(pts) - 1):
+            a, b = pts[j], pts[j + 1]
+            d = b - a
+            self.transect(a, b, math.atan2(d[1], d[0]), "hole", -1, math.nan)
+            self.hole_length += float(np.linalg.norm(d))
+        self.point(pts[0], "start", ti)
+        for j in range(1, len(pts) - 1):
+            self.point(pts[j], "loop", ti + j)
+        self.point(pts[-1], "end", ti + len(pts) - 2)
+
+    def result(self) -> _Path:
+        assert set(self.kinds) <= set(KINDS)
+        return _Path(
+            waypoints=np.asarray(self.points),
+            kinds=tuple(self.kinds),
+            lane=np.asarray(self.lane_of, dtype=np.int64),
+            transects=np.asarray(self.transects),
+            angles=np.asarray(self.angles),
+            roles=tuple(self.roles),
+            cells=np.asarray(self.cells, dtype=np.int64),
+            positions=np.asarray(self.positions),
+            outside=self.outside,
+            hole_length=self.hole_length,
+            blocked=self.blocked,
+        )
