@@ -240,6 +240,25 @@ def _convex_stats(
     )
 
 
+def _layout_segments(
+    poly: Polygon, spacing: float, angle: float, offset: float, layout: str, reach: float | None
+) -> tuple[Segments, float]:
+    """The transect segments of ``layout`` and the reach (default ``spacing / 2``)."""
+    if layout == "guaranteed":
+        segs = guaranteed_segments(poly, spacing, angle, offset, reach=reach)
+    elif layout == "chords":
+        segs = transect_segments(poly, spacing, angle, offset)
+    else:
+        raise InvalidParameterError(f"layout must be 'guaranteed' or 'chords', got {layout!r}")
+    reach = spacing / 2 if reach is None else float(reach)
+    if len(segs.lengths) == 0:
+        raise NoTransectError(
+            f"no transect crosses the polygon at spacing {spacing:g}, angle "
+            f"{math.degrees(angle):g} deg, offset {offset:g}"
+        )
+    return segs, reach
+
+
 def build_plan(
     polygon: Polygon | ArrayLike,
     spacing: float,
@@ -298,19 +317,7 @@ def build_plan(
         speed = check_finite("speed", speed)
         if speed <= 0:
             raise InvalidParameterError(f"speed must be > 0, got {speed!r}")
-    if layout == "guaranteed":
-        segs = guaranteed_segments(poly, spacing, angle, offset, reach=reach)
-        reach = spacing / 2 if reach is None else float(reach)
-    elif layout == "chords":
-        segs = transect_segments(poly, spacing, angle, offset)
-        reach = spacing / 2 if reach is None else float(reach)
-    else:
-        raise InvalidParameterError(f"layout must be 'guaranteed' or 'chords', got {layout!r}")
-    if len(segs.lengths) == 0:
-        raise NoTransectError(
-            f"no transect crosses the polygon at spacing {spacing:g}, angle "
-            f"{math.degrees(angle):g} deg, offset {offset:g}"
-        )
+    segs, reach = _layout_segments(poly, spacing, angle, offset, layout, reach)
     start_pt = _start_point(start, poly.vertices[0])
     n = np.array([-math.sin(angle), math.cos(angle)])
     transects = _orient(segs.segments, start_pt, turnaround)
