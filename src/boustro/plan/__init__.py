@@ -10,7 +10,7 @@ from .lanes import Lanes, region_lanes
 from .region import PlanOptions, plan_region
 from .region_opt import SWEEP_SEARCH, choose_sweep, optimize_region
 from .routing import Route, Router
-from .types import KINDS, Plan, PlanCell, PlanStats
+from .types import KINDS, Layout, Plan, PlanCell, PlanStats
 
 __all__ = [
     "KINDS",
@@ -18,6 +18,7 @@ __all__ = [
     "Coverage",
     "Decomposition",
     "Lanes",
+    "Layout",
     "Plan",
     "PlanCell",
     "PlanOptions",
