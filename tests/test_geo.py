@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pyproj
@@ -18,6 +19,8 @@ from boustro.geo import check_lonlat, parse_crs, plan_area, projection_for, utm_
 from boustro.geometry import Polygon
 from boustro.io import Area, area_from_text, embedded_field, read_area
 from boustro.sensors import Camera
+
+_DATA = Path(__file__).resolve().parent / "data"
 
 FAST: dict = {}  # the default (certified global) optimiser is fast enough for tests
 GEOD = pyproj.Geod(ellps="WGS84")
@@ -236,17 +239,8 @@ def test_read_area_formats(tmp_path):
     ewkt = area_from_text("SRID=28992;POLYGON Z ((0 0 1, 10 0 1, 10 10 1, 0 0 1))")
     assert ewkt.crs == "EPSG:28992" and ewkt.ring.shape == (3, 2)
     assert area_from_text(wkt, crs="EPSG:4258").crs == "EPSG:4258"
-    gml = read_area(_shared("Envelope.xml"))
+    gml = read_area(_DATA / "Envelope.xml")
     assert gml.crs == "EPSG:4258" and len(gml.ring) == 12
-
-
-def _shared(name: str):
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[2] / "shared" / "data" / "fields" / name
-    if not path.exists():
-        pytest.skip(f"{path} not available")
-    return path
 
 
 @pytest.mark.parametrize(

@@ -1,21 +1,7 @@
 """Transect spacing from a sensor: a camera or a swath sensor (sonar, lidar, sprayer boom).
 
-An edge of the system (plain arithmetic, no dependency): each sensor turns into a
-:class:`SensorSpacing`, the spacing to plan with plus the numbers a user wants printed next to it.
 Lengths are metres, the camera's sensor size and focal length millimetres, GSD centimetres per
 pixel, overlaps fractions in ``[0, 1)``.
-
-Conventions:
-
-* Camera: the image's *width* lies across the transects (landscape, long side across track, as
-  QGroundControl assumes). Footprint across track ``W = sensor_width * altitude / focal_length``,
-  ground sample distance ``GSD = W / image_width``; spacing ``W * (1 - side_overlap)``.
-* Swath sensor of total width ``W`` across track: spacing ``W * (1 - overlap)``. A side-scan
-  sonar sees nothing in a strip of width ``g`` (the *nadir gap*) centred under the vehicle; that
-  strip must be seen by a neighbouring line, which needs ``spacing <= (W - g) / 2`` (however small
-  ``g`` is, it halves the spacing), and each line must then cover the polygon over a band of
-  half-width ``reach = spacing + g / 2`` rather than ``spacing / 2`` (see
-  :func:`boustro.plan.guaranteed_segments`): with ``spacing = (1 - overlap) (W - g) / 2``.
 """
 
 from __future__ import annotations
@@ -73,6 +59,11 @@ class Camera:
     Example (a 1-inch 20 MP camera, 13.2 mm wide sensor, 8.8 mm lens, 5472 px wide images):
         >>> round(Camera(13.2, 8.8, 5472, altitude=80, side_overlap=0.7).spacing().spacing, 6)
         36.0
+
+    Example:
+        >>> s = Camera(13.2, 8.8, 5472, altitude=100.0).spacing()
+        >>> round(s.spacing, 3), round(s.footprint, 3)
+        (45.0, 150.0)
     """
 
     sensor_width: float  # mm
@@ -112,6 +103,11 @@ class Swath:
     """A sensor that sees a strip of ``width`` metres across track (sonar, lidar, boom).
 
     ``nadir_gap`` (m): a blind strip of that width centred under the vehicle (side-scan sonar).
+
+    Example:
+        >>> s = Swath(20.0, overlap=0.1, nadir_gap=2.0).spacing()
+        >>> round(s.spacing, 3), round(s.reach, 3)
+        (8.1, 9.1)
     """
 
     width: float

@@ -1,23 +1,6 @@
-"""Reading polygons and survey areas from files (an edge: the core never imports this module).
+"""Reading polygons and survey areas (ring + CRS) from GeoJSON, KML, GML and WKT files.
 
-:func:`read_polygon` reads planar polygons (``boustro score``):
-
-* a JSON list of ``[x, y]`` pairs (extra coordinates such as ``z`` are ignored);
-* GeoJSON: a ``Polygon``, ``MultiPolygon`` (its first polygon), ``Feature``, or
-  ``FeatureCollection`` (its first feature with a polygon geometry).
-
-:func:`read_area` reads a survey *area*: the ring as written in the file plus its coordinate
-reference system (CRS), for :mod:`boustro.geo` to project. It takes the formats above and:
-
-* KML (the first ``Polygon``, e.g. of a placemark; GML 2/3 rings in XML are read the same way);
-* WKT / EWKT: ``POLYGON``, ``POLYGON Z``, ``MULTIPOLYGON`` (first polygon), ``SRID=n;`` prefix.
-
-Coordinates are ``x, y`` = longitude, latitude (RFC 7946, KML) unless the file names another CRS
-(a GeoJSON ``crs`` member, a GML ``srsName``, an EWKT ``SRID``) or the caller gives one. A
-survey area may have holes (obstacles): GeoJSON interior rings, KML ``innerBoundaryIs``, GML
-``interior``, WKT rings after the first; :attr:`Area.holes` holds them. :func:`read_polygon`
-(planar polygons for ``boustro score``) refuses holes, and every reader refuses a file with no
-polygon.
+:func:`read_polygon` reads planar polygons, :func:`read_area` survey areas with their CRS.
 """
 
 from __future__ import annotations
@@ -35,9 +18,8 @@ from xml.etree import ElementTree
 import numpy as np
 from numpy.typing import NDArray
 
-from ._files import atomic_write
-from .errors import InvalidPolygonError, PolygonFileError
-from .geometry import Polygon
+from ..errors import InvalidPolygonError, PolygonFileError
+from ..geometry import Polygon
 
 log = logging.getLogger(__name__)
 
@@ -51,7 +33,6 @@ __all__ = [
     "area_from_kml",
     "area_from_text",
     "area_from_wkt",
-    "atomic_write",
     "embedded_field",
     "polygon_from_json",
     "read_area",
@@ -220,7 +201,7 @@ class Area:
     Attributes:
         ring: ``(N, 2)`` vertices ``(x, y)`` in file order (longitude, latitude for
             geographic CRSs), without a repeated closing vertex. Not yet validated as a
-            polygon: :mod:`boustro.geo` projects it first.
+            polygon: :mod:`boustro.mission` projects it first.
         crs: the CRS, e.g. ``"EPSG:4326"``, or ``None`` for plain planar coordinates.
         name: a name for the area (placemark or feature name, else the file's stem).
         source: where it came from (a path, or ``"<embedded>"``).
@@ -534,6 +515,12 @@ def read_area(path: str | os.PathLike[str], crs: str | None = None) -> Area:
 
     Raises:
         PolygonFileError: missing or unreadable file, malformed content, no polygon.
+
+    Example:
+        >>> from importlib import resources
+        >>> area = read_area(resources.files("boustro") / "data" / EMBEDDED_FIELD)
+        >>> area.name, area.crs, len(area.ring)
+        ('test parcel', 'EPSG:4326', 19)
     """
     name = os.fspath(path)
     try:

@@ -1,7 +1,4 @@
-"""Plot a transect layout: the polygon, its transects in driving order and the turns between them.
-
-An edge of the system: matplotlib is imported inside the function, never by the core.
-"""
+"""Plot a transect layout: the polygon, its transects in driving order, the turns between them."""
 
 from __future__ import annotations
 
@@ -10,9 +7,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import InvalidParameterError
-from .geometry import Polygon
-from .scoring import Segments, as_polygon
+from ..errors import InvalidParameterError
+from ..geometry import Polygon
+from ..scoring import Segments, as_polygon
 
 __all__ = ["plot_layout"]
 

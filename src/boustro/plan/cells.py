@@ -1,0 +1,453 @@
+"""Boustrophedon cellular decomposition: trapezoids, cells, :func:`decompose`."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import InvalidParameterError, InvalidPolygonError, as_number
+from ..geometry import Polygon
+from ..regions import Region, as_region, points_in_ring
+
+__all__ = [
+    "Decomposition",
+    "Trapezoids",
+    "decompose",
+    "trace_region",
+    "trapezoids",
+]
+
+
+#: Relative tolerance (to the area's diameter) for coincident slab lines and overlaps.
+_TOL = 1e-9
+
+
+def _frame(angle: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    u = np.array([math.cos(angle), math.sin(angle)])
+    return u, np.array([-u[1], u[0]])
+
+
+def _check_float(name: str, value: Any, low: float | None = None) -> float:
+    v = as_number(name, value)
+    if not math.isfinite(v) or (low is not None and v < low):
+        bound = "" if low is None else f" >= {low:g}"
+        raise InvalidParameterError(f"{name} must be a finite number{bound}, got {value!r}")
+    return v
+
+
+# -- trapezoids -------------------------------------------------------------------------------
+class Trapezoids(NamedTuple):
+    """The slab decomposition of a region at one angle (plan units, relative to ``origin``).
+
+    Trapezoid ``i`` spans positions ``c`` in ``[a[i], b[i]]`` across the lines of direction
+    ``angle``; along them it spans ``[entry edge, exit edge]``, whose along-coordinates at
+    ``a`` and ``b`` are ``te_a, te_b`` and ``tx_a, tx_b``. Ordered by slab, then along ``u``.
+    """
+
+    angle: float
+    origin: NDArray[np.float64]
+    a: NDArray[np.float64]
+    b: NDArray[np.float64]
+    te_a: NDArray[np.float64]
+    te_b: NDArray[np.float64]
+    tx_a: NDArray[np.float64]
+    tx_b: NDArray[np.float64]
+    slab: NDArray[np.int64]
+
+    def point(self, c: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
+        """Plan coordinates of ``(c, t)`` pairs."""
+        u, n = _frame(self.angle)
+        c, t = np.asarray(c, float), np.asarray(t, float)
+        return self.origin + c[..., None] * n + t[..., None] * u
+
+    def polygons(self) -> NDArray[np.float64]:
+        """``(Q, 4, 2)`` every trapezoid's corners."""
+        return np.stack(
+            [
+                self.point(self.a, self.te_a),
+                self.point(self.a, self.tx_a),
+                self.point(self.b, self.tx_b),
+                self.point(self.b, self.te_b),
+            ],
+            axis=1,
+        )
+
+
+def _crossings(
+    edges: NDArray[np.float64], u: NDArray[np.float64], n: NDArray[np.float64], c: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+    """Sorted crossings of lines ``n . p = c`` with ``edges (E, 2, 2)``: ``(t, edge, count)``
+    with ``t, edge`` ``(K, E)`` (padded with inf / -1) and ``count (K,)``."""
+    c = np.asarray(c, dtype=np.float64).reshape(-1)
+    c1, c2 = edges[:, 0] @ n, edges[:, 1] @ n
+    t1, t2 = edges[:, 0] @ u, edges[:, 1] @ u
+    cross = (c1[None] <= c[:, None]) != (c2[None] <= c[:, None])
+    dc = c2 - c1
+    slope = (t2 - t1) / np.where(dc == 0, 1.0, dc)
+    t = np.where(cross, t1[None] + (c[:, None] - c1[None]) * slope[None], np.inf)
+    order = np.argsort(t, axis=1, kind="stable")
+    t = np.take_along_axis(t, order, axis=1)
+    count = cross.sum(axis=1)
+    edge = np.where(np.isfinite(t), order, -1)
+    return t, edge, count
+
+
+def trapezoids(
+    region: Region | Polygon | ArrayLike, angle: float, origin: ArrayLike | None = None
+) -> Trapezoids:
+    """The slab decomposition of ``region`` by lines of direction ``angle`` through its vertices."""
+    r = as_region(region)
+    angle = _check_float("sweep angle", angle)
+    o = r.centre if origin is None else np.asarray(origin, dtype=np.float64)
+    u, n = _frame(angle)
+    e = r.edges - o
+    c1, c2 = e[:, 0] @ n, e[:, 1] @ n
+    t1, t2 = e[:, 0] @ u, e[:, 1] @ u
+    events = np.unique(c1)
+    tol = _TOL * r.diameter
+    keep = np.concatenate([[True], np.diff(events) > tol])
+    events = events[keep]
+    a, b = events[:-1], events[1:]
+    mid = (a + b) / 2
+    _, edge, count = _crossings(e, u, n, mid)
+    pairs = count // 2
+    m = int(pairs.max()) if len(pairs) else 0
+    slot = np.arange(m)
+    valid = slot[None] < pairs[:, None]
+    entry = edge[:, 0 : 2 * m : 2][valid]
+    exit_ = edge[:, 1 : 2 * m : 2][valid]
+    slab = np.repeat(np.arange(len(mid)), pairs)
+    dc = c2 - c1
+    slope = (t2 - t1) / np.where(dc == 0, 1.0, dc)
+
+    def t_at(j: NDArray[np.int64], c: NDArray[np.float64]) -> NDArray[np.float64]:
+        return t1[j] + (c - c1[j]) * slope[j]
+
+    aa, bb = a[slab], b[slab]
+    return Trapezoids(
+        float(angle),
+        o,
+        aa,
+        bb,
+        t_at(entry, aa),
+        t_at(entry, bb),
+        t_at(exit_, aa),
+        t_at(exit_, bb),
+        slab.astype(np.int64),
+    )
+
+
+# -- cells ------------------------------------------------------------------------------------
+class _UnionFind:
+    def __init__(self, n: int) -> None:
+        self.parent = list(range(n))
+
+    def find(self, i: int) -> int:
+        while self.parent[i] != i:
+            self.parent[i] = self.parent[self.parent[i]]
+            i = self.parent[i]
+        return i
+
+    def union(self, i: int, j: int) -> int:
+        ri, rj = self.find(i), self.find(j)
+        self.parent[rj] = ri
+        return ri
+
+
+def _interval_minus(
+    a: list[tuple[float, float]], b: list[tuple[float, float]], tol: float
+) -> list[tuple[float, float]]:
+    out = []
+    for lo, hi in a:
+        pieces = [(lo, hi)]
+        for g0, g1 in b:
+            nxt = []
+            for x0, x1 in pieces:
+                if g1 <= x0 or g0 >= x1:
+                    nxt.append((x0, x1))
+                    continue
+                if g0 > x0:
+                    nxt.append((x0, g0))
+                if g1 < x1:
+                    nxt.append((g1, x1))
+            pieces = nxt
+        out += [(x0, x1) for x0, x1 in pieces if x1 - x0 > tol]
+    return out
+
+
+def _straighten(ring: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
+    """Drop the vertices where a traced ring goes straight on (many: every slab line crossing
+    an edge makes one), all at once: those within ``tol`` of the line through their
+    neighbours, between them. Tiny steps along an edge would otherwise leave nearly collinear
+    vertices that :class:`~boustro.geometry.Polygon` may take for a self-intersection."""
+    while len(ring) > 3:
+        prev = ring - np.roll(ring, 1, axis=0)
+        nxt = np.roll(ring, -1, axis=0) - ring
+        chord = np.linalg.norm(prev + nxt, axis=1)
+        cross = prev[:, 0] * nxt[:, 1] - prev[:, 1] * nxt[:, 0]
+        straight = (np.abs(cross) <= tol * chord) & (np.einsum("ij,ij->i", prev, nxt) >= 0)
+        straight |= np.linalg.norm(prev, axis=1) <= tol
+        if not straight.any() or straight.all():
+            break
+        ring = ring[~straight]  # a run of straight vertices lies on one line: drop them all
+    return ring
+
+
+def _ring_area(ring: NDArray[np.float64]) -> float:
+    x, y = ring[:, 0], ring[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def trace_region(tr: Trapezoids, members: ArrayLike, diameter: float) -> Region:
+    """The union of trapezoids ``members`` as a :class:`~boustro.regions.Region` (its outer
+    boundary and any holes it surrounds), by tracing the boundary of the union.
+
+    Raises:
+        InvalidPolygonError: the union is not a valid region (e.g. it touches itself at a point).
+    """
+    idx = np.asarray(members, dtype=np.int64)
+    tol = _TOL * diameter
+    segs: list[tuple[float, float, float, float]] = []  # (c0, t0, c1, t1), union on the left
+    for i in idx:
+        segs.append((tr.a[i], tr.te_a[i], tr.b[i], tr.te_b[i]))
+        segs.append((tr.b[i], tr.tx_b[i], tr.a[i], tr.tx_a[i]))
+    by_b: dict[float, list[tuple[float, float]]] = {}
+    by_a: dict[float, list[tuple[float, float]]] = {}
+    for i in idx:
+        by_b.setdefault(float(tr.b[i]), []).append((float(tr.te_b[i]), float(tr.tx_b[i])))
+        by_a.setdefault(float(tr.a[i]), []).append((float(tr.te_a[i]), float(tr.tx_a[i])))
+    for line in set(by_a) | set(by_b):
+        left, right = by_b.get(line, []), by_a.get(line, [])
+        segs += [(line, lo, line, hi) for lo, hi in _interval_minus(left, right, tol)]
+        segs += [(line, hi, line, lo) for lo, hi in _interval_minus(right, left, tol)]
+    seg = np.array(segs, dtype=np.float64).reshape(-1, 4)
+    seg = seg[np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) > tol]
+    ends = np.concatenate([seg[:, :2], seg[:, 2:]])
+    # Cluster end points that differ by rounding only: snap to a grid, then join grid cells
+    # that are neighbours (a cluster straddling a grid line).
+    snap = 0.1 * tol  # below the gap between distinct slab lines (> tol)
+    key = np.floor(ends / snap).astype(np.int64)
+    _, label = np.unique(key, axis=0, return_inverse=True)
+    label = label.ravel()
+    cells: dict[tuple[int, int], int] = {}
+    for (kx, ky), raw in zip(map(tuple, key), label, strict=True):
+        cells.setdefault((int(kx), int(ky)), int(raw))
+    uf = _UnionFind(int(label.max()) + 1 if len(label) else 0)
+    first = np.zeros(len(uf.parent), dtype=np.int64)
+    first[label[::-1]] = np.arange(len(label))[::-1]
+    for (kx, ky), lab in cells.items():
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                other = cells.get((kx + dx, ky + dy))
+                if other is not None and other != lab:
+                    a, b = ends[first[lab]], ends[first[other]]
+                    if np.max(np.abs(a - b)) <= snap:
+                        uf.union(int(lab), int(other))
+    label = np.array([uf.find(int(x)) for x in label])
+    m = len(seg)
+    start, stop = label[:m], label[m:]
+    outgoing: dict[int, list[int]] = {}
+    for k in range(m):
+        outgoing.setdefault(int(start[k]), []).append(k)
+    used = np.zeros(m, dtype=bool)
+    rings = []
+    for k0 in range(m):
+        if used[k0]:
+            continue
+        ring, k = [], k0
+        while not used[k]:
+            used[k] = True
+            ring.append(seg[k, :2])
+            nxt = [j for j in outgoing.get(int(stop[k]), []) if not used[j]]
+            if not nxt:
+                break
+            k = nxt[0]
+        cs, ts = np.array([p[0] for p in ring]), np.array([p[1] for p in ring])
+        arr = _straighten(tr.point(cs, ts), tol)
+        if len(arr) >= 3 and abs(_ring_area(arr)) > tol * diameter:
+            rings.append(arr)
+    if not rings:
+        raise InvalidPolygonError("the cells' union has no area")
+    rings.sort(key=lambda x: -abs(_ring_area(x)))
+    shell = Polygon(rings[0])
+    holes = [Polygon(h) for h in rings[1:]]
+    if all(points_in_ring(h.vertices[:1], shell.vertices)[0] for h in holes):
+        return Region._trusted(shell, holes)  # rings of a tiling: disjoint by construction
+    return Region(shell, holes)
+
+
+@dataclass(frozen=True)
+class Decomposition:
+    """Cells of a boustrophedon decomposition.
+
+    Attributes:
+        sweep: the sweep direction (radians): lines of this direction cut the area into
+            trapezoids; cells not merged for being small are monotone along them.
+        cells: the cells as regions (plan units), interior-disjoint, union = the area.
+        trapezoids: the slab decomposition they are made of.
+        membership: ``(Q,)`` the cell of each trapezoid.
+        widths: ``(C,)`` each cell's extent across the sweep lines.
+        shared: ``(C, C)`` length of the boundary each pair of cells shares.
+    """
+
+    sweep: float
+    cells: tuple[Region, ...]
+    trapezoids: Trapezoids
+    membership: NDArray[np.int64]
+    widths: NDArray[np.float64]
+    shared: NDArray[np.float64]
+
+    def union(self, cells: Sequence[int], diameter: float) -> Region:
+        """The union of some cells as one region."""
+        members = np.flatnonzero(np.isin(self.membership, np.asarray(cells)))
+        return trace_region(self.trapezoids, members, diameter)
+
+
+def _links(tr: Trapezoids, tol: float) -> list[tuple[float, int, int, bool]]:
+    """Trapezoids touching across slab lines: ``(overlap, lower, upper, one-to-one)``."""
+    out = []
+    by_slab: dict[int, NDArray[np.int64]] = {}
+    for s in np.unique(tr.slab):
+        by_slab[int(s)] = np.flatnonzero(tr.slab == s)
+    for s, lower in by_slab.items():
+        upper = by_slab.get(s + 1)
+        if upper is None or tr.b[lower[0]] != tr.a[upper[0]]:
+            continue
+        lo = np.maximum(tr.te_b[lower][:, None], tr.te_a[upper][None])
+        hi = np.minimum(tr.tx_b[lower][:, None], tr.tx_a[upper][None])
+        overlap = hi - lo
+        touching = overlap > tol
+        for i, j in zip(*np.nonzero(touching), strict=True):
+            single = bool(touching[i].sum() == 1 and touching[:, j].sum() == 1)
+            out.append((float(overlap[i, j]), int(lower[i]), int(upper[j]), single))
+    return out
+
+
+def _membership(tr: Trapezoids, roots: list[int]) -> NDArray[np.int64]:
+    """The cell of every trapezoid, cells ordered by their lowest slab, then along the lines."""
+    labels = np.array(roots, dtype=np.int64)
+    _, membership = np.unique(labels, return_inverse=True)
+    n_cells = int(membership.max()) + 1 if len(roots) else 0
+    first = [np.flatnonzero(membership == k)[0] for k in range(n_cells)]
+    rank = np.lexsort(([tr.te_a[i] for i in first], [tr.slab[i] for i in first]))
+    remap = np.empty_like(rank)
+    remap[rank] = np.arange(n_cells)
+    return remap[membership]
+
+
+def _shared_lengths(
+    links: list[tuple[float, int, int, bool]], membership: NDArray[np.int64], n_cells: int
+) -> NDArray[np.float64]:
+    """``(C, C)`` length of the boundary each pair of cells shares."""
+    shared_m = np.zeros((n_cells, n_cells))
+    for overlap, i, j, _ in links:
+        ci, cj = membership[i], membership[j]
+        if ci != cj:
+            shared_m[ci, cj] += overlap
+            shared_m[cj, ci] += overlap
+    return shared_m
+
+
+def decompose(
+    region: Region | Polygon | ArrayLike,
+    sweep: float,
+    *,
+    merge: bool = True,
+    min_width: float = 0.0,
+    polygons: bool = True,
+) -> Decomposition:
+    """Boustrophedon cellular decomposition of ``region`` at sweep direction ``sweep`` (radians).
+
+    Args:
+        region: the area (plan units).
+        sweep: direction of the sweep lines (the lanes along which every cell is monotone).
+        merge: merge cells stacked across a critical line (module docstring); ``False`` gives
+            Choset's cells, split at every critical point.
+        min_width: then merge every cell narrower than this across the sweep lines (typically
+            a few spacings: the cells that wiggles of the boundary cut off) into the neighbour
+            it shares the longest boundary with; such merged cells need not be monotone.
+        polygons: build the cells' regions (``False``: only membership and widths, faster).
+
+    Example:
+        >>> u_shape = [(0, 0), (9, 0), (9, 9), (6, 9), (6, 3), (3, 3), (3, 9), (0, 9)]
+        >>> [round(cell.area, 3) for cell in decompose(u_shape, 0.0).cells]
+        [45.0, 18.0]
+    """
+    r = as_region(region)
+    tr = trapezoids(r, sweep)
+    q = len(tr.a)
+    tol = _TOL * r.diameter
+    uf = _UnionFind(q)
+    links = _links(tr, tol)
+    stacked = []
+    for overlap, i, j, single in links:
+        if single:
+            uf.union(i, j)
+        else:
+            stacked.append((overlap, i, j))
+    lo_c: dict[int, float] = {}
+    hi_c: dict[int, float] = {}
+    top: dict[int, int] = {}
+    bottom: dict[int, int] = {}
+    for i in range(q):
+        rt, sl = uf.find(i), int(tr.slab[i])
+        top[rt] = max(top.get(rt, sl), sl)
+        bottom[rt] = min(bottom.get(rt, sl), sl)
+        lo_c[rt] = min(lo_c.get(rt, math.inf), float(tr.a[i]))
+        hi_c[rt] = max(hi_c.get(rt, -math.inf), float(tr.b[i]))
+
+    def join(ri: int, rj: int) -> None:
+        new = uf.union(ri, rj)
+        top[new], bottom[new] = max(top[ri], top[rj]), min(bottom[ri], bottom[rj])
+        lo_c[new], hi_c[new] = min(lo_c[ri], lo_c[rj]), max(hi_c[ri], hi_c[rj])
+
+    if merge:
+        for _, i, j in sorted(stacked, reverse=True):
+            ri, rj = uf.find(i), uf.find(j)
+            if ri != rj and top[ri] == tr.slab[i] and bottom[rj] == tr.slab[j]:
+                join(ri, rj)
+    if min_width > 0:
+        while True:
+            shared: dict[tuple[int, int], float] = {}
+            for overlap, i, j, _ in links:
+                ri, rj = uf.find(i), uf.find(j)
+                if ri != rj:
+                    key = (min(ri, rj), max(ri, rj))
+                    shared[key] = shared.get(key, 0.0) + overlap
+            roots = {uf.find(i) for i in range(q)}
+            narrow = sorted(
+                (hi_c[rt] - lo_c[rt], rt) for rt in roots if hi_c[rt] - lo_c[rt] < min_width
+            )
+            done = False
+            for _, rt in narrow:
+                best = max(
+                    ((length, key) for key, length in shared.items() if rt in key),
+                    default=None,
+                )
+                if best is not None:
+                    join(*best[1])
+                    done = True
+                    break
+            if not done:
+                break
+    membership = _membership(tr, [uf.find(i) for i in range(q)])
+    n_cells = int(membership.max()) + 1 if q else 0
+    lo = np.full(n_cells, np.inf)
+    hi = np.full(n_cells, -np.inf)
+    np.minimum.at(lo, membership, tr.a)
+    np.maximum.at(hi, membership, tr.b)
+    shared_m = _shared_lengths(links, membership, n_cells)
+    cells: tuple[Region, ...] = ()
+    if polygons:
+        cells = tuple(
+            trace_region(tr, np.flatnonzero(membership == k), r.diameter) for k in range(n_cells)
+        )
+    return Decomposition(float(sweep), cells, tr, membership, hi - lo, shared_m)
+
+
+#: Grid of the quick optimisations that compare sweep directions (:func:`choose_sweep`).

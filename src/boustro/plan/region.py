@@ -1,0 +1,390 @@
+"""Plans for concave areas and areas with holes: check, cells, lanes, tour, assemble."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Literal, NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import InvalidParameterError, InvalidPolygonError, NoTransectError
+from ..geometry import Polygon
+from ..models import check_spacing
+from ..optimize import OptimizeResult
+from ..regions import Region, as_region
+from .cells import _TOL, _check_float
+from .lanes import Lanes, region_lanes
+from .region_opt import _cells_for_sweep, _estimate, choose_sweep, optimize_region
+from .routing import Router
+from .tour import _chain_pass, _chains, _Driver, _hole_pass, _order, _Pass, _Path
+from .types import Layout, Plan, PlanCell, PlanStats
+
+__all__ = ["PlanOptions", "plan_region"]
+
+
+# -- plans ------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class PlanOptions:
+    """The options of :func:`plan_region`, checked (plan units; see its arguments)."""
+
+    spacing: float
+    reach: float
+    turnaround: float = 0.0
+    nadir_gap: float = 0.0
+    turn_time: float = 0.0
+    ground_scale: float = 1.0
+    speed: float | None = None
+    layout: Layout = "guaranteed"
+    decompose_area: bool | Literal["auto"] = "auto"
+    min_width: float = 0.0
+    sweep: float | None = None
+    angle: float | None = None
+    offset: float | None = None
+    fitness: Any = None
+    n_angles: int = 90
+    n_offsets: int = 16
+    start: ArrayLike | None = None
+    hole_passes: bool = True
+    area: float | None = None
+    merge_angle: float = math.radians(15.0)
+
+
+class _Cells(NamedTuple):
+    """Step 2: the cells (or the whole area) and their optima (``None``: the given grid)."""
+
+    regions: list[Region]
+    optima: list[OptimizeResult | None]
+
+
+class _CellLanes(NamedTuple):
+    """Step 3: every cell with its grid and its lanes."""
+
+    cells: list[PlanCell]
+    lanes: list[Lanes]
+
+
+class _Tour(NamedTuple):
+    """Step 4: the passes (chains of lanes, hole passes), their order and driving options."""
+
+    passes: list[_Pass]
+    order: list[int]
+    choice: list[int]
+    router: Router
+
+
+def plan_region(
+    region: Region | Polygon | ArrayLike,
+    spacing: float,
+    *,
+    decompose_area: bool | Literal["auto"] = "auto",
+    sweep: float | None = None,
+    angle: float | None = None,
+    offset: float | None = None,
+    fitness: Any = None,
+    n_angles: int = 90,
+    n_offsets: int = 16,
+    layout: Layout = "guaranteed",
+    start: ArrayLike | None = None,
+    turnaround: float = 0.0,
+    reach: float | None = None,
+    nadir_gap: float = 0.0,
+    hole_passes: bool = True,
+    ground_scale: float = 1.0,
+    speed: float | None = None,
+    turn_time: float = 0.0,
+    area: float | None = None,
+    min_width: float | None = None,
+    merge_angle: float = math.radians(15.0),
+) -> Plan:
+    """Plan a concave area or an area with holes: lanes, hole passes, one connected path.
+
+    Args:
+        region: the area (plan units): a :class:`~boustro.regions.Region`, or a polygon.
+        spacing: distance between lanes, > 0.
+        decompose_area: ``"auto"`` (default): decompose into cells, each with its own
+            optimised angle and offset, when that promises fewer turns (or, on a tie, less
+            lane length) than one grid over the whole area (:func:`choose_sweep`'s estimate);
+            ``True``: always decompose; ``False``: one grid over the whole area.
+        sweep: sweep direction of the decomposition (radians); default: the best of
+            :func:`choose_sweep`'s candidates.
+        angle, offset: with ``decompose_area=False``, plan this grid instead of optimising
+            (offset from the shell's vertex mean).
+        fitness: the objective of the per-cell (or whole-area) optimisation (default Eq. 1 over
+            segments).
+        n_angles, n_offsets: grid of :func:`optimize_region`.
+        layout: ``"guaranteed"`` (default; with hole passes, every point of the area is within
+            ``reach`` of a lane across it or of a hole pass) or ``"chords"``.
+        start: the path begins at the entry nearest this point of a chain of lanes (a chain
+            starts at its first or last lane's ends); default: where the tour is shortest.
+        turnaround: run-in / run-out beyond each lane end (shortened where it would enter a
+            hole), plan units.
+        reach: half-width of each lane's band (default ``spacing / 2``).
+        nadir_gap: blind strip under the vehicle (not supported with hole passes).
+        hole_passes: drive around every hole that cuts a lane (guaranteed layout only).
+        ground_scale, speed, turn_time, area: as in :func:`boustro.plan.build_plan`.
+        min_width: cells narrower than this across the sweep are merged into a neighbour
+            (default two spacings), see :func:`decompose`.
+        merge_angle: neighbouring cells whose optimised angles differ by less than this
+            (radians, default 15 degrees) are merged and optimised again as one cell.
+
+    Returns:
+        a :class:`~boustro.plan.Plan` with ``region``, ``cells``, per-transect angles and
+        roles; its ``polygon`` is the shell.
+
+    Raises:
+        InvalidParameterError: bad parameters. NoTransectError: nothing to plan.
+
+    Example:
+        >>> from boustro.plan import coverage
+        >>> u_shape = [(0, 0), (9, 0), (9, 9), (6, 9), (6, 3), (3, 3), (3, 9), (0, 9)]
+        >>> plan = plan_region(u_shape, 1.0)
+        >>> plan.stats.n_transects, round(coverage(plan).covered_share, 4)
+        (12, 1.0)
+    """
+    r = as_region(region)
+    opts = _check_options(
+        r,
+        spacing,
+        decompose_area=decompose_area,
+        sweep=sweep,
+        angle=angle,
+        offset=offset,
+        fitness=fitness,
+        n_angles=n_angles,
+        n_offsets=n_offsets,
+        layout=layout,
+        start=start,
+        turnaround=turnaround,
+        reach=reach,
+        nadir_gap=nadir_gap,
+        hole_passes=hole_passes,
+        ground_scale=ground_scale,
+        speed=speed,
+        turn_time=turn_time,
+        area=area,
+        min_width=min_width,
+        merge_angle=merge_angle,
+    )
+    notes: list[str] = []
+    cells = _plan_cells(r, opts, notes)
+    cell_lanes = _plan_lanes(r, cells, opts)
+    tour = _plan_tour(r, cell_lanes, opts, notes)
+    path = _drive(tour, cell_lanes, opts)
+    return _assemble(r, cell_lanes, tour, path, opts, notes)
+
+
+# -- step 1: check ----------------------------------------------------------------------------
+def _check_options(r: Region, spacing: float, **kw: Any) -> PlanOptions:
+    """The options checked, in the order the errors are reported."""
+    s = check_spacing(spacing, extent=r.diameter)
+    reach = s / 2 if kw["reach"] is None else _check_float("reach", kw["reach"])
+    if reach < s / 2 * (1 - 1e-12):
+        raise InvalidParameterError(
+            f"reach must be >= spacing / 2 = {s / 2:g} for the bands to tile the area, "
+            f"got {reach:g}"
+        )
+    turnaround = _check_float("turnaround", kw["turnaround"], 0.0)
+    nadir_gap = _check_float("nadir_gap", kw["nadir_gap"], 0.0)
+    turn_time = _check_float("turn_time", kw["turn_time"], 0.0)
+    ground_scale = _check_float("ground_scale", kw["ground_scale"])
+    if ground_scale <= 0:
+        raise InvalidParameterError(f"ground_scale must be > 0, got {kw['ground_scale']!r}")
+    speed = kw["speed"]
+    if speed is not None and _check_float("speed", speed) <= 0:
+        raise InvalidParameterError(f"speed must be > 0, got {speed!r}")
+    layout = kw["layout"]
+    if layout not in ("guaranteed", "chords"):
+        raise InvalidParameterError(f"layout must be 'guaranteed' or 'chords', got {layout!r}")
+    if nadir_gap > 0 and r.n_holes and kw["hole_passes"] and layout == "guaranteed":
+        raise InvalidParameterError(
+            "a nadir gap is not supported with holes: the passes around holes would not cover "
+            "their own blind strip"
+        )
+    if kw["decompose_area"] not in (True, False, "auto"):
+        raise InvalidParameterError(
+            f"decompose_area must be True, False or 'auto', got {kw['decompose_area']!r}"
+        )
+    min_width = kw["min_width"]
+    min_width = 2 * s if min_width is None else _check_float("min_width", min_width, 0.0)
+    kw.update(
+        spacing=s,
+        reach=reach,
+        turnaround=turnaround,
+        nadir_gap=nadir_gap,
+        turn_time=turn_time,
+        ground_scale=ground_scale,
+        min_width=min_width,
+    )
+    return PlanOptions(**kw)
+
+
+# -- step 2: cells ----------------------------------------------------------------------------
+def _plan_cells(r: Region, opts: PlanOptions, notes: list[str]) -> _Cells:
+    """The cells and their optima: the whole area, or its decomposition where that promises
+    fewer turns (or on a tie less lane length); a given ``angle`` is planned as it is."""
+    s = opts.spacing
+    options = {"n_angles": opts.n_angles, "n_offsets": opts.n_offsets, "fitness": opts.fitness}
+    whole = _Cells([r], [None])
+    if opts.angle is not None:
+        return whole
+    optima: list[OptimizeResult | None] = [optimize_region(r, s, **options)]
+    whole = _Cells([r], optima)
+    if not opts.decompose_area or r.is_convex:
+        return whole
+    if opts.sweep is None:
+        sweep_angle, estimate = choose_sweep(
+            r, s, min_width=opts.min_width, merge_angle=opts.merge_angle, fitness=opts.fitness
+        )
+    else:
+        sweep_angle, estimate = _check_float("sweep", opts.sweep), (-math.inf, -math.inf)
+    single = _estimate([r], optima, s)  # type: ignore[arg-type]
+    if not (opts.decompose_area is True or estimate < single):
+        return whole
+    try:
+        cell_regions, cells_opt = _cells_for_sweep(
+            r,
+            s,
+            sweep_angle,
+            min_width=opts.min_width,
+            merge_angle=opts.merge_angle,
+            options=options,
+        )
+    except InvalidPolygonError as exc:
+        notes.append(f"the decomposition failed ({exc}); the area is planned as one cell")
+        return whole
+    if len(cell_regions) > 1 and (
+        opts.decompose_area is True or _estimate(cell_regions, cells_opt, s) < single
+    ):
+        return _Cells(cell_regions, list(cells_opt))
+    return whole  # one cell after all: the whole area, as planned without decomposition
+
+
+# -- step 3: lanes ----------------------------------------------------------------------------
+def _plan_lanes(r: Region, cells: _Cells, opts: PlanOptions) -> _CellLanes:
+    """The lanes of every cell at its angle and offset (the optimum, or the given grid)."""
+    out = _CellLanes([], [])
+    for cell, opt in zip(cells.regions, cells.optima, strict=True):
+        if opt is None:
+            cell_angle = _check_float("angle", opts.angle)
+            cell_offset = 0.0 if opts.offset is None else _check_float("offset", opts.offset)
+            value = math.nan
+        else:
+            cell_angle, cell_offset, value = opt.angle, opt.offset, opt.fitness
+        lanes = region_lanes(
+            cell,
+            opts.spacing,
+            cell_angle,
+            cell_offset,
+            reach=opts.reach,
+            holes=r.holes,
+            layout=opts.layout,
+        )
+        out.lanes.append(lanes)
+        out.cells.append(PlanCell(cell, cell_angle, cell_offset, value, len(lanes.k), opt))
+    if sum(len(lanes.k) for lanes in out.lanes) == 0:
+        raise NoTransectError(f"no lane crosses the area at spacing {opts.spacing:g}")
+    return out
+
+
+# -- step 4: tour -----------------------------------------------------------------------------
+def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -> _Tour:
+    """Chains of lanes and hole passes, ordered from the start (or where the tour is shortest)."""
+    tol = _TOL * r.diameter
+    passes: list[_Pass] = []
+    for ci, lanes in enumerate(cl.lanes):
+        for chain in _chains(lanes, tol):
+            passes.append(_chain_pass(lanes, chain, ci))
+    cut = set().union(*(lanes.cut for lanes in cl.lanes))
+    if opts.layout == "guaranteed" and opts.hole_passes:
+        for hi in sorted(cut):
+            passes.append(_hole_pass(r.holes[hi]))
+    elif cut and opts.layout == "guaranteed":
+        notes.append(
+            f"{len(cut)} hole(s) cut lanes and hole passes are off: the area along their edges "
+            "is not fully covered"
+        )
+    router = Router(r, reach=max(opts.reach, opts.turnaround))
+    start = opts.start
+    if start is None:
+        start_pt = r.shell.vertices[0]
+    else:
+        start_pt = np.asarray(start, dtype=np.float64).reshape(-1)
+        if start_pt.shape != (2,) or not np.all(np.isfinite(start_pt)):
+            raise InvalidParameterError(f"start must be a finite (x, y) pair, got {start!r}")
+    order, choice = _order(passes, start_pt, router, force_start=start is not None)
+    return _Tour(passes, order, choice, router)
+
+
+# -- step 5: drive ----------------------------------------------------------------------------
+def _drive(tour: _Tour, cl: _CellLanes, opts: PlanOptions) -> _Path:
+    """The waypoints of the tour: every pass in order, joined by connecting moves."""
+    driver = _Driver(tour.router, opts.turnaround)
+    for pi, oi in zip(tour.order, tour.choice, strict=True):
+        p = tour.passes[pi]
+        _, _, pts, _ = p.options[oi]
+        if p.kind == "chain":
+            driver.chain(pts, p.angle, p.cell, cl.lanes[p.cell].origin)
+        else:
+            driver.hole(pts)
+    return driver.result()
+
+
+# -- step 6: assemble -------------------------------------------------------------------------
+def _assemble(
+    r: Region, cl: _CellLanes, tour: _Tour, path: _Path, opts: PlanOptions, notes: list[str]
+) -> Plan:
+    """The :class:`Plan` with its statistics (ground units) and notes."""
+    tr = path.transects
+    lane_role = np.array(path.roles) == "lane"
+    transect_length = float(np.linalg.norm(tr[:, 1] - tr[:, 0], axis=1)[lane_role].sum())
+    path_length = float(np.linalg.norm(np.diff(path.waypoints, axis=0), axis=1).sum())
+    n_lanes = int(lane_role.sum())
+    n_turns = n_lanes + sum(1 for p in tour.passes if p.kind == "hole") - 1  # passes - 1
+    for a, b in path.blocked:
+        notes.append(
+            f"no connecting move inside the area from {a.round(3).tolist()} to "
+            f"{b.round(3).tolist()}: the straight line is used"
+        )
+    scale = opts.ground_scale
+    speed = opts.speed
+    duration = None if speed is None else path_length / scale / speed + n_turns * opts.turn_time
+    cells = cl.cells
+    stats = PlanStats(
+        n_transects=n_lanes,
+        n_turns=n_turns,
+        transect_length=transect_length / scale,
+        path_length=path_length / scale,
+        area=r.area / scale**2 if opts.area is None else float(opts.area),
+        speed=speed,
+        turn_time=opts.turn_time,
+        duration=duration,
+        n_cells=len(cells),
+        hole_pass_length=path.hole_length / scale,
+        outside_length=path.outside / scale,
+    )
+    main = max(range(len(cells)), key=lambda i: cells[i].polygon.area)
+    return Plan(
+        polygon=r.shell,
+        spacing=opts.spacing,
+        angle=cells[main].angle,
+        offset=cells[main].offset,
+        layout=opts.layout,
+        reach=float(opts.reach),
+        nadir_gap=opts.nadir_gap,
+        turnaround=opts.turnaround,
+        positions=path.positions,
+        transects=tr,
+        waypoints=path.waypoints,
+        kinds=path.kinds,
+        lane=path.lane,
+        ground_scale=scale,
+        stats=stats,
+        region=r,
+        cells=tuple(cells),
+        transect_angles=path.angles,
+        roles=path.roles,
+        transect_cells=path.cells,
+        notes=tuple(notes),
+    )

@@ -1,0 +1,320 @@
+"""Connecting moves inside an area with holes: a visibility graph and shortest paths."""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..regions import Region, _point_segment_distance, as_region, points_in_ring
+
+__all__ = ["Route", "Router"]
+
+
+def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+class Route(NamedTuple):
+    """A connecting move: ``points (L, 2)`` from start to end, its ``length``, the part of it
+    ``outside`` the area (length; within ``reach`` of the area unless ``found`` is false),
+    whether it is the straight move, and whether a move inside the area was ``found`` (if
+    not, the move is the straight line, through whatever is in the way)."""
+
+    points: NDArray[np.float64]
+    length: float
+    outside: float
+    straight: bool
+    found: bool = True
+
+
+#: Segment x edge pairs tested at once by the visibility test (memory: a few bytes each).
+_VISIBILITY_CHUNK = 1 << 22
+
+
+class Router:
+    """Shortest connecting moves in a region (module docstring).
+
+    Args:
+        region: the area (shell and holes), plan units.
+        reach: how far outside the shell a straight move may pass (plan units, >= 0).
+    """
+
+    def __init__(self, region: Region, reach: float = 0.0) -> None:
+        self.region = as_region(region)
+        self.reach = float(reach)
+        self.tol = 1e-9 * self.region.diameter
+        e = self.region.edges
+        self._e1, self._e2 = e[:, 0], e[:, 1]
+        n_shell = len(self.region.shell)
+        self._shell_edges = e[:n_shell]
+        self._hole_rings = [h.vertices for h in self.region.holes]
+        # Vertices where the free space is reflex: a right turn along rings with the area on
+        # their left (the shell CCW, holes CW).
+        nodes = []
+        for ring in self.region.rings:
+            turn = _cross(ring - np.roll(ring, 1, axis=0), np.roll(ring, -1, axis=0) - ring)
+            nodes.append(ring[turn < 0])
+        self.nodes = np.concatenate(nodes) if nodes else np.zeros((0, 2))
+        self._graph()
+
+    # -- membership --------------------------------------------------------------------------
+    def _boundary_distance(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
+        return _point_segment_distance(p[:, None, :], self._e1[None], self._e2[None]).min(axis=1)
+
+    def _shell_distance(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
+        s = self._shell_edges
+        return _point_segment_distance(p[:, None, :], s[None, :, 0], s[None, :, 1]).min(axis=1)
+
+    def classify(self, points: ArrayLike) -> NDArray[np.int64]:
+        """``(P,)``: 0 in the closed area, 1 strictly inside a hole, 2 strictly outside the
+        shell (within ``1e-9`` of the diameter of a ring counts as on it, i.e. in the area)."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        out = np.zeros(len(p), dtype=np.int64)
+        if len(p) == 0:
+            return out
+        near = self._boundary_distance(p) <= self.tol
+        out[~points_in_ring(p, self.region.shell.vertices) & ~near] = 2
+        for ring in self._hole_rings:
+            out[points_in_ring(p, ring) & ~near] = 1
+        return out
+
+    def anchor(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Each point if it lies in the closed area, else the nearest point of the area's
+        boundary (of the shell for a point outside, of the hole for a point in a hole)."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 2).copy()
+        where = self.classify(p)
+        bad = np.flatnonzero(where != 0)
+        if len(bad):
+            q = p[bad]
+            ab = self._e2 - self._e1
+            den = np.maximum(np.einsum("ij,ij->i", ab, ab), np.finfo(np.float64).tiny)
+            t = np.clip(np.einsum("pij,ij->pi", q[:, None] - self._e1[None], ab) / den, 0, 1)
+            foot = self._e1[None] + t[..., None] * ab[None]
+            k = np.argmin(np.linalg.norm(foot - q[:, None], axis=-1), axis=1)
+            p[bad] = foot[np.arange(len(bad)), k]
+        return p
+
+    # -- segments ----------------------------------------------------------------------------
+    def _breaks(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Sorted parameters in [0, 1] where segment ``p -> q`` meets any ring edge or vertex."""
+        r = q - p
+        s = self._e2 - self._e1
+        den = _cross(r, s)
+        ok = np.abs(den) > 1e-15 * (np.linalg.norm(r) * np.linalg.norm(s, axis=1) + 1e-300)
+        safe = np.where(ok, den, 1.0)
+        w = self._e1 - p
+        t = _cross(w, s) / safe
+        u = _cross(w, r) / safe
+        eps = 1e-12
+        hit = ok & (t >= -eps) & (t <= 1 + eps) & (u >= -eps) & (u <= 1 + eps)
+        params = [t[hit]]
+        # Vertices on the segment (collinear edges included).
+        rr = float(r @ r)
+        if rr > 0:
+            v = self._e1
+            tv = ((v - p) @ r) / rr
+            dist = np.abs(_cross(np.broadcast_to(r, v.shape), v - p)) / math.sqrt(rr)
+            params.append(tv[(dist <= self.tol) & (tv > 0) & (tv < 1)])
+        out = np.clip(np.concatenate([*params, np.array([0.0, 1.0])]), 0.0, 1.0)
+        return np.unique(out)
+
+    def _pieces(self, p: NDArray[np.float64], q: NDArray[np.float64]):
+        """``(params, classes)``: the breakpoints and the class of each piece between them."""
+        br = self._breaks(p, q)
+        mids = (br[:-1] + br[1:]) / 2
+        keep = br[1:] - br[:-1] > 1e-12
+        cls = np.zeros(len(mids), dtype=np.int64)
+        if keep.any():
+            cls[keep] = self.classify(p + mids[keep, None] * (q - p))
+        return br, cls
+
+    def inside(self, p: ArrayLike, q: ArrayLike) -> bool:
+        """Whether the straight move ``p -> q`` stays in the closed area."""
+        p, q = np.asarray(p, float), np.asarray(q, float)
+        _, cls = self._pieces(p, q)
+        return bool(np.all(cls == 0))
+
+    def _straight(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> tuple[bool, float]:
+        """``(allowed, outside length)`` for the straight move (module docstring)."""
+        br, cls = self._pieces(p, q)
+        if np.any(cls == 1):
+            return False, math.inf
+        length = float(np.linalg.norm(q - p))
+        out = cls == 2
+        outside = float(np.sum((br[1:] - br[:-1])[out])) * length
+        if not out.any():
+            return True, 0.0
+        if self.reach <= 0:
+            return False, outside
+        step = self.reach / 16
+        for a, b in zip(br[:-1][out], br[1:][out], strict=True):
+            n = max(2, math.ceil((b - a) * length / step) + 1)
+            pts = p + np.linspace(a, b, n)[:, None] * (q - p)
+            if np.max(self._shell_distance(pts)) > self.reach * (1 + 1e-9):
+                return False, outside
+        return True, outside
+
+    def _visible_many(self, a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.bool_]:
+        """Whether each segment ``a[i] -> b[i]`` stays in the closed area, ``(M,)``.
+
+        Only the edges whose bounding box meets the segment's are tested (flat arrays)."""
+        m = len(a)
+        if m == 0:
+            return np.zeros(0, dtype=bool)
+        e1, e2 = self._e1, self._e2
+        chunk = max(1, _VISIBILITY_CHUNK // max(1, len(e1)))
+        if m > chunk:  # bounded memory: the (segments x edges) test in slices
+            return np.concatenate(
+                [self._visible_many(a[k : k + chunk], b[k : k + chunk]) for k in range(0, m, chunk)]
+            )
+        tol = self.tol
+        lo, hi = np.minimum(a, b) - tol, np.maximum(a, b) + tol
+        elo, ehi = np.minimum(e1, e2), np.maximum(e1, e2)
+        cand = (
+            (lo[:, None, 0] <= ehi[None, :, 0])
+            & (hi[:, None, 0] >= elo[None, :, 0])
+            & (lo[:, None, 1] <= ehi[None, :, 1])
+            & (hi[:, None, 1] >= elo[None, :, 1])
+        )
+        mi, ei = np.nonzero(cand)
+        pa, pb = a[mi], b[mi]
+        q1, q2 = e1[ei], e2[ei]
+        r = pb - pa
+        s = q2 - q1
+        rl = np.linalg.norm(r, axis=1)
+        sl = np.linalg.norm(s, axis=1)
+
+        def side(x: NDArray[np.float64], scale: NDArray[np.float64]) -> NDArray[np.float64]:
+            return np.where(np.abs(x) <= tol * scale, 0.0, np.sign(x))
+
+        o1 = side(_cross(r, q1 - pa), rl)
+        o2 = side(_cross(r, q2 - pa), rl)
+        o3 = side(_cross(s, pa - q1), sl)
+        o4 = side(_cross(s, pb - q1), sl)
+        proper = ((o1 * o2) < 0) & ((o3 * o4) < 0)
+        # A vertex touched in the middle of a segment: check every piece between such vertices.
+        on = (
+            (o1 == 0)
+            & (np.einsum("ij,ij->i", q1 - pa, r) > tol * rl)
+            & (np.einsum("ij,ij->i", q1 - pb, -r) > tol * rl)
+        )
+        ok = np.bincount(mi[proper], minlength=m) == 0
+        touched = np.bincount(mi[on], minlength=m) > 0
+        simple = ok & ~touched
+        res = np.zeros(m, dtype=bool)
+        if simple.any():
+            res[simple] = self.classify(((a + b) / 2)[simple]) == 0
+        for i in np.flatnonzero(ok & touched):
+            res[i] = self.inside(a[i], b[i])
+        return res
+
+    # -- the graph ---------------------------------------------------------------------------
+    def _graph(self) -> None:
+        nodes = self.nodes
+        n = len(nodes)
+        dist = np.full((n, n), math.inf)
+        if n:
+            i, j = np.triu_indices(n, k=1)
+            vis = self._visible_many(nodes[i], nodes[j])
+            d = np.linalg.norm(nodes[i] - nodes[j], axis=1)
+            dist[i[vis], j[vis]] = d[vis]
+            dist[j[vis], i[vis]] = d[vis]
+            np.fill_diagonal(dist, 0.0)
+        nxt = np.tile(np.arange(n), (n, 1))
+        for k in range(n):
+            via = dist[:, k, None] + dist[None, k, :]
+            better = via < dist
+            dist = np.where(better, via, dist)
+            nxt = np.where(better, nxt[:, k, None], nxt)
+        self._dist, self._next = dist, nxt
+
+    def _node_path(self, i: int, j: int) -> list[int]:
+        out = [i]
+        while i != j:
+            i = int(self._next[i, j])
+            out.append(i)
+        return out
+
+    def _to_nodes(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Distances ``(P, N)`` from anchored points to the visible nodes (inf if hidden)."""
+        n = len(self.nodes)
+        if n == 0 or len(p) == 0:
+            return np.full((len(p), n), math.inf)
+        a = np.repeat(p, n, axis=0)
+        b = np.tile(self.nodes, (len(p), 1))
+        vis = self._visible_many(a, b).reshape(len(p), n)
+        d = np.linalg.norm(p[:, None] - self.nodes[None], axis=-1)
+        return np.where(vis, d, math.inf)
+
+    # -- queries -----------------------------------------------------------------------------
+    def path(self, p: ArrayLike, q: ArrayLike) -> Route:
+        """The connecting move from ``p`` to ``q`` (module docstring)."""
+        p = np.asarray(p, dtype=np.float64).reshape(2)
+        q = np.asarray(q, dtype=np.float64).reshape(2)
+        ok, outside = self._straight(p, q)
+        if ok:
+            return Route(np.stack([p, q]), float(np.linalg.norm(q - p)), outside, True)
+        pa, qa = self.anchor(np.stack([p, q]))
+        legs = float(np.linalg.norm(pa - p) + np.linalg.norm(qa - q))
+        if self._visible_many(pa[None], qa[None])[0]:
+            middle = [pa, qa]
+        else:
+            dp, dq = self._to_nodes(pa[None])[0], self._to_nodes(qa[None])[0]
+            total = dp[:, None] + self._dist + dq[None, :]
+            if total.size == 0 or not np.isfinite(total.min()):
+                length = float(np.linalg.norm(q - p))
+                return Route(np.stack([p, q]), length, length, True, False)
+            else:
+                i, j = np.unravel_index(int(np.argmin(total)), total.shape)
+                middle = [pa, *self.nodes[self._node_path(int(i), int(j))], qa]
+        pts = [p, *middle, q]
+        clean = [pts[0]]
+        for x in pts[1:]:
+            if np.linalg.norm(x - clean[-1]) > self.tol:
+                clean.append(x)
+        if len(clean) == 1:
+            clean.append(q)
+        arr = np.asarray(clean)
+        length = float(np.linalg.norm(np.diff(arr, axis=0), axis=1).sum())
+        return Route(arr, length, legs, False)
+
+    def distances(self, points: ArrayLike, *, nearest: int = 24) -> NDArray[np.float64]:
+        """Lengths ``(P, P)`` of the connecting moves between points, for ordering.
+
+        The straight move is tested only towards each point's ``nearest`` neighbours (by
+        straight-line distance); other pairs are measured through the visibility graph (exact
+        where the straight move is blocked, an upper bound otherwise). Points outside the area
+        are measured from their nearest point of it, plus that leg.
+        """
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        m = len(p)
+        pa = self.anchor(p)
+        legs = np.linalg.norm(pa - p, axis=1)
+        euclid = np.linalg.norm(pa[:, None] - pa[None], axis=-1)
+        direct = np.full((m, m), math.inf)
+        if m > 1:
+            k = min(nearest, m - 1)
+            near = np.argsort(euclid, axis=1)[:, 1 : k + 1]
+            i = np.repeat(np.arange(m), k)
+            j = near.ravel()
+            keep = i < j
+            keep |= ~np.isin(j * m + i, i[i < j] * m + j[i < j])
+            i, j = i[keep], j[keep]
+            vis = self._visible_many(pa[i], pa[j])
+            direct[i[vis], j[vis]] = euclid[i[vis], j[vis]]
+            direct[j[vis], i[vis]] = euclid[i[vis], j[vis]]
+        np.fill_diagonal(direct, 0.0)
+        if len(self.nodes):
+            v = self._to_nodes(pa)  # (M, N)
+            w = np.min(v[:, :, None] + self._dist[None], axis=1)  # (M, N)
+            for r0 in range(0, m, 64):  # (M, M) in blocks of rows: memory O(64 M N)
+                via = np.min(w[r0 : r0 + 64, None, :] + v[None, :, :], axis=-1)
+                direct[r0 : r0 + 64] = np.minimum(direct[r0 : r0 + 64], via)
+        else:  # a convex shell without holes: every straight move stays inside
+            direct = euclid
+        out = direct + legs[:, None] + legs[None, :]
+        np.fill_diagonal(out, 0.0)
+        return out

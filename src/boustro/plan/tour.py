@@ -1,0 +1,313 @@
+"""The tour: chains of lanes, passes around holes, their order (greedy, 2-opt, DP), the drive."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..geometry import Polygon
+from .cells import _frame
+from .lanes import Lanes
+from .routing import Router
+from .types import KINDS
+
+__all__ = [
+    "ORDER_BUDGET",
+]
+
+
+# -- passes and their order -------------------------------------------------------------------
+@dataclass
+class _Pass:
+    """A chain of lane segments driven back and forth, or a loop around a hole.
+
+    ``options``: ``(entry point, exit point, points in driving order, transect roles)`` for each
+    way of driving it; the transects of a chain are consecutive pairs of ``points``.
+    """
+
+    kind: str  # "chain" or "hole"
+    cell: int
+    angle: float
+    options: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]]
+
+
+def _chains(lanes: Lanes, tol: float) -> list[list[int]]:
+    """Segments on consecutive lines that overlap one-to-one, chained."""
+    idx_by_k: dict[int, list[int]] = {}
+    for i, kk in enumerate(lanes.k):
+        idx_by_k.setdefault(int(kk), []).append(i)
+    nxt: dict[int, int] = {}
+    has_prev: set[int] = set()
+    for kk, here in idx_by_k.items():
+        there = idx_by_k.get(kk + 1)
+        if not there:
+            continue
+        a0, a1 = lanes.t0[here], lanes.t1[here]
+        b0, b1 = lanes.t0[there], lanes.t1[there]
+        ov = np.minimum(a1[:, None], b1[None]) - np.maximum(a0[:, None], b0[None]) > -tol
+        for i, j in zip(*np.nonzero(ov), strict=True):
+            if ov[i].sum() == 1 and ov[:, j].sum() == 1:
+                nxt[here[i]] = there[j]
+                has_prev.add(there[j])
+    chains = []
+    for i in range(len(lanes.k)):
+        if i in has_prev:
+            continue
+        chain = [i]
+        while chain[-1] in nxt:
+            chain.append(nxt[chain[-1]])
+        chains.append(chain)
+    return chains
+
+
+def _chain_pass(lanes: Lanes, chain: list[int], cell: int) -> _Pass:
+    seg = lanes.segments[chain]  # (m, 2, 2) from t0 to t1
+    options = []
+    for order in (seg, seg[::-1]):
+        for first_forward in (True, False):
+            pts = []
+            for i, sg in enumerate(order):
+                forward = first_forward if i % 2 == 0 else not first_forward
+                pts.extend(sg if forward else sg[::-1])
+            arr = np.asarray(pts)
+            internal = float(np.linalg.norm(np.diff(arr, axis=0), axis=1).sum())
+            options.append((arr[0], arr[-1], arr, internal))
+        if len(seg) == 1:
+            break
+    return _Pass("chain", cell, lanes.angle, options)
+
+
+def _hole_pass(hole: Polygon, max_options: int = 8) -> _Pass:
+    v = hole.vertices
+    starts = np.unique(np.linspace(0, len(v), max_options, endpoint=False).astype(int))
+    perimeter = float(np.linalg.norm(np.roll(v, -1, axis=0) - v, axis=1).sum())
+    options = []
+    for i in starts:
+        ring = np.roll(v, -int(i), axis=0)
+        arr = np.concatenate([ring, ring[:1]])
+        options.append((arr[0], arr[-1], arr, perimeter))
+    return _Pass("hole", -1, 0.0, options)
+
+
+#: Orders the 2-opt improvement of a tour evaluates at most (about 0.25 s for 60 passes on the
+#: project's machine): a count, not a time, so that plans do not depend on the machine's load.
+ORDER_BUDGET = 4000
+
+
+def _order(
+    passes: list[_Pass],
+    start: NDArray[np.float64],
+    router: Router,
+    budget: int = ORDER_BUDGET,
+    *,
+    force_start: bool = True,
+) -> tuple[list[int], list[int]]:
+    """Order and driving option of every pass. With ``force_start`` the first is the pass and
+    option whose entry (a lane end) is nearest ``start``; without, ``start`` only seeds the
+    greedy order and the tour begins where it is shortest. The rest greedy, then 2-opt (at most
+    ``budget`` orders evaluated) with the options chosen by dynamic programming."""
+    pts, entry_idx, exit_idx = [start], [], []
+    for p in passes:
+        e_i, x_i = [], []
+        for entry, exit_, _, _ in p.options:
+            e_i.append(len(pts))
+            pts.append(entry)
+            x_i.append(len(pts))
+            pts.append(exit_)
+        entry_idx.append(np.array(e_i))
+        exit_idx.append(np.array(x_i))
+    dist = router.distances(np.asarray(pts))
+    internal = [np.array([o[3] for o in p.options]) for p in passes]
+    # The first pass and its option: the entry nearest the start (ties: the first found).
+    first_pass, first_option = min(
+        ((k, j) for k in range(len(passes)) for j in range(len(entry_idx[k]))),
+        key=lambda kj: dist[0, entry_idx[kj[0]][kj[1]]],
+    )
+    forced = np.full(len(entry_idx[first_pass]), math.inf)
+    forced[first_option] = 0.0
+
+    def cost(order: list[int]) -> tuple[float, list[int]]:
+        first = order[0]
+        acc = dist[0, entry_idx[first]] + internal[first]
+        if force_start:
+            acc = acc + forced
+        back = []
+        for prev, cur in itertools.pairwise(order):
+            trans = dist[np.ix_(exit_idx[prev], entry_idx[cur])] + acc[:, None]
+            arg = np.argmin(trans, axis=0)
+            back.append(arg)
+            acc = trans[arg, np.arange(trans.shape[1])] + internal[cur]
+        choice = [int(np.argmin(acc))]
+        for arg in reversed(back):
+            choice.append(int(arg[choice[-1]]))
+        return float(acc.min()), choice[::-1]
+
+    # Greedy nearest pass from the first pass's exit.
+    remaining = set(range(len(passes))) - {first_pass}
+    order: list[int] = [first_pass]
+    here = exit_idx[first_pass][first_option : first_option + 1]
+    while remaining:
+        best = (math.inf, -1, -1)
+        for candidate in remaining:
+            d = dist[np.ix_(here, entry_idx[candidate])].min(axis=0)
+            j = int(np.argmin(d))
+            if d[j] < best[0]:
+                best = (float(d[j]), candidate, j)
+        order.append(best[1])
+        remaining.discard(best[1])
+        here = exit_idx[best[1]][best[2] : best[2] + 1]
+    best_cost, choice = cost(order)
+    # 2-opt within a budget of evaluated orders, not of seconds, so that the same input gives
+    # the same plan on a busy machine and an idle one
+    left = budget
+    improved = len(order) > 2
+    while improved and left > 0:
+        improved = False
+        for i in range(int(force_start), len(order) - 1):  # a forced first pass stays first
+            for j in range(i + 1, len(order)):
+                cand = order[:i] + order[i : j + 1][::-1] + order[j + 1 :]
+                c, ch = cost(cand)
+                left -= 1
+                if c < best_cost - 1e-9:
+                    order, best_cost, choice = cand, c, ch
+                    improved = True
+                if left <= 0:
+                    break
+            if left <= 0:
+                break
+    return order, choice
+
+
+# -- driving the tour ------------------------------------------------------------------------
+def _extension_end(
+    router: Router, p: NDArray[np.float64], q: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``q``, or the point where ``p -> q`` first enters a hole (run-ins never enter holes)."""
+    br, cls = router._pieces(p, q)
+    bad = np.flatnonzero(cls == 1)
+    if len(bad) == 0:
+        return q
+    return p + br[bad[0]] * (q - p)
+
+
+class _Path(NamedTuple):
+    """Step 5: the waypoints and transects of the tour (plan units)."""
+
+    waypoints: NDArray[np.float64]
+    kinds: tuple[str, ...]
+    lane: NDArray[np.int64]
+    transects: NDArray[np.float64]
+    angles: NDArray[np.float64]
+    roles: tuple[str, ...]
+    cells: NDArray[np.int64]
+    positions: NDArray[np.float64]
+    outside: float
+    hole_length: float
+    blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]]
+
+
+class _Driver:
+    """Collects the waypoints and transects while the tour is driven pass by pass."""
+
+    def __init__(self, router: Router, turnaround: float) -> None:
+        self.router = router
+        self.turnaround = turnaround
+        self.points: list[NDArray[np.float64]] = []
+        self.kinds: list[str] = []
+        self.lane_of: list[int] = []
+        self.transects: list[NDArray[np.float64]] = []
+        self.angles: list[float] = []
+        self.roles: list[str] = []
+        self.cells: list[int] = []
+        self.positions: list[float] = []
+        self.outside = 0.0
+        self.hole_length = 0.0
+        self.blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
+
+    def point(self, p: NDArray[np.float64], kind: str, transect: int) -> None:
+        self.points.append(p)
+        self.kinds.append(kind)
+        self.lane_of.append(transect)
+
+    def transect(
+        self,
+        a: NDArray[np.float64],
+        b: NDArray[np.float64],
+        angle: float,
+        role: str,
+        cell: int,
+        position: float,
+    ) -> None:
+        self.transects.append(np.stack([a, b]))
+        self.angles.append(angle)
+        self.roles.append(role)
+        self.cells.append(cell)
+        self.positions.append(position)
+
+    def move_to(self, target: NDArray[np.float64], next_transect: int) -> None:
+        """The connecting move from the last waypoint (its corners become ``via`` points)."""
+        if not self.points:
+            return
+        route = self.router.path(self.points[-1], target)
+        self.outside += route.outside
+        if not route.found:
+            self.blocked.append((self.points[-1], target))
+        for p in route.points[1:-1]:
+            self.point(p, "via", next_transect)
+
+    def chain(
+        self, pts: NDArray[np.float64], angle: float, cell: int, origin: NDArray[np.float64]
+    ) -> None:
+        """A chain of lanes driven back and forth, with run-in and run-out."""
+        u, n = _frame(angle)
+        t = self.turnaround
+        for j in range(0, len(pts), 2):
+            a, b = pts[j], pts[j + 1]
+            ti = len(self.transects)
+            d = b - a
+            length = float(np.linalg.norm(d))
+            direction = d / length if length > 0 else (u if j % 4 == 0 else -u)
+            run_in = _extension_end(self.router, a, a - t * direction) if t else a
+            self.move_to(run_in, ti)
+            if t:
+                self.point(run_in, "run_in", ti)
+            self.point(a, "start", ti)
+            self.point(b, "end", ti)
+            if t:
+                self.point(_extension_end(self.router, b, b + t * direction), "run_out", ti)
+            self.transect(a, b, angle, "lane", cell, float((a - origin) @ n))
+
+    def hole(self, pts: NDArray[np.float64]) -> None:
+        """A pass around a hole: one transect per edge of the loop."""
+        ti = len(self.transects)
+        self.move_to(pts[0], ti)
+        for j in range(len(pts) - 1):
+            a, b = pts[j], pts[j + 1]
+            d = b - a
+            self.transect(a, b, math.atan2(d[1], d[0]), "hole", -1, math.nan)
+            self.hole_length += float(np.linalg.norm(d))
+        self.point(pts[0], "start", ti)
+        for j in range(1, len(pts) - 1):
+            self.point(pts[j], "loop", ti + j)
+        self.point(pts[-1], "end", ti + len(pts) - 2)
+
+    def result(self) -> _Path:
+        assert set(self.kinds) <= set(KINDS)
+        return _Path(
+            waypoints=np.asarray(self.points),
+            kinds=tuple(self.kinds),
+            lane=np.asarray(self.lane_of, dtype=np.int64),
+            transects=np.asarray(self.transects),
+            angles=np.asarray(self.angles),
+            roles=tuple(self.roles),
+            cells=np.asarray(self.cells, dtype=np.int64),
+            positions=np.asarray(self.positions),
+            outside=self.outside,
+            hole_length=self.hole_length,
+            blocked=self.blocked,
+        )
