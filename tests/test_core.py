@@ -3,15 +3,10 @@ the copies in the learned planner and the experiments."""
 
 from __future__ import annotations
 
-import math
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 import torch
 
-import boustro.experiments as experiments
-import boustro.learned as learned
 from boustro import io
 from boustro.geometry import (
     PAD_OFFSET,
@@ -23,13 +18,10 @@ from boustro.geometry import (
     random_convex_polygon,
 )
 from boustro.models import (
-    ExactModel,
     chord_bounds,
     chords_at,
     exact_chords,
-    line_chords,
 )
-from boustro.models.base import _prepare
 
 
 def _batch(seed: int = 0, counts: tuple[int, ...] = (3, 5, 8, 4)) -> HalfPlanes:
@@ -99,28 +91,6 @@ def test_padded_batch_equals_each_polygon_alone():
         torch.testing.assert_close(batched.lengths[row], alone.lengths, rtol=0, atol=0)
 
 
-def test_chords_at_serves_the_learned_planners_copy():
-    hp = _batch(1)
-    g = torch.Generator().manual_seed(0)
-    theta = torch.rand(4, 3, generator=g, dtype=torch.float64) * math.pi
-    c = (torch.rand(4, 3, 7, generator=g, dtype=torch.float64) - 0.5) * 1.2
-    batch = SimpleNamespace(normals=hp.normals, offsets=hp.offsets)
-    expected = learned._chords_at(batch, theta, c)
-    ours = chords_at(HalfPlanes(hp.normals[:, None], hp.offsets[:, None], hp.radius), theta, c)
-    assert torch.equal(ours.lengths, expected)
-
-
-def test_fused_exact_model_is_the_learned_planners_fused_copy():
-    hp = _batch(2)
-    theta, offset = torch.tensor([0.2, 1.0, -0.4, 3.0]), torch.tensor([0.0, 0.01, 0.02, -0.01])
-    ours = ExactModel(fused=True)(hp, theta, offset, 0.04)
-    theirs = learned._exact_lengths(hp, theta, offset, 0.04)
-    for mine, copy in zip(ours, theirs, strict=True):
-        assert torch.equal(mine, copy)
-    plain = ExactModel()(hp, theta, offset, 0.04)
-    torch.testing.assert_close(plain.lengths, theirs.lengths, rtol=1e-13, atol=1e-15)
-
-
 @pytest.mark.parametrize("clip", [False, True])
 def test_fused_and_divided_chords_agree_and_differentiate_alike(clip):
     hp = _batch(5, (3, 4, 9, 6, 5, 12))
@@ -144,32 +114,6 @@ def test_axis_parallel_edges_block_the_same_lines_in_both_forms():
     for fused in (False, True):
         out = chords_at(square, 0.0, c, fused=fused).lengths
         assert out.tolist() == [0.0, 1.0, 1.0, 1.0, 0.0]
-
-
-@pytest.mark.parametrize("clip", [False, True])
-def test_line_chords_serves_the_experiments_copy(clip):
-    hp = _batch(3)
-    theta = torch.tensor([0.5, -0.2, 1.3, 2.9], dtype=torch.float64)
-    _, _, across, along, b = _prepare(hp, theta, torch.zeros(4, dtype=torch.float64))
-    sample = torch.tensor([0, 0, 1, 2, 2, 2, 3])
-    position = torch.tensor([-0.3, 0.1, 0.0, -0.45, 0.2, 0.49, 0.05], dtype=torch.float64)
-    group = SimpleNamespace(across=across, along=along, b=b, sample=sample, position=position)
-    expected = experiments._exact_lengths(group, clip)
-    ours = line_chords(across[sample], along[sample], b[sample], position[:, None], clip=clip)
-    assert torch.equal(ours.lengths[:, 0], expected)
-
-
-def test_chord_bounds_serves_the_experiments_band_bounds():
-    hp = _batch(4)
-    theta = torch.tensor([0.5, -0.2, 1.3, math.pi / 2], dtype=torch.float64)
-    _, _, across, along, b = _prepare(hp, theta, torch.zeros(4, dtype=torch.float64))
-    a = 40.0 * (across * 0.1 + b)
-    for delta in (-3.0, 0.0, 5.0):
-        lo, hi = experiments._bounds(a, 40.0 * along, delta)
-        ours = chord_bounds(a, 40.0 * along, delta=delta, parallel_tol=1e-12)
-        inf = torch.tensor(math.inf, dtype=a.dtype)
-        assert torch.equal(torch.where(ours.blocked, inf, ours.lower), lo)
-        assert torch.equal(torch.where(ours.blocked, -inf, ours.upper), hi)
 
 
 def test_padding_half_planes_never_bound_a_chord():

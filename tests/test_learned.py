@@ -131,15 +131,15 @@ def test_batch_lengths_are_the_exact_models(square):
             torch.testing.assert_close(mine, theirs, rtol=1e-12, atol=1e-13)
 
 
-def test_chords_at_is_the_library_kernel_at_any_position(square):
-    from boustro.learned.batch import chords_at
-    from boustro.models import exact_chords
+def test_chords_at_is_the_grid_kernel_at_any_position(square):
+    """The network's chord profile (lines at given positions) is the grid kernel's arithmetic."""
+    from boustro.models import chords_at, exact_chords
 
     hp = halfplanes(square)
     theta = torch.tensor([0.0, 0.3, 1.2], dtype=torch.float64)
     for clip in (False, True):
         ref = exact_chords(hp, theta, 0.05, 0.25, clip=clip)  # (3, K)
-        ours = chords_at(hp.normals, hp.offsets, theta[:, None], ref.positions, clip=clip)
+        ours = chords_at(hp, theta, ref.positions, clip=clip).lengths
         assert torch.equal(ours, ref.lengths)
 
 

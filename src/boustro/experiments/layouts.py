@@ -12,8 +12,8 @@ from numpy.typing import NDArray
 
 from ..fitness import smith_fitness
 from ..geometry import HalfPlanes, Polygon, halfplanes
-from ..learned.batch import chords_at
-from ..models import PAPER_WINDOW
+from ..models import PAPER_WINDOW, line_chords
+from ..models.base import _components
 from .samples import Eq2, Protocol, Samples, Window
 
 __all__ = ["exact_fitness_batch", "protocol_groups"]
@@ -27,8 +27,6 @@ class _Group:
     across: torch.Tensor  # (B, E) n_j . n(theta): edge j holds iff across c + along t + b >= 0
     along: torch.Tensor  # (B, E) n_j . u(theta)
     b: torch.Tensor  # (B, E)
-    normals: torch.Tensor  # (B, E, 2) the edges' normals (scaled by |edge| with Eq. 2 printed)
-    theta: torch.Tensor  # (B,) transect directions
     half: torch.Tensor  # (B,) half-width of the integration window in t
     radius: torch.Tensor  # (B,) largest vertex distance from the origin
     sample: torch.Tensor  # (M,) long: the sample (row in the group) of each transect
@@ -123,11 +121,7 @@ def _group(
             )
         hp = HalfPlanes(hp.normals * scale[..., None], hp.offsets * scale, hp.radius)
     theta = torch.as_tensor(angle[index], dtype=torch.float64)
-    # The same arithmetic as models._prepare: rotate the edges, keep the offsets.
-    cos, sin = torch.cos(theta)[:, None], torch.sin(theta)[:, None]
-    nx, ny = hp.normals[..., 0], hp.normals[..., 1]
-    across = -nx * sin + ny * cos
-    along = nx * cos + ny * sin
+    across, along, b = _components(torch.cos(theta), torch.sin(theta), hp.normals, hp.offsets)
     k = counts[index]
     sample = torch.as_tensor(np.repeat(np.arange(len(index)), k), dtype=torch.long)
     slot = torch.as_tensor(np.concatenate([np.arange(c) for c in k]), dtype=torch.long)
@@ -136,9 +130,7 @@ def _group(
         index=index,
         across=across,
         along=along,
-        b=hp.offsets,
-        normals=hp.normals,
-        theta=theta,
+        b=b,
         half=torch.as_tensor(half[index], dtype=torch.float64),
         radius=torch.as_tensor(radius[index], dtype=torch.float64),
         sample=sample,
@@ -162,7 +154,8 @@ def _exact_lengths(g: _Group, clip: bool) -> torch.Tensor:
     """Exact chord lengths ``(M,)``: the library's kernel (:func:`boustro.models.exact_chords`)
     at each transect's own position."""
     at = g.sample
-    return chords_at(g.normals[at], g.b[at], g.theta[at], g.position, clip=clip)
+    chords = line_chords(g.across[at], g.along[at], g.b[at], g.position[:, None], clip=clip)
+    return chords.lengths[:, 0]
 
 
 def _exact_fitness(g: _Group, clip: bool) -> torch.Tensor:

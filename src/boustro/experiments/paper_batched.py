@@ -12,6 +12,7 @@ import torch.nn.functional as F
 from numpy.typing import NDArray
 
 from ..fitness import smith_fitness
+from ..models import chord_bounds
 from .layouts import _Group, _scatter, protocol_groups
 from .samples import Protocol, Samples, Statistics, Trapezoid
 
@@ -31,18 +32,14 @@ _CHUNK_ELEMENTS = 1 << 19
 def _bounds(
     a: torch.Tensor, along: torch.Tensor, delta: float
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """The ``t``-interval where ``a_j + along_j t >= delta`` for every edge ``j``: ``(M,)`` x 2.
+    """The ``t``-interval where ``a_j + along_j t >= delta`` for every edge ``j``: ``(M,)`` x 2,
+    by the library's :func:`~boustro.models.chord_bounds`.
 
     ``lo > hi`` where it is empty. Edges with ``|along| <= 1e-12`` count as parallel.
     """
-    pos, neg = along > 1e-12, along < -1e-12
-    par = ~(pos | neg)
-    bound = (delta - a) / torch.where(par, torch.ones_like(along), along)
+    lower, upper, blocked = chord_bounds(a, along, delta=delta, parallel_tol=1e-12)
     inf = torch.tensor(math.inf, dtype=a.dtype)
-    lo = torch.where(pos, bound, -inf).amax(dim=-1)
-    hi = torch.where(neg, bound, inf).amin(dim=-1)
-    blocked = (par & (a < delta)).any(dim=-1)
-    return torch.where(blocked, inf, lo), torch.where(blocked, -inf, hi)
+    return torch.where(blocked, inf, lower), torch.where(blocked, -inf, upper)
 
 
 class _Soft:

@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError, NoTransectError
 from ..geometry import PAD_OFFSET, HalfPlanes, Polygon, random_convex_polygon
-from ..models import ExactModel, TransectLengths, check_spacing, exact_chords
+from ..models import ExactModel, TransectLengths, check_spacing
 from ..objectives import as_plan_objective
 from ..scoring import as_polygon
 from ..smooth import smooth_lengths
@@ -21,7 +21,6 @@ __all__ = [
     "PlanBatch",
     "batch_lengths",
     "batch_objective",
-    "chords_at",
     "from_normalised",
     "make_batch",
     "random_batch",
@@ -172,31 +171,6 @@ def _size_classes(batch: PlanBatch) -> list[torch.Tensor]:
     return [torch.nonzero(key == k)[:, 0] for k in torch.unique(key)]
 
 
-def chords_at(
-    normals: torch.Tensor,
-    offsets: torch.Tensor,
-    theta: torch.Tensor,
-    positions: torch.Tensor,
-    *,
-    clip: bool = False,
-) -> torch.Tensor:
-    """Exact chord lengths of the lines ``n(theta) . p = positions`` (broadcasting), by the
-    library's kernel :func:`~boustro.models.exact_chords`.
-
-    The kernel takes a grid ``(offset, spacing)``, not explicit positions: each line is moved
-    onto the grid line ``0`` by shifting the half-planes, ``b_j + c (n_j . n)``, which gives
-    the kernel's own arithmetic (the same floats) for that line. ``normals (*, E, 2)``,
-    ``offsets (*, E)``, ``theta`` and ``positions`` broadcast to the batch shape ``(*)``.
-    """
-    theta, positions = torch.broadcast_tensors(theta, positions)
-    nx, ny = normals[..., 0], normals[..., 1]
-    sin, cos = torch.sin(theta)[..., None], torch.cos(theta)[..., None]
-    shifted = offsets + positions[..., None] * (-nx * sin + ny * cos)
-    hp = HalfPlanes(torch.broadcast_to(normals, (*shifted.shape, 2)), shifted, 0.0)
-    lengths = exact_chords(hp, theta, 0.0, 1.0, clip=clip).lengths
-    return lengths[..., lengths.shape[-1] // 2]  # the grid line at 0
-
-
 def batch_lengths(
     batch: PlanBatch,
     index: torch.Tensor,
@@ -224,7 +198,7 @@ def batch_lengths(
     )
     d = offset / s[:, None]
     if smoothing is None:
-        tl = ExactModel()(hp, theta, d, 1.0)
+        tl = ExactModel(fused=True)(hp, theta, d, 1.0)
     else:
         tl = smooth_lengths(hp, theta, d, 1.0, smoothing=smoothing)
     return TransectLengths(

@@ -10,7 +10,9 @@ from typing import NamedTuple, cast
 import torch
 from torch import nn
 
-from .batch import PlanBatch, chords_at
+from ..geometry import HalfPlanes
+from ..models import chords_at
+from .batch import PlanBatch
 
 __all__ = ["LearnedPlanner", "PlannerConfig", "Prediction", "hypotheses"]
 
@@ -73,9 +75,8 @@ _PROFILE = (0.125, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)
 
 def _chords_at(batch: PlanBatch, theta: torch.Tensor, c: torch.Tensor) -> torch.Tensor:
     """Exact chord lengths ``(P, k, M)`` of the lines ``n(theta) . p = c`` (``c`` ``(P, k, M)``)."""
-    return chords_at(
-        batch.normals[:, None, None], batch.offsets[:, None, None], theta[..., None], c
-    )
+    hp = HalfPlanes(batch.normals[:, None], batch.offsets[:, None], 0.0)
+    return chords_at(hp, theta, c).lengths
 
 
 class Prediction(NamedTuple):
