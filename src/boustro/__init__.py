@@ -23,7 +23,6 @@ Edges (never imported by the core): :mod:`boustro.io` (reading areas), :mod:`bou
 """
 
 from ._version import __version__
-from .decompose import optimize_region, plan_region
 from .errors import (
     BoustroError,
     InvalidParameterError,
@@ -32,14 +31,8 @@ from .errors import (
     NoTransectError,
     PolygonFileError,
 )
-from .fitness import SmithFitness, smith_fitness
 from .geometry import Frame, HalfPlanes, Polygon, halfplanes
-from .global_opt import (
-    best_offset,
-    fewest_transects_optimum,
-    global_optimum,
-    shortest_path_optimum,
-)
+from .geometry.region import Region
 from .models import (
     ExactModel,
     PaperModel,
@@ -49,7 +42,17 @@ from .models import (
     paper_lengths,
     transect_positions,
 )
+from .models.region import RegionExactModel, region_segments
+from .models.region_soft import RegionSoftModel
+from .models.smooth import (
+    DEFAULT_SMOOTHING,
+    SmoothModel,
+    smooth_lengths,
+    smoothing_from_temperature,
+    temperature_from_smoothing,
+)
 from .objectives import FewestTransects, ShortestPath, get_objective, path_length
+from .objectives.smith import SmithFitness, smith_fitness
 from .optimize import (
     GRID_200,
     OptimizeResult,
@@ -59,16 +62,16 @@ from .optimize import (
     hybrid,
     register_method,
 )
-from .plan import Plan, PlanStats, build_plan, coverage, guaranteed_segments
-from .regions import Region, RegionExactModel, RegionSoftModel, region_segments
-from .scoring import Score, Segments, make_model, score, transect_segments
-from .smooth import (
-    DEFAULT_SMOOTHING,
-    SmoothModel,
-    smooth_lengths,
-    smoothing_from_temperature,
-    temperature_from_smoothing,
+from .optimize.exact import (
+    best_offset,
+    fewest_transects_optimum,
+    global_optimum,
+    shortest_path_optimum,
 )
+from .plan import Plan, PlanStats, build_plan, coverage, guaranteed_segments
+from .plan.region import plan_region
+from .plan.region_opt import optimize_region
+from .scoring import Score, Segments, make_model, score, transect_segments
 
 __all__ = [
     "DEFAULT_SMOOTHING",

@@ -19,14 +19,14 @@ from .errors import (
     ProblemTooLargeError,
     as_number,
 )
-from .fitness import SmithFitness
 from .geometry import Polygon
+from .geometry.region import Region
 from .io.crs import Projection, check_lonlat, parse_crs, projection_for
 from .io.read import LONLAT, Area
+from .objectives.smith import SmithFitness
 from .optimize import OptimizeResult, optimize
 from .plan import Coverage, Plan, PlanStats, build_plan, coverage, nearly_convex
 from .plan.region import plan_region
-from .regions import Region
 from .sensors import SensorSpacing
 
 __all__ = [

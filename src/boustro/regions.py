@@ -1,5 +1,6 @@
 """Compatibility path: ``boustro.regions`` re-exports :mod:`boustro.geometry.region` (the
-regions), :mod:`boustro.models.region`, ``region_grid`` and ``region_soft`` (their models)."""
+regions), :mod:`boustro.models.region` and ``region_soft`` (their models) and
+:mod:`boustro.optimize.region_grid` (their grid evaluation)."""
 
 # ruff: noqa: F401 (private names are re-exported for the old import paths; __all__ is public)
 
@@ -28,7 +29,6 @@ from .models.region import (
     region_segments,
     segment_moments,
 )
-from .models.region_grid import _CHUNK_CROSSINGS, evaluate_region_grid
 from .models.region_soft import (
     RegionSoftModel,
     _check_smoothing,
@@ -38,6 +38,7 @@ from .models.region_soft import (
     soft_indicator,
     soft_region_lengths,
 )
+from .optimize.region_grid import _CHUNK_CROSSINGS, evaluate_region_grid
 
 __all__ = [
     "TOUCH_TOLERANCE",

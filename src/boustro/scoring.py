@@ -16,10 +16,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._validate import check_finite, check_spacing
 from .errors import InvalidParameterError, NoTransectError
-from .fitness import SmithFitness
 from .geometry import Polygon, as_polygon, halfplanes
 from .models import ExactModel, PaperModel, TransectModel, exact_chords
 from .models.smooth import DEFAULT_SMOOTHING, SmoothModel
+from .objectives.smith import SmithFitness
 
 __all__ = ["Score", "Segments", "as_polygon", "make_model", "score", "transect_segments"]
 

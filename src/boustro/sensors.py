@@ -9,7 +9,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .errors import InvalidParameterError, as_number
+from ._validate import as_number
+from .errors import InvalidParameterError
 
 __all__ = ["Camera", "SensorSpacing", "Swath"]
 

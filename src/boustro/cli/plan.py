@@ -10,9 +10,10 @@ from typing import Any
 
 from .. import objectives
 from ..errors import InvalidParameterError
-from ..formats import FORMATS, atomic_write, format_for, render
-from ..geo import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission, plan_area
 from ..io import Area, embedded_field, read_area
+from ..io.formats import FORMATS, atomic_write, format_for, render
+from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission, plan_area
+from ..plot.plan import plot_plan
 from ..sensors import Camera, Swath
 from ._common import (
     check_output_path,
@@ -284,8 +285,6 @@ def _load(args: argparse.Namespace) -> Area:
 
 
 def _plot_bytes(mission: Mission, path: str) -> bytes:
-    from ..plot_plan import plot_plan
-
     try:
         import matplotlib
 

@@ -8,9 +8,9 @@ from typing import Any
 
 from ..errors import InvalidParameterError
 from ..io import PAPER_SPACING
+from ..models.smooth import DEFAULT_SMOOTHING
 from ..objectives import SmithFitness
 from ..scoring import Score, make_model, score
-from ..smooth import DEFAULT_SMOOTHING
 from ._common import (
     add_polygon_argument,
     finite_float,

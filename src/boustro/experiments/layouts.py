@@ -10,10 +10,10 @@ import numpy as np
 import torch
 from numpy.typing import NDArray
 
-from ..fitness import smith_fitness
 from ..geometry import HalfPlanes, Polygon, halfplanes
 from ..models import PAPER_WINDOW, line_chords
 from ..models.base import _components
+from ..objectives.smith import smith_fitness
 from .samples import Eq2, Protocol, Samples, Window
 
 __all__ = ["exact_fitness_batch", "protocol_groups"]

@@ -12,10 +12,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .. import global_opt
 from .. import optimize as opt
 from ..geometry import Polygon
 from ..optimize import exact_fitness
+from ..optimize.exact import global_optimum
 from ._common import json_number, progress_bar
 from .samples import Samples
 
@@ -117,11 +117,7 @@ def optimizer_specs() -> list[OptimizerSpec]:
         )
     else:
         specs.append(OptimizerSpec("hybrid", "hybrid", None, {}, "not available"))
-    run_global = None
-    if hasattr(global_opt, "global_optimum"):
-        run_global = lambda poly, s, seed: global_opt.global_optimum(poly, s)  # noqa: E731
-    if run_global is None and "global" in methods:
-        run_global = lambda poly, s, seed: opt.optimize(poly, s, method="global")  # noqa: E731
+    run_global = lambda poly, s, seed: global_optimum(poly, s)  # noqa: E731
     specs.append(
         OptimizerSpec(
             "global",

@@ -11,8 +11,8 @@ import torch
 import torch.nn.functional as F
 from numpy.typing import NDArray
 
-from ..fitness import smith_fitness
 from ..models import chord_bounds
+from ..objectives.smith import smith_fitness
 from .layouts import _Group, _scatter, protocol_groups
 from .samples import Protocol, Samples, Statistics, Trapezoid
 

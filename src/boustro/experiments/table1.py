@@ -12,9 +12,9 @@ import torch
 from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
-from ..fitness import smith_fitness
 from ..geometry import halfplanes
-from ..smooth import SmoothModel
+from ..models.smooth import SmoothModel
+from ..objectives.smith import smith_fitness
 from ._common import json_number, progress_bar
 from .layouts import _protocol_spacing, _sample_offsets, exact_fitness_batch, protocol_groups
 from .paper_batched import _soft_fitness

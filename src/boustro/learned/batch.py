@@ -13,9 +13,9 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InvalidParameterError, NoTransectError
 from ..geometry import PAD_OFFSET, HalfPlanes, Polygon, random_convex_polygon
 from ..models import ExactModel, TransectLengths, check_spacing
+from ..models.smooth import smooth_lengths
 from ..objectives import as_plan_objective
 from ..scoring import as_polygon
-from ..smooth import smooth_lengths
 
 __all__ = [
     "PlanBatch",

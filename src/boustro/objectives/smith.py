@@ -9,9 +9,10 @@ from typing import Any, Literal
 import numpy as np
 import torch
 
-from .. import _compiled, smooth
-from ..errors import InvalidParameterError, as_number
-from ..models import TransectLengths
+from .._validate import as_number
+from ..errors import InvalidParameterError
+from ..models import TransectLengths, smooth
+from ..models import _kernels as _compiled
 from .base import BaseObjective
 
 __all__ = ["SmithFitness", "safe_sqrt", "smith_fitness", "transect_count"]

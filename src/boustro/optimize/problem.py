@@ -10,7 +10,8 @@ import numpy as np
 import torch
 from numpy.typing import ArrayLike
 
-from ..errors import InvalidParameterError, NoTransectError, as_number
+from .._validate import as_number
+from ..errors import InvalidParameterError, NoTransectError
 from ..geometry import HalfPlanes, Polygon, halfplanes
 from ..models import (
     ExactModel,

@@ -10,9 +10,10 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidParameterError, InvalidPolygonError, as_number
+from .._validate import as_number
+from ..errors import InvalidParameterError, InvalidPolygonError
 from ..geometry import Polygon
-from ..regions import Region, as_region, points_in_ring
+from ..geometry.region import Region, as_region, points_in_ring
 
 __all__ = [
     "Decomposition",

@@ -13,7 +13,7 @@ from ..geometry import Polygon
 from ..scoring import as_polygon
 
 if TYPE_CHECKING:
-    from ..regions import Region
+    from ..geometry.region import Region
 
 from .types import Plan
 

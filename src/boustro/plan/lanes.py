@@ -11,8 +11,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 from ..geometry import Polygon
+from ..geometry.region import Region, as_region
 from ..models import check_spacing
-from ..regions import Region, as_region
 from .cells import _TOL, _crossings, _frame, trapezoids
 from .types import Layout
 

@@ -11,9 +11,9 @@ from numpy.typing import ArrayLike
 
 from ..errors import InvalidParameterError, InvalidPolygonError, NoTransectError
 from ..geometry import Polygon
+from ..geometry.region import Region, as_region
 from ..models import check_spacing
 from ..optimize import OptimizeResult
-from ..regions import Region, as_region
 from .cells import _TOL, _check_float
 from .lanes import Lanes, region_lanes
 from .region_opt import _cells_for_sweep, _estimate, choose_sweep, optimize_region

@@ -11,12 +11,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import InvalidPolygonError, NoTransectError
-from ..fitness import SmithFitness
 from ..geometry import Polygon
+from ..geometry.region import Region, as_region
 from ..models import check_spacing
+from ..models.region import segment_moments
 from ..objectives import objective_sign
+from ..objectives.smith import SmithFitness
 from ..optimize import OptimizeResult, grid_search
-from ..regions import Region, as_region, evaluate_region_grid, segment_moments
+from ..optimize.region_grid import evaluate_region_grid
 from .cells import Decomposition, decompose
 
 __all__ = [

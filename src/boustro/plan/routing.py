@@ -8,7 +8,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..regions import Region, _point_segment_distance, as_region, points_in_ring
+from ..geometry.region import Region, _point_segment_distance, as_region, points_in_ring
 
 __all__ = ["Route", "Router"]
 

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from ..geometry import Polygon
 
 if TYPE_CHECKING:
-    from ..regions import Region
+    from ..geometry.region import Region
 
 
 __all__ = [

@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import InvalidParameterError, as_number
+from ..._validate import as_number
+from ...errors import InvalidParameterError
 from .structure import Array, event_angles
 
 __all__ = ["MIN_TOL"]

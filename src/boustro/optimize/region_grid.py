@@ -1,8 +1,8 @@
 """Exact per-segment fitness of a region over many (angle, offset) layouts at once.
 
 Eq. 1 (weighted statistics) runs on :func:`~boustro.models.region.segment_moments` (sparse,
-fast); any other objective on :class:`~boustro.models.region.RegionExactModel`. This is the one
-module of :mod:`boustro.models` that needs the objectives (their direction and Eq. 1).
+fast); any other objective on :class:`~boustro.models.region.RegionExactModel`. The grid
+search over a concave region (:mod:`boustro.plan.region_opt`) evaluates its layouts here.
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ import torch
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
-from ..fitness import SmithFitness
+from ..models.region import RegionEdges, RegionExactModel, segment_moments
 from ..objectives import objective_sign
-from .region import RegionEdges, RegionExactModel, segment_moments
+from ..objectives.smith import SmithFitness
 
 __all__ = ["evaluate_region_grid"]
 
