@@ -110,11 +110,12 @@ def _imports(module: str) -> tuple[set[str], set[str]]:
 
 
 def _layer_of(module: str, layers: list[tuple[str, list[str]]]) -> int:
-    """Index of the layer whose longest matching prefix names ``module``."""
+    """Index of the layer whose longest matching prefix names ``module`` (-1: none)."""
     best, best_len = -1, -1
     for i, (_, prefixes) in enumerate(layers):
         for p in prefixes:
-            if (module == p or module.startswith(p + ".")) and len(p) > best_len:
+            inside = module.startswith(p + ".") and p != "boustro"  # the root names itself only
+            if (module == p or inside) and len(p) > best_len:
                 best, best_len = i, len(p)
     return best
 

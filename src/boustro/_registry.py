@@ -38,6 +38,7 @@ class Registry(dict[str, T]):
 
     ``package`` is the dotted name of the package whose modules define variants; each module
     registers its own with :meth:`register` at import, and :meth:`discover` imports them all.
+    Names are stored in snake case (``snake_case=False`` keeps them as given).
 
     >>> shapes = Registry("shape")
     >>> @shapes.register("unit-square")
@@ -47,10 +48,21 @@ class Registry(dict[str, T]):
     (['unit_square'], True)
     """
 
-    def __init__(self, kind: str, package: str | None = None) -> None:
+    def __init__(self, kind: str, package: str | None = None, *, snake_case: bool = True) -> None:
         super().__init__()
         self.kind = kind
         self.package = package
+        self.snake_case = snake_case
+
+    def key(self, name: object) -> str:
+        """The registry's spelling of ``name`` (snake case unless the registry keeps names)."""
+        if self.snake_case:
+            return canonical_name(name, self.kind)
+        if not isinstance(name, str) or not name:
+            raise InvalidParameterError(
+                f"a {self.kind} name must be a non-empty string, got {name!r}"
+            )
+        return name
 
     def register(self, name: str, value: T | None = None, *, replace: bool = False) -> Any:
         """Register ``value`` as ``name``, or return a decorator that registers what it wraps.
@@ -58,10 +70,10 @@ class Registry(dict[str, T]):
         Raises:
             InvalidParameterError: an empty name, or a name already taken (unless ``replace``).
         """
-        key = canonical_name(name, self.kind)
+        key = self.key(name)
 
         def add(item: T) -> T:
-            if key in self and not replace and self[key] is not item:
+            if key in self and not replace:
                 raise InvalidParameterError(f"{self.kind} {key!r} is already registered")
             self[key] = item
             return item
@@ -76,7 +88,7 @@ class Registry(dict[str, T]):
         Raises:
             InvalidParameterError: no such variant; the message lists the known ones.
         """
-        key = canonical_name(name, self.kind)
+        key = self.key(name)
         if key not in self:
             known = ", ".join(sorted(self)) or "(none)"
             raise InvalidParameterError(f"unknown {self.kind} {name!r}; expected one of {known}")

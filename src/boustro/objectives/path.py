@@ -10,6 +10,7 @@ import torch
 from ..errors import InvalidParameterError
 from ..models import Chords, TransectLengths
 from .base import BaseObjective
+from .registry import register_objective
 from .turns import GRAZE
 
 __all__ = ["ShortestPath", "path_length"]
@@ -53,6 +54,7 @@ def path_length(
     return total + torch.minimum(first_up, first_lo)
 
 
+@register_objective("shortest_path")
 @dataclass(frozen=True)
 class ShortestPath(BaseObjective):
     """Total path length: transects plus straight connecting moves; **minimised**.

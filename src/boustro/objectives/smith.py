@@ -14,6 +14,7 @@ from ..errors import InvalidParameterError
 from ..models import TransectLengths, smooth
 from ..models import _kernels as _compiled
 from .base import BaseObjective
+from .registry import register_objective
 
 __all__ = ["SmithFitness", "safe_sqrt", "smith_fitness", "transect_count"]
 
@@ -183,6 +184,7 @@ class _CompiledSmith(torch.autograd.Function):
         return (*(o if n else None for o, n in zip(out, need, strict=True)), None, None, None)
 
 
+@register_objective("smith")
 @dataclass(frozen=True)
 class SmithFitness(BaseObjective):
     """Eq. 1 as an objective object: holds ``a``, ``b``, the statistics; maximised.

@@ -9,6 +9,7 @@ import torch
 
 from ..models import Chords, TransectLengths
 from .base import BaseObjective
+from .registry import register_objective
 
 __all__ = ["GRAZE", "FewestTransects", "coverage_count"]
 
@@ -17,6 +18,7 @@ __all__ = ["GRAZE", "FewestTransects", "coverage_count"]
 GRAZE = 1e-12
 
 
+@register_objective("fewest_transects")
 @dataclass(frozen=True)
 class FewestTransects(BaseObjective):
     """The number of transects that cross the polygon (turns + 1); **minimised**.

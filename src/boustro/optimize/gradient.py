@@ -19,6 +19,7 @@ from ..models import (
 )
 from ..objectives import Objective
 from .descent import DescentSettings, _descend, _result_from_descent, _zoom_descent
+from .methods import register_method
 from .problem import _check_count, _check_positive, _Problem, _problem, evaluate_pairs
 from .result import OptimizeResult
 from .schedule import DEFAULT_SCHEDULE, TemperatureSchedule, _as_schedule, _with_temperature
@@ -202,6 +203,7 @@ def _describe(options: DescentSettings) -> dict[str, Any]:
     }
 
 
+@register_method("gradient")
 def gradient_descent(
     polygon: Polygon | ArrayLike,
     spacing: float,

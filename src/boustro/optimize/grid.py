@@ -10,6 +10,7 @@ from numpy.typing import ArrayLike
 
 from ..geometry import Polygon
 from ..objectives import Objective
+from .methods import register_method
 from .problem import _check_count, _grid, _no_transect, _problem, evaluate_grid
 from .result import OptimizeResult
 
@@ -21,6 +22,7 @@ __all__ = ["GRID_200", "grid_search"]
 GRID_200: dict[str, int] = {"n_angles": 14, "n_offsets": 14}
 
 
+@register_method("grid")
 def grid_search(
     polygon: Polygon | ArrayLike,
     spacing: float,

@@ -17,6 +17,7 @@ from ..models import (
 from ..objectives import Objective
 from .descent import _descend, _result_from_descent, _zoom_descent
 from .gradient import GradientOptions, _describe
+from .methods import register_method
 from .problem import _check_count, _grid, _no_transect, _Problem, _problem, evaluate_grid
 from .result import OptimizeResult
 from .schedule import DEFAULT_SCHEDULE, TemperatureSchedule
@@ -75,6 +76,7 @@ def _grid_starts(
     return _GridStarts(angles[rows], offsets[cols], best)
 
 
+@register_method("hybrid")
 def hybrid(
     polygon: Polygon | ArrayLike,
     spacing: float,
