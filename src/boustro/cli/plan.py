@@ -79,6 +79,24 @@ output formats (--out, by extension or --format):
 """
 
 
+#: The formats :data:`DETAILS` describes; the help lists any other registered format after them.
+_DESCRIBED_FORMATS = ("geojson", "kml", "gpx", "csv", "plan", "wpl")
+
+
+def _details() -> str:
+    """:data:`DETAILS`, with a line for each format registered beyond those it describes."""
+    extra = []
+    for name, (exts, renderer) in FORMATS.items():
+        if name not in _DESCRIBED_FORMATS:
+            doc = (renderer.__doc__ or "").strip().splitlines()
+            extra.append(f"  {'/'.join(exts):<15} {doc[0] if doc else f'format {name!r}'}")
+    if not extra:
+        return DETAILS
+    marker = "  Files are written atomically"
+    head, _, tail = DETAILS.partition(marker)
+    return head + "\n".join(extra) + "\n" + marker + tail
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "plan",
@@ -86,7 +104,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Plan a boustrophedon survey of an area given in real coordinates: choose "
         "the transect angle and offset with an optimiser, place coverage-guaranteed transects, "
         "order them from the start corner, report statistics, write a mission file and a plot.",
-        epilog=DETAILS,
+        epilog=_details(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument(
@@ -101,6 +119,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="CRS of AREA's coordinates: an EPSG code (e.g. EPSG:28992) or 'planar' (default: "
         "the file's, else EPSG:4326 longitude/latitude)",
     )
+    _add_spacing(p)
+    _add_optimiser(p)
+    _add_path(p)
+    _add_output(p)
+    p.set_defaults(func=run)
+
+
+def _add_spacing(p: argparse.ArgumentParser) -> None:
+    """The spacing options: a spacing, a camera or a swath sensor."""
     sensor = p.add_argument_group("spacing (one of)")
     which = sensor.add_mutually_exclusive_group()
     which.add_argument("--spacing", type=positive_float, help="transect spacing, metres")
@@ -130,6 +157,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="M",
         help="swath sensor's blind strip under the vehicle (side-scan sonar), metres",
     )
+
+
+def _add_optimiser(p: argparse.ArgumentParser) -> None:
+    """The optimiser options: method and objective."""
     opt = p.add_argument_group("optimisation")
     opt.add_argument("--method", default=None, help=f"optimiser (default: {DEFAULT_METHOD})")
     opt.add_argument(
@@ -140,6 +171,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         "or fewest-transects (fewest lanes, i.e. turns, for full coverage: the minimum-width "
         "direction); the global method solves each exactly",
     )
+
+
+def _add_path(p: argparse.ArgumentParser) -> None:
+    """The path options: start, turns, speed, altitude, layout, decomposition."""
     path = p.add_argument_group("path")
     path.add_argument(
         "--start",
@@ -197,6 +232,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="sweep direction of the decomposition, degrees counter-clockwise from east in the "
         "plan frame (default: chosen for few turns)",
     )
+
+
+def _add_output(p: argparse.ArgumentParser) -> None:
+    """The output options: the mission file (formats read from FORMATS), plot, JSON."""
     out = p.add_argument_group("output")
     out.add_argument("--out", metavar="FILE", help="write the mission to FILE")
     out.add_argument(
@@ -204,7 +243,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     out.add_argument("--plot", metavar="FILE", help="draw the plan to an image (e.g. plan.png)")
     out.add_argument("--json", action="store_true", help="print one JSON object")
-    p.set_defaults(func=run)
 
 
 # -- argument types ----------------------------------------------------------------------------

@@ -1,0 +1,55 @@
+"""A survey area as read: its outer ring, holes and CRS; the spellings of a CRS name."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import PolygonFileError
+
+__all__ = ["LONLAT", "Area", "close_ring", "crs_name"]
+
+#: WGS 84 longitude/latitude, the CRS of GeoJSON (RFC 7946), KML and GPX.
+LONLAT = "EPSG:4326"
+
+
+@dataclass(frozen=True)
+class Area:
+    """A survey area as read: its outer ring in the file's coordinates and their CRS.
+
+    Attributes:
+        ring: ``(N, 2)`` vertices ``(x, y)`` in file order (longitude, latitude for
+            geographic CRSs), without a repeated closing vertex. Not yet validated as a
+            polygon: :mod:`boustro.mission` projects it first.
+        crs: the CRS, e.g. ``"EPSG:4326"``, or ``None`` for plain planar coordinates.
+        name: a name for the area (placemark or feature name, else the file's stem).
+        source: where it came from (a path, or ``"<embedded>"``).
+        holes: the inner rings (obstacles), each ``(M, 2)`` like ``ring``; validated with the
+            area (:class:`boustro.regions.Region`).
+    """
+
+    ring: NDArray[np.float64]
+    crs: str | None
+    name: str
+    source: str
+    holes: tuple[NDArray[np.float64], ...] = ()
+
+
+def close_ring(ring: np.ndarray, where: str) -> np.ndarray:
+    if len(ring) > 1 and np.array_equal(ring[0], ring[-1]):
+        ring = ring[:-1]
+    if len(ring) < 3:
+        raise PolygonFileError(f"{where}: a polygon needs at least 3 vertices, got {len(ring)}")
+    return ring
+
+
+def crs_name(name: str) -> str:
+    """``urn:ogc:def:crs:EPSG::28992``, ``EPSG:28992``, ``.../EPSG/0/28992`` -> ``EPSG:28992``."""
+    text = name.strip()
+    if text.upper() in ("URN:OGC:DEF:CRS:OGC:1.3:CRS84", "OGC:CRS84", "CRS84"):
+        return LONLAT
+    m = re.search(r"EPSG(?:::|:|/0/|/)(\d+)$", text, flags=re.IGNORECASE)
+    return f"EPSG:{m.group(1)}" if m else text

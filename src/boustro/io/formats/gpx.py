@@ -1,0 +1,48 @@
+"""GPX 1.1: the path as a route of waypoints, the transects as a track, in WGS 84."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+from xml.sax.saxutils import quoteattr
+
+from ..._version import __version__
+from ._common import describe, lonlat, xml_text
+from .registry import register_format
+
+if TYPE_CHECKING:
+    from ...mission import Mission
+
+__all__ = ["to_gpx"]
+
+
+@register_format("gpx", extensions=(".gpx",))
+def to_gpx(mission: Mission) -> str:
+    """GPX 1.1: the path as a route (``rtept`` per waypoint, named and typed by kind) and the
+    transects as a track with one segment each. No ``ele``: GPX elevations are above sea level,
+    mission altitudes are above take-off.
+
+    >>> from boustro.io import embedded_field
+    >>> from boustro.mission import plan_area
+    >>> to_gpx(plan_area(embedded_field(), 10.0)).count("<trkseg>")
+    19
+    """
+    waypoints, transects, _, _ = lonlat(mission, "GPX")
+    name = xml_text(mission.name or "boustro plan")
+    out = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<gpx version="1.1" creator={quoteattr(f"boustro {__version__}")} '
+        'xmlns="http://www.topografix.com/GPX/1/1">',
+        f"<metadata><name>{name}</name><desc>{xml_text(describe(mission))}</desc></metadata>",
+        f"<rte><name>{name}</name>",
+    ]
+    for i, ((lon, lat), kind) in enumerate(zip(waypoints, mission.kinds, strict=True)):
+        out.append(
+            f'<rtept lat="{lat:.10f}" lon="{lon:.10f}"><name>WP{i:04d}</name>'
+            f"<type>{kind}</type></rtept>"
+        )
+    out += ["</rte>", f"<trk><name>{name} transects</name>"]
+    for seg in transects:
+        pts = "".join(f'<trkpt lat="{lat:.10f}" lon="{lon:.10f}"></trkpt>' for lon, lat in seg)
+        out.append(f"<trkseg>{pts}</trkseg>")
+    out += ["</trk>", "</gpx>"]
+    return "\n".join(out) + "\n"

@@ -1,0 +1,69 @@
+"""Step 3 of a mission: the plan mapped back to the area's coordinates and longitude/latitude."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import InvalidParameterError, as_number
+from ..plan import Plan
+from .project import Frame
+from .steps import Planned, main_cell
+from .types import Mission
+
+__all__ = ["map_back"]
+
+
+def _bearing(frame: Frame, plan: Plan) -> float:
+    """The transects' bearing, degrees clockwise from north (from the plan frame's y axis)."""
+    u = np.array([math.cos(plan.angle), math.sin(plan.angle)])
+    if frame.proj.planar:
+        return math.degrees(math.atan2(u[0], u[1])) % 180.0
+    main = plan.cells[main_cell(plan)].polygon if frame.region is not None else frame.poly
+    c = main.centre
+    a, b = frame.proj.to_lonlat(np.stack([c - 5 * u, c + 5 * u]))
+    azimuth, _, _ = frame.proj._geod.inv(a[0], a[1], b[0], b[1])
+    return float(azimuth) % 180.0
+
+
+def map_back(
+    frame: Frame, planned: Planned, *, altitude: float | None, turnaround: float
+) -> Mission:
+    """The :class:`Mission`: the plan's coordinates in the area's CRS and in lon/lat."""
+    proj, plan, sensor = frame.proj, planned.plan, frame.sensor
+    bearing = _bearing(frame, plan)
+    if altitude is None:
+        altitude = sensor.altitude
+    else:
+        value = as_number("altitude", altitude)
+        if not (math.isfinite(value) and value >= 0):
+            raise InvalidParameterError(
+                f"altitude must be a finite number >= 0 (metres above take-off), got {altitude!r}"
+            )
+    home_plan = frame.start if frame.given_start else plan.waypoints[0]
+    lonlat = None if proj.planar else proj.to_lonlat
+    return Mission(
+        name=frame.area.name,
+        area=frame.area,
+        projection=proj,
+        plan=plan,
+        optimum=planned.optimum,
+        spacing=sensor.spacing,
+        reach=sensor.reach,
+        nadir_gap=sensor.nadir_gap,
+        turnaround=float(turnaround),
+        hull_depth=frame.depth / proj.scale_min,
+        altitude=None if altitude is None else float(altitude),
+        coverage=planned.coverage,
+        sensor=sensor.text,
+        waypoints=proj.to_source(plan.waypoints),
+        transects=proj.to_source(plan.transects),
+        waypoints_lonlat=None if lonlat is None else lonlat(plan.waypoints),
+        transects_lonlat=None if lonlat is None else lonlat(plan.transects),
+        area_lonlat=None if lonlat is None else lonlat(frame.ring),
+        bearing=bearing,
+        home=proj.to_source(home_plan),
+        home_lonlat=None if lonlat is None else lonlat(home_plan),
+        holes_lonlat=() if lonlat is None else tuple(lonlat(h) for h in frame.holes),
+    )

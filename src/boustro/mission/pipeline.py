@@ -1,0 +1,113 @@
+"""Planning a survey area end to end: :func:`plan_area` (project, plan, map back)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from numpy.typing import ArrayLike
+
+from ..io.read import LONLAT, Area
+from ..objectives.smith import SmithFitness
+from ..sensors import SensorSpacing
+from .defaults import DEFAULT_HULL_TOLERANCE
+from .map_back import map_back
+from .project import Sensor, as_area, project, sensor_spacing
+from .steps import plan_concave, plan_convex
+from .types import Mission
+
+__all__ = ["plan_area"]
+
+
+def plan_area(
+    area: Area | ArrayLike,
+    spacing: float | SensorSpacing | Any,
+    *,
+    crs: str | None = LONLAT,
+    method: str | None = None,
+    fitness: SmithFitness | Any | None = None,
+    options: dict[str, Any] | None = None,
+    start: ArrayLike | None = None,
+    turnaround: float = 0.0,
+    speed: float | None = None,
+    turn_time: float = 0.0,
+    altitude: float | None = None,
+    hull_tolerance: float = DEFAULT_HULL_TOLERANCE,
+    layout: str = "guaranteed",
+    check_coverage: bool = True,
+    holes: Sequence[ArrayLike] = (),
+    decompose: bool | None = None,
+    sweep: float | None = None,
+) -> Mission:
+    """Plan a survey area end to end: project, optimise, build the path, map it back.
+
+    Args:
+        area: an :class:`~boustro.io.Area` (from :func:`boustro.io.read_area`), or an ``(N, 2)``
+            ring in ``crs``.
+        spacing: metres on the ground (planar units for planar input), or a sensor
+            (:class:`~boustro.sensors.Camera`, :class:`~boustro.sensors.Swath`, or their
+            :class:`~boustro.sensors.SensorSpacing`).
+        crs: CRS of a bare ring (ignored for an :class:`Area`, which carries its own); default
+            WGS 84 longitude/latitude, ``None`` for planar.
+        method: optimiser (default :data:`DEFAULT_METHOD`), see :func:`boustro.optimize.optimize`;
+            ``options`` override :data:`METHOD_OPTIONS`. Concave areas and areas with holes
+            are optimised by :func:`boustro.plan.optimize_region` (a grid search with the
+            exact per-segment fitness, :data:`REGION_OPTIONS`, ``options`` override it).
+        fitness: the objective (default Eq. 1).
+        start: ``(x, y)`` in the area's coordinates; the path starts at the corner nearest it
+            (default: the area's first vertex).
+        turnaround: run-in / run-out distance beyond each transect end, metres.
+        speed: ground speed, m/s, for the duration; ``turn_time``: seconds per turn.
+        altitude: mission altitude above take-off, metres (default: the camera's, if any).
+        hull_tolerance: a concave area without holes whose convex hull reaches at most this many
+            metres beyond it is planned on its hull (its pockets are digitising noise), unless
+            ``decompose`` is given; a deeper one is planned as a concave area.
+        layout: ``"guaranteed"`` (default) or ``"chords"`` (see :func:`boustro.plan.build_plan`).
+        check_coverage: compute the covered share with shapely.
+        holes: holes of a bare ring (an :class:`Area` carries its own), in ``crs``.
+        decompose: for a concave area or one with holes: ``None`` (default) decomposes into
+            cells when that promises fewer turns, ``True`` always, ``False`` plans one angle
+            with lines cut at the boundary and the holes (:func:`boustro.plan.plan_region`).
+            Given, it also turns off the convex-hull rule for nearly convex areas.
+        sweep: sweep direction of the decomposition, degrees in the plan frame (default:
+            chosen by :func:`boustro.plan.choose_sweep`).
+
+    Raises:
+        InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError.
+
+    Example:
+        >>> from boustro.io import embedded_field
+        >>> mission = plan_area(embedded_field(), 10.0)
+        >>> mission.plan.stats.n_transects, round(mission.bearing, 2)
+        (19, 68.43)
+    """
+    area = as_area(area, crs, holes)
+    sensor = Sensor(*sensor_spacing(spacing))
+    frame = project(area, sensor, hull_tolerance, decompose, start)
+    if frame.region is None:
+        planned = plan_convex(
+            frame,
+            method=method,
+            fitness=fitness,
+            options=options,
+            layout=layout,
+            turnaround=turnaround,
+            speed=speed,
+            turn_time=turn_time,
+            check_coverage=check_coverage,
+        )
+    else:
+        planned = plan_concave(
+            frame,
+            method=method,
+            fitness=fitness,
+            options=options,
+            layout=layout,
+            turnaround=turnaround,
+            speed=speed,
+            turn_time=turn_time,
+            check_coverage=check_coverage,
+            decompose=decompose,
+            sweep=sweep,
+        )
+    return map_back(frame, planned, altitude=altitude, turnaround=turnaround)

@@ -1,0 +1,168 @@
+"""Step 1 of a mission: the area and the sensor, projected into the metric plan frame."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import InvalidParameterError, InvalidPolygonError, NonConvexPolygonError
+from ..geometry import Polygon
+from ..geometry.region import Region
+from ..io.crs import Projection, check_lonlat, parse_crs, projection_for
+from ..io.read import Area
+from ..plan import nearly_convex
+from ..sensors import SensorSpacing
+from .defaults import log
+
+__all__ = ["Frame", "Sensor", "as_area", "project", "sensor_spacing"]
+
+
+def sensor_spacing(spacing: Any) -> tuple[float, float, float, float | None, str | None]:
+    """(spacing, reach, nadir gap, altitude, description) from a number or a sensor."""
+    if hasattr(spacing, "spacing") and callable(spacing.spacing):
+        spacing = spacing.spacing()
+    if isinstance(spacing, SensorSpacing):
+        return (
+            spacing.spacing,
+            spacing.reach,
+            spacing.nadir_gap,
+            spacing.altitude,
+            (spacing.description),
+        )
+    try:
+        s = float(spacing)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(
+            f"spacing must be a number of metres or a sensor, got {spacing!r}"
+        ) from None
+    if not math.isfinite(s) or s <= 0:
+        raise InvalidParameterError(f"spacing must be a finite number > 0, got {spacing!r}")
+    return s, s / 2, 0.0, None, None
+
+
+class Sensor(NamedTuple):
+    """The spacing and footprint asked for, on the ground (metres, or planar units)."""
+
+    spacing: float
+    reach: float
+    nadir_gap: float
+    altitude: float | None
+    text: str | None
+
+
+class Frame(NamedTuple):
+    """Step 1: the area projected into the plan frame, with what the plan needs."""
+
+    area: Area
+    sensor: Sensor
+    proj: Projection
+    ring: NDArray[np.float64]
+    holes: list[NDArray[np.float64]]
+    surveyed: Polygon
+    poly: Polygon
+    region: Region | None
+    depth: float
+    start: NDArray[np.float64]
+    given_start: bool
+    ground_area: float
+
+
+def as_area(area: Area | ArrayLike, crs: str | None, holes: Sequence[ArrayLike]) -> Area:
+    """An :class:`Area` with one spelling of its CRS ("EPSG:n", or None for planar)."""
+    if not isinstance(area, Area):
+        hole_rings = tuple(np.asarray(h, dtype=np.float64) for h in holes)
+        return Area(np.asarray(area, dtype=np.float64), parse_crs(crs), "", "<array>", hole_rings)
+    return dataclasses.replace(area, crs=parse_crs(area.crs))
+
+
+# -- step 1: project --------------------------------------------------------------------------
+def _project_holes(area: Area, proj: Projection) -> list[NDArray[np.float64]]:
+    """The holes in the plan frame, checked."""
+    where = area.source
+    holes_plan = []
+    for i, hole in enumerate(area.holes):
+        if proj.geographic:
+            check_lonlat(proj.to_lonlat(proj.to_plan(hole)), f"{where}: hole {i}")
+        hp = proj.to_plan(hole)
+        if not np.all(np.isfinite(hp)):
+            raise InvalidPolygonError(f"{where}: hole {i} cannot be projected to {proj.plan_crs}")
+        holes_plan.append(hp)
+    if holes_plan and proj.geographic:
+        # Validate the holes in the file's own coordinates too: a hole edge lying on the shell
+        # in the file (touching it) can come out a fraction of a millimetre inside it after the
+        # projection, above the tolerance, and would pass; messages then name the file's values.
+        try:
+            Region(Polygon(area.ring), [np.asarray(h, dtype=np.float64) for h in area.holes])
+        except InvalidPolygonError as exc:
+            raise InvalidPolygonError(f"{where}: {exc} (in the file's coordinates)") from None
+    return holes_plan
+
+
+def project(
+    area: Area,
+    sensor: Sensor,
+    hull_tolerance: float,
+    decompose: bool | None,
+    start: ArrayLike | None,
+) -> Frame:
+    """Project the area, decide convex (possibly its hull) or region, place the start."""
+    where = area.source
+    proj = projection_for(area.ring, area.crs, where)
+    ring_plan = proj.to_plan(area.ring)
+    holes_plan = _project_holes(area, proj)
+    try:
+        surveyed = Polygon(ring_plan)
+        region = Region(surveyed, holes_plan) if holes_plan else None
+    except InvalidPolygonError as exc:
+        raise InvalidPolygonError(f"{where}: {exc}") from None
+    k_lo = proj.scale_min
+    depth = 0.0
+    poly = surveyed
+    if region is None and (decompose is None or surveyed.is_convex):
+        try:
+            poly, depth = nearly_convex(surveyed, float(hull_tolerance) * k_lo)
+        except NonConvexPolygonError:
+            region = Region(surveyed)
+    elif region is None:
+        region = Region(surveyed)
+    if depth > 0:
+        log.debug(
+            "the area is not convex, but its convex hull reaches only %.3g m beyond it: "
+            "planning the hull",
+            depth / k_lo,
+        )
+    start_plan = ring_plan[0] if start is None else proj.to_plan(np.asarray(start, float))
+    if start is not None:
+        _warn_far_start(ring_plan, start_plan, k_lo)
+    ground_area = proj.ground_area(ring_plan) - sum(proj.ground_area(h) for h in holes_plan)
+    return Frame(
+        area=area,
+        sensor=sensor,
+        proj=proj,
+        ring=ring_plan,
+        holes=holes_plan,
+        surveyed=surveyed,
+        poly=poly,
+        region=region,
+        depth=depth,
+        start=start_plan,
+        given_start=start is not None,
+        ground_area=ground_area,
+    )
+
+
+def _warn_far_start(ring: NDArray[np.float64], start: NDArray[np.float64], k_lo: float) -> None:
+    far = float(np.min(np.hypot(*(ring - start).T))) / k_lo
+    size = float(np.max(np.hypot(*(ring - ring.mean(axis=0)).T))) * 2 / k_lo
+    if far > 10 * size:
+        log.warning(
+            "the start is %.3g m from the area, %.0f times its size: swapped longitude and "
+            "latitude?",
+            far,
+            far / size,
+        )

@@ -1,0 +1,142 @@
+"""Step 2 of a mission: the projected area optimised and planned (convex, or cells and lanes)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ..errors import InvalidParameterError, ProblemTooLargeError
+from ..optimize import OptimizeResult, optimize
+from ..plan import Coverage, Plan, build_plan, coverage
+from ..plan.region import plan_region
+from .defaults import DEFAULT_METHOD, FALLBACK_METHOD, METHOD_OPTIONS, REGION_OPTIONS, log
+from .project import Frame
+
+__all__ = ["Planned", "main_cell", "plan_concave", "plan_convex", "region_optimum"]
+
+
+class Planned(NamedTuple):
+    """Step 2: the plan (plan frame), its optimum and its coverage."""
+
+    plan: Plan
+    optimum: OptimizeResult
+    coverage: Coverage | None
+
+
+def _path_options(frame: Frame, turnaround: float, speed: Any, turn_time: float) -> dict:
+    """The options of the path that both planners take, scaled to the plan frame."""
+    proj, sensor = frame.proj, frame.sensor
+    return {
+        "turnaround": float(turnaround) * proj.scale_max,
+        "reach": sensor.reach * proj.scale_min,
+        "nadir_gap": sensor.nadir_gap * proj.scale_max,
+        "ground_scale": proj.scale,
+        "speed": speed,
+        "turn_time": turn_time,
+        "area": frame.ground_area,
+    }
+
+
+def plan_convex(
+    frame: Frame,
+    *,
+    method: str | None,
+    fitness: Any,
+    options: dict[str, Any] | None,
+    layout: str,
+    turnaround: float,
+    speed: float | None,
+    turn_time: float,
+    check_coverage: bool,
+) -> Planned:
+    """A convex area (or the hull of a nearly convex one): optimise, then build the plan."""
+    s_plan = frame.sensor.spacing * frame.proj.scale_min
+    chosen = method or DEFAULT_METHOD
+    opts = dict(METHOD_OPTIONS.get(chosen, {}))
+    opts.update(options or {})
+    try:
+        optimum = optimize(frame.poly, s_plan, method=chosen, fitness=fitness, **opts)
+    except ProblemTooLargeError as exc:
+        if method is not None:
+            raise
+        log.warning("%s; planning with the hybrid optimiser instead", exc)
+        optimum = optimize(frame.poly, s_plan, method=FALLBACK_METHOD, fitness=fitness)
+    plan = build_plan(
+        frame.poly,
+        s_plan,
+        optimum.angle,
+        optimum.offset,
+        layout=layout,  # type: ignore[arg-type]
+        start=frame.start,
+        **_path_options(frame, turnaround, speed, turn_time),
+    )
+    cov = coverage(plan, frame.surveyed) if check_coverage else None
+    return Planned(plan, optimum, cov)
+
+
+def plan_concave(
+    frame: Frame,
+    *,
+    method: str | None,
+    fitness: Any,
+    options: dict[str, Any] | None,
+    layout: str,
+    turnaround: float,
+    speed: float | None,
+    turn_time: float,
+    check_coverage: bool,
+    decompose: bool | None,
+    sweep: float | None,
+) -> Planned:
+    """A concave area or one with holes: cells, lanes and a tour (:func:`plan_region`)."""
+    if method not in (None, DEFAULT_METHOD, "grid", "region-grid"):
+        raise InvalidParameterError(
+            f"method {method!r} optimises convex areas only; a concave area or one with "
+            "holes is optimised by grid search over its segments (leave --method out)"
+        )
+    s_plan = frame.sensor.spacing * frame.proj.scale_min
+    opts = dict(REGION_OPTIONS)
+    opts.update({k: v for k, v in (options or {}).items() if k in ("n_angles", "n_offsets")})
+    plan = plan_region(
+        frame.region,  # type: ignore[arg-type]
+        s_plan,
+        decompose_area="auto" if decompose is None else bool(decompose),
+        sweep=None if sweep is None else math.radians(float(sweep)),
+        fitness=fitness,
+        layout=layout,  # type: ignore[arg-type]
+        start=frame.start if frame.given_start else None,  # None: the shortest tour
+        **_path_options(frame, turnaround, speed, turn_time),
+        **opts,
+    )
+    optimum = region_optimum(plan, s_plan)
+    cov = coverage(plan, frame.region) if check_coverage else None
+    return Planned(plan, optimum, cov)
+
+
+def main_cell(plan: Plan) -> int:
+    return max(range(len(plan.cells)), key=lambda i: plan.cells[i].region.area)
+
+
+def region_optimum(plan: Plan, spacing: float) -> OptimizeResult:
+    """One :class:`OptimizeResult` for a plan of cells: the largest cell's angle and offset,
+    the area-weighted mean of the cells' fitness, the evaluations and time of all of them."""
+    cells = plan.cells
+    results = [c.optimum for c in cells if c.optimum is not None]
+    areas = np.array([c.region.area for c in cells])
+    values = np.array([c.fitness for c in cells])
+    ok = np.isfinite(values)
+    fitness = float(np.sum(values[ok] * areas[ok]) / np.sum(areas[ok])) if ok.any() else math.nan
+    main = cells[main_cell(plan)]
+    method = "region-grid" if len(cells) == 1 else "decomposed"
+    return OptimizeResult(
+        angle=main.angle,
+        offset=main.offset,
+        fitness=fitness,
+        spacing=spacing,
+        method=method,
+        evaluations=int(sum(r.evaluations for r in results)),
+        seconds=float(sum(r.seconds for r in results)),
+        info={"cells": len(cells)},
+    )
