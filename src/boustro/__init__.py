@@ -1,25 +1,12 @@
 """boustro: boustrophedon (lawnmower) coverage paths over polygons.
 
-Layers, each importing only those below it (see ``DESIGN.md``):
-
-1. :mod:`boustro.geometry` - validated polygons, the normalised frame, half-planes.
-2. :mod:`boustro.models` - transect-length models: exact chords, the paper's sigmoid integral;
-   :mod:`boustro.smooth` - the smooth closed form (the paper's first item of future work).
-3. :mod:`boustro.fitness` - fitness functions of transect lengths (Eq. 1 of the paper).
-4. :mod:`boustro.scoring` - score a layout in user units; :mod:`boustro.objectives` - fewest
-   transects, shortest path.
-5. :mod:`boustro.optimize` - grid search, gradient descent (SGD/Adam, temperature schedules),
-   hybrid, and :mod:`boustro.global_opt` - the certified global optimum; one result type.
-   :mod:`boustro.learned` - a planner network trained through the differentiable fitness.
-6. :mod:`boustro.regions`, :mod:`boustro.decompose` - concave areas and holes;
-   :mod:`boustro.plan` - ordered, coverage-guaranteed waypoints and statistics.
-
-The functions ``optimize.optimize`` and ``decompose.decompose`` are not re-exported here, so
-that ``boustro.optimize`` and ``boustro.decompose`` stay the modules.
-
-Edges (never imported by the core): :mod:`boustro.io` (reading areas), :mod:`boustro.geo`
-(coordinate systems, missions), :mod:`boustro.formats` (mission files), :mod:`boustro.plot`,
-:mod:`boustro.plot_plan`, :mod:`boustro.experiments`, :mod:`boustro.cli`.
+The names below are the curated API of the README's tour; each subpackage has its own
+``__all__``. The pipeline and the one statement of its layer order are in
+``docs/architecture.md``: :mod:`boustro.geometry` -> :mod:`boustro.models` ->
+:mod:`boustro.objectives` -> :mod:`boustro.optimize` -> :mod:`boustro.plan`, with the edges
+(:mod:`boustro.io`, :mod:`boustro.mission`, :mod:`boustro.plot`, :mod:`boustro.experiments`,
+:mod:`boustro.cli`) never imported by the core, so ``import boustro`` loads no file formats,
+projections, plotting or network code.
 """
 
 from ._version import __version__
@@ -27,9 +14,11 @@ from .errors import (
     BoustroError,
     InvalidParameterError,
     InvalidPolygonError,
+    MissingDependencyError,
     NonConvexPolygonError,
     NoTransectError,
     PolygonFileError,
+    ProblemTooLargeError,
 )
 from .geometry import Frame, HalfPlanes, Polygon, halfplanes
 from .geometry.region import Region
@@ -51,7 +40,14 @@ from .models.smooth import (
     smoothing_from_temperature,
     temperature_from_smoothing,
 )
-from .objectives import FewestTransects, ShortestPath, get_objective, path_length
+from .objectives import (
+    FewestTransects,
+    ShortestPath,
+    get_objective,
+    objective_sense,
+    path_length,
+    register_objective,
+)
 from .objectives.smith import SmithFitness, smith_fitness
 from .optimize import (
     GRID_200,
@@ -72,17 +68,20 @@ from .plan import Plan, PlanStats, build_plan, coverage, guaranteed_segments
 from .plan.region import plan_region
 from .plan.region_opt import optimize_region
 from .scoring import Score, Segments, make_model, score, transect_segments
+from .sensors import Camera, Swath
 
 __all__ = [
     "DEFAULT_SMOOTHING",
     "GRID_200",
     "BoustroError",
+    "Camera",
     "ExactModel",
     "FewestTransects",
     "Frame",
     "HalfPlanes",
     "InvalidParameterError",
     "InvalidPolygonError",
+    "MissingDependencyError",
     "NoTransectError",
     "NonConvexPolygonError",
     "OptimizeResult",
@@ -91,6 +90,7 @@ __all__ = [
     "PlanStats",
     "Polygon",
     "PolygonFileError",
+    "ProblemTooLargeError",
     "Region",
     "RegionExactModel",
     "RegionSoftModel",
@@ -99,6 +99,7 @@ __all__ = [
     "ShortestPath",
     "SmithFitness",
     "SmoothModel",
+    "Swath",
     "TemperatureSchedule",
     "TransectLengths",
     "TransectModel",
@@ -116,12 +117,14 @@ __all__ = [
     "halfplanes",
     "hybrid",
     "make_model",
+    "objective_sense",
     "optimize_region",
     "paper_lengths",
     "path_length",
     "plan_region",
     "region_segments",
     "register_method",
+    "register_objective",
     "score",
     "shortest_path_optimum",
     "smith_fitness",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import inspect
 import logging
 import math
 import sys
@@ -10,7 +11,7 @@ from typing import Any
 
 from ..errors import InvalidParameterError
 from ..objectives import SmithFitness
-from ..optimize import GRID_200, OptimizeResult, TemperatureSchedule, optimize
+from ..optimize import GRID_200, OptimizeResult, TemperatureSchedule, optimize, resolve_method
 from ..optimize import METHODS as _REGISTRY
 from ..plot import plot_layout
 from ..scoring import score
@@ -158,10 +159,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def _parameters(method: str) -> set[str]:
+    """The keyword parameters of the registered method (``"**"`` if it takes any)."""
+    try:
+        params = inspect.signature(resolve_method(method)).parameters.values()
+    except (TypeError, ValueError):
+        return {"**"}
+    return {"**" if p.kind is p.VAR_KEYWORD else p.name for p in params}
+
+
 def _options(args: argparse.Namespace) -> dict[str, Any]:
     """The keyword arguments of the chosen method; warn about options it does not use."""
     method = args.method
-    options: dict[str, Any] = {"progress": False if args.quiet else None}
+    takes = _parameters(method)
+    options: dict[str, Any] = {}
+    if "progress" in takes or "**" in takes:
+        options["progress"] = False if args.quiet else None
     ignored = []
     if args.paper_grid and (args.angles is not None or args.offsets is not None):
         raise InvalidParameterError("--paper-grid fixes the grid: drop --angles and --offsets")
@@ -195,7 +208,7 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
         ):
             if value != default:
                 ignored.append(flag)
-    if method == "gradient":
+    if "seed" in takes:
         options["seed"] = args.seed
     elif args.seed != 0:
         ignored.append("--seed")

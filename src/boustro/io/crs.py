@@ -10,9 +10,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import (
-    BoustroError,
     InvalidParameterError,
     InvalidPolygonError,
+    MissingDependencyError,
 )
 from ..geometry import Polygon
 from .read import LONLAT
@@ -30,10 +30,6 @@ __all__ = [
 log = logging.getLogger("boustro")
 
 _PLANAR_NAMES = ("planar", "local", "none")
-
-
-class MissingDependencyError(BoustroError, ImportError):
-    """An optional dependency that this operation needs is not installed."""
 
 
 def _pyproj() -> Any:

@@ -6,7 +6,8 @@ import math
 
 import numpy as np
 
-from ..errors import InvalidParameterError, as_number
+from .._validate import as_number
+from ..errors import InvalidParameterError
 from ..plan import Plan
 from .project import Frame
 from .steps import Planned, main_cell

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Literal, Protocol, runtime_checkable
+from typing import Any, Literal, Protocol, runtime_checkable
 
 import torch
 
 from ..errors import InvalidParameterError
-from ..models import Chords, TransectLengths
+from ..models import TransectLengths
 
 __all__ = [
     "BaseObjective",
@@ -35,11 +35,7 @@ class Objective(Protocol):
     :class:`~boustro.models.TransectLengths`.
     """
 
-    name: str
-    sense: Sense
-    needs_chords: bool
-
-    def __call__(self, x: TransectLengths | Chords, /) -> torch.Tensor: ...
+    def __call__(self, x: Any, /) -> torch.Tensor: ...
 
 
 @runtime_checkable

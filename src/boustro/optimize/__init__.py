@@ -21,11 +21,11 @@ from .hybrid import hybrid
 from .methods import METHODS, Method, optimize, register_method, resolve_method
 from .methods import _check_options as _check_options
 from .problem import _CHUNK_ELEMENTS as _CHUNK_ELEMENTS
+from .problem import Problem, evaluate_grid, evaluate_pairs, exact_fitness, prepare_problem
 from .problem import _check_count as _check_count
 from .problem import _check_positive as _check_positive
 from .problem import _Problem as _Problem
 from .problem import _problem as _problem
-from .problem import evaluate_grid, evaluate_pairs, exact_fitness
 from .result import OptimizeResult, canonical
 from .schedule import DEFAULT_SCHEDULE, TemperatureSchedule
 from .schedule import _with_temperature as _with_temperature
@@ -42,6 +42,7 @@ __all__ = [
     "Method",
     "Objective",
     "OptimizeResult",
+    "Problem",
     "TemperatureSchedule",
     "canonical",
     "evaluate_grid",
@@ -53,6 +54,7 @@ __all__ = [
     "grid_search",
     "hybrid",
     "optimize",
+    "prepare_problem",
     "register_method",
     "resolve_method",
 ]

@@ -22,7 +22,7 @@ from ..models import grid_size as _grid_size
 from ..objectives import Objective, SmithFitness, objective_sign
 from ..scoring import as_polygon
 
-__all__ = ["evaluate_grid", "evaluate_pairs", "exact_fitness"]
+__all__ = ["Problem", "evaluate_grid", "evaluate_pairs", "exact_fitness", "prepare_problem"]
 
 
 #: Upper bound on the elements of one batched exact evaluation (pairs x transects x edges);
@@ -53,12 +53,29 @@ def _problem(
             "(its widest extent at any angle): at most one transect can cross it, so there is "
             "no boustrophedon layout to optimise"
         )
-    fitness = SmithFitness() if fitness is None else fitness
-    sign = objective_sign(fitness)
+    objective: Objective = SmithFitness() if fitness is None else fitness
+    sign = objective_sign(objective)
     frame = poly.frame
     return _Problem(
-        poly, spacing, spacing / frame.scale, frame.scale, halfplanes(poly), fitness, sign
+        poly, spacing, spacing / frame.scale, frame.scale, halfplanes(poly), objective, sign
     )
+
+
+#: The validated problem every optimiser starts from (public names for new optimisers).
+Problem = _Problem
+
+
+def prepare_problem(
+    polygon: Polygon | ArrayLike, spacing: float, fitness: Objective | None, what: str
+) -> _Problem:
+    """Validate ``polygon`` (convex), ``spacing`` and ``fitness`` (default Eq. 1) for the
+    optimiser named ``what`` (in error messages), and move them to the normalised frame.
+
+    >>> p = prepare_problem([(0, 0), (4, 0), (4, 3), (0, 3)], 0.5, None, "a demo")
+    >>> round(p.s_n, 4), round(p.scale, 4), p.sign
+    (0.1, 5.0, 1.0)
+    """
+    return _problem(polygon, spacing, fitness, what)
 
 
 def _check_count(name: str, value: Any, low: int = 1) -> int:
@@ -110,8 +127,8 @@ def evaluate_grid(
     (normalised for the paper's scale).
     """
     model = ExactModel() if model is None else model
-    fitness = SmithFitness() if fitness is None else fitness
-    sign = objective_sign(fitness)
+    objective: Objective = SmithFitness() if fitness is None else fitness
+    sign = objective_sign(objective)
     k_count, _ = _grid_size(spacing, hp.radius)
     per_angle = max(1, len(offsets) * k_count * hp.normals.shape[-2])
     chunk = max(1, _CHUNK_ELEMENTS // per_angle)
@@ -124,7 +141,7 @@ def evaluate_grid(
             for start in range(0, len(angles), chunk):
                 theta = angles[start : start + chunk, None]
                 tl = model(hp, theta, offsets[None, :], spacing)
-                out.append(_invalid_to_worst(fitness(tl), tl.weights, sign))
+                out.append(_invalid_to_worst(objective(tl), tl.weights, sign))
                 if bar is not None:
                     bar.update(len(theta))
     finally:
@@ -148,15 +165,15 @@ def evaluate_pairs(
     gradient, the worst value where no transect crosses, chunked to bound memory).
     """
     model = ExactModel() if model is None else model
-    fitness = SmithFitness() if fitness is None else fitness
-    sign = objective_sign(fitness)
+    objective: Objective = SmithFitness() if fitness is None else fitness
+    sign = objective_sign(objective)
     k_count, _ = _grid_size(spacing, hp.radius)
     chunk = max(1, _CHUNK_ELEMENTS // max(1, k_count * hp.normals.shape[-2]))
     out = []
     with torch.no_grad():
         for start in range(0, len(angles), chunk):
             tl = model(hp, angles[start : start + chunk], offsets[start : start + chunk], spacing)
-            out.append(_invalid_to_worst(fitness(tl), tl.weights, sign))
+            out.append(_invalid_to_worst(objective(tl), tl.weights, sign))
     if not out:
         return torch.empty(0, dtype=hp.normals.dtype, device=hp.normals.device)
     return torch.cat(out) if len(out) > 1 else out[0]

@@ -9,11 +9,8 @@ import numpy as np
 import torch
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import (
-    InvalidParameterError,
-    NoTransectError,
-    as_number,
-)
+from .._validate import as_number
+from ..errors import InvalidParameterError, NoTransectError
 from ..geometry import HalfPlanes, Polygon, halfplanes
 from ..models import check_finite, check_spacing, exact_chords
 from ..scoring import Segments, as_polygon, transect_segments

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -22,7 +23,7 @@ def _kml_coords(points: NDArray[np.float64], altitude: float | None = None) -> s
     return " ".join(f"{x:.10f},{y:.10f},{altitude:.3f}" for x, y in points)
 
 
-def _area_placemark(area: NDArray[np.float64], holes: list[NDArray[np.float64]]) -> str:
+def _area_placemark(area: NDArray[np.float64], holes: Sequence[NDArray[np.float64]]) -> str:
     return (
         "<Placemark><name>Area</name><Polygon><outerBoundaryIs><LinearRing><coordinates>"
         + _kml_coords(ring_closed(ring_ccw(area)))
