@@ -4,27 +4,13 @@ from __future__ import annotations
 
 import math
 
-from .errors import InvalidParameterError
+from .errors import InvalidParameterError, as_number
 
 __all__ = ["MAX_TRANSECTS", "as_number", "check_finite", "check_positive", "check_spacing"]
 
 #: Most transects across one area that boustro plans or scores (a 10 km field at 1 cm): a
 #: smaller spacing is refused with a clear error instead of exhausting memory.
 MAX_TRANSECTS = 1_000_000
-
-
-def as_number(name: str, value: object) -> float:
-    """``float(value)``, or :class:`InvalidParameterError` ``"<name> must be a number, got ..."``.
-
-    Callers check the range themselves, with a message that states it.
-    """
-    if isinstance(value, bool):  # float(True) == 1.0: a flag is not a number
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}")
-    try:
-        detach = getattr(value, "detach", None)  # a tensor (a gradient may flow through it)
-        return float(detach() if callable(detach) else value)  # type: ignore[arg-type]
-    except (TypeError, ValueError, RuntimeError):
-        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
 
 
 def check_spacing(spacing: float, extent: float | None = None) -> float:

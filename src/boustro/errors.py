@@ -2,7 +2,8 @@
 
 Each also derives from the built-in exception a caller would naturally catch (``ValueError``
 for bad values), so both ``except boustro.BoustroError`` and ``except ValueError`` work.
-Messages say what was expected and what came.
+Messages say what was expected and what came; :func:`as_number`, the one conversion of a
+parameter to a number, raises them (the other checks are in :mod:`boustro._validate`).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ __all__ = [
     "NonConvexPolygonError",
     "PolygonFileError",
     "ProblemTooLargeError",
-    "as_number",  # noqa: F822 (served lazily by __getattr__)
+    "as_number",
 ]
 
 
@@ -53,11 +54,15 @@ class MissingDependencyError(BoustroError, ImportError):
     """An optional dependency that this operation needs is not installed."""
 
 
-def __getattr__(name: str) -> object:
-    """Lazy compatibility entry: ``as_number`` lives in :mod:`boustro._validate` (which imports
-    this module, so importing it here at load time would make a cycle)."""
-    if name == "as_number":
-        from ._validate import as_number  # declared lazy entry (no cycle at load)
+def as_number(name: str, value: object) -> float:
+    """``float(value)``, or :class:`InvalidParameterError` ``"<name> must be a number, got ..."``.
 
-        return as_number
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    Callers check the range themselves, with a message that states it.
+    """
+    if isinstance(value, bool):  # float(True) == 1.0: a flag is not a number
+        raise InvalidParameterError(f"{name} must be a number, got {value!r}")
+    try:
+        detach = getattr(value, "detach", None)  # a tensor (a gradient may flow through it)
+        return float(detach() if callable(detach) else value)  # type: ignore[arg-type]
+    except (TypeError, ValueError, RuntimeError):
+        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
