@@ -19,12 +19,19 @@ from .base import (
 from .exact import ChordBounds, ExactModel, chord_bounds, chords_at, exact_chords, line_chords
 from .paper import (
     _BAND_MIN_WORK,
-    _TARGET,
     MAX_POINTS_PER_TRANSECT,
     Method,
     PaperModel,
     Trapezoid,
     _as_temperature,
+    paper_lengths,
+    paper_line_lengths,
+    paper_weights,
+    trapezoid_scale,
+)
+from .paper_band import _Band, _band, _band_integrand, _band_tau, _Group, _group_points
+from .paper_integral import (
+    _TARGET,
     _chunks,
     _full_grads,
     _full_lengths,
@@ -32,12 +39,7 @@ from .paper import (
     _sigmoid_integrand,
     _SigmoidIntegral,
     _trapezoid_weights,
-    paper_lengths,
-    paper_line_lengths,
-    paper_weights,
-    trapezoid_scale,
 )
-from .paper_band import _Band, _band, _band_integrand, _band_tau, _Group, _group_points
 from .smooth import SmoothModel, smooth_lengths
 
 __all__ = [

@@ -198,7 +198,10 @@ def _group_points(
     n_points = t.shape[-1]
     p = g.start[:, None] + torch.arange(g.width, device=t.device)
     valid = p < g.stop[:, None]
-    p = (p.clamp_(max=n_points - 1) + grid[g.item, None] * n_points).view(-1)
+    p = p.clamp_(max=n_points - 1)
+    if len(t) > 1:  # one grid per block: its row of the flattened points
+        p = p + grid[g.item, None] * n_points
+    p = p.view(-1)
     tp = t.reshape(-1).index_select(0, p).view(valid.shape)
     wp = torch.where(valid, w.reshape(-1).index_select(0, p).view(valid.shape), 0.0)
     return lhs[g.item].gather(1, g.edges), slope[g.item].gather(1, g.edges), tp, wp
