@@ -12,13 +12,24 @@ from .._validate import as_number
 from ..errors import InvalidParameterError
 from ..geometry import HalfPlanes
 from .base import PAPER_WINDOW, TransectLengths, _prepare, _window_mask, transect_positions
-from .paper_band import (
+from .paper_band import (  # noqa: F401 (the private names are re-exported for old imports)
+    _Band,
+    _band,
+    _band_integrand,
+    _band_tau,
+    _Group,
+    _group_points,
     band_tau,
 )
-from .paper_integral import (
+from .paper_integral import (  # noqa: F401 (the private names are re-exported for old imports)
+    _TARGET,
+    _chunks,
+    _full_grads,
     _full_lengths,
     _Grids,
+    _items,
     _plan,
+    _sigmoid_integrand,
     _SigmoidIntegral,
     _trapezoid_weights,
 )
