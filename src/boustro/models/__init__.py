@@ -19,24 +19,26 @@ from .base import (
 from .exact import ChordBounds, ExactModel, chord_bounds, chords_at, exact_chords, line_chords
 from .paper import (
     _BAND_MIN_WORK,
-    _TARGET,
     MAX_POINTS_PER_TRANSECT,
+    Method,
     PaperModel,
+    Trapezoid,
     _as_temperature,
-    _Band,
-    _band,
-    _band_integrand,
-    _band_tau,
+    paper_lengths,
+    paper_line_lengths,
+    paper_weights,
+    trapezoid_scale,
+)
+from .paper_band import _Band, _band, _band_integrand, _band_tau, _Group, _group_points
+from .paper_integral import (
+    _TARGET,
     _chunks,
     _full_grads,
     _full_lengths,
-    _Group,
-    _group_points,
     _items,
     _sigmoid_integrand,
     _SigmoidIntegral,
     _trapezoid_weights,
-    paper_lengths,
 )
 from .smooth import SmoothModel, smooth_lengths
 
@@ -48,10 +50,12 @@ __all__ = [
     "ChordBounds",
     "Chords",
     "ExactModel",
+    "Method",
     "PaperModel",
     "SmoothModel",
     "TransectLengths",
     "TransectModel",
+    "Trapezoid",
     "check_finite",
     "check_spacing",
     "chord_bounds",
@@ -60,6 +64,9 @@ __all__ = [
     "grid_size",
     "line_chords",
     "paper_lengths",
+    "paper_line_lengths",
+    "paper_weights",
     "smooth_lengths",
     "transect_positions",
+    "trapezoid_scale",
 ]
