@@ -122,8 +122,9 @@ class _SigmoidIntegral(torch.autograd.Function):
     ) -> torch.Tensor:
         g = _as_grids(t, dx, grid, len(lhs))
         ctx.save_for_backward(lhs, slope, temp, *g)
-        plan = _plan(lhs, slope, temp, g) if band is True and lhs.numel() else band
-        ctx.plan = plan = plan if isinstance(plan, _Band) else None
+        chosen = _plan(lhs, slope, temp, g) if band is True and lhs.numel() else band
+        plan: _Band | None = chosen if isinstance(chosen, _Band) else None
+        ctx.plan = plan
         if plan is None:
             return _full_lengths(lhs, slope, temp, g, slice(None))
         n, k, _ = lhs.shape
