@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
 from numpy.typing import ArrayLike
 
+from ..errors import InvalidParameterError
 from ..io.read import LONLAT, Area
 from ..objectives.smith import SmithFitness
 from ..sensors import SensorSpacing
@@ -38,6 +40,7 @@ def plan_area(
     holes: Sequence[ArrayLike] = (),
     decompose: bool | None = None,
     sweep: float | None = None,
+    angle: float | None = None,
 ) -> Mission:
     """Plan a survey area end to end: project, optimise, build the path, map it back.
 
@@ -71,6 +74,11 @@ def plan_area(
             Given, it also turns off the convex-hull rule for nearly convex areas.
         sweep: sweep direction of the decomposition, degrees in the plan frame (default:
             chosen by :func:`boustro.plan.choose_sweep`).
+        angle: a fixed transect angle, radians counter-clockwise from +x in the plan frame
+            (taken modulo pi); only the offset is then optimised for ``fitness``
+            (:func:`boustro.optimize.fixed_angle.optimize_offset`, its way in
+            ``Mission.optimum.method``), and a concave area is planned as one grid (no
+            decomposition). Not with ``method``, ``decompose=True`` or ``sweep``.
 
     Raises:
         InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError.
@@ -81,6 +89,7 @@ def plan_area(
         >>> mission.plan.stats.n_transects, round(mission.bearing, 2)
         (19, 68.43)
     """
+    angle = _check_fixed_angle(angle, method=method, decompose=decompose, sweep=sweep)
     area = as_area(area, crs, holes)
     sensor = Sensor(*sensor_spacing(spacing))
     frame = project(area, sensor, hull_tolerance, decompose, start)
@@ -95,6 +104,7 @@ def plan_area(
             speed=speed,
             turn_time=turn_time,
             check_coverage=check_coverage,
+            angle=angle,
         )
     else:
         planned = plan_concave(
@@ -109,5 +119,31 @@ def plan_area(
             check_coverage=check_coverage,
             decompose=decompose,
             sweep=sweep,
+            angle=angle,
         )
     return map_back(frame, planned, altitude=altitude, turnaround=turnaround)
+
+
+def _check_fixed_angle(
+    angle: Any, *, method: str | None, decompose: bool | None, sweep: float | None
+) -> float | None:
+    """A fixed angle checked (finite, radians) against the options it excludes."""
+    if angle is None:
+        return None
+    try:
+        value = float(angle)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"angle must be a number (radians), got {angle!r}") from None
+    if not math.isfinite(value):
+        raise InvalidParameterError(f"angle must be a finite number (radians), got {angle!r}")
+    for given, what in (
+        (
+            method is not None,
+            "a method (the offset at a fixed angle is found exactly or by a dense offset scan)",
+        ),
+        (decompose is True, "decompose=True (a fixed angle plans one grid over the whole area)"),
+        (sweep is not None, "a sweep (a fixed angle plans one grid over the whole area)"),
+    ):
+        if given:
+            raise InvalidParameterError(f"a fixed angle does not take {what}")
+    return value
