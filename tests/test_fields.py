@@ -288,3 +288,27 @@ def test_fields_with_a_fixed_angle(collection, capsys):
     out = json.loads(_plan([str(collection), "--json", "--angle", "45"], capsys))
     assert [o["angle_deg"] for o in out] == pytest.approx([45.0, 45.0])
     assert [o["method"] for o in out] == ["exact-offset", "region-offset-grid"]
+
+
+def test_kml_multigeometry_parts_and_duplicate_names(tmp_path, capsys):
+    poly = "<Polygon><outerBoundaryIs><LinearRing><coordinates>{}</coordinates></LinearRing>"
+    poly += "</outerBoundaryIs></Polygon>"
+    path = tmp_path / "dup.kml"
+    path.write_text(
+        '<kml xmlns="http://www.opengis.net/kml/2.2"><Document>'
+        "<Placemark><name>Farm</name><MultiGeometry>"
+        + poly.format(_coords(NORTH))
+        + poly.format(_coords(SOUTH))
+        + "</MultiGeometry></Placemark><Placemark><name>Farm part 1</name>"
+        + poly.format(_coords(SOUTH))
+        + "</Placemark><Placemark>"
+        + poly.format(_coords(NORTH))
+        + "</Placemark></Document></kml>"
+    )
+    areas = read_areas(path)
+    assert [a.name for a in areas] == ["Farm part 1", "Farm part 2", "Farm part 1", "field 4"]
+    assert main(["plan", str(path), "--spacing", "10", "--field", "Farm part 1"]) == 2
+    err = capsys.readouterr().err
+    assert "2 fields have that name" in err and err.count("\n") == 1
+    out = json.loads(_plan([str(path), "--field", "3", "--json"], capsys))
+    assert out["name"] == "Farm part 1" and out["area_m2"] > 20000  # the southern one

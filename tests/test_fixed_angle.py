@@ -14,6 +14,7 @@ from boustro.cli import main
 from boustro.errors import InvalidParameterError
 from boustro.geometry import Polygon, halfplanes
 from boustro.geometry.region import Region
+from boustro.io import embedded_field
 from boustro.mission import plan_area
 from boustro.objectives import FewestTransects, SmithFitness
 from boustro.optimize import evaluate_grid
@@ -126,3 +127,25 @@ def test_cli_angle_is_honoured_and_bad_values_refused(tmp_path, capsys):
         assert exc.value.code == 2
     assert main([*args, "--angle", "10", "--decompose"]) == 2
     assert "fixed angle" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("bearing", [0.0, 30.0, 95.5, 179.0])
+def test_bearing_is_the_reported_bearing(bearing):
+    lonlat = plan_area(embedded_field(), 10.0, bearing=bearing)
+    assert (lonlat.bearing - bearing + 90) % 180 - 90 == pytest.approx(0.0, abs=1e-6)
+    assert lonlat.optimum.method == "exact-offset"
+    planar = plan_area(L_SHAPE, 4.0, crs=None, bearing=bearing)
+    assert (planar.bearing - bearing + 90) % 180 - 90 == pytest.approx(0.0, abs=1e-9)
+    assert planar.summary()["angle_deg"] == pytest.approx((90.0 - bearing) % 180.0)
+    with pytest.raises(InvalidParameterError, match="not both"):
+        plan_area(L_SHAPE, 4.0, crs=None, bearing=bearing, angle=0.1)
+    with pytest.raises(InvalidParameterError, match="finite"):
+        plan_area(L_SHAPE, 4.0, crs=None, bearing=math.nan)
+
+
+def test_cli_bearing(capsys):
+    assert main(["-q", "plan", "--bearing", "120", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["bearing_deg"] == pytest.approx(120.0, abs=1e-6)
+    with pytest.raises(SystemExit) as exc:
+        main(["plan", "--bearing", "10", "--angle", "10"])
+    assert exc.value.code == 2

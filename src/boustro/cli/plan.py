@@ -190,7 +190,8 @@ def _add_optimiser(p: argparse.ArgumentParser) -> None:
         "or fewest-transects (fewest lanes, i.e. turns, for full coverage: the minimum-width "
         "direction); the global method solves each exactly",
     )
-    opt.add_argument(
+    fixed = opt.add_mutually_exclusive_group()
+    fixed.add_argument(
         "--angle",
         type=finite_float,
         metavar="DEG",
@@ -199,6 +200,14 @@ def _add_optimiser(p: argparse.ArgumentParser) -> None:
         "objective (exactly for a convex area, by a dense offset scan otherwise; --json's "
         "method says which) and a concave area is planned as one grid. Not with --method, "
         "--decompose or --sweep",
+    )
+    fixed.add_argument(
+        "--bearing",
+        type=finite_float,
+        metavar="DEG",
+        help="as --angle, the direction given as a bearing: degrees clockwise from true north "
+        "(grid north for planar input), modulo 180, as bearing_deg in --json; in the plan "
+        "frame angle = 90 - bearing + the azimuth of grid north at the area's centre",
     )
 
 
@@ -398,6 +407,7 @@ def _plan_one(args: argparse.Namespace, area: Area) -> Mission:
         decompose=args.decompose,
         sweep=args.sweep,
         angle=None if args.angle is None else math.radians(args.angle),
+        bearing=args.bearing,
     )
 
 

@@ -13,7 +13,7 @@ from ..io.read import LONLAT, Area
 from ..objectives.smith import SmithFitness
 from ..sensors import SensorSpacing
 from .defaults import DEFAULT_HULL_TOLERANCE
-from .map_back import map_back
+from .map_back import angle_for_bearing, map_back
 from .project import Sensor, as_area, project, sensor_spacing
 from .steps import plan_concave, plan_convex
 from .types import Mission
@@ -41,6 +41,7 @@ def plan_area(
     decompose: bool | None = None,
     sweep: float | None = None,
     angle: float | None = None,
+    bearing: float | None = None,
 ) -> Mission:
     """Plan a survey area end to end: project, optimise, build the path, map it back.
 
@@ -79,6 +80,10 @@ def plan_area(
             (:func:`boustro.optimize.fixed_angle.optimize_offset`, its way in
             ``Mission.optimum.method``), and a concave area is planned as one grid (no
             decomposition). Not with ``method``, ``decompose=True`` or ``sweep``.
+        bearing: a fixed transect direction as a bearing instead of ``angle``: degrees clockwise
+            from true north (grid north, +y, for planar input), turned into the plan frame's
+            angle at the area's centre (so ``Mission.bearing`` reports it back); as ``angle``
+            otherwise.
 
     Raises:
         InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError.
@@ -89,10 +94,15 @@ def plan_area(
         >>> mission.plan.stats.n_transects, round(mission.bearing, 2)
         (19, 68.43)
     """
-    angle = _check_fixed_angle(angle, method=method, decompose=decompose, sweep=sweep)
+    if angle is not None and bearing is not None:
+        raise InvalidParameterError("give a fixed angle or a bearing, not both")
+    fixed = _check_fixed_angle(
+        angle if bearing is None else bearing, method=method, decompose=decompose, sweep=sweep
+    )
     area = as_area(area, crs, holes)
     sensor = Sensor(*sensor_spacing(spacing))
     frame = project(area, sensor, hull_tolerance, decompose, start)
+    angle = fixed if bearing is None or fixed is None else angle_for_bearing(frame, fixed)
     if frame.region is None:
         planned = plan_convex(
             frame,
@@ -133,9 +143,9 @@ def _check_fixed_angle(
     try:
         value = float(angle)
     except (TypeError, ValueError):
-        raise InvalidParameterError(f"angle must be a number (radians), got {angle!r}") from None
+        raise InvalidParameterError(f"angle must be a number, got {angle!r}") from None
     if not math.isfinite(value):
-        raise InvalidParameterError(f"angle must be a finite number (radians), got {angle!r}")
+        raise InvalidParameterError(f"angle must be a finite number, got {angle!r}")
     for given, what in (
         (
             method is not None,
