@@ -10,8 +10,8 @@ from typing import Any
 
 from .. import objectives
 from ..errors import InvalidParameterError
-from ..io import Area, embedded_field, read_area
-from ..io.formats import FORMATS, atomic_write, format_for, render
+from ..io import Area, embedded_field, read_areas
+from ..io.formats import FORMATS, atomic_write, format_for
 from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission, plan_area
 from ..plot.plan import plot_plan
 from ..sensors import Camera, Swath
@@ -23,6 +23,8 @@ from ._common import (
     print_json,
     print_table,
 )
+from ._fields import mission_files, output_files, pick_fields, plan_fields
+from ._plan_rows import rows as _rows
 
 
 #: Objectives by name on the command line: the library's registry
@@ -48,11 +50,22 @@ EMBEDDED_SPACING = 10.0
 
 DETAILS = """\
 area files:
-  GeoJSON (RFC 7946: Polygon, MultiPolygon, Feature, FeatureCollection: first polygon), a JSON
-  list of [x, y] pairs, KML (first Polygon placemark), WKT/EWKT (POLYGON, MULTIPOLYGON).
+  GeoJSON (RFC 7946: Polygon, MultiPolygon, Feature, FeatureCollection), a JSON list of [x, y]
+  pairs, KML, GML, WKT/EWKT (POLYGON, MULTIPOLYGON, GEOMETRYCOLLECTION).
   Coordinates are longitude, latitude (WGS 84) unless the file or --crs says otherwise; lon/lat
   areas are planned in the UTM zone of the area and written back in lon/lat. Without AREA, an
   embedded 3.6 ha field in the Netherlands (Fields2Cover, BSD-3-Clause) is planned at 10 m.
+
+several fields in one file:
+  every polygon is a field (each feature, placemark or GML parcel; each part of a multi-part
+  geometry), named by its feature's name or id, its placemark's <name>, else 'field N'. Every
+  field is planned (--field NAME|INDEX picks one; INDEX counts from 1): --json prints a list,
+  one object per field; a GeoJSON mission holds every field (a 'field' property on each
+  feature), KML a Folder per field, GPX a route and a track per field, CSV a 'field' column;
+  other formats (.plan, .waypoints) and --plot write one file per field, FILE-<name>.ext (the
+  name made filesystem-safe: runs of characters other than letters, digits, '.', '_', '-'
+  become '_'). All fields are planned before anything is written; if any fails, nothing is
+  written and one line names each failed field (exit status 2).
 
 concave areas and holes:
   holes (GeoJSON interior rings, KML innerBoundaryIs, WKT inner rings) are obstacles: no path
@@ -111,7 +124,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "area",
         nargs="?",
         metavar="AREA",
-        help="area file (GeoJSON, JSON list, KML, WKT); default: the embedded example field",
+        help="area file (GeoJSON, JSON list, KML, GML, WKT); every field in it is planned; "
+        "default: the embedded example field",
+    )
+    p.add_argument(
+        "--field",
+        metavar="NAME|INDEX",
+        help="plan only this field of AREA: its name, else its index in the file (from 1)",
     )
     p.add_argument(
         "--crs",
@@ -170,6 +189,25 @@ def _add_optimiser(p: argparse.ArgumentParser) -> None:
         help="what the optimiser seeks: smith (Eq. 1 of the paper, maximised; default), "
         "or fewest-transects (fewest lanes, i.e. turns, for full coverage: the minimum-width "
         "direction); the global method solves each exactly",
+    )
+    fixed = opt.add_mutually_exclusive_group()
+    fixed.add_argument(
+        "--angle",
+        type=finite_float,
+        metavar="DEG",
+        help="plan at this fixed transect angle, degrees counter-clockwise from east (+x) in the "
+        "plan frame, modulo 180 (as angle_deg in --json); only the offset is optimised for the "
+        "objective (exactly for a convex area, by a dense offset scan otherwise; --json's "
+        "method says which) and a concave area is planned as one grid. Not with --method, "
+        "--decompose or --sweep",
+    )
+    fixed.add_argument(
+        "--bearing",
+        type=finite_float,
+        metavar="DEG",
+        help="as --angle, the direction given as a bearing: degrees clockwise from true north "
+        "(grid north for planar input), modulo 180, as bearing_deg in --json; in the plan "
+        "frame angle = 90 - bearing + the azimuth of grid north at the area's centre",
     )
 
 
@@ -242,7 +280,11 @@ def _add_output(p: argparse.ArgumentParser) -> None:
         "--format", choices=tuple(FORMATS), help="format of --out (default: from its extension)"
     )
     out.add_argument("--plot", metavar="FILE", help="draw the plan to an image (e.g. plan.png)")
-    out.add_argument("--json", action="store_true", help="print one JSON object")
+    out.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON object (a list of them, one per field, for several fields)",
+    )
 
 
 # -- argument types ----------------------------------------------------------------------------
@@ -311,15 +353,16 @@ def _spacing(args: argparse.Namespace, embedded: bool) -> Any:
     raise InvalidParameterError("give the spacing: --spacing METRES, --camera ... or --swath ...")
 
 
-def _load(args: argparse.Namespace) -> Area:
+def _load(args: argparse.Namespace) -> list[Area]:
     if args.area is None:
-        area = embedded_field()
+        areas = [embedded_field()]
         if args.crs is not None:
             raise InvalidParameterError(
                 "--crs applies to an AREA file; the embedded field is lon/lat"
             )
-        return area
-    return read_area(args.area, crs=args.crs)
+    else:
+        areas = read_areas(args.area, crs=args.crs)
+    return pick_fields(areas, args.field)
 
 
 def _plot_bytes(mission: Mission, path: str) -> bytes:
@@ -346,90 +389,10 @@ def _plot_bytes(mission: Mission, path: str) -> bytes:
         plt.close(fig)
 
 
-def _rows(mission: Mission, written: list[str]) -> list[tuple[str, str]]:
-    s, opt = mission.stats, mission.optimum
-    proj = mission.projection
-    where = mission.area.source
-    crs = "planar coordinates" if proj.planar else f"{mission.crs}"
-    if proj.geographic:
-        crs += f", planned in {proj.plan_crs}"
-    rows = [
-        ("area", f"{mission.name or '(unnamed)'} ({where}), {crs}"),
-        ("area size", f"{s.area:.1f} m2 ({s.area / 1e4:.4g} ha)"),
-        (
-            "spacing",
-            f"{mission.spacing:.4g} m" + (f" ({mission.sensor})" if mission.sensor else ""),
-        ),
-        (
-            "transects",
-            f"angle {math.degrees(mission.plan.angle):.4f} deg (bearing {mission.bearing:.2f} "
-            f"deg from north), offset {mission.plan.offset:.4g} m",
-        ),
-        ("optimiser", f"{opt.method}, fitness {opt.fitness:.6f} ({opt.evaluations} evaluations)"),
-        ("count", f"{s.n_transects} transects, {s.n_turns} turns ({mission.plan.layout} layout)"),
-        ("transect length", f"{s.transect_length:.1f} m"),
-        ("path length", f"{s.path_length:.1f} m"),
-    ]
-    if mission.coverage is not None:
-        rows.append(
-            (
-                "covered",
-                f"{100 * mission.coverage.covered_share:.4f}% of the area "
-                f"(overlap {100 * mission.coverage.overlap_share:.2f}%)",
-            )
-        )
-    if s.duration is not None:
-        rows.append(
-            (
-                "duration",
-                f"{s.duration:.0f} s ({s.duration / 60:.1f} min) at {s.speed:g} m/s, "
-                f"{s.turn_time:g} s per turn",
-            )
-        )
-    region = mission.plan.region
-    if region is not None:
-        shape = "concave" if not region.shell.is_convex else "convex"
-        rows.append(
-            (
-                "area shape",
-                f"{shape}, {region.n_holes} hole(s), "
-                + (
-                    f"{s.n_cells} cells (boustrophedon decomposition)"
-                    if s.n_cells > 1
-                    else "one angle, lines cut at the boundary"
-                ),
-            )
-        )
-        if s.n_cells > 1:
-            angles = ", ".join(f"{math.degrees(c.angle):.1f}" for c in mission.plan.cells)
-            rows.append(("cell angles", f"{angles} deg"))
-        if s.hole_pass_length > 0:
-            rows.append(("hole passes", f"{s.hole_pass_length:.1f} m around holes that cut lanes"))
-        rows += [("note", note) for note in mission.plan.notes]
-    if mission.hull_depth > 0:
-        rows.append(
-            (
-                "note",
-                f"the area is not convex; its convex hull, planned instead, reaches at most "
-                f"{mission.hull_depth:.2f} m beyond it",
-            )
-        )
-    if mission.altitude is not None:
-        rows.append(("altitude", f"{mission.altitude:g} m above take-off"))
-    rows += [("written", name) for name in written]
-    return rows
-
-
-def run(args: argparse.Namespace) -> int:
-    # Refuse unwritable outputs before any work (an error writes nothing).
-    if args.out is not None:
-        check_output_path(args.out, "--out")
-    if args.plot is not None:
-        check_plot_target(args.plot)
-    area = _load(args)
+def _plan_one(args: argparse.Namespace, area: Area) -> Mission:
     spacing = _spacing(args, embedded=args.area is None)
     fitness = cli_objectives()[args.objective]()
-    mission = plan_area(
+    return plan_area(
         area,
         spacing,
         method=args.method,
@@ -443,23 +406,49 @@ def run(args: argparse.Namespace) -> int:
         layout=args.layout,
         decompose=args.decompose,
         sweep=args.sweep,
+        angle=None if args.angle is None else math.radians(args.angle),
+        bearing=args.bearing,
     )
+
+
+def run(args: argparse.Namespace) -> int:
+    # Refuse unwritable outputs before any work (an error writes nothing).
+    if args.out is not None:
+        check_output_path(args.out, "--out")
+    if args.plot is not None:
+        check_plot_target(args.plot)
+    if args.format is not None and args.out is None:
+        raise InvalidParameterError("--format needs --out FILE")
+    areas = _load(args)
+    _spacing(args, embedded=args.area is None)  # a missing spacing: one error, not one per field
+    missions = plan_fields(areas, lambda area: _plan_one(args, area))
     # Render everything before touching any file, so that an error writes nothing.
-    outputs: list[tuple[str, bytes | str, str]] = []
+    outputs: list[tuple[str, bytes | str, str, int | None]] = []
     if args.out is not None:
         fmt = format_for(args.out, args.format)
-        outputs.append((args.out, render(mission, fmt), fmt))
-    elif args.format is not None:
-        raise InvalidParameterError("--format needs --out FILE")
+        outputs += [(p, d, fmt, i) for p, d, i in mission_files(missions, args.out, fmt)]
     if args.plot is not None:
-        outputs.append((args.plot, _plot_bytes(mission, args.plot), "plot"))
-    for path, data, _ in outputs:
+        plots = output_files(
+            missions,
+            [m.name for m in missions],
+            args.plot,
+            lambda ms: None,  # one image per field
+            lambda m: _plot_bytes(m, args.plot),
+        )
+        outputs += [(p, d, "plot", i) for p, d, i in plots]
+    for path, data, _, _ in outputs:
         atomic_write(path, data)
-    written = [f"{path} ({fmt})" for path, _, fmt in outputs]
+    results = []
+    for k, mission in enumerate(missions):
+        mine = [(path, fmt) for path, _, fmt, i in outputs if i is None or i == k]
+        if args.json:
+            out = mission.summary()
+            out["written"] = [path for path, _ in mine]
+            results.append(out)
+        else:
+            if k:
+                print()
+            print_table(_rows(mission, [f"{path} ({fmt})" for path, fmt in mine]))
     if args.json:
-        out = mission.summary()
-        out["written"] = [path for path, _, _ in outputs]
-        print_json(out)
-    else:
-        print_table(_rows(mission, written))
+        print_json(results[0] if len(results) == 1 else results)
     return 0

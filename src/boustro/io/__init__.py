@@ -13,9 +13,11 @@ from .read import (
     area_from_kml,
     area_from_text,
     area_from_wkt,
+    areas_from_text,
     embedded_field,
     polygon_from_json,
     read_area,
+    read_areas,
     read_polygon,
 )
 
@@ -29,9 +31,11 @@ __all__ = [
     "area_from_kml",
     "area_from_text",
     "area_from_wkt",
+    "areas_from_text",
     "atomic_write",
     "embedded_field",
     "polygon_from_json",
     "read_area",
+    "read_areas",
     "read_polygon",
 ]

@@ -14,6 +14,7 @@ from ..errors import PolygonFileError
 from .area import LONLAT, Area
 from .area import close_ring as _close_open
 from .area import crs_name as _crs_name
+from .read_fields import fields_from_text
 from .read_geojson import (
     _feature_name,
     _from_geometry,
@@ -40,9 +41,11 @@ __all__ = [
     "area_from_kml",
     "area_from_text",
     "area_from_wkt",
+    "areas_from_text",
     "embedded_field",
     "polygon_from_json",
     "read_area",
+    "read_areas",
     "read_polygon",
 ]
 
@@ -56,14 +59,18 @@ PAPER_SPACING = 0.5
 EMBEDDED_FIELD = "fields2cover_test_field.json"
 
 
+def _sniff(text: str) -> str:
+    head = text.lstrip()[:1]
+    return "kml" if head == "<" else "json" if head in ("{", "[") else "wkt"
+
+
 def area_from_text(
     text: str, where: str = "input", crs: str | None = None, kind: str | None = None
 ) -> Area:
     """An :class:`Area` from file content; ``kind`` is ``json``, ``kml`` or ``wkt`` (sniffed
     from the first character when ``None``: ``<`` XML, ``{`` or ``[`` JSON, else WKT)."""
     if kind is None:
-        head = text.lstrip()[:1]
-        kind = "kml" if head == "<" else "json" if head in ("{", "[") else "wkt"
+        kind = _sniff(text)
     if kind == "json":
         try:
             data = json.loads(text)
@@ -124,6 +131,51 @@ def read_area(path: str | os.PathLike[str], crs: str | None = None) -> Area:
         stem = os.path.splitext(os.path.basename(name))[0]
         area = Area(area.ring, area.crs, stem, area.source, area.holes)
     return area
+
+
+def areas_from_text(
+    text: str, where: str = "input", crs: str | None = None, kind: str | None = None
+) -> list[Area]:
+    """Every field of a file's content (:mod:`boustro.io.read_fields`), in file order; ``kind``
+    as in :func:`area_from_text`. Several fields: unnamed ones are ``field N`` (N from 1); one
+    field: ``[area_from_text(...)]``.
+
+    Raises:
+        PolygonFileError: malformed content, or no polygon in it.
+    """
+    kind = _sniff(text) if kind is None else kind
+    fields = fields_from_text(text, where, crs, kind)
+    if len(fields) <= 1:  # one field (or an error): read as one area
+        return [area_from_text(text, where, crs, kind)]
+    return [
+        Area(a.ring, a.crs, name or f"field {i}", a.source, a.holes)
+        for i, (name, a) in enumerate(fields, start=1)
+    ]
+
+
+def read_areas(path: str | os.PathLike[str], crs: str | None = None) -> list[Area]:
+    """Read every field of an area file (see :mod:`boustro.io.read_fields`): each polygon of a
+    FeatureCollection, MultiPolygon, KML, GML or WKT MULTIPOLYGON/GEOMETRYCOLLECTION as an
+    :class:`Area` with its name, in file order. A file with one field gives
+    ``[read_area(path, crs)]``.
+
+    Raises:
+        PolygonFileError: missing or unreadable file, malformed content, no polygon.
+
+    Example:
+        >>> from importlib import resources
+        >>> [a.name for a in read_areas(resources.files("boustro") / "data" / EMBEDDED_FIELD)]
+        ['test parcel']
+    """
+    name = os.fspath(path)
+    try:
+        with open(name, encoding="utf-8-sig") as fh:
+            text = fh.read()
+    except (OSError, UnicodeDecodeError):
+        return [read_area(path, crs)]  # its one-line error
+    kind = _AREA_KINDS.get(os.path.splitext(name)[1].lower()) or _sniff(text)
+    areas = areas_from_text(text, name, crs, kind)
+    return [read_area(path, crs)] if len(areas) == 1 else areas
 
 
 def embedded_field() -> Area:

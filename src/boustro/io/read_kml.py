@@ -12,7 +12,7 @@ from .area import LONLAT, Area
 from .area import close_ring as _close_open
 from .area import crs_name as _crs_name
 
-__all__ = ["area_from_kml"]
+__all__ = ["area_from_kml", "xml_polygon_area"]
 
 
 def _local(tag: str) -> str:
@@ -73,6 +73,20 @@ def area_from_kml(text: str, where: str = "input", crs: str | None = None) -> Ar
         raise PolygonFileError(
             f"{where}: no Polygon in the file (expected a KML Polygon placemark)"
         )
+    name = ""
+    for placemark in (e for e in root.iter() if _local(e.tag) == "Placemark"):
+        if any(e is polygon for e in placemark.iter()):
+            found = next((c for c in placemark if _local(c.tag) == "name"), None)
+            name = (found.text or "").strip() if found is not None else ""
+            break
+    return xml_polygon_area(polygon, where, crs, name, polygon.get("srsName"))
+
+
+def xml_polygon_area(
+    polygon: ElementTree.Element, where: str, crs: str | None, name: str, srs: str | None
+) -> Area:
+    """The :class:`Area` of one KML/GML ``Polygon`` element; ``srs``: the GML ``srsName`` that
+    applies to it (its own or an enclosing geometry's), if any."""
     outer = [e for e in polygon if _local(e.tag) in ("outerBoundaryIs", "exterior")]
     inner = [e for e in polygon if _local(e.tag) in ("innerBoundaryIs", "interior")]
     if not outer:
@@ -84,13 +98,6 @@ def area_from_kml(text: str, where: str = "input", crs: str | None = None) -> Ar
         rings = [e for e in element.iter() if _local(e.tag) == "LinearRing"] or [element]
         for r in rings:
             holes.append(_close_open(_xml_coordinates(r, where), f"{where}: hole {len(holes)}"))
-    name = ""
-    for placemark in (e for e in root.iter() if _local(e.tag) == "Placemark"):
-        if any(e is polygon for e in placemark.iter()):
-            found = next((c for c in placemark if _local(c.tag) == "name"), None)
-            name = (found.text or "").strip() if found is not None else ""
-            break
-    srs = polygon.get("srsName")
     file_crs = _crs_name(srs) if srs else None
     if srs and _north_first(srs):  # a URN/URI srsName: the CRS's own axis order, lat first
         ring, holes = ring[:, ::-1], [h[:, ::-1] for h in holes]

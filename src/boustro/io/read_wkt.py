@@ -11,7 +11,7 @@ from ..errors import PolygonFileError
 from .area import LONLAT, Area
 from .area import close_ring as _close_open
 
-__all__ = ["area_from_wkt"]
+__all__ = ["area_from_wkt", "wkt_rings"]
 
 
 _WKT_TYPES = frozenset(
@@ -60,6 +60,30 @@ def _wkt_nested(text: str, where: str) -> list[Any]:
     return out
 
 
+def wkt_rings(nested: list[Any], where: str) -> list[np.ndarray]:
+    """The rings of one parsed WKT polygon (``[[x y, ...], ...]``), closed rings opened; the
+    first is the shell, the others holes."""
+    rings = [r for r in nested if isinstance(r, list)]
+    if not rings or len(rings) != len(nested):
+        raise PolygonFileError(f"{where}: a WKT POLYGON needs rings in parentheses")
+    parsed = []
+    for r_index, ring_items in enumerate(rings):
+        what = where if r_index == 0 else f"{where}: hole {r_index - 1}"
+        rows = []
+        for i, pos in enumerate(ring_items):
+            if not isinstance(pos, str):
+                raise PolygonFileError(f"{what}: position {i} of the ring is nested, not 'x y'")
+            parts = pos.split()
+            try:
+                rows.append((float(parts[0]), float(parts[1])))
+            except (ValueError, IndexError):
+                raise PolygonFileError(
+                    f"{what}: position {i} must be two numbers 'x y', got {pos!r:.60}"
+                ) from None
+        parsed.append(_close_open(np.asarray(rows, dtype=np.float64).reshape(-1, 2), what))
+    return parsed
+
+
 def area_from_wkt(text: str, where: str = "input", crs: str | None = None) -> Area:
     """An :class:`Area` from WKT or EWKT: ``POLYGON``, ``POLYGON Z``, ``MULTIPOLYGON`` (first);
     rings after the first are holes."""
@@ -83,23 +107,6 @@ def area_from_wkt(text: str, where: str = "input", crs: str | None = None) -> Ar
         if not nested or not isinstance(nested[0], list):
             raise PolygonFileError(f"{where}: empty MULTIPOLYGON")
         nested = nested[0]
-    rings = [r for r in nested if isinstance(r, list)]
-    if not rings or len(rings) != len(nested):
-        raise PolygonFileError(f"{where}: a WKT POLYGON needs rings in parentheses")
-    parsed = []
-    for r_index, ring_items in enumerate(rings):
-        what = where if r_index == 0 else f"{where}: hole {r_index - 1}"
-        rows = []
-        for i, pos in enumerate(ring_items):
-            if not isinstance(pos, str):
-                raise PolygonFileError(f"{what}: position {i} of the ring is nested, not 'x y'")
-            parts = pos.split()
-            try:
-                rows.append((float(parts[0]), float(parts[1])))
-            except (ValueError, IndexError):
-                raise PolygonFileError(
-                    f"{what}: position {i} must be two numbers 'x y', got {pos!r:.60}"
-                ) from None
-        parsed.append(_close_open(np.asarray(rows, dtype=np.float64).reshape(-1, 2), what))
+    parsed = wkt_rings(nested, where)
     file_crs = f"EPSG:{srid}" if srid else None
     return Area(parsed[0], crs or file_crs or LONLAT, "", where, tuple(parsed[1:]))

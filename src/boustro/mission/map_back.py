@@ -13,19 +13,39 @@ from .project import Frame
 from .steps import Planned, main_cell
 from .types import Mission
 
-__all__ = ["map_back"]
+__all__ = ["angle_for_bearing", "map_back"]
 
 
 def _bearing(frame: Frame, plan: Plan) -> float:
     """The transects' bearing, degrees clockwise from north (from the plan frame's y axis)."""
-    u = np.array([math.cos(plan.angle), math.sin(plan.angle)])
+    if frame.proj.planar:
+        return _azimuth(frame, np.zeros(2), plan.angle)
+    main = plan.cells[main_cell(plan)].polygon if frame.region is not None else frame.poly
+    return _azimuth(frame, main.centre, plan.angle)
+
+
+def _azimuth(frame: Frame, c: np.ndarray, angle: float) -> float:
+    """The bearing of direction ``angle`` (plan frame) at ``c``, degrees in ``[0, 180)``."""
+    u = np.array([math.cos(angle), math.sin(angle)])
     if frame.proj.planar:
         return math.degrees(math.atan2(u[0], u[1])) % 180.0
-    main = plan.cells[main_cell(plan)].polygon if frame.region is not None else frame.poly
-    c = main.centre
     a, b = frame.proj.to_lonlat(np.stack([c - 5 * u, c + 5 * u]))
     azimuth, _, _ = frame.proj._geod.inv(a[0], a[1], b[0], b[1])
     return float(azimuth) % 180.0
+
+
+def angle_for_bearing(frame: Frame, bearing: float) -> float:
+    """The plan-frame angle (radians) of transects at ``bearing`` (degrees clockwise from true
+    north; from grid north +y for planar input): the inverse of the bearing a mission reports,
+    at the same point (the area's centre; true north turns across a projected area), found by
+    three corrections of the angle by the bearing's error (the map is a rotation up to the
+    projection's small distortion)."""
+    c = (frame.poly if frame.region is None else frame.region.shell).centre
+    angle = math.radians(90.0 - float(bearing)) % math.pi
+    for _ in range(3):  # at the angle in [0, pi) that the plan will have (the azimuth's sense)
+        error = (_azimuth(frame, c, angle) - float(bearing) + 90.0) % 180.0 - 90.0
+        angle = (angle + math.radians(error)) % math.pi
+    return angle
 
 
 def map_back(

@@ -2,16 +2,18 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
 from numpy.typing import ArrayLike
 
+from ..errors import InvalidParameterError
 from ..io.read import LONLAT, Area
 from ..objectives.smith import SmithFitness
 from ..sensors import SensorSpacing
 from .defaults import DEFAULT_HULL_TOLERANCE
-from .map_back import map_back
+from .map_back import angle_for_bearing, map_back
 from .project import Sensor, as_area, project, sensor_spacing
 from .steps import plan_concave, plan_convex
 from .types import Mission
@@ -38,6 +40,8 @@ def plan_area(
     holes: Sequence[ArrayLike] = (),
     decompose: bool | None = None,
     sweep: float | None = None,
+    angle: float | None = None,
+    bearing: float | None = None,
 ) -> Mission:
     """Plan a survey area end to end: project, optimise, build the path, map it back.
 
@@ -71,6 +75,15 @@ def plan_area(
             Given, it also turns off the convex-hull rule for nearly convex areas.
         sweep: sweep direction of the decomposition, degrees in the plan frame (default:
             chosen by :func:`boustro.plan.choose_sweep`).
+        angle: a fixed transect angle, radians counter-clockwise from +x in the plan frame
+            (taken modulo pi); only the offset is then optimised for ``fitness``
+            (:func:`boustro.optimize.fixed_angle.optimize_offset`, its way in
+            ``Mission.optimum.method``), and a concave area is planned as one grid (no
+            decomposition). Not with ``method``, ``decompose=True`` or ``sweep``.
+        bearing: a fixed transect direction as a bearing instead of ``angle``: degrees clockwise
+            from true north (grid north, +y, for planar input), turned into the plan frame's
+            angle at the area's centre (so ``Mission.bearing`` reports it back); as ``angle``
+            otherwise.
 
     Raises:
         InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError.
@@ -81,9 +94,15 @@ def plan_area(
         >>> mission.plan.stats.n_transects, round(mission.bearing, 2)
         (19, 68.43)
     """
+    if angle is not None and bearing is not None:
+        raise InvalidParameterError("give a fixed angle or a bearing, not both")
+    fixed = _check_fixed_angle(
+        angle if bearing is None else bearing, method=method, decompose=decompose, sweep=sweep
+    )
     area = as_area(area, crs, holes)
     sensor = Sensor(*sensor_spacing(spacing))
     frame = project(area, sensor, hull_tolerance, decompose, start)
+    angle = fixed if bearing is None or fixed is None else angle_for_bearing(frame, fixed)
     if frame.region is None:
         planned = plan_convex(
             frame,
@@ -95,6 +114,7 @@ def plan_area(
             speed=speed,
             turn_time=turn_time,
             check_coverage=check_coverage,
+            angle=angle,
         )
     else:
         planned = plan_concave(
@@ -109,5 +129,31 @@ def plan_area(
             check_coverage=check_coverage,
             decompose=decompose,
             sweep=sweep,
+            angle=angle,
         )
     return map_back(frame, planned, altitude=altitude, turnaround=turnaround)
+
+
+def _check_fixed_angle(
+    angle: Any, *, method: str | None, decompose: bool | None, sweep: float | None
+) -> float | None:
+    """A fixed angle checked (finite, radians) against the options it excludes."""
+    if angle is None:
+        return None
+    try:
+        value = float(angle)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"angle must be a number, got {angle!r}") from None
+    if not math.isfinite(value):
+        raise InvalidParameterError(f"angle must be a finite number, got {angle!r}")
+    for given, what in (
+        (
+            method is not None,
+            "a method (the offset at a fixed angle is found exactly or by a dense offset scan)",
+        ),
+        (decompose is True, "decompose=True (a fixed angle plans one grid over the whole area)"),
+        (sweep is not None, "a sweep (a fixed angle plans one grid over the whole area)"),
+    ):
+        if given:
+            raise InvalidParameterError(f"a fixed angle does not take {what}")
+    return value

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any, NamedTuple
 
@@ -9,6 +10,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, ProblemTooLargeError
 from ..optimize import OptimizeResult, optimize
+from ..optimize.fixed_angle import optimize_offset
 from ..plan import Coverage, Plan, build_plan, coverage
 from ..plan.region import plan_region
 from .defaults import DEFAULT_METHOD, FALLBACK_METHOD, METHOD_OPTIONS, REGION_OPTIONS, log
@@ -50,19 +52,15 @@ def plan_convex(
     speed: float | None,
     turn_time: float,
     check_coverage: bool,
+    angle: float | None = None,
 ) -> Planned:
-    """A convex area (or the hull of a nearly convex one): optimise, then build the plan."""
+    """A convex area (or the hull of a nearly convex one): optimise, then build the plan; at a
+    fixed ``angle`` (radians, plan frame) only the offset is optimised (:func:`optimize_offset`)."""
     s_plan = frame.sensor.spacing * frame.proj.scale_min
-    chosen = method or DEFAULT_METHOD
-    opts = dict(METHOD_OPTIONS.get(chosen, {}))
-    opts.update(options or {})
-    try:
-        optimum = optimize(frame.poly, s_plan, method=chosen, fitness=fitness, **opts)
-    except ProblemTooLargeError as exc:
-        if method is not None:
-            raise
-        log.warning("%s; planning with the hybrid optimiser instead", exc)
-        optimum = optimize(frame.poly, s_plan, method=FALLBACK_METHOD, fitness=fitness)
+    if angle is not None:
+        optimum = optimize_offset(frame.poly, s_plan, angle, fitness=fitness)
+    else:
+        optimum = _optimize_convex(frame, s_plan, method, fitness, options)
     plan = build_plan(
         frame.poly,
         s_plan,
@@ -74,6 +72,21 @@ def plan_convex(
     )
     cov = coverage(plan, frame.surveyed) if check_coverage else None
     return Planned(plan, optimum, cov)
+
+
+def _optimize_convex(
+    frame: Frame, s_plan: float, method: str | None, fitness: Any, options: dict[str, Any] | None
+) -> OptimizeResult:
+    chosen = method or DEFAULT_METHOD
+    opts = dict(METHOD_OPTIONS.get(chosen, {}))
+    opts.update(options or {})
+    try:
+        return optimize(frame.poly, s_plan, method=chosen, fitness=fitness, **opts)
+    except ProblemTooLargeError as exc:
+        if method is not None:
+            raise
+        log.warning("%s; planning with the hybrid optimiser instead", exc)
+        return optimize(frame.poly, s_plan, method=FALLBACK_METHOD, fitness=fitness)
 
 
 def plan_concave(
@@ -89,8 +102,10 @@ def plan_concave(
     check_coverage: bool,
     decompose: bool | None,
     sweep: float | None,
+    angle: float | None = None,
 ) -> Planned:
-    """A concave area or one with holes: cells, lanes and a tour (:func:`plan_region`)."""
+    """A concave area or one with holes: cells, lanes and a tour (:func:`plan_region`); at a
+    fixed ``angle`` one grid over the whole area, its offset optimised (:func:`optimize_offset`)."""
     if method not in (None, DEFAULT_METHOD, "grid", "region-grid"):
         raise InvalidParameterError(
             f"method {method!r} optimises convex areas only; a concave area or one with "
@@ -99,18 +114,28 @@ def plan_concave(
     s_plan = frame.sensor.spacing * frame.proj.scale_min
     opts = dict(REGION_OPTIONS)
     opts.update({k: v for k, v in (options or {}).items() if k in ("n_angles", "n_offsets")})
+    fixed = None
+    if angle is not None:
+        fixed = optimize_offset(frame.region, s_plan, angle, fitness=fitness)  # type: ignore[arg-type]
+        decompose = False
     plan = plan_region(
         frame.region,  # type: ignore[arg-type]
         s_plan,
         decompose_area="auto" if decompose is None else bool(decompose),
         sweep=None if sweep is None else math.radians(float(sweep)),
+        angle=None if fixed is None else fixed.angle,
+        offset=None if fixed is None else fixed.offset,
         fitness=fitness,
         layout=layout,  # type: ignore[arg-type]
         start=frame.start if frame.given_start else None,  # None: the shortest tour
         **_path_options(frame, turnaround, speed, turn_time),
         **opts,
     )
-    optimum = region_optimum(plan, s_plan)
+    if fixed is None:
+        optimum = region_optimum(plan, s_plan)
+    else:  # the one cell carries the fixed angle's optimum
+        cell = dataclasses.replace(plan.cells[0], fitness=fixed.fitness, optimum=fixed)
+        plan, optimum = dataclasses.replace(plan, cells=(cell,)), fixed
     cov = coverage(plan, frame.region) if check_coverage else None
     return Planned(plan, optimum, cov)
 

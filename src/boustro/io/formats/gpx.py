@@ -12,7 +12,7 @@ from .registry import register_format
 if TYPE_CHECKING:
     from ...mission import Mission
 
-__all__ = ["to_gpx"]
+__all__ = ["gpx_route", "gpx_track", "to_gpx"]
 
 
 @register_format("gpx", extensions=(".gpx",))
@@ -26,23 +26,41 @@ def to_gpx(mission: Mission) -> str:
     >>> to_gpx(plan_area(embedded_field(), 10.0)).count("<trkseg>")
     19
     """
-    waypoints, transects, _, _ = lonlat(mission, "GPX")
     name = xml_text(mission.name or "boustro plan")
+    route, track = gpx_route(mission), gpx_track(mission)
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         f'<gpx version="1.1" creator={quoteattr(f"boustro {__version__}")} '
         'xmlns="http://www.topografix.com/GPX/1/1">',
         f"<metadata><name>{name}</name><desc>{xml_text(describe(mission))}</desc></metadata>",
-        f"<rte><name>{name}</name>",
+        *route,
+        *track,
+        "</gpx>",
     ]
+    return "\n".join(out) + "\n"
+
+
+def gpx_route(mission: Mission) -> list[str]:
+    """The mission's path as one GPX ``rte`` (lines), named after the mission."""
+    waypoints, _, _, _ = lonlat(mission, "GPX")
+    name = xml_text(mission.name or "boustro plan")
+    out = [f"<rte><name>{name}</name>"]
     for i, ((lon, lat), kind) in enumerate(zip(waypoints, mission.kinds, strict=True)):
         out.append(
             f'<rtept lat="{lat:.10f}" lon="{lon:.10f}"><name>WP{i:04d}</name>'
             f"<type>{kind}</type></rtept>"
         )
-    out += ["</rte>", f"<trk><name>{name} transects</name>"]
+    out.append("</rte>")
+    return out
+
+
+def gpx_track(mission: Mission) -> list[str]:
+    """The mission's transects as one GPX ``trk`` with a segment each (lines)."""
+    _, transects, _, _ = lonlat(mission, "GPX")
+    name = xml_text(mission.name or "boustro plan")
+    out = [f"<trk><name>{name} transects</name>"]
     for seg in transects:
         pts = "".join(f'<trkpt lat="{lat:.10f}" lon="{lon:.10f}"></trkpt>' for lon, lat in seg)
         out.append(f"<trkseg>{pts}</trkseg>")
-    out += ["</trk>", "</gpx>"]
-    return "\n".join(out) + "\n"
+    out.append("</trk>")
+    return out

@@ -14,7 +14,7 @@ from .registry import register_format
 if TYPE_CHECKING:
     from ...mission import Mission
 
-__all__ = ["to_kml"]
+__all__ = ["kml_body", "to_kml"]
 
 
 def _kml_coords(points: NDArray[np.float64], altitude: float | None = None) -> str:
@@ -62,9 +62,6 @@ def to_kml(mission: Mission) -> str:
     >>> to_kml(plan_area(embedded_field(), 10.0)).splitlines()[1]
     '<kml xmlns="http://www.opengis.net/kml/2.2">'
     """
-    waypoints, transects, area, _ = lonlat(mission, "KML")
-    alt = mission.altitude
-    mode = "" if alt is None else "<altitudeMode>relativeToGround</altitudeMode>"
     name = xml_text(mission.name or "boustro plan")
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
@@ -72,6 +69,18 @@ def to_kml(mission: Mission) -> str:
         "<Document>",
         f"<name>{name}</name>",
         f"<description>{xml_text(describe(mission))}</description>",
+    ]
+    out += kml_body(mission)
+    out += ["</Document>", "</kml>"]
+    return "\n".join(out) + "\n"
+
+
+def kml_body(mission: Mission) -> list[str]:
+    """The area, the path and the Transects folder of one mission (KML elements, one a line)."""
+    waypoints, transects, area, _ = lonlat(mission, "KML")
+    alt = mission.altitude
+    mode = "" if alt is None else "<altitudeMode>relativeToGround</altitudeMode>"
+    out = [
         _area_placemark(area, mission.holes_lonlat),
         "<Placemark><name>Path</name><LineString><tessellate>1</tessellate>"
         + mode
@@ -81,5 +90,5 @@ def to_kml(mission: Mission) -> str:
         "<Folder><name>Transects</name>",
     ]
     out += _transect_placemarks(mission, transects, mode)
-    out += ["</Folder>", "</Document>", "</kml>"]
-    return "\n".join(out) + "\n"
+    out.append("</Folder>")
+    return out
