@@ -6,12 +6,14 @@ import argparse
 import io
 import math
 import os
+import sys
 from typing import Any
 
 from .. import objectives
 from ..errors import InvalidParameterError
 from ..io import Area, embedded_field, read_area
 from ..io.formats import FORMATS, atomic_write, format_for, render
+from ..io.repair import check_area, repair_area
 from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission, plan_area
 from ..plot.plan import plot_plan
 from ..sensors import Camera, Swath
@@ -118,6 +120,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=None,
         help="CRS of AREA's coordinates: an EPSG code (e.g. EPSG:28992) or 'planar' (default: "
         "the file's, else EPSG:4326 longitude/latitude)",
+    )
+    p.add_argument(
+        "--repair",
+        action="store_true",
+        help="make an invalid AREA valid (shapely.make_valid: e.g. a self-touching ring or a "
+        "spike) and say on stderr what changed; a repair that splits the area into several "
+        "polygons is refused. Without it an invalid AREA is refused with GEOS's reason",
     )
     _add_spacing(p)
     _add_optimiser(p)
@@ -319,7 +328,14 @@ def _load(args: argparse.Namespace) -> Area:
                 "--crs applies to an AREA file; the embedded field is lon/lat"
             )
         return area
-    return read_area(args.area, crs=args.crs)
+    area = read_area(args.area, crs=args.crs)
+    if args.repair:
+        area, note = repair_area(area)
+        if note is not None:
+            print(f"boustro: {note}", file=sys.stderr)
+        return area
+    check_area(area)
+    return area
 
 
 def _plot_bytes(mission: Mission, path: str) -> bytes:
