@@ -6,12 +6,14 @@ import argparse
 import io
 import math
 import os
+import sys
 from typing import Any
 
 from .. import objectives
 from ..errors import InvalidParameterError
 from ..io import Area, embedded_field, read_areas
 from ..io.formats import FORMATS, atomic_write, format_for
+from ..io.repair import check_area, repair_area
 from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission, plan_area
 from ..plot.plan import plot_plan
 from ..sensors import Camera, Swath
@@ -137,6 +139,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=None,
         help="CRS of AREA's coordinates: an EPSG code (e.g. EPSG:28992) or 'planar' (default: "
         "the file's, else EPSG:4326 longitude/latitude)",
+    )
+    p.add_argument(
+        "--repair",
+        action="store_true",
+        help="make an invalid AREA valid (shapely.make_valid: e.g. a self-touching ring or a "
+        "spike) and say on stderr what changed; a repair that splits the area into several "
+        "polygons is refused. Without it an invalid AREA is refused with GEOS's reason",
     )
     _add_spacing(p)
     _add_optimiser(p)
@@ -365,6 +374,17 @@ def _load(args: argparse.Namespace) -> list[Area]:
     return pick_fields(areas, args.field)
 
 
+def _validated(args: argparse.Namespace, area: Area) -> Area:
+    """``area`` checked by GEOS (refused with its reason), or made valid with ``--repair``."""
+    if not args.repair:
+        check_area(area)
+        return area
+    area, note = repair_area(area)
+    if note is not None:
+        print(f"boustro: {note}", file=sys.stderr)
+    return area
+
+
 def _plot_bytes(mission: Mission, path: str) -> bytes:
     try:
         import matplotlib
@@ -421,7 +441,7 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidParameterError("--format needs --out FILE")
     areas = _load(args)
     _spacing(args, embedded=args.area is None)  # a missing spacing: one error, not one per field
-    missions = plan_fields(areas, lambda area: _plan_one(args, area))
+    missions = plan_fields(areas, lambda area: _plan_one(args, _validated(args, area)))
     # Render everything before touching any file, so that an error writes nothing.
     outputs: list[tuple[str, bytes | str, str, int | None]] = []
     if args.out is not None:

@@ -13,7 +13,6 @@ from .polygon import (
     _cross,
     _drop_collinear,
     _drop_duplicates,
-    _first_self_intersection,
     as_polygon,
     rotation_matrix,
 )

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidPolygonError, NonConvexPolygonError
+from .validity import ring_problem
 
 __all__ = [
     "COORDINATE_LIMIT",
@@ -35,6 +36,11 @@ COORDINATE_LIMIT = 1e100
 #: Smallest extent of a polygon relative to its largest coordinate: below it the vertices have
 #: fewer than ~4 significant digits in float64.
 MIN_RELATIVE_EXTENT = 1e-12
+
+#: Rows of the pairwise distances computed at once by the diameter (memory ~ 24 * n * block).
+_DIAMETER_BLOCK = 256
+#: Above this many vertices the diameter is sought among the convex hull's vertices only.
+_DIAMETER_HULL_FROM = 1024
 
 
 def rotation_matrix(angle: float) -> NDArray[np.float64]:
@@ -83,6 +89,9 @@ def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64
 
 def _drop_duplicates(v: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
     """Remove consecutive (cyclically) coincident vertices, including a closing vertex."""
+    steps = np.linalg.norm(np.diff(v, axis=0), axis=1)
+    if np.all(steps > tol) and np.linalg.norm(v[-1] - v[0]) > tol:
+        return v  # nothing to drop (the usual case), without a loop over the vertices
     keep = [0]
     for i in range(1, len(v)):
         if np.linalg.norm(v[i] - v[keep[-1]]) > tol:
@@ -115,42 +124,21 @@ def _drop_collinear(v: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
     return v
 
 
-def _first_self_intersection(
-    v: NDArray[np.float64], tol: float, scale: float
-) -> tuple[int, int] | None:
-    """Indices of two non-adjacent edges that touch or cross, or None for a simple polygon.
+def _diameter(v: NDArray[np.float64]) -> float:
+    """Largest vertex-to-vertex distance, in blocks of rows (memory ``O(n)``, not ``O(n^2)``).
 
-    A point counts as on a line when it is within ``tol * scale`` of it (``scale`` the
-    polygon's extent), whatever the polygon's units."""
-    n = len(v)
-    p, q = v, np.roll(v, -1, axis=0)
-    i, j = np.triu_indices(n, k=2)
-    keep = ~((i == 0) & (j == n - 1))  # edge 0 and edge n-1 share vertex 0
-    i, j = i[keep], j[keep]
-    if len(i) == 0:
-        return None
-    p1, p2, q1, q2 = p[i], q[i], p[j], q[j]
+    The farthest pair is a pair of convex-hull vertices, so a large ring is reduced to its hull
+    first (GEOS); the value is the same maximum of the same squared distances."""
+    if len(v) > _DIAMETER_HULL_FROM:
+        import shapely
 
-    def orient(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]):
-        d = _cross(b - a, c - a)
-        on_line = np.abs(d) <= tol * scale * np.linalg.norm(b - a, axis=1)
-        return np.where(on_line, 0.0, np.sign(d))
-
-    d1, d2 = orient(q1, q2, p1), orient(q1, q2, p2)
-    d3, d4 = orient(p1, p2, q1), orient(p1, p2, q2)
-    proper = (d1 * d2 <= 0) & (d3 * d4 <= 0)
-    collinear = (d1 == 0) & (d2 == 0)
-    # Two collinear segments meet only when their projections on the common line overlap.
-    direction = p2 - p1
-    t = lambda x: np.einsum("ij,ij->i", x - p1, direction)  # noqa: E731
-    lo, hi = np.minimum(t(q1), t(q2)), np.maximum(t(q1), t(q2))
-    length2 = np.einsum("ij,ij->i", direction, direction)
-    overlap = (hi >= -tol * length2) & (lo <= length2 * (1 + tol))
-    hit = np.where(collinear, overlap, proper)
-    if np.any(hit):
-        k = int(np.argmax(hit))
-        return int(i[k]), int(j[k])
-    return None
+        hull = shapely.get_coordinates(shapely.convex_hull(shapely.multipoints(v)))
+        v = np.unique(hull, axis=0)
+    best = 0.0
+    for start in range(0, len(v), _DIAMETER_BLOCK):
+        diffs = v[start : start + _DIAMETER_BLOCK, None, :] - v[None, :, :]
+        best = max(best, float(np.max(np.einsum("ijk,ijk->ij", diffs, diffs))))
+    return float(np.sqrt(best))
 
 
 class Polygon:
@@ -202,14 +190,9 @@ class Polygon:
         v = _drop_collinear(v, RELATIVE_TOLERANCE)
         if len(v) < 3:
             raise InvalidPolygonError("the polygon has zero area (all vertices are collinear)")
-        hit = _first_self_intersection(v, RELATIVE_TOLERANCE, extent)
-        if hit is not None:
-            a, b = hit
-            raise InvalidPolygonError(
-                f"the polygon is self-intersecting: edge {a} ({v[a].tolist()} -> "
-                f"{v[(a + 1) % len(v)].tolist()}) meets edge {b} ({v[b].tolist()} -> "
-                f"{v[(b + 1) % len(v)].tolist()})"
-            )
+        problem = ring_problem(v, RELATIVE_TOLERANCE * extent)
+        if problem is not None:
+            raise InvalidPolygonError(problem)
         area2 = float(np.sum(_cross(v, np.roll(v, -1, axis=0))))
         if abs(area2) <= RELATIVE_TOLERANCE * extent**2:
             raise InvalidPolygonError("the polygon has zero area")
@@ -219,8 +202,7 @@ class Polygon:
         self._vertices = v
         turns = _cross(v - np.roll(v, 1, axis=0), np.roll(v, -1, axis=0) - v)
         self._is_convex = bool(np.all(turns > 0))
-        diffs = v[:, None, :] - v[None, :, :]
-        self._diameter = float(np.sqrt(np.max(np.einsum("ijk,ijk->ij", diffs, diffs))))
+        self._diameter = _diameter(v)
 
     # -- basic properties -------------------------------------------------------------------
     @property

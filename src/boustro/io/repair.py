@@ -1,0 +1,106 @@
+"""Validity of an area as read, and its repair (``boustro plan --repair``), through GEOS.
+
+:func:`area_problem` says why GEOS finds an area invalid (e.g. "Ring Self-intersection at
+(2, 4)"); :func:`repair_area` makes it valid with ``shapely.make_valid`` and says what changed.
+A repair that yields several polygons is refused with their areas (planning the parts as
+separate fields is not done here). Both work in the file's coordinates, before projection.
+shapely is imported on use.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import InvalidPolygonError
+from ..geometry import Region
+from ..geometry.validity import geos_reason
+from .area import LONLAT, Area, crs_name
+from .crs import check_lonlat
+
+__all__ = ["area_problem", "check_area", "repair_area"]
+
+
+def _shapely_area(area: Area):
+    import shapely
+
+    return shapely.Polygon(area.ring, list(area.holes))
+
+
+def _vertices(geom) -> int:
+    """Vertices of a polygon's rings, without the closing vertex of each ring."""
+    return sum(len(r.coords) - 1 for r in [geom.exterior, *geom.interiors])
+
+
+def area_problem(area: Area) -> str | None:
+    """GEOS's reason why ``area`` (shell and holes, file coordinates) is invalid, or None.
+
+    Example:
+        >>> bow_tie = Area(np.array([[0, 0], [1, 0], [0, 1], [1, 1]]), None, "", "")
+        >>> area_problem(bow_tie)
+        'Self-intersection at (0.5, 0.5)'
+    """
+    import shapely
+
+    reason = shapely.is_valid_reason(_shapely_area(area))
+    return None if reason == "Valid Geometry" else geos_reason(reason)
+
+
+def check_area(area: Area) -> None:
+    """Refuse an invalid ``area`` in the file's coordinates, with boustro's reason (the rules of
+    :class:`~boustro.geometry.Region`), GEOS's where it says more, and a hint to repair it when
+    GEOS finds it invalid (so that ``make_valid`` would change it).
+
+    Raises:
+        InvalidPolygonError: one line, naming the file (``area.source``).
+    """
+    if area.crs is not None and crs_name(area.crs) == LONLAT:
+        check_lonlat(area.ring, area.source)  # a pole or the antimeridian first: not a repair
+    try:
+        Region(area.ring, list(area.holes))
+    except InvalidPolygonError as exc:
+        message = f"{area.source}: {exc}"
+        problem = area_problem(area)
+        if problem is not None:
+            if problem not in message:
+                message += f" (GEOS: {problem})"
+            message += "; try --repair (shapely.make_valid; it says what it changes)"
+        raise InvalidPolygonError(message) from None
+
+
+def repair_area(area: Area) -> tuple[Area, str | None]:
+    """``area`` made valid by ``shapely.make_valid``, and a line saying what changed (None
+    when the area was valid and is returned unchanged).
+
+    Only the polygonal result is kept (lines and points that collapsed out of the area are
+    dropped). Raises :class:`InvalidPolygonError` when the repair yields no polygon or several
+    (naming their areas).
+    """
+    import shapely
+
+    problem = area_problem(area)
+    if problem is None:
+        return area, None
+    before = _shapely_area(area)
+    fixed = shapely.make_valid(before)
+    parts = [g for g in shapely.get_parts(fixed) if g.geom_type in ("Polygon", "MultiPolygon")]
+    polygons = [p for g in parts for p in shapely.get_parts(g) if not p.is_empty]
+    where = area.source or "the area"
+    if not polygons:
+        raise InvalidPolygonError(f"{where}: {problem}; --repair leaves no polygon (zero area)")
+    if len(polygons) > 1:
+        sizes = ", ".join(f"{p.area:.6g}" for p in sorted(polygons, key=lambda p: -p.area))
+        raise InvalidPolygonError(
+            f"{where}: {problem}; --repair splits the area into {len(polygons)} polygons of "
+            f"areas {sizes} (file units squared): plan each part as its own area"
+        )
+    (poly,) = polygons
+    ring = np.asarray(poly.exterior.coords, dtype=np.float64)[:-1]
+    holes = tuple(np.asarray(h.coords, dtype=np.float64)[:-1] for h in poly.interiors)
+    note = (
+        f"--repair: {where} was invalid ({problem}); shapely.make_valid changed it: vertices "
+        f"{_vertices(before)} -> {_vertices(poly)}, holes {len(area.holes)} -> {len(holes)}, "
+        f"area {before.area:.6g} -> {poly.area:.6g} (file units squared)"
+    )
+    return replace(area, ring=ring, holes=holes), note

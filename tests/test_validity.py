@@ -1,0 +1,216 @@
+"""Validity through GEOS: agreement with shapely, tolerance at any scale, large rings in bounded
+memory, and ``boustro plan --repair``."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+import shapely
+
+from boustro.errors import InvalidPolygonError
+from boustro.geometry import Polygon, Region
+from boustro.geometry.validity import geos_reason
+from boustro.io import Area
+from boustro.io.repair import area_problem, repair_area
+
+from .conftest import run_cli
+
+
+def _star(rng: np.random.Generator, n: int, centre=(0.0, 0.0), size: float = 1.0) -> np.ndarray:
+    """A simple ring: sorted random angles, random radii (star-shaped about ``centre``)."""
+    angles = np.sort(rng.uniform(0, 2 * math.pi, n))
+    radii = size * rng.uniform(0.3, 1.0, n)
+    return np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1) + centre
+
+
+def _builds(shell, holes=()) -> bool:
+    try:
+        Region(shell, list(holes))
+    except InvalidPolygonError:
+        return False
+    return True
+
+
+def _random_case(rng: np.random.Generator, kind: int):
+    n = int(rng.integers(4, 40))
+    if kind == 0:  # random order: mostly self-crossing
+        return rng.uniform(-1, 1, (int(rng.integers(4, 9)), 2)), []
+    if kind == 1:  # simple, or made self-crossing by swapping two vertices
+        ring = _star(rng, n)
+        if rng.random() < 0.5:
+            i, j = rng.choice(n, 2, replace=False)
+            ring[[i, j]] = ring[[j, i]]
+        return ring, []
+    shell = _star(rng, n)  # holes anywhere: inside, crossing, outside, overlapping, nested
+    holes = [
+        _star(rng, int(rng.integers(3, 8)), rng.uniform(-0.8, 0.8, 2), rng.uniform(0.05, 0.4))
+        for _ in range(int(rng.integers(1, 4)))
+    ]
+    return shell, holes
+
+
+@pytest.mark.parametrize("kind", [0, 1, 2])
+def test_agrees_with_shapely_is_valid_on_random_rings(kind):
+    rng = np.random.default_rng(2100 + kind)
+    outcomes = set()
+    for _ in range(120):
+        shell, holes = _random_case(rng, kind)
+        expected = bool(shapely.is_valid(shapely.Polygon(shell, holes)))
+        assert _builds(shell, holes) == expected, (shell.tolist(), [h.tolist() for h in holes])
+        outcomes.add(expected)
+    assert outcomes == {True, False}  # both kinds of case were tried
+
+
+def test_geos_names_the_place():
+    assert geos_reason("Ring Self-intersection[2 0]") == "Ring Self-intersection at (2, 0)"
+    assert geos_reason("Too few points") == "Too few points"
+    with pytest.raises(
+        InvalidPolygonError, match=r"self-intersecting: Self-intersection at \(1, 0\)"
+    ):
+        Polygon([(0, 0), (2, 0), (2, 2), (1, 2), (1, -1), (0, -1)])
+    with pytest.raises(InvalidPolygonError, match=r"Ring Self-intersection at \(2, 0\)"):
+        Polygon([(0, 0), (4, 0), (4, 4), (2, 0), (0, 4)])  # a vertex on another edge
+
+
+@pytest.mark.parametrize("scale", [1e-30, 1e-6, 1.0, 1e13, 1e90])
+def test_near_touching_edges_are_refused_at_any_scale(scale):
+    """A vertex 1e-13 of the extent from a non-adjacent edge touches it (boustro's tolerance,
+    1e-12 of the extent; GEOS alone finds the ring valid); 1e-9 away it does not."""
+    for gap, valid in ((1e-13, False), (1e-9, True)):
+        ring = np.array([(0, 0), (10, 0), (10, 10), (5, 10 * gap), (0, 10)]) * scale
+        assert shapely.is_valid(shapely.Polygon(ring))
+        if valid:
+            assert len(Polygon(ring)) == 5
+        else:
+            with pytest.raises(InvalidPolygonError, match=r"edge 0 .* comes within .* of edge 2"):
+                Polygon(ring)
+
+
+@pytest.mark.parametrize("scale", [1e-30, 1.0, 1e90])
+def test_hole_rules_at_any_scale(scale):
+    shell = np.array([(0, 0), (4, 0), (4, 4), (0, 4)]) * scale
+    near = 1 + 1e-10  # within TOUCH_TOLERANCE (1e-9) of the diameter of the hole at x = 1
+    with pytest.raises(InvalidPolygonError, match="holes 0 and 1 touch or overlap"):
+        Region(
+            shell,
+            [
+                np.array(h) * scale
+                for h in ([(1, 1), (1, 2), (0.5, 2)], [(near, 1), (2, 1), (2, 2)])
+            ],
+        )
+    with pytest.raises(InvalidPolygonError, match="hole 0 touches or crosses the shell"):
+        Region(shell, [np.array([(1e-10, 1), (1, 1), (1, 2)]) * scale])
+    ok = Region(
+        shell,
+        [np.array(h) * scale for h in ([(1, 1), (1, 2), (0.5, 2)], [(1.01, 1), (2, 1), (2, 2)])],
+    )
+    assert ok.n_holes == 2
+
+
+def _big_star(n: int) -> np.ndarray:
+    rng = np.random.default_rng(n)
+    angles = np.linspace(0, 2 * math.pi, n, endpoint=False) + rng.uniform(0, 0.5 / n, n)
+    radii = 1.0 + 0.2 * np.cos(3 * angles) + 1e-3 * rng.random(n)  # lobes, traced noise
+    return np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1)
+
+
+def test_self_crossing_8000_vertex_ring_is_refused():
+    ring = _big_star(8000)
+    ring[[10, 4000]] = ring[[4000, 10]]
+    with pytest.raises(InvalidPolygonError, match="self-intersecting: Self-intersection at"):
+        Polygon(ring)
+
+
+def test_validating_20000_vertices_takes_little_memory():
+    """Peak RSS of building a valid 20000-vertex Polygon (and a Region with it as a hole's
+    shell), measured in a fresh process beyond what importing and the input take."""
+    code = textwrap.dedent(
+        """
+        import math, resource
+        import numpy as np
+        import shapely
+        from boustro.geometry import Polygon, Region
+        n = 20000
+        rng = np.random.default_rng(n)
+        angles = np.linspace(0, 2 * math.pi, n, endpoint=False) + rng.uniform(0, 0.5 / n, n)
+        radii = 1.0 + 0.2 * np.cos(3 * angles) + 1e-3 * rng.random(n)
+        ring = np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1)
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+        p = Polygon(ring)
+        r = Region(p, [ring * 0.5])  # the ring and a hole like it
+        after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+        print(len(p), r.n_holes, (after - before) / 1024)
+        """
+    )
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
+    ).stdout.split()
+    assert out[:2] == ["20000", "1"]
+    assert float(out[2]) < 500  # MB; the all-pairs check needed tens of GB here
+
+
+# -- the command line: refusal with GEOS's reason, --repair -----------------------------------
+SLIT = [[0, 0], [40, 0], [40, 40], [20, 40], [20, 20], [20, 40], [0, 40]]  # touches itself
+BOW_TIE = [[0, 0], [10, 0], [0, 10], [10, 10]]
+
+
+def test_repair_area_keeps_one_part_and_says_what_changed():
+    fixed, note = repair_area(Area(np.array(SLIT, dtype=float), None, "slit", "slit.json"))
+    assert note is not None and "Ring Self-intersection at (20, 40)" in note
+    assert "vertices 7 -> 5" in note and "area 1600 -> 1600" in note
+    assert area_problem(fixed) is None and Polygon(fixed.ring).area == pytest.approx(1600)
+    same, nothing = repair_area(fixed)
+    assert same is fixed and nothing is None
+
+
+def _write(tmp_path, name, ring):
+    path = tmp_path / name
+    path.write_text(json.dumps(ring))
+    return str(path)
+
+
+def test_cli_refuses_an_invalid_area_with_geos_reason(capsys, tmp_path):
+    path = _write(tmp_path, "slit.json", SLIT)
+    code, out, err = run_cli(capsys, "plan", path, "--crs", "planar", "--spacing", "5")
+    assert code == 2 and out == ""
+    assert "GEOS: Ring Self-intersection at (20, 40)" in err and "try --repair" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_cli_repair_plans_the_repaired_area(capsys, tmp_path):
+    path = _write(tmp_path, "slit.json", SLIT)
+    out_file = tmp_path / "plan.geojson"
+    code, out, err = run_cli(
+        capsys, "plan", path, "--crs", "planar", "--spacing", "5", "--repair", "--out", out_file
+    )
+    assert code == 0, err
+    assert err.startswith("boustro: --repair: ") and "vertices 7 -> 5" in err
+    assert "1600.0 m2" in out and out_file.exists()
+
+
+def test_cli_repair_refuses_a_split_and_writes_nothing(capsys, tmp_path):
+    path = _write(tmp_path, "bowtie.json", BOW_TIE)
+    out_file = tmp_path / "plan.geojson"
+    code, out, err = run_cli(
+        capsys, "plan", path, "--crs", "planar", "--spacing", "5", "--repair", "--out", out_file
+    )
+    assert code == 2 and out == "" and not out_file.exists()
+    assert "Self-intersection at (5, 5)" in err and "2 polygons of areas 25, 25" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_diameter_of_a_large_ring_is_its_largest_vertex_distance():
+    """Above 1024 vertices the diameter is sought on the convex hull, in blocks: the same value
+    as the all-pairs maximum."""
+    for v in (_big_star(3000), _big_star(1500) * (3.0, 1.0)):
+        diffs = v[:, None, :] - v[None, :, :]
+        expected = float(np.sqrt(np.max(np.einsum("ijk,ijk->ij", diffs, diffs))))
+        assert Polygon(v).diameter == expected
