@@ -10,7 +10,7 @@ import numpy as np
 from ..errors import PolygonFileError
 from .area import LONLAT, Area
 from .area import close_ring as _close_open
-from .area import crs_name as _crs_name
+from .file_crs import crs_from_file
 
 __all__ = ["area_from_kml"]
 
@@ -91,10 +91,11 @@ def area_from_kml(text: str, where: str = "input", crs: str | None = None) -> Ar
             name = (found.text or "").strip() if found is not None else ""
             break
     srs = polygon.get("srsName")
-    file_crs = _crs_name(srs) if srs else None
+    if crs is None and srs:  # a CRS given by the caller overrides the file's
+        crs = crs_from_file(srs, where)
     if srs and _north_first(srs):  # a URN/URI srsName: the CRS's own axis order, lat first
         ring, holes = ring[:, ::-1], [h[:, ::-1] for h in holes]
-    return Area(_close_open(ring, where), crs or file_crs or LONLAT, name, where, tuple(holes))
+    return Area(_close_open(ring, where), crs or LONLAT, name, where, tuple(holes))
 
 
 def _north_first(srs: str) -> bool:
@@ -113,6 +114,6 @@ def _north_first(srs: str) -> bool:
 
     try:
         axes = pyproj.CRS.from_epsg(int(m.group(1))).axis_info
-    except pyproj.exceptions.CRSError:
+    except pyproj.exceptions.ProjError:  # CRSError and every other PROJ error
         return False
     return bool(axes) and axes[0].direction.lower() in ("north", "south")
