@@ -348,6 +348,10 @@ def _plot_bytes(mission: Mission, path: str) -> bytes:
         plt.close(fig)
 
 
+def _fitness(value: float) -> str:
+    return "undefined (one lane)" if math.isnan(value) else f"{value:.6f}"
+
+
 def _rows(mission: Mission, written: list[str]) -> list[tuple[str, str]]:
     s, opt = mission.stats, mission.optimum
     proj = mission.projection
@@ -367,7 +371,10 @@ def _rows(mission: Mission, written: list[str]) -> list[tuple[str, str]]:
             f"angle {math.degrees(mission.plan.angle):.4f} deg (bearing {mission.bearing:.2f} "
             f"deg from north), offset {mission.plan.offset:.4g} m",
         ),
-        ("optimiser", f"{opt.method}, fitness {opt.fitness:.6f} ({opt.evaluations} evaluations)"),
+        (
+            "optimiser",
+            f"{opt.method}, fitness {_fitness(opt.fitness)} ({opt.evaluations} evaluations)",
+        ),
         ("count", f"{s.n_transects} transects, {s.n_turns} turns ({mission.plan.layout} layout)"),
         ("transect length", f"{s.transect_length:.1f} m"),
         ("path length", f"{s.path_length:.1f} m"),
