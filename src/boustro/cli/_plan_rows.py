@@ -9,6 +9,10 @@ from ..mission import Mission
 __all__ = ["rows"]
 
 
+def _fitness(value: float) -> str:
+    return "undefined (one lane)" if math.isnan(value) else f"{value:.6f}"
+
+
 def rows(mission: Mission, written: list[str]) -> list[tuple[str, str]]:
     s, opt = mission.stats, mission.optimum
     proj = mission.projection
@@ -28,7 +32,10 @@ def rows(mission: Mission, written: list[str]) -> list[tuple[str, str]]:
             f"angle {math.degrees(mission.plan.angle):.4f} deg (bearing {mission.bearing:.2f} "
             f"deg from north), offset {mission.plan.offset:.4g} m",
         ),
-        ("optimiser", f"{opt.method}, fitness {opt.fitness:.6f} ({opt.evaluations} evaluations)"),
+        (
+            "optimiser",
+            f"{opt.method}, fitness {_fitness(opt.fitness)} ({opt.evaluations} evaluations)",
+        ),
         ("count", f"{s.n_transects} transects, {s.n_turns} turns ({mission.plan.layout} layout)"),
         ("transect length", f"{s.transect_length:.1f} m"),
         ("path length", f"{s.path_length:.1f} m"),

@@ -137,8 +137,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--crs",
         default=None,
-        help="CRS of AREA's coordinates: an EPSG code (e.g. EPSG:28992) or 'planar' (default: "
-        "the file's, else EPSG:4326 longitude/latitude)",
+        help="CRS of AREA's coordinates: an EPSG code (e.g. EPSG:28992), 'planar', or any "
+        "pyproj input (WKT, PROJ string) (default: the file's, else EPSG:4326 longitude/"
+        "latitude; a CRS read from a file must be an authority code or a WKT naming no file "
+        "or grid)",
     )
     p.add_argument(
         "--repair",

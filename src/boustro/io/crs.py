@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -22,6 +24,7 @@ __all__ = [
     "Projection",
     "check_lonlat",
     "parse_crs",
+    "proj_errors",
     "projection_for",
     "utm_crs",
 ]
@@ -41,6 +44,33 @@ def _pyproj() -> Any:
             "(or give planar coordinates with crs=None / --crs planar)"
         ) from None
     return pyproj
+
+
+@contextmanager
+def proj_errors(crs: object) -> Iterator[None]:
+    """Turn any pyproj error raised inside into one line of :class:`InvalidParameterError`
+    naming ``crs`` (a CRS, or a transformation).
+
+    >>> with proj_errors("+proj=nonsense"):
+    ...     raise _pyproj().exceptions.ProjError("bad step\\nsecond line")
+    Traceback (most recent call last):
+    ...
+    boustro.errors.InvalidParameterError: coordinate reference system '+proj=nonsense': PROJ failed: bad step second line
+    """  # noqa: E501
+    pyproj = _pyproj()
+    errors = (
+        pyproj.exceptions.ProjError,  # CRSError derives from it
+        pyproj.exceptions.GeodError,
+        pyproj.exceptions.DataDirError,
+    )
+    try:
+        yield
+    except errors as exc:
+        shown = " ".join(str(crs).split())
+        shown = shown if len(shown) <= 80 else shown[:77] + "..."
+        raise InvalidParameterError(
+            f"coordinate reference system {shown!r}: PROJ failed: {' '.join(str(exc).split())}"
+        ) from None
 
 
 def parse_crs(crs: str | int | None) -> str | None:
@@ -63,10 +93,10 @@ def parse_crs(crs: str | int | None) -> str | None:
     pyproj = _pyproj()
     try:
         obj = pyproj.CRS.from_user_input(text)
-    except pyproj.exceptions.CRSError as exc:
+    except pyproj.exceptions.ProjError as exc:
         raise InvalidParameterError(
             f"unknown coordinate reference system {crs!r} (expected e.g. EPSG:4326, "
-            f"EPSG:28992, or 'planar'): {exc}"
+            f"EPSG:28992, or 'planar'): {' '.join(str(exc).split())}"
         ) from None
     if not (obj.is_geographic or obj.is_projected):
         raise InvalidParameterError(
@@ -170,6 +200,10 @@ class Projection:
         self._geod: Any = None
         if source_crs is None:
             return
+        with proj_errors(source_crs):
+            self._transformers(plan_crs, source_crs)
+
+    def _transformers(self, plan_crs: str | None, source_crs: str) -> None:
         pyproj = _pyproj()
         if plan_crs != source_crs:
             self._fwd = pyproj.Transformer.from_crs(source_crs, plan_crs, always_xy=True)
@@ -199,7 +233,8 @@ class Projection:
         if transformer is None:
             return pts.copy()
         flat = pts.reshape(-1, 2)
-        x, y = transformer.transform(flat[:, 0], flat[:, 1])
+        with proj_errors(getattr(transformer, "source_crs", transformer)):
+            x, y = transformer.transform(flat[:, 0], flat[:, 1])
         return np.stack([np.asarray(x), np.asarray(y)], axis=-1).reshape(pts.shape)
 
     def to_plan(self, points: ArrayLike) -> NDArray[np.float64]:
@@ -228,7 +263,8 @@ class Projection:
         if self.planar:
             return np.linalg.norm(np.asarray(b, float) - np.asarray(a, float), axis=-1)
         la, lb = self.to_lonlat(a).reshape(-1, 2), self.to_lonlat(b).reshape(-1, 2)
-        _, _, dist = self._geod.inv(la[:, 0], la[:, 1], lb[:, 0], lb[:, 1])
+        with proj_errors(self.plan_crs):
+            _, _, dist = self._geod.inv(la[:, 0], la[:, 1], lb[:, 0], lb[:, 1])
         return np.asarray(dist).reshape(np.asarray(a).shape[:-1])
 
     def ground_area(self, ring_plan: ArrayLike) -> float:
@@ -237,7 +273,8 @@ class Projection:
         if self.planar:
             return Polygon(ring).area
         ll = self.to_lonlat(ring)
-        area, _ = self._geod.polygon_area_perimeter(ll[:, 0], ll[:, 1])
+        with proj_errors(self.plan_crs):
+            area, _ = self._geod.polygon_area_perimeter(ll[:, 0], ll[:, 1])
         return abs(float(area))
 
     def measure_scale(self, ring_plan: ArrayLike) -> None:
@@ -263,8 +300,18 @@ class Projection:
 
 
 def projection_for(ring: ArrayLike, crs: str | None, where: str = "area") -> Projection:
-    """The projection to plan an area given by ``ring`` in ``crs`` (see the module docstring)."""
+    """The projection to plan an area given by ``ring`` in ``crs`` (see the module docstring).
+
+    Raises:
+        InvalidParameterError: an unknown CRS, or any error of PROJ (one line).
+        InvalidPolygonError: coordinates outside the CRS's range or area of use.
+    """
     crs = parse_crs(crs)
+    with proj_errors(crs):
+        return _projection_for(ring, crs, where)
+
+
+def _projection_for(ring: ArrayLike, crs: str | None, where: str) -> Projection:
     pts = np.asarray(ring, dtype=np.float64)
     if crs is None:
         return Projection(None, None)

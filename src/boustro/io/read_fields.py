@@ -60,7 +60,7 @@ def _geometry_polygons(geom: Any, where: str) -> list[Any]:
 def _json_fields(data: Any, where: str, crs: str | None) -> list[_Named]:
     if not isinstance(data, dict) or "type" not in data:
         return []  # a list of pairs, or an error: read_area's reading
-    area_crs = crs or _geojson_crs(data) or LONLAT
+    area_crs = crs or _geojson_crs(data, where) or LONLAT
     if data["type"] == "FeatureCollection":
         features = data.get("features")
         if not isinstance(features, list):

@@ -14,7 +14,7 @@ from ..errors import InvalidPolygonError, PolygonFileError
 from ..geometry import Polygon
 from .area import LONLAT, Area
 from .area import close_ring as _close_open
-from .area import crs_name as _crs_name
+from .file_crs import crs_from_file
 
 __all__ = ["area_from_json", "polygon_from_json", "read_polygon"]
 
@@ -161,13 +161,25 @@ def read_polygon(path: str | os.PathLike[str]) -> Polygon:
     return polygon_from_json(data, name)
 
 
-def _geojson_crs(data: Any) -> str | None:
-    """The CRS named by an old-style (2008) GeoJSON ``crs`` member, if any."""
+def _geojson_crs(data: Any, where: str = "input") -> str | None:
+    """The CRS named by an old-style (2008) GeoJSON ``crs`` member, if any, checked by
+    :func:`boustro.io.file_crs.crs_from_file` (a linked CRS is refused, never followed)."""
     crs = data.get("crs") if isinstance(data, dict) else None
-    if not isinstance(crs, dict):
+    if crs is None:
         return None
-    name = (crs.get("properties") or {}).get("name")
-    return _crs_name(name) if isinstance(name, str) else None
+    kind = crs.get("type") if isinstance(crs, dict) else None
+    props = crs.get("properties") if isinstance(crs, dict) else None
+    if kind == "link":
+        raise PolygonFileError(
+            f"{where}: the crs member links to a CRS definition elsewhere; boustro does not "
+            "follow links: give the CRS on the command line with --crs"
+        )
+    if kind != "name" or not isinstance(props, dict) or "name" not in props:
+        raise PolygonFileError(
+            f'{where}: the crs member must be {{"type": "name", "properties": '
+            f'{{"name": ...}}}}, got {crs!r:.80}'
+        )
+    return crs_from_file(props["name"], where)
 
 
 def area_from_json(data: Any, where: str = "input", crs: str | None = None) -> Area:
@@ -185,10 +197,11 @@ def area_from_json(data: Any, where: str = "input", crs: str | None = None) -> A
         geom, where_geom, feature = _polygon_geometry(data, where)
         ring, holes = _geometry_rings(geom, where_geom)
         name = _feature_name(feature)
-    file_crs = _geojson_crs(data) if isinstance(data, dict) else None
+    if crs is None and isinstance(data, dict):
+        crs = _geojson_crs(data, where)  # a CRS given by the caller overrides the file's
     return Area(
         _close_open(ring, where),
-        crs or file_crs or LONLAT,
+        crs or LONLAT,
         name,
         where,
         tuple(_close_open(h, f"{where}: hole {i}") for i, h in enumerate(holes)),

@@ -10,7 +10,7 @@ import numpy as np
 from ..errors import PolygonFileError
 from .area import LONLAT, Area
 from .area import close_ring as _close_open
-from .area import crs_name as _crs_name
+from .file_crs import crs_from_file
 
 __all__ = ["area_from_kml", "xml_polygon_area"]
 
@@ -98,10 +98,11 @@ def xml_polygon_area(
         rings = [e for e in element.iter() if _local(e.tag) == "LinearRing"] or [element]
         for r in rings:
             holes.append(_close_open(_xml_coordinates(r, where), f"{where}: hole {len(holes)}"))
-    file_crs = _crs_name(srs) if srs else None
+    if crs is None and srs:  # a CRS given by the caller overrides the file's
+        crs = crs_from_file(srs, where)
     if srs and _north_first(srs):  # a URN/URI srsName: the CRS's own axis order, lat first
         ring, holes = ring[:, ::-1], [h[:, ::-1] for h in holes]
-    return Area(_close_open(ring, where), crs or file_crs or LONLAT, name, where, tuple(holes))
+    return Area(_close_open(ring, where), crs or LONLAT, name, where, tuple(holes))
 
 
 def _north_first(srs: str) -> bool:
@@ -120,6 +121,6 @@ def _north_first(srs: str) -> bool:
 
     try:
         axes = pyproj.CRS.from_epsg(int(m.group(1))).axis_info
-    except pyproj.exceptions.CRSError:
+    except pyproj.exceptions.ProjError:  # CRSError and every other PROJ error
         return False
     return bool(axes) and axes[0].direction.lower() in ("north", "south")

@@ -9,6 +9,7 @@ from typing import Any
 from numpy.typing import ArrayLike
 
 from ..errors import InvalidParameterError
+from ..geometry.region import Region
 from ..io.read import LONLAT, Area
 from ..objectives.smith import SmithFitness
 from ..sensors import SensorSpacing
@@ -50,7 +51,9 @@ def plan_area(
             ring in ``crs``.
         spacing: metres on the ground (planar units for planar input), or a sensor
             (:class:`~boustro.sensors.Camera`, :class:`~boustro.sensors.Swath`, or their
-            :class:`~boustro.sensors.SensorSpacing`).
+            :class:`~boustro.sensors.SensorSpacing`). An area narrower than the spacing in every
+            direction (spacing >= its diameter) gets one lane along its diameter, planned by
+            the region planner whatever ``method`` (its fitness is undefined: NaN).
         crs: CRS of a bare ring (ignored for an :class:`Area`, which carries its own); default
             WGS 84 longitude/latitude, ``None`` for planar.
         method: optimiser (default :data:`DEFAULT_METHOD`), see :func:`boustro.optimize.optimize`;
@@ -103,6 +106,11 @@ def plan_area(
     sensor = Sensor(*sensor_spacing(spacing))
     frame = project(area, sensor, hull_tolerance, decompose, start)
     angle = fixed if bearing is None or fixed is None else angle_for_bearing(frame, fixed)
+    if frame.region is None and sensor.spacing * frame.proj.scale_min >= frame.poly.diameter:
+        # Narrower than the spacing in every direction (a lake under a wide swath): nothing to
+        # optimise; the region planner lays one lane along the area's (not its hull's) diameter.
+        frame = frame._replace(region=Region(frame.surveyed), poly=frame.surveyed, depth=0.0)
+        method = None
     if frame.region is None:
         planned = plan_convex(
             frame,

@@ -109,7 +109,8 @@ class Mission:
             "angle_deg": math.degrees(self.plan.angle),
             "offset": self.plan.offset,
             "method": self.optimum.method,
-            "fitness": self.optimum.fitness,
+            # undefined (None) for a single lane: Eq. 1 needs two transects (region_opt)
+            "fitness": None if math.isnan(self.optimum.fitness) else self.optimum.fitness,
             "layout": self.plan.layout,
             "n_transects": s.n_transects,
             "n_turns": s.n_turns,

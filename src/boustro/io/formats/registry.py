@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
+
+import numpy as np
 
 from ..._files import atomic_write
 from ..._registry import Registry
@@ -13,7 +16,15 @@ from ...errors import InvalidParameterError
 if TYPE_CHECKING:
     from ...mission import Mission
 
-__all__ = ["FORMATS", "Renderer", "format_for", "register_format", "render", "write_mission"]
+__all__ = [
+    "FORMATS",
+    "Renderer",
+    "check_finite",
+    "format_for",
+    "register_format",
+    "render",
+    "write_mission",
+]
 
 #: A renderer: the text of a mission in one format, or its bytes for a binary format.
 Renderer = Callable[["Mission"], "str | bytes"]
@@ -76,8 +87,58 @@ def format_for(path: str | os.PathLike[str], fmt: str | None = None) -> str:
     )
 
 
+def _first_non_finite(value: Any, path: str) -> str | None:
+    """The path of the first number in ``value`` that is not finite (inf, nan), else None."""
+    if isinstance(value, dict):
+        items: Any = ((f"{path}.{k}", v) for k, v in value.items())
+    elif isinstance(value, (list, tuple)):
+        items = ((f"{path}[{i}]", v) for i, v in enumerate(value))
+    elif isinstance(value, np.ndarray):
+        bad: Any = np.argwhere(~np.isfinite(value)) if value.dtype.kind in "fc" else []
+        return f"{path}[{', '.join(str(int(i)) for i in bad[0])}]" if len(bad) else None
+    elif isinstance(value, (float, np.floating)):
+        return None if math.isfinite(value) else path
+    else:
+        return None
+    for where, item in items:
+        found = _first_non_finite(item, where)
+        if found is not None:
+            return found
+    return None
+
+
+def check_finite(mission: Mission, fmt: str = "the mission") -> None:
+    """Refuse a mission holding a number that is not finite, before anything is rendered.
+
+    Checks the summary every format may carry and every coordinate array (area, holes, cells,
+    transects, waypoints, home; source and longitude/latitude).
+
+    Raises:
+        InvalidParameterError: one line naming the first such number.
+    """
+    fields = (
+        "waypoints transects waypoints_lonlat transects_lonlat area_lonlat home home_lonlat "
+        "holes_lonlat"
+    ).split()
+    values: dict[str, Any] = {name: getattr(mission, name) for name in fields}
+    values.update(
+        ring=mission.area.ring,
+        holes=mission.area.holes,
+        plan_transects=mission.plan.transects,
+        summary=mission.summary(),
+    )
+    if len(mission.plan.cells) > 1:
+        values["cells"] = mission.cell_rings()
+    found = _first_non_finite(values, "mission")
+    if found is not None:
+        raise InvalidParameterError(
+            f"cannot write {fmt}: {found} is not a finite number (inf or nan); nothing written"
+        )
+
+
 def render(mission: Mission, fmt: str) -> str | bytes:
-    """The text (or bytes) of ``mission`` in format ``fmt`` (a key of :data:`FORMATS`).
+    """The text (or bytes) of ``mission`` in format ``fmt`` (a key of :data:`FORMATS`), after
+    :func:`check_finite` (every number in every export is finite, or nothing is rendered).
 
     Example:
         >>> from boustro.io import embedded_field
@@ -87,7 +148,9 @@ def render(mission: Mission, fmt: str) -> str | bytes:
         >>> render(plan_area(embedded_field(), 10.0), "csv").splitlines()[0]
         'seq,kind,transect,lon,lat'
     """
-    return FORMATS[format_for("", fmt)][1](mission)
+    name = format_for("", fmt)
+    check_finite(mission, name)
+    return FORMATS[name][1](mission)
 
 
 def write_mission(mission: Mission, path: str | os.PathLike[str], fmt: str | None = None) -> str:
