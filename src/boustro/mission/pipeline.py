@@ -8,6 +8,7 @@ from typing import Any
 
 from numpy.typing import ArrayLike
 
+from .._validate import as_number
 from ..errors import InvalidParameterError
 from ..geometry.region import Region
 from ..io.read import LONLAT, Area
@@ -15,7 +16,7 @@ from ..objectives.smith import SmithFitness
 from ..sensors import SensorSpacing
 from .defaults import DEFAULT_HULL_TOLERANCE
 from .map_back import angle_for_bearing, map_back
-from .project import Sensor, as_area, project, sensor_spacing
+from .project import Frame, Sensor, as_area, project, sensor_spacing
 from .steps import plan_concave, plan_convex
 from .types import Mission
 
@@ -106,40 +107,32 @@ def plan_area(
     sensor = Sensor(*sensor_spacing(spacing))
     frame = project(area, sensor, hull_tolerance, decompose, start)
     angle = fixed if bearing is None or fixed is None else angle_for_bearing(frame, fixed)
-    if frame.region is None and sensor.spacing * frame.proj.scale_min >= frame.poly.diameter:
-        # Narrower than the spacing in every direction (a lake under a wide swath): nothing to
-        # optimise; the region planner lays one lane along the area's (not its hull's) diameter.
+    if _narrower_than_the_spacing(frame, sensor):
+        # Nothing to optimise: the region planner lays one lane along the area's diameter.
         frame = frame._replace(region=Region(frame.surveyed), poly=frame.surveyed, depth=0.0)
         method = None
+    settings: dict[str, Any] = dict(
+        method=method,
+        fitness=fitness,
+        options=options,
+        layout=layout,
+        turnaround=turnaround,
+        speed=speed,
+        turn_time=turn_time,
+        check_coverage=check_coverage,
+        angle=angle,
+    )
     if frame.region is None:
-        planned = plan_convex(
-            frame,
-            method=method,
-            fitness=fitness,
-            options=options,
-            layout=layout,
-            turnaround=turnaround,
-            speed=speed,
-            turn_time=turn_time,
-            check_coverage=check_coverage,
-            angle=angle,
-        )
+        planned = plan_convex(frame, **settings)
     else:
-        planned = plan_concave(
-            frame,
-            method=method,
-            fitness=fitness,
-            options=options,
-            layout=layout,
-            turnaround=turnaround,
-            speed=speed,
-            turn_time=turn_time,
-            check_coverage=check_coverage,
-            decompose=decompose,
-            sweep=sweep,
-            angle=angle,
-        )
+        planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
     return map_back(frame, planned, altitude=altitude, turnaround=turnaround)
+
+
+def _narrower_than_the_spacing(frame: Frame, sensor: Sensor) -> bool:
+    """A convex (or hull-planned) area whose diameter is at most the spacing on the ground: a
+    lake under a wide swath. Planned over the area itself, not its hull."""
+    return frame.region is None and sensor.spacing * frame.proj.scale_min >= frame.poly.diameter
 
 
 def _check_fixed_angle(
@@ -148,10 +141,7 @@ def _check_fixed_angle(
     """A fixed angle checked (finite, radians) against the options it excludes."""
     if angle is None:
         return None
-    try:
-        value = float(angle)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"angle must be a number, got {angle!r}") from None
+    value = as_number("angle", angle)
     if not math.isfinite(value):
         raise InvalidParameterError(f"angle must be a finite number, got {angle!r}")
     for given, what in (
