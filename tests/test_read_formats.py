@@ -121,7 +121,8 @@ def test_a_zipped_shapefile(tmp_path, name):
 
 
 def test_a_layer_without_crs_is_lonlat_and_the_command_line_crs_overrides(tmp_path):
-    path = _write(tmp_path / "nocrs.fgb", [("a", shapely.box(5, 52, 5.003, 52.002))], crs=None)
+    with pytest.warns(UserWarning, match="'crs' was not provided"):  # pyogrio's, writing
+        path = _write(tmp_path / "nocrs.fgb", [("a", shapely.box(5, 52, 5.003, 52.002))], crs=None)
     assert read_area(path).crs == "EPSG:4326"
     assert read_area(_write(tmp_path / "rd.gpkg"), crs="EPSG:4326").crs == "EPSG:4326"
 
@@ -200,12 +201,33 @@ def _random(tmp_path, name):
     return tmp_path / name
 
 
+def _text(path, text):
+    path.write_text(text)
+    return path
+
+
+def _sqlite(path):
+    with sqlite3.connect(path) as db:
+        db.execute("CREATE TABLE t (a)")
+    db.close()
+    return path
+
+
 CORRUPT = {
     "half.gpkg": _half_gpkg,
     "random.shp": lambda p: _random(p, "random.shp"),
     "random.fgb": lambda p: _random(p, "random.fgb"),
     "random.parquet": lambda p: _random(p, "random.parquet"),
     "random.bin": lambda p: _random(p, "random.bin"),
+    "not-a-geopackage.sqlite": lambda p: _sqlite(p / "not-a-geopackage.sqlite"),
+    # GDAL would open a VRT whatever its name, and read the files it names
+    "vrt.gpkg": lambda p: _text(
+        p / "vrt.gpkg",
+        '<OGRVRTDataSource><OGRVRTLayer name="x">'
+        "<SrcDataSource>/etc/passwd</SrcDataSource></OGRVRTLayer>"
+        "</OGRVRTDataSource>",
+    ),
+    "geojson.shp": lambda p: _text(p / "geojson.shp", '{"type": "Polygon", "coordinates": []}'),
     "nokml.kmz": lambda p: _zip(p / "nokml.kmz", {"readme.txt": "hello"}),
     "nokml.zip": lambda p: _zip(p / "nokml.zip", {"a/b.txt": "hello"}),
     "truncated.kmz": lambda p: (

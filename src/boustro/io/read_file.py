@@ -4,8 +4,10 @@ Text formats (GeoJSON, JSON pairs, KML, GML, WKT, QGroundControl ``.plan``) go t
 readers; binary ones never do: a zip (``PK``) is a KMZ when it holds a ``.kml``, a zipped
 Shapefile when it holds a ``.shp`` (:mod:`boustro.io.read_zip`); a Shapefile, GeoPackage
 (``SQLite format 3``), FlatGeobuf (``fgb``) or GeoParquet (``PAR1``), by extension or by
-signature, goes to GDAL (:mod:`boustro.io.read_gdal`); any other binary file to GDAL as a
-fallback, else one line saying that its type is unknown.
+signature, goes to GDAL (:mod:`boustro.io.read_gdal`), and a file named as one of them without
+its signature is refused (GDAL would open a text file, e.g. a VRT naming other files, whatever
+its name); any other binary file goes to GDAL as a fallback, else one line says its type is
+unknown.
 """
 
 from __future__ import annotations
@@ -29,10 +31,17 @@ _SIGNATURES = (
     (b"PK\x03\x04", "zip"),
     (b"PK\x05\x06", "zip"),
     (b"SQLite format 3\x00", ".gpkg"),
-    (b"fgb\x03", ".fgb"),
+    (b"fgb\x03", ".fgb"),  # FlatGeobuf, major version 3
     (b"PAR1", ".parquet"),
     (b"\x00\x00\x27\x0a", ".shp"),
 )
+_EXPECTED = {
+    ".shp": ("Shapefile", b"\x00\x00\x27\x0a"),
+    ".gpkg": ("GeoPackage", b"SQLite format 3\x00"),
+    ".fgb": ("FlatGeobuf file", b"fgb"),
+    ".parquet": ("GeoParquet file", b"PAR1"),
+    ".geoparquet": ("GeoParquet file", b"PAR1"),
+}
 _TEXT_KINDS = {
     ".json": "json",
     ".geojson": "json",
@@ -59,6 +68,12 @@ def _kind(name: str, head: bytes) -> str | None:
         return "zip"
     ext = os.path.splitext(lower)[1]
     if ext in GDAL_EXTENSIONS:
+        # A GDAL format by its name must be one by its content: GDAL would open a text file
+        # (a VRT naming other files, a GeoJSON) whatever it is called.
+        if not head.startswith(_EXPECTED[ext][1]):
+            raise PolygonFileError(
+                f"{name}: not a {_EXPECTED[ext][0]}: its first bytes are not the format's signature"
+            )
         return ext
     for signature, kind in _SIGNATURES:
         if head.startswith(signature):

@@ -67,6 +67,13 @@ def _check_gpkg(path: str, where: str) -> None:
         )
         names = [d[0].lower() for d in rows.description]
         found = [dict(zip(names, row, strict=True)) for row in rows.fetchall()]
+    except sqlite3.OperationalError as exc:
+        if "no such table" not in str(exc):
+            raise PolygonFileError(f"{where}: not a readable GeoPackage: {exc}") from None
+        raise PolygonFileError(
+            f"{where}: an SQLite database but not a GeoPackage ({exc}); boustro reads "
+            "GeoPackages among SQLite files"
+        ) from None
     except sqlite3.Error as exc:
         raise PolygonFileError(f"{where}: not a readable GeoPackage: {exc}") from None
     finally:
