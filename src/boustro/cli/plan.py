@@ -53,7 +53,10 @@ EMBEDDED_SPACING = 10.0
 DETAILS = """\
 area files:
   GeoJSON (RFC 7946: Polygon, MultiPolygon, Feature, FeatureCollection), a JSON list of [x, y]
-  pairs, KML, GML, WKT/EWKT (POLYGON, MULTIPOLYGON, GEOMETRYCOLLECTION).
+  pairs, KML, KMZ, GML, WKT/EWKT (POLYGON, MULTIPOLYGON, GEOMETRYCOLLECTION), QGroundControl
+  .plan (survey polygons and inclusion geofences, [lat, lon] read as lon/lat); with pyogrio
+  (pip install 'boustro[geo]'): Shapefile (.shp, .shp.zip, .zip), GeoPackage, FlatGeobuf,
+  GeoParquet and any binary vector format GDAL reads. Chosen by extension, else by content.
   Coordinates are longitude, latitude (WGS 84) unless the file or --crs says otherwise; lon/lat
   areas are planned in the UTM zone of the area and written back in lon/lat. Without AREA, an
   embedded 3.6 ha field in the Netherlands (Fields2Cover, BSD-3-Clause) is planned at 10 m.
@@ -126,8 +129,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "area",
         nargs="?",
         metavar="AREA",
-        help="area file (GeoJSON, JSON list, KML, GML, WKT); every field in it is planned; "
-        "default: the embedded example field",
+        help="area file (GeoJSON, JSON list, KML, KMZ, GML, WKT, QGroundControl .plan; with "
+        "'boustro[geo]': Shapefile, GeoPackage, FlatGeobuf, GeoParquet); every field in it is "
+        "planned; default: the embedded example field",
     )
     p.add_argument(
         "--field",

@@ -1,7 +1,9 @@
 """Reading survey areas (ring + CRS) and polygons: the dispatcher over the per-format readers.
 
-:func:`read_area` reads GeoJSON, KML/GML and WKT files (:mod:`boustro.io.read_geojson`,
-:mod:`boustro.io.read_kml`, :mod:`boustro.io.read_wkt`); :func:`read_polygon` planar polygons.
+:func:`read_areas` reads every field of an area file, :func:`read_area` its first: GeoJSON, KML/GML
+and WKT text (:mod:`boustro.io.read_geojson`, :mod:`boustro.io.read_kml`,
+:mod:`boustro.io.read_wkt`), QGroundControl plans, KMZ and the formats GDAL reads (dispatched by
+:mod:`boustro.io.read_file`); :func:`read_polygon` planar polygons.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from .area import LONLAT, Area
 from .area import close_ring as _close_open
 from .area import crs_name as _crs_name
 from .read_fields import fields_from_text
+from .read_file import load_file
 from .read_geojson import (
     _feature_name,
     _from_geometry,
@@ -29,6 +32,7 @@ from .read_geojson import (
     read_polygon,
 )
 from .read_kml import _local, _north_first, _xml_coordinates, area_from_kml
+from .read_objects import area_from_object, areas_from_object
 from .read_wkt import _WKT_HEAD, _WKT_TYPES, _wkt_nested, area_from_wkt
 
 __all__ = [
@@ -39,8 +43,10 @@ __all__ = [
     "Area",
     "area_from_json",
     "area_from_kml",
+    "area_from_object",
     "area_from_text",
     "area_from_wkt",
+    "areas_from_object",
     "areas_from_text",
     "embedded_field",
     "polygon_from_json",
@@ -88,18 +94,8 @@ def area_from_text(
     raise PolygonFileError(f"{where}: unknown area format {kind!r}; expected json, kml or wkt")
 
 
-_AREA_KINDS = {
-    ".json": "json",
-    ".geojson": "json",
-    ".kml": "kml",
-    ".xml": "kml",
-    ".gml": "kml",
-    ".wkt": "wkt",
-}
-
-
 def read_area(path: str | os.PathLike[str], crs: str | None = None) -> Area:
-    """Read a survey area: GeoJSON, a JSON list of pairs, KML, or WKT (by extension, else sniffed).
+    """Read a survey area: the first field of any area file :func:`read_areas` reads.
 
     Args:
         path: the file.
@@ -108,6 +104,7 @@ def read_area(path: str | os.PathLike[str], crs: str | None = None) -> Area:
 
     Raises:
         PolygonFileError: missing or unreadable file, malformed content, no polygon.
+        MissingDependencyError: a format read through GDAL without pyogrio installed.
 
     Example:
         >>> from importlib import resources
@@ -116,21 +113,22 @@ def read_area(path: str | os.PathLike[str], crs: str | None = None) -> Area:
         ('test parcel', 'EPSG:4326', 19)
     """
     name = os.fspath(path)
-    try:
-        with open(name, encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except FileNotFoundError:
-        raise PolygonFileError(f"{name}: no such file") from None
-    except IsADirectoryError:
-        raise PolygonFileError(f"{name}: is a directory, not a polygon file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise PolygonFileError(f"{name}: cannot read: {exc}") from None
-    kind = _AREA_KINDS.get(os.path.splitext(name)[1].lower())
-    area = area_from_text(text, name, crs, kind)
-    if not area.name:
-        stem = os.path.splitext(os.path.basename(name))[0]
-        area = Area(area.ring, area.crs, stem, area.source, area.holes)
-    return area
+    loaded = load_file(name, crs)
+    if loaded.fields is not None:
+        if len(loaded.fields) > 1:
+            log.warning("%s: %d fields; only the first is used", name, len(loaded.fields))
+        area = loaded.fields[0][1]
+    else:
+        area = area_from_text(loaded.text or "", name, crs, loaded.kind)
+    return _named(area, name)
+
+
+def _named(area: Area, path: str) -> Area:
+    """``area``, named after the file's stem if it has no name."""
+    if area.name:
+        return area
+    stem = os.path.splitext(os.path.basename(path))[0]
+    return Area(area.ring, area.crs, stem, area.source, area.holes)
 
 
 def areas_from_text(
@@ -154,13 +152,18 @@ def areas_from_text(
 
 
 def read_areas(path: str | os.PathLike[str], crs: str | None = None) -> list[Area]:
-    """Read every field of an area file (see :mod:`boustro.io.read_fields`): each polygon of a
-    FeatureCollection, MultiPolygon, KML, GML or WKT MULTIPOLYGON/GEOMETRYCOLLECTION as an
-    :class:`Area` with its name, in file order. A file with one field gives
-    ``[read_area(path, crs)]``.
+    """Read every field of an area file, each an :class:`Area` with its name, in file order.
+
+    Text: GeoJSON (each polygon of a FeatureCollection, MultiPolygon), KML, GML, WKT
+    MULTIPOLYGON/GEOMETRYCOLLECTION (see :mod:`boustro.io.read_fields`), QGroundControl
+    ``.plan`` (:mod:`boustro.io.read_qgc`); binary: KMZ, and through GDAL (the ``boustro[geo]``
+    extra) Shapefile (plain or zipped), GeoPackage, FlatGeobuf, GeoParquet
+    (:mod:`boustro.io.read_gdal`); dispatched by :mod:`boustro.io.read_file`. A file with one
+    field gives ``[read_area(path, crs)]``.
 
     Raises:
         PolygonFileError: missing or unreadable file, malformed content, no polygon.
+        MissingDependencyError: a format read through GDAL without pyogrio installed.
 
     Example:
         >>> from importlib import resources
@@ -168,14 +171,18 @@ def read_areas(path: str | os.PathLike[str], crs: str | None = None) -> list[Are
         ['test parcel']
     """
     name = os.fspath(path)
-    try:
-        with open(name, encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except (OSError, UnicodeDecodeError):
-        return [read_area(path, crs)]  # its one-line error
-    kind = _AREA_KINDS.get(os.path.splitext(name)[1].lower()) or _sniff(text)
-    areas = areas_from_text(text, name, crs, kind)
-    return [read_area(path, crs)] if len(areas) == 1 else areas
+    loaded = load_file(name, crs)
+    if loaded.fields is None:
+        text = loaded.text or ""
+        areas = areas_from_text(text, name, crs, loaded.kind or _sniff(text))
+    elif len(loaded.fields) == 1:
+        areas = [loaded.fields[0][1]]
+    else:  # several fields: the unnamed ones are "field N"
+        areas = [
+            Area(a.ring, a.crs, n or f"field {i}", a.source, a.holes)
+            for i, (n, a) in enumerate(loaded.fields, start=1)
+        ]
+    return [_named(areas[0], name)] if len(areas) == 1 else areas
 
 
 def embedded_field() -> Area:

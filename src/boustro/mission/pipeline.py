@@ -11,12 +11,12 @@ from numpy.typing import ArrayLike
 from .._validate import as_number
 from ..errors import InvalidParameterError
 from ..geometry.region import Region
-from ..io.read import LONLAT, Area
+from ..io.read import Area
 from ..objectives.smith import SmithFitness
 from ..sensors import SensorSpacing
 from .defaults import DEFAULT_HULL_TOLERANCE
 from .map_back import angle_for_bearing, map_back
-from .project import Frame, Sensor, as_area, project, sensor_spacing
+from .project import AUTO_CRS, Frame, Sensor, as_area, project, sensor_spacing
 from .steps import plan_concave, plan_convex
 from .types import Mission
 
@@ -24,10 +24,10 @@ __all__ = ["plan_area"]
 
 
 def plan_area(
-    area: Area | ArrayLike,
+    area: Area | ArrayLike | Any,
     spacing: float | SensorSpacing | Any,
     *,
-    crs: str | None = LONLAT,
+    crs: str | None = AUTO_CRS,
     method: str | None = None,
     fitness: SmithFitness | Any | None = None,
     options: dict[str, Any] | None = None,
@@ -48,15 +48,20 @@ def plan_area(
     """Plan a survey area end to end: project, optimise, build the path, map it back.
 
     Args:
-        area: an :class:`~boustro.io.Area` (from :func:`boustro.io.read_area`), or an ``(N, 2)``
-            ring in ``crs``.
+        area: an :class:`~boustro.io.Area` (from :func:`boustro.io.read_area`), an ``(N, 2)``
+            ring in ``crs``, or a geometry object: a shapely Polygon (or a MultiPolygon of one
+            part), any object with ``__geo_interface__``, a GeoJSON geometry, Feature or
+            FeatureCollection mapping (:mod:`boustro.io.read_objects`). Several polygons are
+            several fields: refused, plan each of :func:`boustro.io.areas_from_object`.
         spacing: metres on the ground (planar units for planar input), or a sensor
             (:class:`~boustro.sensors.Camera`, :class:`~boustro.sensors.Swath`, or their
             :class:`~boustro.sensors.SensorSpacing`). An area narrower than the spacing in every
             direction (spacing >= its diameter) gets one lane along its diameter, planned by
             the region planner whatever ``method`` (its fitness is undefined: NaN).
-        crs: CRS of a bare ring (ignored for an :class:`Area`, which carries its own); default
-            WGS 84 longitude/latitude, ``None`` for planar.
+        crs: CRS of a bare ring or a geometry object (ignored for an :class:`Area`, which
+            carries its own); ``None`` for planar. The default ``"auto"``: WGS 84
+            longitude/latitude for a bare ring, PLANAR for a geometry object (it carries no
+            CRS; a GeoJSON mapping's ``crs`` member is used if it has one).
         method: optimiser (default :data:`DEFAULT_METHOD`), see :func:`boustro.optimize.optimize`;
             ``options`` override :data:`METHOD_OPTIONS`. Concave areas and areas with holes
             are optimised by :func:`boustro.plan.optimize_region` (a grid search with the

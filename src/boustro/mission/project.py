@@ -14,12 +14,13 @@ from ..errors import InvalidParameterError, InvalidPolygonError, NonConvexPolygo
 from ..geometry import Polygon
 from ..geometry.region import Region
 from ..io.crs import Projection, check_lonlat, parse_crs, projection_for
-from ..io.read import Area
+from ..io.read import LONLAT, Area
+from ..io.read_objects import area_from_object, is_geo_object
 from ..plan import nearly_convex
 from ..sensors import SensorSpacing
 from .defaults import log
 
-__all__ = ["Frame", "Sensor", "as_area", "project", "sensor_spacing"]
+__all__ = ["AUTO_CRS", "Frame", "Sensor", "as_area", "project", "sensor_spacing"]
 
 
 def sensor_spacing(spacing: Any) -> tuple[float, float, float, float | None, str | None]:
@@ -72,12 +73,34 @@ class Frame(NamedTuple):
     ground_area: float
 
 
-def as_area(area: Area | ArrayLike, crs: str | None, holes: Sequence[ArrayLike]) -> Area:
-    """An :class:`Area` with one spelling of its CRS ("EPSG:n", or None for planar)."""
-    if not isinstance(area, Area):
+#: The default ``crs`` of :func:`boustro.mission.plan_area`: WGS 84 longitude/latitude for bare
+#: vertices, planar for a geometry object (which carries no CRS).
+AUTO_CRS = "auto"
+
+
+def as_area(area: Area | ArrayLike | Any, crs: str | None, holes: Sequence[ArrayLike]) -> Area:
+    """An :class:`Area` with one spelling of its CRS ("EPSG:n", or None for planar), from an
+    Area, vertices (``crs`` ``"auto"``: lon/lat) or a geometry object (``"auto"``: planar, see
+    :mod:`boustro.io.read_objects`)."""
+    if isinstance(area, Area):
+        return dataclasses.replace(area, crs=parse_crs(area.crs))
+    if is_geo_object(area):
+        if len(holes):
+            raise InvalidParameterError(
+                "holes= goes with bare vertices; a geometry object carries its own holes"
+            )
+        got = area_from_object(area, None if crs == AUTO_CRS else crs)
+        return dataclasses.replace(got, crs=parse_crs(got.crs))
+    crs = LONLAT if crs == AUTO_CRS else crs
+    try:
+        ring = np.asarray(area, dtype=np.float64)
         hole_rings = tuple(np.asarray(h, dtype=np.float64) for h in holes)
-        return Area(np.asarray(area, dtype=np.float64), parse_crs(crs), "", "<array>", hole_rings)
-    return dataclasses.replace(area, crs=parse_crs(area.crs))
+    except (TypeError, ValueError):
+        raise InvalidParameterError(
+            "area must be an Area, (N, 2) vertices, a shapely geometry, an object with "
+            f"__geo_interface__ or a GeoJSON mapping, got {type(area).__name__}"
+        ) from None
+    return Area(ring, parse_crs(crs), "", "<array>", hole_rings)
 
 
 # -- step 1: project --------------------------------------------------------------------------

@@ -1,0 +1,75 @@
+"""Survey areas from a QGroundControl ``.plan`` file: its survey and geofence polygons.
+
+A ``.plan`` is JSON (``"fileType": "Plan"``). Its fields: each survey of the mission
+(``mission.items[*]`` with ``"complexItemType": "survey"``: its ``polygon``), named
+``survey N`` (N: the item's position in the mission, from 1), then each inclusion geofence
+(``geoFence.polygons[*]`` with ``"inclusion": true``, or the single ``geoFence.polygon`` of a
+version 1 file), named ``geofence N``. Every vertex is ``[latitude, longitude]`` (latitude
+FIRST, unlike GeoJSON), read as WGS 84 longitude/latitude; exclusion fences, circles and
+corridor scans are not fields.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..errors import PolygonFileError
+from .area import LONLAT, Area
+from .area import close_ring as _close_open
+from .read_geojson import _ring
+
+__all__ = ["is_qgc_plan", "qgc_fields"]
+
+
+def is_qgc_plan(data: Any) -> bool:
+    """Parsed JSON is a QGroundControl plan (``"fileType": "Plan"``)."""
+    return isinstance(data, dict) and data.get("fileType") == "Plan"
+
+
+def _lonlat(polygon: Any, where: str) -> np.ndarray:
+    return _close_open(_ring(polygon, where)[:, ::-1], where)  # [lat, lon] -> (lon, lat)
+
+
+def _survey_polygons(mission: Any, where: str) -> list[tuple[str, Any, str]]:
+    items = mission.get("items", []) if isinstance(mission, dict) else []
+    if not isinstance(items, list):
+        raise PolygonFileError(f"{where}: mission.items must be a list")
+    return [
+        (f"survey {k}", item.get("polygon"), f"{where}: mission item {k}")
+        for k, item in enumerate(items, start=1)
+        if isinstance(item, dict) and str(item.get("complexItemType", "")).lower() == "survey"
+    ]
+
+
+def _fence_polygons(fence: Any, where: str) -> list[tuple[str, Any, str]]:
+    if not isinstance(fence, dict):
+        return []
+    if "polygons" not in fence and fence.get("polygon"):  # version 1: one inclusion polygon
+        return [("geofence 1", fence["polygon"], f"{where}: geoFence.polygon")]
+    polygons = fence.get("polygons", [])
+    if not isinstance(polygons, list):
+        raise PolygonFileError(f"{where}: geoFence.polygons must be a list")
+    return [
+        (f"geofence {k}", p.get("polygon"), f"{where}: geoFence.polygons[{k - 1}]")
+        for k, p in enumerate(polygons, start=1)
+        if isinstance(p, dict) and p.get("inclusion", True) is True
+    ]
+
+
+def qgc_fields(data: dict[str, Any], where: str, crs: str | None) -> list[tuple[str, Area]]:
+    """Every survey and inclusion geofence polygon of a parsed ``.plan`` as ``(name, area)``.
+
+    Raises:
+        PolygonFileError: a polygon that is not a list of ``[lat, lon]`` pairs, or no survey
+            nor inclusion geofence polygon in the plan.
+    """
+    found = _survey_polygons(data.get("mission"), where)
+    found += _fence_polygons(data.get("geoFence"), where)
+    if not found:
+        raise PolygonFileError(
+            f"{where}: the QGroundControl plan holds no survey polygon and no inclusion "
+            "geofence (simple waypoint items are not an area)"
+        )
+    return [(name, Area(_lonlat(p, at), crs or LONLAT, name, at)) for name, p, at in found]
