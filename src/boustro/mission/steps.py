@@ -103,6 +103,7 @@ def plan_concave(
     decompose: bool | None,
     sweep: float | None,
     angle: float | None = None,
+    progress: bool = False,
 ) -> Planned:
     """A concave area or one with holes: cells, lanes and a tour (:func:`plan_region`); at a
     fixed ``angle`` one grid over the whole area, its offset optimised (:func:`optimize_offset`)."""
@@ -130,6 +131,7 @@ def plan_concave(
         start=frame.start if frame.given_start else None,  # None: the shortest tour
         **_path_options(frame, turnaround, speed, turn_time),
         **opts,
+        progress=progress,
     )
     if fixed is None:
         optimum = region_optimum(plan, s_plan)
