@@ -21,7 +21,7 @@ import numpy as np
 
 from boustro.geometry.random import random_convex_polygon
 from boustro.mission import estimate_work, plan_area
-from boustro.mission.estimate import COST_MODEL
+from boustro.mission.estimate import COST_MODEL, estimate_seconds
 
 
 def star(n: int, seed: int = 0) -> np.ndarray:
@@ -55,23 +55,33 @@ def measure(kind: str, n: int, lanes: int) -> dict:
     }
 
 
-def fit(rows: list[dict]) -> None:
-    """Least squares of the model's rows: ``b`` of ``a + b W`` (the median of ``(T - a) / W``),
-    and ``c, alpha, beta`` of ``a + c n^alpha L^beta`` on ``log(T - a)``."""
+def _powers(x: np.ndarray, log_c1: float, beta: float, log_c2: float, alpha: float):
+    n, lanes, a = x
+    return np.log(a + np.exp(log_c1) * lanes**beta + np.exp(log_c2) * n**alpha)
+
+
+def fit(rows: list[dict]) -> dict[str, tuple[float, ...]]:
+    """Least squares on the logarithm of the time: ``b`` of ``a + b W`` (the median of
+    ``(T - a) / W``), and ``c1, beta, c2, alpha`` of ``a + c1 L^beta + c2 n^alpha``."""
+    from scipy.optimize import curve_fit
+
+    model = dict(COST_MODEL)
     for kind, (a, *_rest) in COST_MODEL.items():
-        sel = [r for r in rows if r["kind"] == kind and r["measured_s"] > a]
-        if len(sel) < 3:
+        sel = [r for r in rows if r["kind"] == kind]
+        if len(sel) < 5:
             continue
-        t = np.array([r["measured_s"] for r in sel]) - a
+        t = np.array([r["measured_s"] for r in sel])
         if kind == "certified":
-            coef = [a, float(np.median(t / np.array([r["work"] for r in sel])))]
+            work = np.array([r["work"] for r in sel])
+            model[kind] = (a, float(np.median(np.maximum(t - a, 1e-3) / work)))
         else:
-            n = np.log([r["vertices"] for r in sel])
-            lanes = np.log([r["lanes"] for r in sel])
-            x = np.stack([np.ones_like(n), n, lanes], axis=1)
-            (logc, alpha, beta), *_ = np.linalg.lstsq(x, np.log(t), rcond=None)
-            coef = [a, float(np.exp(logc)), float(alpha), float(beta)]
-        print(f"{kind}: fitted {[float(f'{c:.3g}') for c in coef]} on {len(sel)} cases")
+            n = np.array([r["vertices"] for r in sel], float)
+            lanes = np.array([r["lanes"] for r in sel], float)
+            x = np.stack([n, lanes, np.full_like(n, a)])
+            p, _ = curve_fit(_powers, x, np.log(t), p0=(-6.0, 1.0, -12.0, 2.0), maxfev=20000)
+            model[kind] = (a, float(np.exp(p[0])), float(p[1]), float(np.exp(p[2])), float(p[3]))
+        print(f"{kind}: fitted {[float(f'{c:.3g}') for c in model[kind]]} on {len(sel)} cases")
+    return model
 
 
 def main() -> None:
@@ -79,10 +89,18 @@ def main() -> None:
     ap.add_argument("--sizes", default="10,30,50,200,1000,2000")
     ap.add_argument("--lanes", default="10,40,150")
     ap.add_argument("--fit", action="store_true")
+    ap.add_argument("--rows", help="fit and compare the JSON rows of an earlier run's output")
     ap.add_argument(
         "--max-product", type=float, default=1e5, help="skip cases with vertices x lanes above"
     )
     args = ap.parse_args()
+    if args.rows:
+        with open(args.rows) as f:
+            rows = [json.loads(line) for line in f if line.startswith("{")]
+        for r in rows:
+            r["estimated_s"] = estimate_seconds(r["kind"], r["vertices"], r["lanes"], r["work"])
+        report(rows, fit(rows) if args.fit else COST_MODEL)
+        return
     rows = []
     plan_area(convex(10), 100.0, crs=None)  # warm up (imports, compiled kernels)
     plan_area(star(50), 100.0, crs=None)
@@ -94,14 +112,32 @@ def main() -> None:
                 row = measure(kind, n, lanes)
                 rows.append(row)
                 print(json.dumps(row), flush=True)
-    if args.fit:
-        fit(rows)
-    ratios = [r["estimated_s"] / r["measured_s"] for r in rows if r["measured_s"] > 0]
-    print(
-        f"model {COST_MODEL}: estimate / measured over {len(ratios)} cases: "
-        f"{min(ratios):.2f}..{max(ratios):.2f} (median {float(np.median(ratios)):.2f}); "
-        f"log10 error rms {math.sqrt(np.mean(np.log10(ratios) ** 2)):.2f}"
-    )
+    report(rows, fit(rows) if args.fit else COST_MODEL)
+
+
+def report(rows: list[dict], model: dict[str, tuple[float, ...]]) -> None:
+    """The ratio estimate / measured of ``model`` over ``rows``, per row of the model."""
+    saved = dict(COST_MODEL)
+    COST_MODEL.update(model)
+    try:
+        for kind in model:
+            sel = [r for r in rows if r["kind"] == kind]
+            if not sel:
+                continue
+            ratios = np.array(
+                [
+                    estimate_seconds(kind, r["vertices"], r["lanes"], r["work"]) / r["measured_s"]
+                    for r in sel
+                ]
+            )
+            print(
+                f"{kind} {model[kind]}: estimate / measured over {len(sel)} cases "
+                f"{ratios.min():.2f}..{ratios.max():.2f} (median {np.median(ratios):.2f}; "
+                f"rms of log10 {math.sqrt(np.mean(np.log10(ratios) ** 2)):.2f})"
+            )
+    finally:
+        COST_MODEL.clear()
+        COST_MODEL.update(saved)
 
 
 if __name__ == "__main__":

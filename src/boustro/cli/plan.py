@@ -153,10 +153,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--force",
         action="store_true",
         help="plan even when the estimate before planning is absurd (more than 100000 lanes, "
-        "an area over 10000 km^2 or an estimated time over 10 minutes: usually a planar file "
-        "read as longitude/latitude, or longitude and latitude swapped); the hard limits (a "
-        "million lanes) still hold. A plan estimated over 3 s says so on stderr first and shows "
-        "progress bars (-q silences both)",
+        "an area over 10000 km^2, or an estimated time over 10 minutes for an area over 100 "
+        "km^2: usually a planar file read as longitude/latitude, or longitude and latitude "
+        "swapped); the hard limit (a million lanes) still holds. A plan estimated over 3 s "
+        "says so on stderr first and shows progress bars (-q silences both)",
     )
     _add_spacing(p)
     _add_optimiser(p)

@@ -13,6 +13,7 @@ from ..errors import InvalidParameterError
 from ..geometry.region import Region
 from ..io.read import LONLAT, Area
 from ..objectives.smith import SmithFitness
+from ..optimize.methods import resolve_method
 from ..sensors import SensorSpacing
 from .defaults import DEFAULT_HULL_TOLERANCE
 from .estimate import SAY_SECONDS, WorkEstimate, check_work, frame_estimate
@@ -120,14 +121,16 @@ def plan_area(
     area = as_area(area, crs, holes)
     sensor = Sensor(*sensor_spacing(spacing))
     frame = project(area, sensor, hull_tolerance, decompose, start)
-    estimate = check_work(frame, method, force=bool(force))
-    show = _say(estimate, progress)
     angle = fixed if bearing is None or fixed is None else angle_for_bearing(frame, fixed)
     if frame.region is None and sensor.spacing * frame.proj.scale_min >= frame.poly.diameter:
         # Narrower than the spacing in every direction (a lake under a wide swath): nothing to
         # optimise; the region planner lays one lane along the area's (not its hull's) diameter.
         frame = frame._replace(region=Region(frame.surveyed), poly=frame.surveyed, depth=0.0)
         method = None
+    if frame.region is None and method is not None:
+        resolve_method(method)  # an unknown method: its error before the estimate
+    estimate = check_work(frame, method, force=bool(force))
+    show = _say(estimate, progress)
     if frame.region is None:
         planned = plan_convex(
             frame,
