@@ -204,3 +204,12 @@ def test_the_api_is_silent_unless_asked(monkeypatch, capsys):
     assert "plan:" not in capsys.readouterr().err
     plan_area(U_SHAPE, 5.0, crs=None, progress=True)
     assert "tour and routing" in capsys.readouterr().err
+
+
+def test_a_long_convex_plan_shows_its_optimisers_bars(monkeypatch, capsys):
+    monkeypatch.setattr(pipeline, "SAY_SECONDS", 0.0)
+    plan_area(embedded_field(), 10.0, method="hybrid", progress=True)
+    err = capsys.readouterr().err
+    assert "planning ~29 lanes over 19 vertices" in err and "gradient:" in err
+    plan_area(embedded_field(), 10.0, method="hybrid")  # progress=False: silent
+    assert capsys.readouterr().err == ""

@@ -100,7 +100,8 @@ def plan_area(
         progress: for a plan whose estimate is over
             :data:`~boustro.mission.estimate.SAY_SECONDS`: ``True`` says it on stderr
             ("boustro: planning ~N lanes over V vertices, estimated T s") and shows a bar over
-            the stages of a concave plan; ``None`` says it, and shows the bar if stderr is a
+            the stages of a concave plan, or the optimiser's bars for a convex one (the hybrid
+            fallback, grid, gradient); ``None`` says it, and shows the bar if stderr is a
             terminal (what ``boustro plan`` does unless ``-q``); ``False`` (default): silent.
 
     Raises:
@@ -143,6 +144,7 @@ def plan_area(
             turn_time=turn_time,
             check_coverage=check_coverage,
             angle=angle,
+            progress=show,
         )
     else:
         planned = plan_concave(
