@@ -17,6 +17,7 @@ __all__ = [
     "NonConvexPolygonError",
     "PolygonFileError",
     "ProblemTooLargeError",
+    "TooMuchWorkError",
     "as_number",
 ]
 
@@ -40,6 +41,11 @@ class InvalidParameterError(BoustroError, ValueError):
 class ProblemTooLargeError(InvalidParameterError):
     """The exact global optimiser would need more work than :data:`boustro.global_opt.WORK_LIMIT`
     (many vertices at a small spacing); another method can take the problem."""
+
+
+class TooMuchWorkError(InvalidParameterError):
+    """The estimate before planning (:func:`boustro.mission.estimate_work`) is absurd: too many
+    lanes, too large an area or too long a time; ``force=True`` (``--force``) plans anyway."""
 
 
 class NoTransectError(BoustroError, ValueError):

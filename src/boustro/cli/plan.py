@@ -153,6 +153,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         "spike) and say on stderr what changed; a repair that splits the area into several "
         "polygons is refused. Without it an invalid AREA is refused with GEOS's reason",
     )
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="plan even when the estimate before planning is absurd (more than 100000 lanes, "
+        "an area over 10000 km^2, or an estimated time over 10 minutes for an area over 100 "
+        "km^2: usually a planar file read as longitude/latitude, or longitude and latitude "
+        "swapped); the hard limit (a million lanes) still holds. A plan estimated over 3 s "
+        "says so on stderr first and shows progress bars (-q silences both)",
+    )
     _add_spacing(p)
     _add_optimiser(p)
     _add_path(p)
@@ -434,6 +443,8 @@ def _plan_one(args: argparse.Namespace, area: Area) -> Mission:
         sweep=args.sweep,
         angle=None if args.angle is None else math.radians(args.angle),
         bearing=args.bearing,
+        force=args.force,
+        progress=False if args.quiet else None,
     )
 
 

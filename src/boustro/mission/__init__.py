@@ -15,9 +15,10 @@ from .defaults import (
     REGION_OPTIONS,
     log,
 )
+from .estimate import WorkEstimate
 from .map_back import _bearing
 from .map_back import map_back as _map_back
-from .pipeline import plan_area
+from .pipeline import estimate_work, plan_area
 from .project import Frame as _Frame
 from .project import Sensor as _Sensor
 from .project import _project_holes, _warn_far_start
@@ -39,6 +40,8 @@ __all__ = [
     "METHOD_OPTIONS",
     "REGION_OPTIONS",
     "Mission",
+    "WorkEstimate",
+    "estimate_work",
     "plan_area",
 ]
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Sequence
 from typing import Any
 
@@ -13,14 +14,16 @@ from ..errors import InvalidParameterError
 from ..geometry.region import Region
 from ..io.read import Area
 from ..objectives.smith import SmithFitness
+from ..optimize.methods import resolve_method
 from ..sensors import SensorSpacing
 from .defaults import DEFAULT_HULL_TOLERANCE
+from .estimate import SAY_SECONDS, WorkEstimate, check_work, frame_estimate
 from .map_back import angle_for_bearing, map_back
 from .project import AUTO_CRS, Frame, Sensor, as_area, project, sensor_spacing
 from .steps import plan_concave, plan_convex
 from .types import Mission
 
-__all__ = ["plan_area"]
+__all__ = ["estimate_work", "plan_area"]
 
 
 def plan_area(
@@ -44,6 +47,8 @@ def plan_area(
     sweep: float | None = None,
     angle: float | None = None,
     bearing: float | None = None,
+    force: bool = False,
+    progress: bool | None = False,
 ) -> Mission:
     """Plan a survey area end to end: project, optimise, build the path, map it back.
 
@@ -93,9 +98,21 @@ def plan_area(
             from true north (grid north, +y, for planar input), turned into the plan frame's
             angle at the area's centre (so ``Mission.bearing`` reports it back); as ``angle``
             otherwise.
+        force: plan even when the estimate before planning (:func:`estimate_work`) is absurd:
+            more than :data:`~boustro.mission.estimate.MAX_LANES` lanes, an area over
+            :data:`~boustro.mission.estimate.MAX_AREA_KM2` km^2 or an estimated time over
+            :data:`~boustro.mission.estimate.MAX_SECONDS` s (the hard limits, e.g.
+            :data:`boustro.models.MAX_TRANSECTS`, still hold).
+        progress: for a plan whose estimate is over
+            :data:`~boustro.mission.estimate.SAY_SECONDS`: ``True`` says it on stderr
+            ("boustro: planning ~N lanes over V vertices, estimated T s") and shows a bar over
+            the stages of a concave plan, or the optimiser's bars for a convex one (the hybrid
+            fallback, grid, gradient); ``None`` says it, and shows the bar if stderr is a
+            terminal (what ``boustro plan`` does unless ``-q``); ``False`` (default): silent.
 
     Raises:
-        InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError.
+        InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError,
+        TooMuchWorkError (the estimate, without ``force``).
 
     Example:
         >>> from boustro.io import embedded_field
@@ -116,6 +133,10 @@ def plan_area(
         # Nothing to optimise: the region planner lays one lane along the area's diameter.
         frame = frame._replace(region=Region(frame.surveyed), poly=frame.surveyed, depth=0.0)
         method = None
+    if frame.region is None and method is not None:
+        resolve_method(method)  # an unknown method: its error before the estimate
+    estimate = check_work(frame, method, force=bool(force))
+    show = _say(estimate, progress)
     settings: dict[str, Any] = dict(
         method=method,
         fitness=fitness,
@@ -126,6 +147,7 @@ def plan_area(
         turn_time=turn_time,
         check_coverage=check_coverage,
         angle=angle,
+        progress=show,
     )
     if frame.region is None:
         planned = plan_convex(frame, **settings)
@@ -138,6 +160,39 @@ def _narrower_than_the_spacing(frame: Frame, sensor: Sensor) -> bool:
     """A convex (or hull-planned) area whose diameter is at most the spacing on the ground: a
     lake under a wide swath. Planned over the area itself, not its hull."""
     return frame.region is None and sensor.spacing * frame.proj.scale_min >= frame.poly.diameter
+
+
+def _say(estimate: WorkEstimate, progress: bool | None) -> bool:
+    """Say a long estimate on stderr (unless ``progress`` is False); whether to show progress
+    bars (a long plan, and ``progress``, or ``None`` and stderr is a terminal)."""
+    if estimate.seconds <= SAY_SECONDS or progress is False:
+        return False
+    print(f"boustro: {estimate.describe()}", file=sys.stderr, flush=True)
+    return sys.stderr.isatty() if progress is None else True
+
+
+def estimate_work(
+    area: Area | ArrayLike,
+    spacing: float | SensorSpacing | Any,
+    *,
+    crs: str | None = AUTO_CRS,
+    holes: Sequence[ArrayLike] = (),
+    hull_tolerance: float = DEFAULT_HULL_TOLERANCE,
+    decompose: bool | None = None,
+    method: str | None = None,
+) -> WorkEstimate:
+    """What :func:`plan_area` would take for this area: lanes, vertices, holes, area and the
+    estimated time (the arguments as :func:`plan_area`'s). Never refuses (see ``force``).
+
+    Example:
+        >>> from boustro.io import embedded_field
+        >>> est = estimate_work(embedded_field(), 10.0)
+        >>> round(est.lanes), est.vertices, est.kind, est.seconds < 3
+        (29, 19, 'certified', True)
+    """
+    area = as_area(area, crs, holes)
+    sensor = Sensor(*sensor_spacing(spacing))
+    return frame_estimate(project(area, sensor, hull_tolerance, decompose, None), method)
 
 
 def _check_fixed_angle(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from typing import Any, NamedTuple
 
@@ -11,6 +12,7 @@ import numpy as np
 from ..errors import InvalidParameterError, ProblemTooLargeError
 from ..optimize import OptimizeResult, optimize
 from ..optimize.fixed_angle import optimize_offset
+from ..optimize.methods import resolve_method
 from ..plan import Coverage, Plan, build_plan, coverage
 from ..plan.region import plan_region
 from .defaults import DEFAULT_METHOD, FALLBACK_METHOD, METHOD_OPTIONS, REGION_OPTIONS, log
@@ -53,6 +55,7 @@ def plan_convex(
     turn_time: float,
     check_coverage: bool,
     angle: float | None = None,
+    progress: bool = False,
 ) -> Planned:
     """A convex area (or the hull of a nearly convex one): optimise, then build the plan; at a
     fixed ``angle`` (radians, plan frame) only the offset is optimised (:func:`optimize_offset`)."""
@@ -60,7 +63,7 @@ def plan_convex(
     if angle is not None:
         optimum = optimize_offset(frame.poly, s_plan, angle, fitness=fitness)
     else:
-        optimum = _optimize_convex(frame, s_plan, method, fitness, options)
+        optimum = _optimize_convex(frame, s_plan, method, fitness, options, progress)
     plan = build_plan(
         frame.poly,
         s_plan,
@@ -75,10 +78,19 @@ def plan_convex(
 
 
 def _optimize_convex(
-    frame: Frame, s_plan: float, method: str | None, fitness: Any, options: dict[str, Any] | None
+    frame: Frame,
+    s_plan: float,
+    method: str | None,
+    fitness: Any,
+    options: dict[str, Any] | None,
+    progress: bool = False,
 ) -> OptimizeResult:
+    """The optimum by ``method`` (default: certified, else the hybrid); with ``progress`` the
+    optimiser's bars on stderr where it has them (``progress`` parameter)."""
     chosen = method or DEFAULT_METHOD
     opts = dict(METHOD_OPTIONS.get(chosen, {}))
+    if progress and "progress" in inspect.signature(resolve_method(chosen)).parameters:
+        opts["progress"] = True
     opts.update(options or {})
     try:
         return optimize(frame.poly, s_plan, method=chosen, fitness=fitness, **opts)
@@ -86,7 +98,9 @@ def _optimize_convex(
         if method is not None:
             raise
         log.warning("%s; planning with the hybrid optimiser instead", exc)
-        return optimize(frame.poly, s_plan, method=FALLBACK_METHOD, fitness=fitness)
+        return optimize(
+            frame.poly, s_plan, method=FALLBACK_METHOD, fitness=fitness, progress=progress
+        )
 
 
 def plan_concave(
@@ -103,6 +117,7 @@ def plan_concave(
     decompose: bool | None,
     sweep: float | None,
     angle: float | None = None,
+    progress: bool = False,
 ) -> Planned:
     """A concave area or one with holes: cells, lanes and a tour (:func:`plan_region`); at a
     fixed ``angle`` one grid over the whole area, its offset optimised (:func:`optimize_offset`)."""
@@ -130,6 +145,7 @@ def plan_concave(
         start=frame.start if frame.given_start else None,  # None: the shortest tour
         **_path_options(frame, turnaround, speed, turn_time),
         **opts,
+        progress=progress,
     )
     if fixed is None:
         optimum = region_optimum(plan, s_plan)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any, Literal, NamedTuple
 
@@ -14,6 +16,7 @@ from ..geometry import Polygon
 from ..geometry.region import Region, as_region
 from ..models import check_spacing
 from ..optimize import OptimizeResult
+from ..optimize.problem import _progress_bar
 from .cells import _TOL, _check_float
 from .lanes import Lanes, region_lanes
 from .region_opt import _cells_for_sweep, _estimate, choose_sweep, optimize_region
@@ -97,6 +100,7 @@ def plan_region(
     area: float | None = None,
     min_width: float | None = None,
     merge_angle: float = math.radians(15.0),
+    progress: bool | None = False,
 ) -> Plan:
     """Plan a concave area or an area with holes: lanes, hole passes, one connected path.
 
@@ -128,6 +132,8 @@ def plan_region(
             (default two spacings), see :func:`decompose`.
         merge_angle: neighbouring cells whose optimised angles differ by less than this
             (radians, default 15 degrees) are merged and optimised again as one cell.
+        progress: a tqdm bar on stderr over the stages (optimisation of the cells, lanes,
+            tour and routing, path); ``None``: if stderr is a terminal.
 
     Returns:
         a :class:`~boustro.plan.Plan` with ``region``, ``cells``, per-transect angles and
@@ -168,11 +174,36 @@ def plan_region(
         merge_angle=merge_angle,
     )
     notes: list[str] = []
-    cells = _plan_cells(r, opts, notes)
-    cell_lanes = _plan_lanes(r, cells, opts)
-    tour = _plan_tour(r, cell_lanes, opts, notes)
-    path = _drive(tour, cell_lanes, opts)
+    bar = _Stages(progress)
+    with bar.stage("optimising the cells"):
+        cells = _plan_cells(r, opts, notes)
+    with bar.stage("lanes"):
+        cell_lanes = _plan_lanes(r, cells, opts)
+    with bar.stage("tour and routing"):
+        tour = _plan_tour(r, cell_lanes, opts, notes)
+    with bar.stage("path"):
+        path = _drive(tour, cell_lanes, opts)
+    bar.close()
     return _assemble(r, cell_lanes, tour, path, opts, notes)
+
+
+class _Stages:
+    """A bar over the named stages of :func:`plan_region` (nothing when not shown)."""
+
+    def __init__(self, progress: bool | None) -> None:
+        self.bar = _progress_bar(4, progress, "plan", unit="stage")
+
+    @contextlib.contextmanager
+    def stage(self, name: str) -> Iterator[None]:
+        if self.bar is not None:
+            self.bar.set_postfix_str(name)
+        yield
+        if self.bar is not None:
+            self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
 
 
 # -- step 1: check ----------------------------------------------------------------------------

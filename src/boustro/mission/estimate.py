@@ -1,0 +1,175 @@
+"""The estimate before planning: lanes, vertices, area and time, and the refusal of the absurd.
+
+A planar file read as longitude/latitude (a local grid in metres, 0..150, taken for degrees)
+becomes an area of continental size, and planning it ran for over 11 minutes before it was
+stopped. :func:`check_work` estimates the work from the projected area before any long work
+starts (the lanes across the convex hull at the worst angle, the vertices, the holes) and
+refuses the absurd with one line that names the numbers and the usual cause, unless forced.
+The cost model and its measured error are in ``docs/concave.md`` ("The estimate before
+planning"); ``benchmarks/estimate.py`` measures it.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, NamedTuple
+
+from .._validate import MAX_TRANSECTS
+from ..errors import TooMuchWorkError
+from ..optimize.exact import WORK_LIMIT, global_work
+from .defaults import DEFAULT_METHOD
+
+if TYPE_CHECKING:
+    from .project import Frame
+
+__all__ = [
+    "COST_MODEL",
+    "FIELD_AREA_KM2",
+    "MAX_AREA_KM2",
+    "MAX_LANES",
+    "MAX_SECONDS",
+    "SAY_SECONDS",
+    "WorkEstimate",
+    "check_work",
+    "estimate_seconds",
+    "frame_estimate",
+    "refusals",
+]
+
+#: Refusal thresholds (without ``force``): lanes across the area at the worst angle, ground
+#: area (km^2) and estimated planning time (seconds). Real fields and lakes (up to ~100 km^2 at
+#: a spacing of 1 m or more) are far below the first two; the time limit is for concave areas.
+MAX_LANES = 100_000
+MAX_AREA_KM2 = 10_000.0
+MAX_SECONDS = 600.0
+#: The largest real field or lake considered (km^2): never refused for its estimated time.
+FIELD_AREA_KM2 = 100.0
+#: Above this estimate ``boustro plan`` says on stderr what it is about to do.
+SAY_SECONDS = 3.0
+
+#: The cost model: seconds as a function of the vertices ``n`` (with the holes'), the lanes
+#: ``L`` at the worst angle and, for a convex area that the certified optimiser takes
+#: (``method="global"``, the default, within its :data:`~boustro.optimize.exact.WORK_LIMIT`),
+#: its work ``W`` (:func:`~boustro.optimize.exact.global_work`):
+#: ``"certified"``: ``a + b W``; ``"convex"`` (the hybrid or another optimiser) and ``"concave"``
+#: (a region, or with holes): ``a + c1 L^beta + c2 n^alpha``, as ``(a, c1, beta, c2, alpha)``.
+#: Fitted on this machine by ``benchmarks/estimate.py --fit`` (load 4-7); docs/concave.md states
+#: the fit's error (estimate / measured 0.34..2.8 on the calibration, 0.37..4.8 held out).
+COST_MODEL: dict[str, tuple[float, ...]] = {
+    "certified": (0.05, 3.18e-7),
+    "convex": (0.05, 0.329, 0.61, 8.94e-5, 1.72),
+    "concave": (0.05, 3.7e-5, 2.1, 2.94e-6, 2.33),
+}
+
+#: Above this many (hull) vertices the certified optimiser's work is over its limit whatever
+#: the spacing (at least ``n^3 (n - 1)``), so :func:`global_work` is not computed.
+_CERTIFIED_VERTICES = 100
+
+
+class WorkEstimate(NamedTuple):
+    """What planning an area will take, estimated before it starts."""
+
+    lanes: float  #: the convex hull's width at the worst angle (its diameter) / spacing
+    vertices: int  #: of the ring and the holes
+    holes: int
+    area_km2: float  #: ground area, km^2
+    kind: str  #: the row of :data:`COST_MODEL`: "certified", "convex" or "concave"
+    work: float  #: the certified optimiser's work (0 unless ``kind == "certified"``)
+    seconds: float  #: estimated planning time on a machine like the calibration's
+
+    @property
+    def concave(self) -> bool:
+        return self.kind == "concave"
+
+    def describe(self) -> str:
+        """``"planning ~N lanes over V vertices, estimated T s"``."""
+        return (
+            f"planning ~{self.lanes:.0f} lanes over {self.vertices} vertices"
+            f"{f' ({self.holes} holes)' if self.holes else ''}, estimated {self.seconds:.3g} s"
+        )
+
+
+def estimate_seconds(kind: str, vertices: int, lanes: float, work: float = 0.0) -> float:
+    """The cost model :data:`COST_MODEL` (row ``kind``) at ``vertices``, ``lanes``, ``work``."""
+    if kind == "certified":
+        a, b = COST_MODEL["certified"]
+        return a + b * work
+    a, c1, beta, c2, alpha = COST_MODEL[kind]
+    return a + c1 * max(lanes, 1.0) ** beta + c2 * max(vertices, 3) ** alpha
+
+
+def frame_estimate(frame: Frame, method: str | None = None) -> WorkEstimate:
+    """The estimate for a projected area (step 1 of :func:`plan_area`) and ``method``."""
+    s_plan = frame.sensor.spacing * frame.proj.scale_min
+    lanes = frame.surveyed.diameter / s_plan  # the hull's diameter: its widest extent
+    vertices = len(frame.ring) + sum(len(h) for h in frame.holes)
+    kind, work = ("concave" if frame.region is not None else "convex"), 0.0
+    if kind == "convex" and (method or DEFAULT_METHOD) == "global":
+        if len(frame.poly) <= _CERTIFIED_VERTICES:
+            w = global_work(frame.poly.vertices, s_plan)
+            if w <= WORK_LIMIT:
+                kind, work = "certified", w
+    return WorkEstimate(
+        lanes=float(lanes),
+        vertices=int(vertices),
+        holes=len(frame.holes),
+        area_km2=float(frame.ground_area) / 1e6,
+        kind=kind,
+        work=float(work),
+        seconds=estimate_seconds(kind, vertices, lanes, work),
+    )
+
+
+def _cause(frame: Frame, est: WorkEstimate) -> str:
+    """The usual cause of an absurd area, as a hint (empty when nothing points to one)."""
+    if not frame.proj.geographic:
+        return ""
+    ring = frame.area.ring
+    span = float(max(ring[:, 0].max() - ring[:, 0].min(), ring[:, 1].max() - ring[:, 1].min()))
+    if est.area_km2 > MAX_AREA_KM2 or span > 1.0:
+        return (
+            f"; the coordinates span {span:.3g} degrees: a planar file read as longitude/"
+            "latitude? (give its CRS with --crs, e.g. an EPSG code or 'planar'; or are "
+            "longitude and latitude swapped?)"
+        )
+    return ""
+
+
+def refusals(est: WorkEstimate) -> list[str]:
+    """Why ``est`` is absurd (empty when it is not): more than :data:`MAX_LANES` lanes, an area
+    over :data:`MAX_AREA_KM2` km^2, or an estimated time over :data:`MAX_SECONDS` s for an
+    area larger than a real field (:data:`FIELD_AREA_KM2`; a real field is never refused for
+    its time: it is told the estimate and shown progress)."""
+    why = []
+    if est.lanes > MAX_LANES:
+        why.append(f"~{est.lanes:.3g} lanes (more than {MAX_LANES})")
+    if est.area_km2 > MAX_AREA_KM2:
+        why.append(f"an area of {est.area_km2:.3g} km^2 (more than {MAX_AREA_KM2:.0f})")
+    if est.seconds > MAX_SECONDS and est.area_km2 > FIELD_AREA_KM2:
+        why.append(
+            f"an estimated {est.seconds:.3g} s (more than {MAX_SECONDS:.0f}) for "
+            f"{est.area_km2:.3g} km^2"
+        )
+    return why
+
+
+def check_work(frame: Frame, method: str | None = None, force: bool = False) -> WorkEstimate:
+    """The estimate for ``frame``; unless ``force``, :class:`TooMuchWorkError` when it is
+    absurd (:func:`refusals`), in one line that names the numbers and the usual cause. Beyond
+    the hard limit (:data:`~boustro._validate.MAX_TRANSECTS` lanes) it is refused even with
+    ``force``, in the words of that limit, with the cause."""
+    est = frame_estimate(frame, method)
+    where = frame.area.source or "area"
+    spacing = frame.sensor.spacing
+    if est.lanes > MAX_TRANSECTS:
+        raise TooMuchWorkError(
+            f"{where}: spacing {spacing:g} is too small for an area {est.lanes * spacing:.6g} "
+            f"across: about {est.lanes:.3g} transects, more than the {MAX_TRANSECTS} boustro "
+            f"handles{_cause(frame, est)}"
+        )
+    why = [] if force else refusals(est)
+    if why:
+        raise TooMuchWorkError(
+            f"{where}: refusing to plan {' and '.join(why)} for {est.vertices} vertices at "
+            f"spacing {spacing:g}{_cause(frame, est)}; pass --force (force=True) to plan anyway"
+        )
+    return est
