@@ -84,6 +84,8 @@ def area_from_text(
             raise PolygonFileError(
                 f"{where}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
             ) from None
+        except RecursionError:
+            raise PolygonFileError(f"{where}: JSON nested too deeply to read") from None
         return area_from_json(data, where, crs)
     if kind == "kml":
         return area_from_kml(text, where, crs)

@@ -185,7 +185,7 @@ def fields_from_text(text: str, where: str, crs: str | None, kind: str) -> list[
     if kind == "json":
         try:
             data = json.loads(text)
-        except json.JSONDecodeError:
+        except (json.JSONDecodeError, RecursionError):
             return []
         return _json_fields(data, where, crs)
     if kind == "kml":

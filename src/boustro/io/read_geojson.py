@@ -158,6 +158,8 @@ def read_polygon(path: str | os.PathLike[str]) -> Polygon:
         raise PolygonFileError(
             f"{name}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
         ) from None
+    except RecursionError:
+        raise PolygonFileError(f"{name}: JSON nested too deeply to read") from None
     return polygon_from_json(data, name)
 
 
