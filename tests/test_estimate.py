@@ -24,6 +24,8 @@ from boustro.mission.estimate import (
 )
 from boustro.models import MAX_TRANSECTS
 
+from .conftest import run_cli
+
 # Local planar surveys (metres from a corner): what a planar file read as lon/lat looks like.
 LOCAL_METRES = [(0.0, 0.0), (12.0, 0.0), (12.0, 8.0), (0.0, 8.0)]  # ~1.6e5 lanes at 10 m
 LARGER_METRES = [(0.0, 0.0), (120.0, 0.0), (120.0, 80.0), (0.0, 80.0)]  # ~1.7e6: a hard limit
@@ -213,3 +215,14 @@ def test_a_long_convex_plan_shows_its_optimisers_bars(monkeypatch, capsys):
     assert "planning ~29 lanes over 19 vertices" in err and "gradient:" in err
     plan_area(embedded_field(), 10.0, method="hybrid")  # progress=False: silent
     assert capsys.readouterr().err == ""
+
+
+def test_a_long_sliver_of_small_area_is_refused_for_its_time(capsys, tmp_path):
+    """Found by the fuzz test: 6 vertices, < 100 km^2, but ~68 000 lanes and an estimate of
+    days. A field is at most 100 km^2 AND at most 20 000 lanes across."""
+    path = tmp_path / "sliver.wkt"
+    path.write_text("POLYGON ((0 0, 1400000 0, 1400000 40, 700000 40, 700000 20, 0 20, 0 0))")
+    code, out, err = run_cli(capsys, "plan", path, "--crs", "planar", "--spacing", "20", "--json")
+    lines = err.strip().splitlines()
+    assert code == 2 and out == "" and len(lines) == 1
+    assert "estimated" in lines[0] and "--force" in lines[0]

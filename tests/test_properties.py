@@ -106,7 +106,9 @@ def _uncovered(shape: shapely.Polygon, plan) -> float:
     lane = np.asarray(plan.role()) == "lane"
     rects = swath_polygons(plan)[lane].reshape(-1, 4, 2)
     parts = [shapely.Polygon(r) for r in rects]
-    parts += list(shapely.buffer(shapely.linestrings(plan.transects[~lane]), plan.reach, quad_segs=64))
+    parts += list(
+        shapely.buffer(shapely.linestrings(plan.transects[~lane]), plan.reach, quad_segs=64)
+    )
     left = shape
     for part in parts:
         left = left.difference(part)

@@ -170,6 +170,36 @@ def test_a_hostile_prj_is_refused_before_gdal_and_proj(capsys, tmp_path):
     assert "is refused" in _one_line(code, err, path)
 
 
+@pytest.mark.usefixtures("pyproj_never_sees", "gdal_never_opens")
+@pytest.mark.parametrize("suffix", [".PRJ", ".Prj"])
+def test_a_hostile_prj_in_any_letter_case_is_refused_before_gdal(capsys, tmp_path, suffix):
+    """GDAL opens ``.PRJ`` as well as ``.prj``: the check before GDAL must see both."""
+    path = _write(tmp_path / "hostile.shp")
+    (tmp_path / "hostile.prj").unlink(missing_ok=True)
+    (tmp_path / f"hostile{suffix}").write_text(HOSTILE["wkt1-extension"])
+    code, _, err = run_cli(capsys, "plan", path, "--spacing", "20")
+    assert "is refused" in _one_line(code, err, path) and suffix in err
+
+
+@pytest.mark.usefixtures("gdal_never_opens")
+@pytest.mark.parametrize("tail", [b"\n\x00", b"<!-- \xe9 -->\n"])
+def test_a_disguised_vrt_is_refused_and_gdal_never_guesses(capsys, tmp_path, tail):
+    """A VRT naming another file, made "binary" by one NUL or one non-UTF-8 byte, must not
+    reach GDAL (which would open the file it names)."""
+    target = tmp_path / "poly.csv"
+    target.write_text('WKT\n"POLYGON((5 52,5.001 52,5.001 52.001,5 52.001,5 52))"\n')
+    vrt = (
+        f"<OGRVRTDataSource><OGRVRTLayer name='s'><SrcDataSource>{target}</SrcDataSource>"
+        "<SrcLayer>poly</SrcLayer><GeometryType>wkbPolygon</GeometryType>"
+        "<GeometryField encoding='WKT' field='WKT'/></OGRVRTLayer></OGRVRTDataSource>"
+    ).encode()
+    path = tmp_path / "evil.bin"
+    path.write_bytes(vrt + tail)
+    code, out, err = run_cli(capsys, "plan", path, "--spacing", "10", "--json")
+    assert "neither UTF-8 text nor a binary area format" in _one_line(code, err, str(path))
+    assert out == ""
+
+
 def test_missing_pyogrio_is_one_line_naming_the_extra(capsys, tmp_path, monkeypatch):
     path = _write(tmp_path / "fields.gpkg")
     real = builtins.__import__

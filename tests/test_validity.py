@@ -214,3 +214,19 @@ def test_diameter_of_a_large_ring_is_its_largest_vertex_distance():
         diffs = v[:, None, :] - v[None, :, :]
         expected = float(np.sqrt(np.max(np.einsum("ijk,ijk->ij", diffs, diffs))))
         assert Polygon(v).diameter == expected
+
+
+def test_coordinates_near_the_float_limit_give_one_line_and_no_warning(tmp_path):
+    """GEOS overflows on 1e308 coordinates; the user sees the range error alone (found by
+    review: a RuntimeWarning with its source line was printed before it)."""
+    path = tmp_path / "big.geojson"
+    ring = [[0, 0], [1e308, 0], [1e308, 1e308], [0, 0]]
+    path.write_text(json.dumps({"type": "Polygon", "coordinates": [ring]}))
+    run = subprocess.run(
+        [sys.executable, "-m", "boustro", "plan", str(path), "--crs", "planar", "--spacing", "1"],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 2
+    assert run.stderr.strip().splitlines() == [run.stderr.strip()]
+    assert "within +-1e+100" in run.stderr and "Warning" not in run.stderr

@@ -59,7 +59,8 @@ def ring_problem(v: NDArray[np.float64], tol: float) -> str | None:
         return None  # three distinct, non-collinear vertices: always simple, no edge pairs
     import shapely
 
-    reason = shapely.is_valid_reason(shapely.polygons(v))
+    with np.errstate(all="ignore"):  # coordinates near the float limit: the range check says
+        reason = shapely.is_valid_reason(shapely.polygons(v))
     if reason != "Valid Geometry":
         kind = "self-intersecting" if "intersection" in reason.lower() else "invalid"
         return f"the polygon is {kind}: {geos_reason(reason)}"

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import json
 import os
-from typing import NamedTuple
+from typing import NamedTuple, NoReturn
 
-from ..errors import MissingDependencyError, PolygonFileError
+from ..errors import PolygonFileError
 from .area import Area
 from .read_gdal import gdal_fields, zipped_shapefile_fields
 from .read_qgc import is_qgc_plan, qgc_fields
@@ -93,19 +93,16 @@ def _from_zip(data: bytes, name: str, crs: str | None) -> Loaded:
     return Loaded(None, None, fields)
 
 
-def _unknown_binary(name: str, crs: str | None) -> Loaded:
-    why = (
-        f"{name}: neither UTF-8 text nor a binary area format (KMZ, zipped Shapefile, "
-        "Shapefile, GeoPackage, FlatGeobuf, GeoParquet"
+def _unknown_binary(name: str) -> NoReturn:
+    """Refuse a file that is neither UTF-8 text nor a binary format recognised by its signature.
+
+    GDAL is never asked to guess: given any other file it would pick a driver by content, and a
+    VRT or similar text naming other files would make it open them."""
+    raise PolygonFileError(
+        f"{name}: neither UTF-8 text nor a binary area format boustro reads (KMZ, zipped "
+        "Shapefile, Shapefile, GeoPackage, FlatGeobuf, GeoParquet, recognised by their "
+        "signature); save text formats as UTF-8"
     )
-    try:
-        return Loaded(None, None, gdal_fields(name, name, crs, "this binary file"))
-    except MissingDependencyError:
-        raise PolygonFileError(f"{why}; other formats need pyogrio: 'boustro[geo]')") from None
-    except PolygonFileError as exc:
-        if "GDAL cannot read it" not in str(exc):
-            raise
-        raise PolygonFileError(f"{why}, nor a format GDAL reads)") from None
 
 
 def _plan(text: str, name: str, crs: str | None) -> Loaded | None:
@@ -149,9 +146,9 @@ def load_file(name: str, crs: str | None) -> Loaded:
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError:
-        return _unknown_binary(name, crs)
+        _unknown_binary(name)
     if "\x00" in text[:4096]:
-        return _unknown_binary(name, crs)
+        _unknown_binary(name)
     kind = _TEXT_KINDS.get(os.path.splitext(name)[1].lower())
     if name.lower().endswith(".plan") or (text.lstrip()[:1] == "{" and '"Plan"' in text):
         plan = _plan(text, name, crs)

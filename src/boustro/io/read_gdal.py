@@ -46,12 +46,15 @@ def _pyogrio(what: str) -> Any:
 
 
 def _check_prj(shp: str, where: str) -> None:
-    prj = os.path.splitext(shp)[0] + ".prj"
-    if not os.path.exists(prj):
-        return
-    with open(prj, "rb") as fh:
-        raw = fh.read(MAX_WKT_CHARS + 1)
-    crs_from_file(raw.decode("utf-8", "replace"), f"{where}: .prj")
+    """Every ``.prj`` beside the Shapefile, in any letter case (GDAL opens ``.PRJ`` too)."""
+    stem = os.path.splitext(shp)[0]
+    folder = os.path.dirname(stem) or "."
+    base = os.path.basename(stem)
+    for entry in sorted(os.listdir(folder)):
+        if entry.lower() == base.lower() + ".prj":
+            with open(os.path.join(folder, entry), "rb") as fh:
+                raw = fh.read(MAX_WKT_CHARS + 1)
+            crs_from_file(raw.decode("utf-8", "replace"), f"{where}: {entry[len(base) :]}")
 
 
 def _check_gpkg(path: str, where: str) -> None:

@@ -43,7 +43,8 @@ def area_problem(area: Area) -> str | None:
     """
     import shapely
 
-    reason = shapely.is_valid_reason(_shapely_area(area))
+    with np.errstate(all="ignore"):  # coordinates near the float limit: the range check says
+        reason = shapely.is_valid_reason(_shapely_area(area))
     return None if reason == "Valid Geometry" else geos_reason(reason)
 
 

@@ -41,8 +41,11 @@ __all__ = [
 MAX_LANES = 100_000
 MAX_AREA_KM2 = 10_000.0
 MAX_SECONDS = 600.0
-#: The largest real field or lake considered (km^2): never refused for its estimated time.
+#: The largest real field or lake considered: at most this area (km^2) and this many lanes at
+#: the worst angle (a 10 km square at 1 m: 14,142); never refused for its estimated time. A
+#: thin sliver of small area can still be thousands of kilometres long (a mistaken file).
 FIELD_AREA_KM2 = 100.0
+FIELD_LANES = 20_000
 #: Above this estimate ``boustro plan`` says on stderr what it is about to do.
 SAY_SECONDS = 3.0
 
@@ -137,17 +140,17 @@ def _cause(frame: Frame, est: WorkEstimate) -> str:
 def refusals(est: WorkEstimate) -> list[str]:
     """Why ``est`` is absurd (empty when it is not): more than :data:`MAX_LANES` lanes, an area
     over :data:`MAX_AREA_KM2` km^2, or an estimated time over :data:`MAX_SECONDS` s for an
-    area larger than a real field (:data:`FIELD_AREA_KM2`; a real field is never refused for
-    its time: it is told the estimate and shown progress)."""
+    area larger than a real field (:data:`FIELD_AREA_KM2`, :data:`FIELD_LANES`; a real field
+    is never refused for its time: it is told the estimate and shown progress)."""
     why = []
     if est.lanes > MAX_LANES:
         why.append(f"~{est.lanes:.3g} lanes (more than {MAX_LANES})")
     if est.area_km2 > MAX_AREA_KM2:
         why.append(f"an area of {est.area_km2:.3g} km^2 (more than {MAX_AREA_KM2:.0f})")
-    if est.seconds > MAX_SECONDS and est.area_km2 > FIELD_AREA_KM2:
+    if est.seconds > MAX_SECONDS and (est.area_km2 > FIELD_AREA_KM2 or est.lanes > FIELD_LANES):
         why.append(
             f"an estimated {est.seconds:.3g} s (more than {MAX_SECONDS:.0f}) for "
-            f"{est.area_km2:.3g} km^2"
+            f"{est.area_km2:.3g} km^2 and ~{est.lanes:.3g} lanes"
         )
     return why
 
