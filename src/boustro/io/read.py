@@ -8,7 +8,6 @@ and WKT text (:mod:`boustro.io.read_geojson`, :mod:`boustro.io.read_kml`,
 
 from __future__ import annotations
 
-import json
 import os
 from importlib import resources
 
@@ -28,6 +27,7 @@ from .read_geojson import (
     _ring,
     area_from_json,
     log,
+    parse_json,
     polygon_from_json,
     read_polygon,
 )
@@ -78,15 +78,7 @@ def area_from_text(
     if kind is None:
         kind = _sniff(text)
     if kind == "json":
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise PolygonFileError(
-                f"{where}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
-            ) from None
-        except RecursionError:
-            raise PolygonFileError(f"{where}: JSON nested too deeply to read") from None
-        return area_from_json(data, where, crs)
+        return area_from_json(parse_json(text, where), where, crs)
     if kind == "kml":
         return area_from_kml(text, where, crs)
     if kind == "wkt":

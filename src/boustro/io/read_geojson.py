@@ -16,7 +16,7 @@ from .area import LONLAT, Area
 from .area import close_ring as _close_open
 from .file_crs import crs_from_file
 
-__all__ = ["area_from_json", "polygon_from_json", "read_polygon"]
+__all__ = ["area_from_json", "parse_json", "polygon_from_json", "read_polygon"]
 
 log = logging.getLogger("boustro.io.read")  # the name of the module these readers came from
 
@@ -152,15 +152,19 @@ def read_polygon(path: str | os.PathLike[str]) -> Polygon:
         raise PolygonFileError(f"{name}: no such file") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise PolygonFileError(f"{name}: cannot read: {exc}") from None
+    return polygon_from_json(parse_json(text, name), name)
+
+
+def parse_json(text: str, where: str) -> Any:
+    """``json.loads(text)``, its errors as one :class:`PolygonFileError` line naming ``where``."""
     try:
-        data = json.loads(text)
+        return json.loads(text)
     except json.JSONDecodeError as exc:
         raise PolygonFileError(
-            f"{name}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
+            f"{where}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
         ) from None
     except RecursionError:
-        raise PolygonFileError(f"{name}: JSON nested too deeply to read") from None
-    return polygon_from_json(data, name)
+        raise PolygonFileError(f"{where}: JSON nested too deeply to read") from None
 
 
 def _geojson_crs(data: Any, where: str = "input") -> str | None:
