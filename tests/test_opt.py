@@ -61,7 +61,7 @@ def test_register_objective_and_duplicate(clean_objectives):
 def test_cli_plan_objectives_come_from_the_registry(clean_objectives):
     from boustro.cli import plan as cli_plan
 
-    assert sorted(cli_plan.cli_objectives()) == ["fewest-transects", "smith"]
+    assert sorted(cli_plan.cli_objectives()) == ["fewest-transects", "smith", "time"]
     register_objective("my_cost", FewestTransects)
     assert "my-cost" in cli_plan.cli_objectives()
 

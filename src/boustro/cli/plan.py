@@ -209,10 +209,13 @@ def _add_optimiser(p: argparse.ArgumentParser) -> None:
     opt.add_argument(
         "--objective",
         choices=sorted(cli_objectives()),
-        default="smith",
-        help="what the optimiser seeks: smith (Eq. 1 of the paper, maximised; default), "
-        "or fewest-transects (fewest lanes, i.e. turns, for full coverage: the minimum-width "
-        "direction); the global method solves each exactly",
+        default=None,
+        help="what the optimiser seeks: time (the mission time of the flown plan: path / "
+        "--speed + turns x --turn-time, minimised over every angle and offset by a certified "
+        "search; the DEFAULT whenever --speed is given), smith (Eq. 1 of the paper, "
+        "maximised; the default without --speed), or fewest-transects (fewest lanes, i.e. "
+        "turns, for full coverage: the minimum-width direction on a convex area, the "
+        "certified search on a concave one); --json says certified and gap",
     )
     fixed = opt.add_mutually_exclusive_group()
     fixed.add_argument(
@@ -426,7 +429,8 @@ def _plot_bytes(mission: Mission, path: str) -> bytes:
 
 def _plan_one(args: argparse.Namespace, area: Area) -> Mission:
     spacing = _spacing(args, embedded=args.area is None)
-    fitness = cli_objectives()[args.objective]()
+    name = args.objective or ("time" if args.speed is not None else "smith")
+    fitness = cli_objectives()[name]()
     return plan_area(
         area,
         spacing,

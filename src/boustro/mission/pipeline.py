@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import sys
 from collections.abc import Sequence
@@ -14,13 +15,16 @@ from ..errors import InvalidParameterError
 from ..geometry.region import Region
 from ..io.read import Area
 from ..objectives.smith import SmithFitness
+from ..objectives.time import MissionTime
+from ..optimize.cover import CoverCost
 from ..optimize.methods import resolve_method
 from ..sensors import SensorSpacing
 from .defaults import DEFAULT_HULL_TOLERANCE
+from .cover import cover_cost, plan_cover
 from .estimate import SAY_SECONDS, WorkEstimate, check_work, frame_estimate
 from .map_back import angle_for_bearing, map_back
 from .project import AUTO_CRS, Frame, Sensor, as_area, project, sensor_spacing
-from .steps import plan_concave, plan_convex
+from .steps import Planned, plan_concave, plan_convex
 from .types import Mission
 
 __all__ = ["estimate_work", "plan_area"]
@@ -71,7 +75,10 @@ def plan_area(
             ``options`` override :data:`METHOD_OPTIONS`. Concave areas and areas with holes
             are optimised by :func:`boustro.plan.optimize_region` (a grid search with the
             exact per-segment fitness, :data:`REGION_OPTIONS`, ``options`` override it).
-        fitness: the objective (default Eq. 1).
+        fitness: the objective (default Eq. 1, or mission time when ``speed`` is given):
+            :class:`~boustro.objectives.MissionTime` (and fewest transects on a concave area or
+            one with holes) is minimised over the flown plan by the certified search
+            (:func:`boustro.optimize.cover.cover_optimum`, method ``certified-cover``).
         start: ``(x, y)`` in the area's coordinates; the path starts at the corner nearest it
             (default: the area's first vertex).
         turnaround: run-in / run-out distance beyond each transect end, metres.
@@ -149,11 +156,49 @@ def plan_area(
         angle=angle,
         progress=show,
     )
-    if frame.region is None:
+    if fitness is None and speed is not None:
+        fitness = settings["fitness"] = MissionTime()
+    cost = cover_cost(fitness, frame, speed, turn_time, turnaround)
+    if cost is not None:
+        planned = _plan_for_cost(frame, cost, decompose, sweep, settings)
+    elif frame.region is None:
         planned = plan_convex(frame, **settings)
     else:
         planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
     return map_back(frame, planned, altitude=altitude, turnaround=turnaround)
+
+
+def _plan_for_cost(
+    frame: Frame,
+    cost: CoverCost,
+    decompose: bool | None,
+    sweep: float | None,
+    settings: dict[str, Any],
+) -> Planned:
+    """A plan-level objective: the certified one-grid plan (:func:`plan_cover`); for a concave
+    area or one with holes also the decomposed plan (cells optimised for Eq. 1, not certified),
+    kept only if it costs less (always with ``decompose=True``, never with ``False``)."""
+    if settings["method"] not in (None, "certified-cover"):
+        raise InvalidParameterError(
+            f"the {cost.name} objective is optimised by the certified search over the flown "
+            f"plan (method 'certified-cover'), not by {settings['method']!r}: leave --method out"
+        )
+    keys = ("layout", "turnaround", "speed", "turn_time", "check_coverage", "angle")
+    if frame.region is None or decompose is False or settings["angle"] is not None:
+        return plan_cover(frame, cost, **{k: settings[k] for k in keys})
+    cells = plan_concave(
+        frame, decompose=True, sweep=sweep, **{**settings, "fitness": None, "method": None}
+    )
+    if decompose:
+        return cells
+    one = plan_cover(frame, cost, **{k: settings[k] for k in keys})
+    scale = frame.proj.scale
+    value = cost.of(cells.plan.stats.path_length * scale, cells.plan.stats.n_turns)
+    if value < one.optimum.fitness:
+        info = {**cells.optimum.info, "objective": cost.name, "one_grid": one.optimum.fitness}
+        return cells._replace(optimum=dataclasses.replace(cells.optimum, info=info))
+    info = {**one.optimum.info, "decomposed": value}
+    return one._replace(optimum=dataclasses.replace(one.optimum, info=info))
 
 
 def _narrower_than_the_spacing(frame: Frame, sensor: Sensor) -> bool:

@@ -17,6 +17,37 @@ from ..plan import Coverage, Plan, PlanStats
 __all__ = ["Mission"]
 
 
+def certificate(optimum: OptimizeResult | None) -> dict[str, Any]:
+    """``objective``, ``certified`` and ``gap`` (and ``lower_bound`` for a minimised
+    objective) of an optimum: certified when the method proves its gap within its tolerance
+    (the certified cover search; the global Eq. 1 search when converged); ``gap`` is ``None``
+    without a certificate."""
+    if optimum is None:
+        return {"certified": False, "gap": None}
+    info = optimum.info
+    if "gap" in info and "lower_bound" in info and "certified" not in info:  # exact solvers
+        gap = info["gap"]
+        return {
+            "objective": info.get("objective"),
+            "certified": gap is not None and bool(info.get("converged", True)),
+            "gap": gap,
+            "lower_bound": info["lower_bound"],
+        }
+    if "certified" in info:
+        out = {"objective": info.get("objective"), "certified": bool(info["certified"])}
+        out["gap"] = info.get("gap")
+        if "lower_bound" in info:
+            out["lower_bound"] = info["lower_bound"]
+        return out
+    if optimum.upper_bound is not None:
+        return {
+            "objective": "smith",
+            "certified": bool(info.get("converged", True)),
+            "gap": optimum.gap,
+        }
+    return {"certified": False, "gap": None}
+
+
 @dataclass(frozen=True)
 class Mission:
     """A plan over a real area: the plan frame's :class:`~boustro.plan.Plan` and its coordinates.
@@ -109,6 +140,7 @@ class Mission:
             "angle_deg": math.degrees(self.plan.angle),
             "offset": self.plan.offset,
             "method": self.optimum.method,
+            **certificate(self.optimum),
             # undefined (None) for a single lane: Eq. 1 needs two transects (region_opt)
             "fitness": None if math.isnan(self.optimum.fitness) else self.optimum.fitness,
             "layout": self.plan.layout,
@@ -141,6 +173,7 @@ class Mission:
                     "offset": c.offset,
                     "fitness": None if math.isnan(c.fitness) else c.fitness,
                     "n_transects": c.n_transects,
+                    **certificate(c.optimum),
                     "area_m2": c.region.area / self.plan.ground_scale**2,
                 }
                 for c in self.plan.cells

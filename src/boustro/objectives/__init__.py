@@ -16,6 +16,7 @@ from .plan_objective import LengthObjective, PreferredAngle, as_plan_objective
 from .plan_objective import _Negated as _Negated  # re-exported (private)
 from .registry import OBJECTIVES, get_objective, objective_key, register_objective
 from .smith import SmithFitness, smith_fitness
+from .time import MissionTime
 from .turns import GRAZE, FewestTransects, coverage_count
 
 __all__ = [
@@ -24,6 +25,7 @@ __all__ = [
     "BaseObjective",
     "FewestTransects",
     "LengthObjective",
+    "MissionTime",
     "Objective",
     "PlanObjective",
     "PreferredAngle",

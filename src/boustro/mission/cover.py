@@ -1,0 +1,128 @@
+"""Step 2 for plan-level objectives (mission time, fewest turns): the certified cover search
+with the real planner as its upper bound (:func:`boustro.optimize.cover.cover_optimum`)."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Any
+
+from ..errors import InvalidParameterError
+from ..objectives import FewestTransects, MissionTime
+from ..optimize.cover import CoverCost, cover_optimum
+from ..plan import Plan, build_plan, coverage
+from ..plan.region import plan_region
+from .project import Frame
+from .steps import Planned, _path_options
+
+__all__ = ["cover_cost", "plan_cover"]
+
+
+def cover_cost(
+    fitness: Any, frame: Frame, speed: float | None, turn_time: float, turnaround: float
+) -> CoverCost | None:
+    """The :class:`CoverCost` of a plan-level objective, or ``None`` for the others: mission
+    time (:class:`MissionTime`, its speed and turn time default to the plan's), and fewest
+    transects on a concave area or one with holes (fewest lanes and hole passes)."""
+    scale = frame.proj.scale_max
+    if isinstance(fitness, MissionTime):
+        v = fitness.speed if fitness.speed is not None else speed
+        if v is None:
+            raise InvalidParameterError(
+                "the time objective needs a speed (--speed M/S, or plan_area(speed=...))"
+            )
+        tt = fitness.turn_time if fitness.turn_time is not None else turn_time
+        return CoverCost.time(
+            float(v), float(tt), turnaround=turnaround * scale, ground_scale=frame.proj.scale
+        )
+    if isinstance(fitness, FewestTransects) and frame.region is not None:
+        return CoverCost.fewest_turns(turnaround=turnaround * scale)
+    return None
+
+
+def _planner(frame: Frame, layout: str, options: dict[str, Any]) -> Callable[..., Plan]:
+    """The plan of one layout, as the final plan is built (convex or region planner)."""
+    s_plan = frame.sensor.spacing * frame.proj.scale_min
+
+    if frame.region is None:
+
+        def convex(angle: float, offset: float) -> Plan:
+            plan = build_plan(
+                frame.poly, s_plan, angle, offset, layout=layout, start=frame.start, **options
+            )
+            if frame.given_start:
+                return plan
+            # no start given: the corner of the first lane's other end flips the turns' sides
+            other = build_plan(
+                frame.poly, s_plan, angle, offset, layout=layout,
+                start=plan.waypoints[_first_end(plan)], **options,
+            )  # fmt: skip
+            return other if _cost_key(other) < _cost_key(plan) else plan
+
+        return convex
+
+    def region(angle: float, offset: float) -> Plan:
+        return plan_region(
+            frame.region,  # type: ignore[arg-type]
+            s_plan,
+            decompose_area=False,
+            angle=angle,
+            offset=offset,
+            layout=layout,  # type: ignore[arg-type]
+            start=frame.start if frame.given_start else None,
+            **options,
+        )
+
+    return region
+
+
+def _first_end(plan: Plan) -> int:
+    kinds = list(plan.kinds)
+    return kinds.index("end") if "end" in kinds else len(kinds) - 1
+
+
+def _cost_key(plan: Plan) -> tuple[float, int]:
+    return (plan.stats.path_length, plan.stats.n_turns)
+
+
+def plan_cover(
+    frame: Frame,
+    cost: CoverCost,
+    *,
+    layout: str,
+    turnaround: float,
+    speed: float | None,
+    turn_time: float,
+    check_coverage: bool,
+    angle: float | None = None,
+) -> Planned:
+    """The plan of the layout with the least ``cost``, certified by
+    :func:`~boustro.optimize.cover.cover_optimum` (over every angle, or at ``angle``)."""
+    options = _path_options(frame, turnaround, speed, turn_time)
+    planner = _planner(frame, layout, options)
+    scale = frame.proj.scale
+
+    def evaluate(a: float, d: float) -> float:
+        st = planner(a, d).stats
+        return cost.of(st.path_length * scale, st.n_turns)
+
+    s_plan = frame.sensor.spacing * frame.proj.scale_min
+    target = frame.poly if frame.region is None else frame.region
+    optimum = cover_optimum(
+        target,
+        s_plan,
+        cost,
+        evaluate,
+        reach=frame.sensor.reach * frame.proj.scale_min,
+        angle=angle,
+        boustrophedon=frame.region is None,
+    )
+    plan = planner(optimum.angle, optimum.offset)
+    if plan.cells:  # the one cell carries the certificate
+        cells = tuple(
+            dataclasses.replace(c, fitness=optimum.fitness, optimum=optimum) for c in plan.cells
+        )
+        plan = dataclasses.replace(plan, cells=cells)
+    surveyed = frame.surveyed if frame.region is None else frame.region
+    cov = coverage(plan, surveyed) if check_coverage else None  # type: ignore[arg-type]
+    return Planned(plan, optimum, cov)

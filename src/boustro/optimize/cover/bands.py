@@ -1,0 +1,351 @@
+"""Per-band lane statistics of a transect grid over a region, for many layouts at once.
+
+For a layout ``(theta, d)`` line ``k`` is ``n . (p - o) = d + k s`` with ``u = (cos theta,
+sin theta)``, ``n = (-sin theta, cos theta)``; its *band* is ``|n . (p - o) - c_k| <= reach``.
+The lane a coverage-guaranteed plan flies on line ``k`` spans the projection onto the line of
+the band's part of the area (merged where pieces overlap), minus the line's parts inside holes
+(:func:`boustro.plan.lanes.region_lanes`). The projection of a compact set is the projection of
+its boundary, so each band's projection is the union of the projections of the boundary edges
+clipped to the band and of the area's chords on the band's two edge lines: computed here from
+the edges in ``O(E + crossings)`` per layout, with no decomposition of the area.
+
+:func:`band_stats` evaluates a *sandwich*: an inner set (contained in every area the layouts of
+a leaf can see) and an outer set (containing each), and returns per layout and band the
+quantities the certified bounds need (:mod:`boustro.optimize.cover.bounds`). With inner = outer
+= the area it is the exact lane statistics of one layout. numba compiles the loop on first use.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["BandStats", "EdgeSet", "band_stats", "edge_set"]
+
+
+class EdgeSet(NamedTuple):
+    """The boundary of a region as edges: ``(E, 4)`` rows ``x1, y1, x2, y2`` (plan units) and
+    ``hole (E,)``: ``-1`` for an edge of an outer ring, else the index of the ORIGINAL hole it
+    belongs to (several rings of a set may map to one original hole)."""
+
+    xy: NDArray[np.float64]
+    hole: NDArray[np.int64]
+
+
+def edge_set(rings: list[NDArray[np.float64]], holes: list[int]) -> EdgeSet:
+    """The :class:`EdgeSet` of closed ``rings`` (``(m, 2)``, not repeated), ``holes[i]`` the
+    original hole of ring ``i`` or ``-1`` for an outer ring."""
+    rows, ids = [], []
+    for ring, h in zip(rings, holes, strict=True):
+        ring = np.asarray(ring, dtype=np.float64)
+        if len(ring) < 3:
+            continue
+        nxt = np.roll(ring, -1, axis=0)
+        rows.append(np.concatenate([ring, nxt], axis=1))
+        ids.append(np.full(len(ring), int(h), dtype=np.int64))
+    if not rows:
+        return EdgeSet(np.zeros((0, 4)), np.zeros(0, dtype=np.int64))
+    return EdgeSet(np.concatenate(rows), np.concatenate(ids))
+
+
+class BandStats(NamedTuple):
+    """Per layout ``l`` and band ``b`` (line ``k = k0 + b``), arrays ``(L, B)``:
+
+    * ``length``: measure of the inner set's band projection minus the inner set's hole chords
+      on the line (a lower bound on the lane length any sandwiched area gets);
+    * ``count``: pieces of the outer projection minus the outer set's hole chords that hold
+      inner length (a lower bound on the lanes on the line);
+    * ``in_lo, in_hi, out_lo, out_hi``: the extremes of the inner and outer projections
+      (``nan`` where empty);
+    * ``cut (L, H)``: original holes whose outer-set chord overlaps the inner projection on some
+      line (a hole every sandwiched plan cuts, hence passes around).
+    """
+
+    k0: int
+    length: NDArray[np.float64]
+    count: NDArray[np.int64]
+    in_lo: NDArray[np.float64]
+    in_hi: NDArray[np.float64]
+    out_lo: NDArray[np.float64]
+    out_hi: NDArray[np.float64]
+    cut: NDArray[np.bool_]
+
+
+# -- the loop (plain Python, compiled by numba on first use) ----------------------------------
+def _project(xy, cs, sn, ox, oy):  # type: ignore[no-untyped-def]
+    e = xy.shape[0]
+    h1 = np.empty(e)
+    h2 = np.empty(e)
+    t1 = np.empty(e)
+    t2 = np.empty(e)
+    for i in range(e):
+        x1, y1, x2, y2 = xy[i, 0] - ox, xy[i, 1] - oy, xy[i, 2] - ox, xy[i, 3] - oy
+        h1[i] = -sn * x1 + cs * y1
+        h2[i] = -sn * x2 + cs * y2
+        t1[i] = cs * x1 + sn * y1
+        t2[i] = cs * x2 + sn * y2
+    return h1, h2, t1, t2
+
+
+def _band_intervals(h1, h2, t1, t2, d, s, reach, k0, nb):  # type: ignore[no-untyped-def]
+    """Per band: sorted, merged intervals of the projection (start index, lo, hi arrays)."""
+    e = h1.shape[0]
+    # pass 1: counts of clipped edges and of crossings of each band's two edge lines
+    n_clip = np.zeros(nb, dtype=np.int64)
+    n_x = np.zeros((nb, 2), dtype=np.int64)
+    for i in range(e):
+        lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
+        ka = max(int(math.ceil((lo - reach - d) / s)), k0)
+        kb = min(int(math.floor((hi + reach - d) / s)), k0 + nb - 1)
+        for k in range(ka, kb + 1):
+            c = d + k * s
+            if min(hi, c + reach) >= max(lo, c - reach):
+                n_clip[k - k0] += 1
+            for side in range(2):
+                line = c - reach if side == 0 else c + reach
+                if (h1[i] <= line) != (h2[i] <= line):
+                    n_x[k - k0, side] += 1
+    cap = n_clip + n_x[:, 0] // 2 + n_x[:, 1] // 2
+    start = np.zeros(nb + 1, dtype=np.int64)
+    for b in range(nb):
+        start[b + 1] = start[b] + cap[b]
+    xstart = np.zeros(nb * 2 + 1, dtype=np.int64)
+    for b in range(nb):
+        for side in range(2):
+            j = 2 * b + side
+            xstart[j + 1] = xstart[j] + n_x[b, side]
+    ilo = np.empty(start[nb])
+    ihi = np.empty(start[nb])
+    xt = np.empty(xstart[2 * nb])
+    fill = start[:nb].copy()
+    xfill = xstart[: 2 * nb].copy()
+    # pass 2: fill
+    for i in range(e):
+        lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
+        ka = max(int(math.ceil((lo - reach - d) / s)), k0)
+        kb = min(int(math.floor((hi + reach - d) / s)), k0 + nb - 1)
+        dh = h2[i] - h1[i]
+        for k in range(ka, kb + 1):
+            c = d + k * s
+            a, bb = max(lo, c - reach), min(hi, c + reach)
+            b = k - k0
+            if bb >= a:
+                if dh == 0.0:
+                    ta, tb = t1[i], t2[i]
+                else:
+                    ta = t1[i] + (a - h1[i]) * (t2[i] - t1[i]) / dh
+                    tb = t1[i] + (bb - h1[i]) * (t2[i] - t1[i]) / dh
+                ilo[fill[b]] = min(ta, tb)
+                ihi[fill[b]] = max(ta, tb)
+                fill[b] += 1
+            for side in range(2):
+                line = c - reach if side == 0 else c + reach
+                if (h1[i] <= line) != (h2[i] <= line):
+                    xt[xfill[2 * b + side]] = t1[i] + (line - h1[i]) * (t2[i] - t1[i]) / dh
+                    xfill[2 * b + side] += 1
+    # chords on the band's edge lines: sorted crossings paired (even-odd rule)
+    for b in range(nb):
+        for side in range(2):
+            j = 2 * b + side
+            seg = np.sort(xt[xstart[j] : xstart[j + 1]])
+            for q in range(0, seg.shape[0] - 1, 2):
+                ilo[fill[b]] = seg[q]
+                ihi[fill[b]] = seg[q + 1]
+                fill[b] += 1
+    # sort and merge per band, in place; mstart/mcount index the merged intervals
+    mcount = np.zeros(nb, dtype=np.int64)
+    for b in range(nb):
+        p0, p1 = start[b], fill[b]
+        if p1 <= p0:
+            continue
+        order = np.argsort(ilo[p0:p1])
+        slo = ilo[p0:p1][order]
+        shi = ihi[p0:p1][order]
+        m = 0
+        for q in range(p1 - p0):
+            if m > 0 and slo[q] <= ihi[p0 + m - 1]:
+                ihi[p0 + m - 1] = max(ihi[p0 + m - 1], shi[q])
+            else:
+                ilo[p0 + m] = slo[q]
+                ihi[p0 + m] = shi[q]
+                m += 1
+        mcount[b] = m
+    return start, mcount, ilo, ihi
+
+
+def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):  # type: ignore[no-untyped-def]
+    """Per band: the chords of the holes on the band's centre line, sorted (lo, hi, hole id)."""
+    e = h1.shape[0]
+    n_x = np.zeros(nb, dtype=np.int64)
+    for i in range(e):
+        if hole[i] < 0:
+            continue
+        lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
+        ka = max(int(math.ceil((lo - d) / s)), k0)
+        kb = min(int(math.floor((hi - d) / s)), k0 + nb - 1)
+        for k in range(ka, kb + 1):
+            line = d + k * s
+            if (h1[i] <= line) != (h2[i] <= line):
+                n_x[k - k0] += 1
+    xstart = np.zeros(nb + 1, dtype=np.int64)
+    for b in range(nb):
+        xstart[b + 1] = xstart[b] + n_x[b]
+    xt = np.empty(xstart[nb])
+    xh = np.empty(xstart[nb], dtype=np.int64)
+    fill = xstart[:nb].copy()
+    for i in range(e):
+        if hole[i] < 0:
+            continue
+        lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
+        ka = max(int(math.ceil((lo - d) / s)), k0)
+        kb = min(int(math.floor((hi - d) / s)), k0 + nb - 1)
+        for k in range(ka, kb + 1):
+            line = d + k * s
+            if (h1[i] <= line) != (h2[i] <= line):
+                b = k - k0
+                xt[fill[b]] = t1[i] + (line - h1[i]) * (t2[i] - t1[i]) / (h2[i] - h1[i])
+                xh[fill[b]] = hole[i]
+                fill[b] += 1
+    for b in range(nb):
+        p0, p1 = xstart[b], xstart[b + 1]
+        order = np.argsort(xt[p0:p1])
+        xt[p0:p1] = xt[p0:p1][order]
+        xh[p0:p1] = xh[p0:p1][order]
+    return xstart, xt, xh
+
+
+def _minus(lo, hi, n, glo, ghi, tol):  # type: ignore[no-untyped-def]
+    """Sorted disjoint intervals minus sorted disjoint gaps (pieces longer than ``tol``)."""
+    out_lo = np.empty(n + glo.shape[0] + 1)
+    out_hi = np.empty(n + glo.shape[0] + 1)
+    m = 0
+    g = 0
+    ng = glo.shape[0]
+    for q in range(n):
+        a, b = lo[q], hi[q]
+        while g < ng and ghi[g] <= a:
+            g += 1
+        gg = g
+        cur = a
+        while gg < ng and glo[gg] < b:
+            if glo[gg] - cur > tol:
+                out_lo[m] = cur
+                out_hi[m] = glo[gg]
+                m += 1
+            cur = max(cur, ghi[gg])
+            gg += 1
+        if b - cur > tol:
+            out_lo[m] = cur
+            out_hi[m] = b
+            m += 1
+    return out_lo[:m], out_hi[:m]
+
+
+def _leaf(inner_xy, inner_hole, outer_xy, outer_hole, cs, sn, d, s, r_in, r_out, ox, oy, k0, nb,
+          tol, length, count, in_lo, in_hi, out_lo, out_hi, cut):  # type: ignore[no-untyped-def]
+    ih1, ih2, it1, it2 = _project(inner_xy, cs, sn, ox, oy)
+    oh1, oh2, ot1, ot2 = _project(outer_xy, cs, sn, ox, oy)
+    i_start, i_m, i_lo, i_hi = _band_intervals(ih1, ih2, it1, it2, d, s, r_in, k0, nb)
+    o_start, o_m, o_lo, o_hi = _band_intervals(oh1, oh2, ot1, ot2, d, s, r_out, k0, nb)
+    gi_start, gi_t, gi_h = _hole_chords(ih1, ih2, it1, it2, inner_hole, d, s, k0, nb)
+    go_start, go_t, go_h = _hole_chords(oh1, oh2, ot1, ot2, outer_hole, d, s, k0, nb)
+    for b in range(nb):
+        p0, m = i_start[b], i_m[b]
+        q0, mo = o_start[b], o_m[b]
+        if m > 0:
+            in_lo[b] = i_lo[p0]
+            in_hi[b] = i_hi[p0 + m - 1]
+        if mo > 0:
+            out_lo[b] = o_lo[q0]
+            out_hi[b] = o_hi[q0 + mo - 1]
+        if m == 0:
+            continue
+        g = gi_t[gi_start[b] : gi_start[b + 1]]
+        plo, phi = _minus(i_lo[p0 : p0 + m], i_hi[p0 : p0 + m], m, g[0::2], g[1::2], tol)
+        total = 0.0
+        for q in range(plo.shape[0]):
+            total += phi[q] - plo[q]
+        length[b] = total
+        go = go_t[go_start[b] : go_start[b + 1]]
+        gh = go_h[go_start[b] : go_start[b + 1]]
+        qlo, qhi = _minus(o_lo[q0 : q0 + mo], o_hi[q0 : q0 + mo], mo, go[0::2], go[1::2], 0.0)
+        # outer pieces holding inner length
+        c = 0
+        j = 0
+        for q in range(qlo.shape[0]):
+            while j < plo.shape[0] and phi[j] <= qlo[q] + tol:
+                j += 1
+            if j < plo.shape[0] and plo[j] < qhi[q] - tol:
+                c += 1
+        count[b] = c
+        # holes whose outer chord overlaps the inner projection
+        for q in range(0, go.shape[0] - 1, 2):
+            a, bb = go[q], go[q + 1]
+            for j in range(m):
+                if min(bb, i_hi[p0 + j]) - max(a, i_lo[p0 + j]) > tol:
+                    cut[gh[q]] = True
+                    break
+
+
+def _all(inner_xy, inner_hole, outer_xy, outer_hole, cs, sn, d, s, r_in, r_out, ox, oy, k0, nb,
+         n_holes, tol):  # type: ignore[no-untyped-def]
+    n = cs.shape[0]
+    length = np.zeros((n, nb))
+    count = np.zeros((n, nb), dtype=np.int64)
+    in_lo = np.full((n, nb), np.nan)
+    in_hi = np.full((n, nb), np.nan)
+    out_lo = np.full((n, nb), np.nan)
+    out_hi = np.full((n, nb), np.nan)
+    cut = np.zeros((n, max(n_holes, 1)), dtype=np.bool_)
+    for leaf in range(n):
+        _leaf(inner_xy, inner_hole, outer_xy, outer_hole, cs[leaf], sn[leaf], d[leaf], s, r_in,
+              r_out, ox, oy, k0, nb, tol, length[leaf], count[leaf], in_lo[leaf], in_hi[leaf],
+              out_lo[leaf], out_hi[leaf], cut[leaf])
+    return length, count, in_lo, in_hi, out_lo, out_hi, cut
+
+
+@cache
+def _compiled() -> Any:
+    """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
+    try:
+        import numba
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return _all
+    jit = numba.njit(cache=True)
+    g = globals()
+    for name in ("_project", "_band_intervals", "_hole_chords", "_minus", "_leaf"):
+        g[name] = jit(g[name])
+    return jit(_all)
+
+
+def band_stats(
+    inner: EdgeSet,
+    outer: EdgeSet,
+    angles: NDArray[np.float64],
+    offsets: NDArray[np.float64],
+    spacing: float,
+    reach: float,
+    origin: NDArray[np.float64],
+    k_range: tuple[int, int],
+    n_holes: int,
+    tol: float,
+    *,
+    inner_reach: float | None = None,
+) -> BandStats:
+    """:class:`BandStats` of the layouts ``(angles[l], offsets[l])`` for lines ``k`` in
+    ``k_range`` (inclusive; it must hold every line whose band meets the outer set)."""
+    k0, k1 = k_range
+    fn = _compiled()
+    angles = np.ascontiguousarray(angles, dtype=np.float64)
+    out = fn(
+        np.ascontiguousarray(inner.xy), np.ascontiguousarray(inner.hole),
+        np.ascontiguousarray(outer.xy), np.ascontiguousarray(outer.hole),
+        np.cos(angles), np.sin(angles), np.ascontiguousarray(offsets, dtype=np.float64),
+        float(spacing), float(reach if inner_reach is None else inner_reach), float(reach),
+        float(origin[0]), float(origin[1]), int(k0), int(k1 - k0 + 1), int(n_holes), float(tol),
+    )  # fmt: skip
+    return BandStats(int(k0), *out)

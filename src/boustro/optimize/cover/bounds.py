@@ -1,0 +1,74 @@
+"""Lower bounds on the cost of every plan whose area lies in a sandwich (per layout)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .bands import BandStats
+from .cost import CoverCost
+from .sandwich import Level
+
+__all__ = ["lower_bounds"]
+
+
+def _interval_gap(
+    a_lo: NDArray[np.float64],
+    a_hi: NDArray[np.float64],
+    b_lo: NDArray[np.float64],
+    b_hi: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Distance between the intervals ``[a_lo, a_hi]`` and ``[b_lo, b_hi]`` (0 if they meet)."""
+    return np.maximum(0.0, np.maximum(a_lo, b_lo) - np.minimum(a_hi, b_hi))
+
+
+def _boustrophedon_moves(st: BandStats, spacing: float) -> NDArray[np.float64]:
+    """The shortest moves between consecutive lines of a boustrophedon over one lane per line,
+    each end anywhere between the inner and the outer projection's extreme, on the better start
+    side; ``nan`` where the lines holding lanes are not contiguous."""
+    used = st.count >= 1
+    pair = used[:, :-1] & used[:, 1:]
+    right = _interval_gap(st.in_hi[:, :-1], st.out_hi[:, :-1], st.in_hi[:, 1:], st.out_hi[:, 1:])
+    left = _interval_gap(st.out_lo[:, :-1], st.in_lo[:, :-1], st.out_lo[:, 1:], st.in_lo[:, 1:])
+    right = np.sqrt(spacing**2 + np.where(pair, right, 0.0) ** 2)
+    left = np.sqrt(spacing**2 + np.where(pair, left, 0.0) ** 2)
+    parity = np.arange(pair.shape[1]) % 2 == 0
+    even = np.where(pair, np.where(parity, right, left), 0.0).sum(axis=1)
+    odd = np.where(pair, np.where(parity, left, right), 0.0).sum(axis=1)
+    moves = np.minimum(even, odd)
+    contiguous = pair.sum(axis=1) == np.maximum(used.sum(axis=1) - 1, 0)
+    return np.where(contiguous, moves, np.nan)
+
+
+def lower_bounds(
+    st: BandStats, level: Level, cost: CoverCost, spacing: float, *, boustrophedon: bool
+) -> NDArray[np.float64]:
+    """``(L,)`` a lower bound on the cost of every plan of the layouts' grids over any area
+    between ``level``'s inner and outer sets.
+
+    Lanes: at least the inner projection minus the inner set's hole chords on each line, at
+    least one lane per piece of the outer projection (minus the outer set's hole chords) that
+    holds such length, each with its run-in and run-out. Hole passes: every original hole whose
+    outer-set chord overlaps the inner projection is cut in every such plan, so it gets its pass
+    (a closed loop around it: at least the perimeter of the convex hull of its outer-set
+    remains) and one more turn. Moves: a path visiting lines ``k_min .. k_max`` travels at least
+    ``(k_max - k_min) spacing`` across them; with ``boustrophedon`` (the convex planner: one lane
+    per line, consecutive lines joined end to end) each move is at least the distance between
+    the ranges of its two ends.
+    """
+    n_lanes = st.count.sum(axis=1)
+    holes = level.hole_perimeter.shape[0]
+    cut = st.cut[:, :holes]
+    n_passes = cut.sum(axis=1)
+    perimeter = (cut * level.hole_perimeter[None, :]).sum(axis=1) if holes else 0.0
+    used = st.count >= 1
+    idx = np.arange(st.count.shape[1])
+    k_max = np.where(used, idx, -1).max(axis=1)
+    k_min = np.where(used, idx, st.count.shape[1]).min(axis=1)
+    moves = np.where(n_lanes > 0, (k_max - k_min) * spacing, 0.0)
+    if boustrophedon:
+        exact = _boustrophedon_moves(st, spacing)
+        moves = np.where(np.isfinite(exact), np.maximum(moves, exact), moves)
+    length = st.length.sum(axis=1) + 2.0 * cost.turnaround * n_lanes + moves + perimeter
+    turns = np.maximum(n_lanes + n_passes - 1, 0)
+    return cost.per_length * length + cost.per_turn * turns

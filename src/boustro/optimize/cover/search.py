@@ -1,0 +1,363 @@
+"""Certified minimum over (angle, offset) of a flown plan's cost, on any region: branch and
+bound over boxes of layouts with sandwich lower bounds and plans as upper bounds."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...errors import InvalidParameterError
+from ...geometry import Polygon
+from ...geometry.region import Region, as_region
+from ...models import check_spacing
+from ..result import OptimizeResult, canonical
+from .bands import band_stats
+from .bounds import lower_bounds
+from .cost import CoverCost
+from .sandwich import Sandwich
+
+__all__ = ["CoverSearch", "cover_optimum"]
+
+#: Plans evaluated per round at most (the layouts with the lowest point bound).
+PLANS_PER_ROUND = 2
+#: Plans evaluated at the first round, at angles this far apart (radians) at least.
+FIRST_PLANS = 8
+FIRST_SEPARATION = math.radians(3.0)
+
+
+class _Boxes(NamedTuple):
+    """Boxes of layouts: angle ``theta +- delta``, offset ``d +- eta`` (arrays)."""
+
+    theta: NDArray[np.float64]
+    delta: NDArray[np.float64]
+    d: NDArray[np.float64]
+    eta: NDArray[np.float64]
+
+    def take(self, mask: NDArray[np.bool_]) -> _Boxes:
+        return _Boxes(*(a[mask] for a in self))
+
+
+#: Relative distance between a box's bound and the model at its centre at which a box of a
+#: routed (non-boustrophedon) plan is not halved further: its bound relaxes the tour's moves
+#: by more than that anyway.
+RESOLVE_RTOL = 1e-2
+#: Edge directions (longest edges first) whose best offsets are planned before the search,
+#: and offsets scanned at each.
+EDGE_PLANS = 12
+#: Smallest box radius (relative to the spacing) of a routed plan's search.
+RESOLVE_EPS = 1e-3
+#: Offsets planned at the best angle after the search of a routed plan.
+REFINE_OFFSETS = 8
+#: Offset boxes at the first round of a fixed-angle search.
+FIXED_OFFSETS = 64
+EDGE_OFFSETS = 64
+
+
+class CoverSearch:
+    """The state of one search (see :func:`cover_optimum`)."""
+
+    def __init__(
+        self,
+        region: Region,
+        spacing: float,
+        reach: float,
+        cost: CoverCost,
+        evaluate: Callable[[float, float], float] | None,
+        boustrophedon: bool,
+    ) -> None:
+        self.region, self.s, self.reach, self.cost = region, spacing, reach, cost
+        self.evaluate, self.boustrophedon = evaluate, boustrophedon
+        self.sandwich = Sandwich(region)
+        self.origin = region.centre
+        self.radius = float(np.linalg.norm(region.shell.vertices - self.origin, axis=1).max())
+        self.n_holes = len(region.holes)
+        self.tol = 1e-9 * region.diameter
+        self.top_eps = 0.0
+        self.best = (math.inf, 0.0, 0.0)
+        self.plans = 0
+        self.bound_evaluations = 0
+        self.seen: set[tuple[float, float]] = set()
+        self.model_min = math.inf  # the lowest model value at a layout seen
+
+    def k_range(self, eps: float) -> tuple[int, int]:
+        far = self.radius + eps + self.reach
+        return math.floor(-far / self.s) - 1, math.ceil(far / self.s) + 1
+
+    def point_values(self, boxes: _Boxes) -> NDArray[np.float64]:
+        """The bound at each box's centre with the region itself (a layout's own model)."""
+        lv = self.sandwich.exact
+        st = band_stats(
+            lv.inner, lv.outer, boxes.theta, boxes.d, self.s, self.reach, self.origin,
+            self.k_range(0.0), self.n_holes, self.tol, inner_reach=self.reach - 2 * self.tol,
+        )  # fmt: skip
+        self.bound_evaluations += len(boxes.theta)
+        out = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
+        self.model_min = min(self.model_min, float(out.min(initial=math.inf)))
+        return out
+
+    def box_bounds(self, boxes: _Boxes) -> NDArray[np.float64]:
+        """A lower bound on the cost over each box: the sandwich at the radius that holds
+        every rotation by ``delta`` about the origin and shift by ``eta`` across the lines."""
+        eps = boxes.delta * self.radius + boxes.eta
+        level = np.maximum(np.floor(np.log2(self.top_eps / eps)), 0.0)
+        radius = self.top_eps * 2.0 ** (-level)  # >= eps: a level of the sandwich
+        out = np.empty(len(eps))
+        for r in np.unique(radius):
+            sel = radius == r
+            lv = self.sandwich.level(float(r))
+            st = band_stats(
+                lv.inner, lv.outer, boxes.theta[sel], boxes.d[sel], self.s, self.reach,
+                self.origin, self.k_range(float(r)), self.n_holes, self.tol,
+                inner_reach=self.reach - 2 * self.tol,
+            )  # fmt: skip
+            out[sel] = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
+        self.bound_evaluations += len(eps)
+        return out
+
+    def try_edges(self) -> None:
+        """Plan the best offset (by the model) along each of the longest edges' directions:
+        areas with parallel sides often have their optimum exactly there."""
+        for a in _edge_angles(self.region, EDGE_PLANS):
+            d = (np.arange(EDGE_OFFSETS) + 0.5) * (self.s / EDGE_OFFSETS)
+            boxes = _Boxes(np.full(len(d), a), np.zeros(len(d)), d, np.zeros(len(d)))
+            self.try_plans(boxes, self.point_values(boxes), limit=1)
+
+    def refine_offsets(self) -> None:
+        """Plan :data:`REFINE_OFFSETS` more offsets at the best angle: a routed plan's moves
+        differ between offsets that the bound (lanes, turns) cannot tell apart."""
+        theta = self.best[1]
+        d = (np.arange(REFINE_OFFSETS) + 0.5) * (self.s / REFINE_OFFSETS)
+        boxes = _Boxes(np.full(len(d), theta), np.zeros(len(d)), d, np.zeros(len(d)))
+        points = self.point_values(boxes)
+        self.try_plans(boxes, points, limit=REFINE_OFFSETS)
+
+    def try_plans(
+        self,
+        boxes: _Boxes,
+        points: NDArray[np.float64],
+        first: bool = False,
+        limit: int | None = None,
+    ) -> None:
+        """Evaluate the plans of the boxes' centres with the lowest point values (upper
+        bounds), where they could beat the best plan: :data:`PLANS_PER_ROUND`, or at the first
+        round :data:`FIRST_PLANS` at angles at least :data:`FIRST_SEPARATION` apart."""
+        order = np.argsort(points)
+        if limit is None:
+            limit = FIRST_PLANS if first else PLANS_PER_ROUND
+        tried, taken = 0, []
+        for i in order:
+            if tried >= limit or points[i] >= self.best[0]:
+                break
+            key = (round(float(boxes.theta[i]), 12), round(float(boxes.d[i]), 12))
+            if key in self.seen:
+                continue
+            if first and any(
+                abs((float(boxes.theta[i]) - t + math.pi / 2) % math.pi - math.pi / 2)
+                < FIRST_SEPARATION
+                for t in taken
+            ):
+                continue
+            taken.append(float(boxes.theta[i]))
+            self.seen.add(key)
+            theta, d = float(boxes.theta[i]), float(boxes.d[i])
+            value = float(points[i]) if self.evaluate is None else float(self.evaluate(theta, d))
+            self.plans += 1
+            tried += 1
+            if value < self.best[0]:
+                self.best = (value, theta, d)
+
+
+def _edge_angles(region: Region, count: int) -> list[float]:
+    """The directions of the shell's longest edges, distinct by 0.1 degree, at most ``count``."""
+    v = region.shell.vertices
+    e = np.roll(v, -1, axis=0) - v
+    order = np.argsort(-np.hypot(e[:, 0], e[:, 1]))
+    out: list[float] = []
+    for i in order:
+        a = math.atan2(e[i, 1], e[i, 0]) % math.pi
+        if all(abs((a - b + math.pi / 2) % math.pi - math.pi / 2) > math.radians(0.1) for b in out):
+            out.append(a)
+        if len(out) >= count:
+            break
+    return out
+
+
+def _split(boxes: _Boxes, radius: float) -> _Boxes:
+    """Halve each box along the side that contributes more to its radius (both if close)."""
+    rot, shift = boxes.delta * radius, boxes.eta
+    cut_t = rot >= 0.5 * shift
+    cut_d = shift >= 0.5 * rot
+    parts = []
+    for st in (-1.0, 1.0):
+        for sd in (-1.0, 1.0):
+            keep = (cut_t | (st > 0)) & (cut_d | (sd > 0))
+            b = boxes.take(keep)
+            ct, cd = cut_t[keep], cut_d[keep]
+            delta = np.where(ct, b.delta / 2, b.delta)
+            eta = np.where(cd, b.eta / 2, b.eta)
+            parts.append(
+                _Boxes(
+                    b.theta + np.where(ct, st * delta, 0.0), delta, b.d + np.where(cd, sd * eta, 0.0), eta
+                )
+            )
+    return _Boxes(*(np.concatenate([getattr(p, f) for p in parts]) for f in _Boxes._fields))
+
+
+def _initial(search: CoverSearch, n_angles: int, angle: float | None) -> _Boxes:
+    if angle is not None:  # one angle: boxes of offsets only
+        n = FIXED_OFFSETS
+        eta = search.s / (2 * n)
+        d = (np.arange(n) + 0.5) * (2 * eta)
+        return _Boxes(np.full(n, angle), np.zeros(n), d, np.full(n, eta))
+    delta = math.pi / (2 * n_angles)
+    n_off = max(1, math.ceil(search.s / (2 * delta * search.radius)))
+    eta = search.s / (2 * n_off)
+    theta = (np.arange(n_angles) + 0.5) * (2 * delta)
+    d = (np.arange(n_off) + 0.5) * (2 * eta)
+    tt, dd = np.meshgrid(theta, d, indexing="ij")
+    n = tt.size
+    return _Boxes(tt.ravel(), np.full(n, delta), dd.ravel(), np.full(n, eta))
+
+
+def cover_optimum(
+    region: Region | Polygon,
+    spacing: float,
+    cost: CoverCost,
+    evaluate: Callable[[float, float], float] | None = None,
+    *,
+    reach: float | None = None,
+    boustrophedon: bool | None = None,
+    angle: float | None = None,
+    rtol: float = 1e-3,
+    n_angles: int = 90,
+    min_eps: float | None = None,
+    max_boxes: int = 400_000,
+    max_seconds: float | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> OptimizeResult:
+    """The layout ``(angle, offset)`` whose plan has the least ``cost``, with a certificate.
+
+    Branch and bound over boxes of layouts. For a box of angles ``theta +- delta`` and offsets
+    ``d +- eta`` every layout's grid is the centre's grid after a rotation by at most ``delta``
+    about the region's centre and a shift by at most ``eta``, so (moving the area instead of
+    the grid) its plan is the centre grid's plan over an area between the region eroded and
+    dilated by ``eps = delta * radius + eta`` (:class:`Sandwich`); :func:`lower_bounds` bounds
+    the cost of every such plan from below. The plans at the centres of the most promising
+    boxes are evaluated by ``evaluate(angle, offset) -> cost`` (the real planner: upper bounds);
+    a box whose bound is within ``rtol`` of the best plan is discarded, the others are halved,
+    until none is left or the radius falls below ``min_eps`` (default ``1e-6`` of the
+    spacing), ``max_boxes`` boxes were bounded or ``max_seconds`` passed.
+
+    Args:
+        region: the area (plan units), convex or not, with holes.
+        spacing: distance between lines; ``reach``: half-width of a lane's band (default
+            ``spacing / 2``).
+        cost: what is minimised (:class:`CoverCost`).
+        evaluate: the cost of the plan of one layout; ``None``: the bound at the layout
+            itself (then the certificate is about that model).
+        angle: search only this angle (radians): the best offset at a fixed angle.
+        boustrophedon: whether plans fly one lane per line in boustrophedon order (the convex
+            planner); default: the region is a convex polygon without holes.
+
+    Returns:
+        an :class:`OptimizeResult` with ``fitness`` = the best plan's cost (minimised),
+        ``method = "certified-cover"``, and ``info``: ``lower_bound`` (no layout's plan costs
+        less), ``gap``, ``certified`` (``gap <= rtol * cost``), ``objective``, ``plans``,
+        ``boxes``, ``rounds``, ``converged`` and, when not, ``stopped`` (why).
+    """
+    r = as_region(region)
+    s = check_spacing(spacing, extent=r.diameter)
+    reach = s / 2 if reach is None else float(reach)
+    if not (0 < reach < math.inf):
+        raise InvalidParameterError(f"reach must be > 0, got {reach}")
+    if boustrophedon is None:
+        boustrophedon = not r.holes and r.shell.is_convex
+    search = CoverSearch(r, s, reach, cost, evaluate, boustrophedon)
+    if min_eps is None:
+        min_eps = (1e-6 if boustrophedon else RESOLVE_EPS) * s
+    resolve = rtol if boustrophedon else max(rtol, RESOLVE_RTOL)
+    t0 = time.perf_counter()
+    if angle is None:
+        search.try_edges()
+    else:
+        angle = float(angle) % math.pi
+    boxes = _initial(search, n_angles, angle)
+    search.top_eps = float((boxes.delta * search.radius + boxes.eta).max())
+    floor = math.inf  # the lowest bound of a discarded box
+    rounds, stopped = 0, ""
+    while len(boxes.theta):
+        rounds += 1
+        bounds = search.box_bounds(boxes)
+        points = search.point_values(boxes)
+        search.try_plans(boxes, points, first=rounds == 1)
+        best = search.best[0]
+        # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
+        # model at the box's centre, so halving cannot raise it further than the model
+        model_min = search.model_min
+        # settled: the bound is above the lowest model value by a quarter of the gap between
+        # it and the best plan (the certificate's gap cannot get much smaller than that gap)
+        settle = model_min - 0.25 * max(best - model_min, 0.0) - rtol * abs(best)
+        keep = (
+            (bounds < best - rtol * abs(best))
+            & (bounds < points - resolve * abs(best))
+            & (bounds < settle)
+        )
+        if (~keep).any():
+            floor = min(floor, float(bounds[~keep].min()))
+        boxes = boxes.take(keep)
+        bounds = bounds[keep]
+        if progress is not None and math.isfinite(best):
+            low = min(floor, float(bounds.min()) if len(bounds) else math.inf)
+            progress(max(0.0, min(1.0, 1.0 - (best - low) / max(abs(best), 1e-300))))
+        if not len(boxes.theta):
+            break
+        eps = boxes.delta * search.radius + boxes.eta
+        fine = eps <= min_eps
+        if fine.any():
+            floor = min(floor, float(bounds[fine].min()))
+            stopped = stopped or "the boxes reached the smallest radius"
+            boxes = boxes.take(~fine)
+            if not len(boxes.theta):
+                break
+        if search.bound_evaluations + 4 * len(boxes.theta) > max_boxes:
+            floor = min(floor, float(bounds[~fine].min()))
+            stopped = f"{max_boxes} boxes bounded"
+            break
+        if max_seconds is not None and time.perf_counter() - t0 > max_seconds:
+            floor = min(floor, float(bounds[~fine].min()))
+            stopped = f"{max_seconds} s passed"
+            break
+        boxes = _split(boxes, search.radius)
+    if not boustrophedon and evaluate is not None and math.isfinite(search.best[0]):
+        search.refine_offsets()
+    value, theta, d = search.best
+    if not math.isfinite(value):
+        raise InvalidParameterError("no layout of this spacing has a lane over the area")
+    lower = min(floor, value)
+    gap = max(0.0, value - lower)
+    angle, offset = canonical(theta, d, s)
+    return OptimizeResult(
+        angle=angle,
+        offset=offset,
+        fitness=value,
+        spacing=s,
+        method="certified-cover",
+        evaluations=search.bound_evaluations,
+        seconds=time.perf_counter() - t0,
+        info={
+            "objective": cost.name,
+            "lower_bound": lower,
+            "gap": gap,
+            "certified": gap <= rtol * abs(value) + 1e-12,
+            "rtol": rtol,
+            "plans": search.plans,
+            "rounds": rounds,
+            "converged": not stopped,
+            **({"stopped": stopped} if stopped else {}),
+        },
+    )
