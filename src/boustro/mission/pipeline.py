@@ -16,6 +16,7 @@ from ..io.read import Area
 from ..objectives.smith import SmithFitness
 from ..optimize.methods import resolve_method
 from ..sensors import SensorSpacing
+from .camera import camera_trigger, with_camera
 from .defaults import DEFAULT_HULL_TOLERANCE
 from .estimate import SAY_SECONDS, WorkEstimate, check_work, frame_estimate
 from .map_back import angle_for_bearing, map_back
@@ -153,7 +154,8 @@ def plan_area(
         planned = plan_convex(frame, **settings)
     else:
         planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
-    return map_back(frame, planned, altitude=altitude, turnaround=turnaround)
+    mission = map_back(frame, planned, altitude=altitude, turnaround=turnaround)
+    return with_camera(mission, camera_trigger(spacing))
 
 
 def _narrower_than_the_spacing(frame: Frame, sensor: Sensor) -> bool:
