@@ -14,7 +14,7 @@ from ..errors import InvalidParameterError
 from ..io import Area, embedded_field, read_areas
 from ..io.formats import FORMATS, atomic_write, format_for
 from ..io.repair import check_area, repair_area
-from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission, plan_area
+from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission
 from ..mission.camera import camera_preset, camera_presets
 from ..plot.plan import plot_plan
 from ..sensors import Camera, Swath
@@ -27,6 +27,7 @@ from ._common import (
     print_table,
 )
 from ._fields import mission_files, output_files, pick_fields, plan_fields
+from ._flight import add_flight_options, fly, plan_mission
 from ._plan_rows import rows as _rows
 
 
@@ -166,6 +167,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     _add_spacing(p)
     _add_optimiser(p)
     _add_path(p)
+    add_flight_options(p, _point)
     _add_output(p)
     p.set_defaults(func=run)
 
@@ -471,10 +473,11 @@ def _plot_bytes(mission: Mission, path: str) -> bytes:
         plt.close(fig)
 
 
-def _plan_one(args: argparse.Namespace, area: Area) -> Mission:
+def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:
     spacing = _spacing(args, embedded=args.area is None)
     fitness = cli_objectives()[args.objective]()
-    return plan_area(
+    mission = plan_mission(
+        args,
         area,
         spacing,
         method=args.method,
@@ -493,6 +496,7 @@ def _plan_one(args: argparse.Namespace, area: Area) -> Mission:
         force=args.force,
         progress=False if args.quiet else None,
     )
+    return fly(args, mission)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -505,7 +509,8 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidParameterError("--format needs --out FILE")
     areas = _load(args)
     _spacing(args, embedded=args.area is None)  # a missing spacing: one error, not one per field
-    missions = plan_fields(areas, lambda area: _plan_one(args, _validated(args, area)))
+    planned = plan_fields(areas, lambda area: _plan_one(args, _validated(args, area)))
+    missions = [m for ms in planned for m in ms]  # a field's sorties follow one another
     # Render everything before touching any file, so that an error writes nothing.
     outputs: list[tuple[str, bytes | str, str, int | None]] = []
     if args.out is not None:
