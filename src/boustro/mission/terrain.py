@@ -51,8 +51,10 @@ class Dem:
 
         to_dem = Transformer.from_crs("EPSG:4326", self.crs, always_xy=True)
         x, y = to_dem.transform(lonlat[:, 0], lonlat[:, 1])
-        col, row = ~self.transform * (np.asarray(x), np.asarray(y))
-        r, c = np.asarray(row) - 0.5, np.asarray(col) - 0.5
+        inv = ~self.transform  # pixel (column, row) from the DEM's x, y
+        x, y = np.asarray(x), np.asarray(y)
+        c = inv.a * x + inv.b * y + inv.c - 0.5  # from pixel centres
+        r = inv.d * x + inv.e * y + inv.f - 0.5
         h, w = self.z.shape
         outside = (r < -0.5) | (r > h - 0.5) | (c < -0.5) | (c > w - 0.5)
         if outside.any():
