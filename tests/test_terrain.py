@@ -160,3 +160,29 @@ def test_command_line_dem(tmp_path, capsys):
     assert main(["plan", "--altitude", "40", "--dem", str(tmp_path / "missing.tif")]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
     assert main(["plan", "--terrain-tolerance", "2"]) == 2
+
+
+def test_everything_together_in_qgc_files(tmp_path, capsys):
+    """Camera, sorties, terrain and crosshatch at once: each sortie's file in order."""
+    dem = write_dem(tmp_path / "bump.tif", bump)
+    out = tmp_path / "m.plan"
+    args = ["-q", "plan", "--camera", "dji-phantom-4-pro", "--altitude", "60"]
+    args += ["--front-overlap", "75", "--speed", "8", "--max-flight-time", "400"]
+    args += ["--dem", str(dem), "--crosshatch", "--out", str(out), "--json"]
+    assert main(args) == 0
+    summaries = json.loads(capsys.readouterr().out)
+    files = sorted(tmp_path.glob("m-*.plan"))
+    assert len(files) == len(summaries) >= 2
+    lanes = 0
+    for path, summary in zip(files, summaries, strict=True):
+        items = json.loads(path.read_text())["mission"]["items"]
+        commands = [it["command"] for it in items]
+        assert commands[0] == 178 and commands[-1] == 20  # speed first, return to launch last
+        waypoints = [it for it in items if it["command"] == 16]
+        assert {it["frame"] for it in waypoints} == {0}
+        trig = [it["params"][0] for it in items if it["command"] == 206]
+        n = summary["sortie"]["lanes"][1] - summary["sortie"]["lanes"][0] + 1
+        assert trig == [pytest.approx(summary["camera"]["trigger_distance_m"]), 0] * n
+        lanes += n
+        assert summary["sortie"]["duration_s"] <= 400
+    assert lanes == sum(p["n_transects"] for p in summaries[0]["crosshatch"])
