@@ -18,6 +18,7 @@ from boustro.objectives import FewestTransects
 from boustro.optimize.fixed_angle import optimize_offset
 
 FIELD = [(0, 0), (400, 0), (450, 300), (0, 250)]
+KITE = [(0, 0), (500, 80), (420, 300), (60, 260)]  # its pair's optimum: a knife edge
 L_SHAPE = [(0, 0), (300, 0), (300, 200), (150, 200), (150, 100), (0, 100)]
 
 
@@ -51,15 +52,18 @@ def test_two_passes_90_degrees_apart_each_covering_everything(area):
     )
 
 
-def test_the_angle_is_the_best_pair():
-    poly = Polygon(FIELD)
-    angle, value = crosshatch_angle(poly, 20.0)
+@pytest.mark.parametrize("area", [FIELD, KITE])
+def test_the_angle_is_the_best_pair(area):
+    poly = Polygon(area)
+    single = plan_area(area, 10.0, crs=None).plan.angle  # the one-pass optimum
+    angle, value = crosshatch_angle(poly, 10.0, candidates=[single])
     assert 0 <= angle < math.pi / 2
-    assert value == pytest.approx(_pair(poly, 20.0, angle), abs=1e-12)
-    grid = [_pair(poly, 20.0, a) for a in np.radians(np.arange(0.0, 90.0, 1.0))]
+    assert value == pytest.approx(_pair(poly, 10.0, angle), abs=1e-12)
+    grid = [_pair(poly, 10.0, a) for a in np.radians(np.arange(0.0, 90.0, 1.0))]
     assert value >= max(grid) - 1e-9  # at least as good as a 1-degree scan of the pairs
-    single = plan_area(FIELD, 20.0, crs=None).plan.angle  # the one-pass optimum, plus 90
-    assert value >= _pair(poly, 20.0, single) - 1e-12
+    assert value >= _pair(poly, 10.0, single) - 1e-12  # and the one-pass optimum plus 90
+    m = plan_crosshatch(area, 10.0, crs=None)  # what plan_crosshatch finds by itself
+    assert m.passes[0].plan.angle == pytest.approx(angle, abs=1e-12)
 
 
 def test_a_minimised_objective_is_minimised_for_the_pair():

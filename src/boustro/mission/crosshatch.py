@@ -3,7 +3,8 @@
 The angle is chosen for the pair: the objective of the first pass at angle ``a`` (its best
 offset) plus that of the second at ``a + 90`` degrees, optimised over ``a`` in ``[0, 90)``
 degrees (a scan of :data:`N_ANGLES` angles over ``[0, 180)``, each pair read off the same
-scan, then a golden-section refinement around the best pair). Each pass is then planned at its
+scan, then a golden-section refinement around the best pair; for a convex area the certified
+one-pass optimum is tried as either pass too). Each pass is then planned at its
 angle (:func:`~boustro.mission.plan_area` with ``angle=``, coverage-guaranteed), the second
 starting at its lane end nearest the first's last waypoint, and the mission flies both.
 """
@@ -12,20 +13,22 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, ProblemTooLargeError
 from ..objectives import SmithFitness, objective_sign
+from ..optimize import optimize
 from ..optimize.fixed_angle import optimize_offset
 from ..plan import PlanStats
 from .camera import with_camera
-from .defaults import DEFAULT_HULL_TOLERANCE
+from .defaults import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD
 from .map_back import angle_for_bearing
 from .pipeline import plan_area
-from .project import AUTO_CRS, Sensor, as_area, project, sensor_spacing
+from .project import AUTO_CRS, Frame, Sensor, as_area, project, sensor_spacing
 from .types import Mission
 
 __all__ = ["N_ANGLES", "crosshatch_angle", "join_passes", "plan_crosshatch"]
@@ -34,10 +37,15 @@ __all__ = ["N_ANGLES", "crosshatch_angle", "join_passes", "plan_crosshatch"]
 N_ANGLES = 60
 
 
-def crosshatch_angle(target: Any, spacing: float, fitness: Any = None) -> tuple[float, float]:
+def crosshatch_angle(
+    target: Any, spacing: float, fitness: Any = None, candidates: Sequence[float] = ()
+) -> tuple[float, float]:
     """``(angle, value)``: the first pass's angle (radians, ``[0, pi/2)``) whose pair with
     ``angle + pi/2`` has the best summed objective (``fitness``, default Eq. 1, in its sense)
-    over ``target`` (a convex polygon or a region, plan units), and that sum."""
+    over ``target`` (a convex polygon or a region, plan units), and that sum. ``candidates``:
+    angles also tried as either pass's (e.g. the one-pass optimum, which often sits on a knife
+    edge of Eq. 1 that a scan misses). Not certified: the best of the scan, its refinement
+    and the candidates."""
     fitness = SmithFitness() if fitness is None else fitness
     sign = objective_sign(fitness)
 
@@ -66,8 +74,20 @@ def crosshatch_angle(target: Any, spacing: float, fitness: Any = None) -> tuple[
             b = lo + g * (hi - lo)
             fb = value(b)
     found = [(angles[best], pairs[best]), (a, fa), (b, fb)]
+    found += [(c - k * math.pi / 2, value(c)) for c in candidates for k in (0, 1)]
     angle, val = max(found, key=lambda p: sign * p[1])
     return float(angle) % (math.pi / 2), float(val)
+
+
+def _one_pass(frame: Frame, s_plan: float, fitness: Any) -> list[float]:
+    """The certified one-pass optimum's angle of a convex area (none for a concave one, or
+    where the certified optimiser would take too long)."""
+    if frame.region is not None:
+        return []
+    try:
+        return [optimize(frame.poly, s_plan, method=DEFAULT_METHOD, fitness=fitness).angle]
+    except ProblemTooLargeError:
+        return []
 
 
 def join_passes(first: Mission, second: Mission) -> Mission:
@@ -154,7 +174,7 @@ def plan_crosshatch(
     if angle is None:
         s_plan = sensor.spacing * frame.proj.scale_min
         target = frame.poly if frame.region is None else frame.region
-        angle, _ = crosshatch_angle(target, s_plan, fitness)
+        angle, _ = crosshatch_angle(target, s_plan, fitness, _one_pass(frame, s_plan, fitness))
     first = plan_area(area, spacing, angle=angle, fitness=fitness, start=start, **kwargs)
     second = plan_area(
         area,
