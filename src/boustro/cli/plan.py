@@ -15,9 +15,10 @@ from ..io import Area, embedded_field, read_areas
 from ..io.formats import FORMATS, atomic_write, format_for
 from ..io.repair import check_area, repair_area
 from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission
-from ..mission.camera import camera_preset, camera_presets
+from ..mission.camera import camera_presets
 from ..plot.plan import plot_plan
-from ..sensors import Camera, Swath
+from ..sensors import Swath
+from ._camera import add_trigger_options, camera_arg, camera_from_args
 from ._common import (
     check_output_path,
     check_plot_target,
@@ -179,7 +180,7 @@ def _add_spacing(p: argparse.ArgumentParser) -> None:
     which.add_argument("--spacing", type=positive_float, help="transect spacing, metres")
     which.add_argument(
         "--camera",
-        type=_camera,
+        type=camera_arg,
         metavar="SENSOR_MM,FOCAL_MM,IMAGE_PX[,IMAGE_H_PX]|NAME",
         help="camera: sensor width (mm), focal length (mm), image width (px) and, for "
         "--front-overlap, image height (px), e.g. 13.2,8.8,5472,3648; or a preset: "
@@ -197,20 +198,7 @@ def _add_spacing(p: argparse.ArgumentParser) -> None:
         metavar="PCT",
         help="side overlap between neighbouring swaths, percent (camera default 70, swath 0)",
     )
-    sensor.add_argument(
-        "--front-overlap",
-        type=_percent,
-        metavar="PCT",
-        help="camera: forward overlap between consecutive photos, percent; triggers the camera "
-        "by distance (MAV_CMD_DO_SET_CAM_TRIGG_DIST at each lane's start, 0 at its end, in "
-        ".plan and .waypoints): footprint along track x (1 - PCT/100)",
-    )
-    sensor.add_argument(
-        "--images-in-turns",
-        action="store_true",
-        help="with --front-overlap: keep taking photos through the turns (default: only along "
-        "the lanes)",
-    )
+    add_trigger_options(sensor, _percent)
     sensor.add_argument(
         "--nadir-gap",
         type=_non_negative,
@@ -348,29 +336,6 @@ def _point(text: str) -> tuple[float, float]:
     return x, y
 
 
-def _all_numbers(text: str) -> bool:
-    try:
-        [float(x) for x in text.replace(" ", "").split(",")]
-    except ValueError:
-        return False
-    return True
-
-
-def _camera(text: str) -> tuple[float, float, float, float | None]:
-    """Three or four numbers, or a preset's name (its four numbers)."""
-    if not _all_numbers(text):
-        try:
-            cam = camera_preset(text)
-        except InvalidParameterError as exc:
-            raise argparse.ArgumentTypeError(str(exc)) from None
-        return cam.sensor_width, cam.focal_length, cam.image_width, cam.image_height
-    count = 4 if text.count(",") == 3 else 3
-    values = _numbers(text, count, "SENSOR_MM,FOCAL_MM,IMAGE_PX[,IMAGE_H_PX] or a preset name")
-    if min(values) <= 0:
-        raise argparse.ArgumentTypeError(f"camera values must be > 0, got {text!r}")
-    return values[0], values[1], values[2], values[3] if count == 4 else None
-
-
 def _percent(text: str) -> float:
     value = finite_float(text.rstrip("%"))
     if not 0 <= value < 100:
@@ -391,29 +356,8 @@ def _spacing(args: argparse.Namespace, embedded: bool) -> Any:
         raise InvalidParameterError("--gsd needs --camera")
     if args.nadir_gap and args.swath is None:
         raise InvalidParameterError("--nadir-gap needs --swath")
-    if args.camera is None and (args.front_overlap is not None or args.images_in_turns):
-        raise InvalidParameterError("--front-overlap and --images-in-turns need --camera")
-    if args.images_in_turns and args.front_overlap is None:
-        raise InvalidParameterError("--images-in-turns needs --front-overlap")
-    if args.camera is not None:
-        sw, f, px, height = args.camera
-        if args.gsd is not None and args.altitude is not None:
-            raise InvalidParameterError(
-                "give the camera's --altitude or its --gsd, not both (one follows from the other)"
-            )
-        overlap = 70.0 if args.overlap is None else args.overlap
-        front = None if args.front_overlap is None else args.front_overlap / 100
-        return Camera(
-            sw,
-            f,
-            px,
-            altitude=args.altitude,
-            gsd=args.gsd,
-            side_overlap=overlap / 100,
-            image_height=None if height is None else round(height),
-            front_overlap=front,
-            images_in_turns=args.images_in_turns,
-        )
+    if args.camera is not None or args.front_overlap is not None or args.images_in_turns:
+        return camera_from_args(args)
     if args.swath is not None:
         overlap = 0.0 if args.overlap is None else args.overlap
         return Swath(args.swath, overlap / 100, args.nadir_gap)
