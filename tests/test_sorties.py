@@ -83,6 +83,18 @@ def test_the_split_is_the_least_total_time_of_all_splits(mission):
     assert all(t <= limit for *_, t in found)
 
 
+def test_sorties_around_a_hole():
+    area = [(0, 0), (300, 0), (300, 300), (150, 300), (150, 150), (0, 150)]
+    hole = [(200, 100), (250, 100), (250, 150), (200, 150)]
+    m = plan_area(area, 10.0, crs=None, holes=[hole], speed=5.0)
+    sorties = split_mission(m, max_distance=1500.0)
+    assert len(sorties) > 2
+    np.testing.assert_array_equal(np.concatenate([s.transects for s in sorties]), m.transects)
+    assert sum(s.stats.n_transects for s in sorties) == m.stats.n_transects
+    assert sum(s.stats.n_turns + 1 for s in sorties) == m.stats.n_turns + 1  # passes
+    assert max(s.sortie.length for s in sorties) <= 1500.0
+
+
 def test_lane_units_keep_run_ins_and_hole_passes_whole():
     kinds = ("run_in", "start", "end", "run_out", "via", "start", "loop", "loop", "end")
     assert lane_units(kinds) == [(0, 3), (5, 8)]

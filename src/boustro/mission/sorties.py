@@ -177,7 +177,7 @@ def _sortie(mission: Mission, units: list[tuple[int, int]], sortie: Sortie) -> M
     s = plan.stats
     stats = dataclasses.replace(
         s,
-        n_transects=t1 - t0,
+        n_transects=plan.role()[t0:t1].count("lane"),  # lane segments, as the plan's
         n_turns=n - 1,
         transect_length=float(np.hypot(*(transects[:, 1] - transects[:, 0]).T).sum())
         / plan.ground_scale,
