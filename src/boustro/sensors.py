@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from ._validate import as_number
 from .errors import InvalidParameterError
 
-__all__ = ["Camera", "SensorSpacing", "Swath"]
+__all__ = ["Camera", "CameraTrigger", "SensorSpacing", "Swath"]
 
 
 def _positive(name: str, value: float) -> float:
@@ -49,13 +49,41 @@ class SensorSpacing:
     footprint: float
     altitude: float | None
     description: str
+    trigger: CameraTrigger | None = None
+
+
+@dataclass(frozen=True)
+class CameraTrigger:
+    """Distance-based camera triggering along the lanes (``MAV_CMD_DO_SET_CAM_TRIGG_DIST``).
+
+    Attributes:
+        distance: metres flown between two photos: the footprint along track times
+            ``1 - front_overlap``.
+        front_overlap: forward overlap between consecutive photos, a fraction in ``[0, 1)``.
+        footprint_along, footprint_across: the photo's footprint on the ground, metres (the
+            image's height along track, its width across).
+        gsd: ground sample distance, centimetres per pixel.
+        altitude: flying height above ground, metres.
+        images_in_turns: keep triggering through the turns (default: only along the lanes).
+    """
+
+    distance: float
+    front_overlap: float
+    footprint_along: float
+    footprint_across: float
+    gsd: float
+    altitude: float
+    images_in_turns: bool = False
 
 
 @dataclass(frozen=True)
 class Camera:
     """A frame camera looking straight down.
 
-    Give exactly one of ``altitude`` (m) and ``gsd`` (cm/px); the other follows.
+    Give exactly one of ``altitude`` (m) and ``gsd`` (cm/px); the other follows. The image's
+    width lies across track. With ``front_overlap`` (and the image's height ``image_height``,
+    px, square pixels) the camera is triggered by distance along the lanes
+    (:class:`CameraTrigger`, in :attr:`SensorSpacing.trigger`).
 
     Example (a 1-inch 20 MP camera, 13.2 mm wide sensor, 8.8 mm lens, 5472 px wide images):
         >>> round(Camera(13.2, 8.8, 5472, altitude=80, side_overlap=0.7).spacing().spacing, 6)
@@ -73,6 +101,9 @@ class Camera:
     altitude: float | None = None  # m above ground
     gsd: float | None = None  # cm / px
     side_overlap: float = 0.7
+    image_height: int | None = None  # px, along track
+    front_overlap: float | None = None
+    images_in_turns: bool = False
 
     def spacing(self) -> SensorSpacing:
         sw = _positive("sensor width (mm)", self.sensor_width)
@@ -96,7 +127,28 @@ class Camera:
             f"camera footprint {footprint:.2f} m across track at {altitude:.1f} m, "
             f"GSD {gsd_cm:.2f} cm/px, side overlap {overlap * 100:g}%: spacing {spacing:.2f} m"
         )
-        return SensorSpacing(spacing, spacing / 2, 0.0, footprint, altitude, text)
+        trigger = self._trigger(footprint, gsd_cm, altitude)
+        if trigger is not None:
+            text += (
+                f"; front overlap {trigger.front_overlap * 100:g}%: a photo every "
+                f"{trigger.distance:.2f} m"
+            )
+        return SensorSpacing(spacing, spacing / 2, 0.0, footprint, altitude, text, trigger)
+
+    def _trigger(self, footprint: float, gsd_cm: float, altitude: float) -> CameraTrigger | None:
+        """The trigger distance for ``front_overlap``: footprint along track x (1 - overlap)."""
+        if self.front_overlap is None:
+            return None
+        front = _fraction("front overlap", self.front_overlap)
+        if self.image_height is None:
+            raise InvalidParameterError(
+                "a front overlap needs the image's height in pixels (along track): give the "
+                "camera as SENSOR_MM,FOCAL_MM,IMAGE_W_PX,IMAGE_H_PX or a preset name"
+            )
+        along = gsd_cm / 100 * _positive("image height (px)", self.image_height)
+        return CameraTrigger(
+            along * (1 - front), front, along, footprint, gsd_cm, altitude, self.images_in_turns
+        )
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,52 @@ import math
 
 from ..mission import Mission
 
-__all__ = ["rows"]
+__all__ = ["flight_rows", "rows"]
+
+
+def flight_rows(mission: Mission) -> list[tuple[str, str]]:
+    """The camera, terrain, sortie and crosshatch rows."""
+    out = []
+    c = mission.camera
+    if c is not None:
+        turns = "through the turns" if c.images_in_turns else "along the lanes only"
+        out.append(
+            (
+                "camera",
+                f"{mission.photos} photos, one every {c.distance:.2f} m {turns} (front overlap "
+                f"{100 * c.front_overlap:g}%, footprint {c.footprint_along:.1f} m along track), "
+                f"GSD {c.gsd:.2f} cm/px",
+            )
+        )
+    t = mission.terrain
+    if t is not None:
+        out.append(
+            (
+                "terrain",
+                f"{t.height:g} m above ground from {t.dem}: {len(t.points)} waypoints "
+                f"({sum(k == 'terrain' for k in t.kinds)} added, tolerance {t.tolerance:g} m), "
+                f"{t.amsl.min():.1f} to {t.amsl.max():.1f} m AMSL",
+            )
+        )
+    so = mission.sortie
+    if so is not None:
+        time = "" if so.duration is None else f", {so.duration:.0f} s"
+        out.append(
+            (
+                "sortie",
+                f"{so.index} of {so.count}: lanes {so.lanes[0] + 1}-{so.lanes[1] + 1}, "
+                f"{so.length:.1f} m from home and back{time} ({so.limit})",
+            )
+        )
+    for k, p in enumerate(mission.passes, start=1):
+        cov = "" if p.coverage is None else f", covered {100 * p.coverage.covered_share:.4f}%"
+        out.append(
+            (
+                f"crosshatch {k}",
+                f"angle {math.degrees(p.plan.angle):.2f} deg, {p.stats.n_transects} transects{cov}",
+            )
+        )
+    return out
 
 
 def _fitness(value: float) -> str:
@@ -86,5 +131,6 @@ def rows(mission: Mission, written: list[str]) -> list[tuple[str, str]]:
         )
     if mission.altitude is not None:
         rows.append(("altitude", f"{mission.altitude:g} m above take-off"))
+    rows += flight_rows(mission)
     rows += [("written", name) for name in written]
     return rows

@@ -14,9 +14,11 @@ from ..errors import InvalidParameterError
 from ..io import Area, embedded_field, read_areas
 from ..io.formats import FORMATS, atomic_write, format_for
 from ..io.repair import check_area, repair_area
-from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission, plan_area
+from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission
+from ..mission.camera import camera_presets
 from ..plot.plan import plot_plan
-from ..sensors import Camera, Swath
+from ..sensors import Swath
+from ._camera import add_trigger_options, camera_arg, camera_from_args
 from ._common import (
     check_output_path,
     check_plot_target,
@@ -26,6 +28,7 @@ from ._common import (
     print_table,
 )
 from ._fields import mission_files, output_files, pick_fields, plan_fields
+from ._flight import add_flight_options, fly, plan_mission
 from ._plan_rows import rows as _rows
 
 
@@ -165,6 +168,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     _add_spacing(p)
     _add_optimiser(p)
     _add_path(p)
+    add_flight_options(p, _point)
     _add_output(p)
     p.set_defaults(func=run)
 
@@ -176,10 +180,11 @@ def _add_spacing(p: argparse.ArgumentParser) -> None:
     which.add_argument("--spacing", type=positive_float, help="transect spacing, metres")
     which.add_argument(
         "--camera",
-        type=_camera,
-        metavar="SENSOR_MM,FOCAL_MM,IMAGE_PX",
-        help="camera: sensor width (mm), focal length (mm), image width (px), with --altitude "
-        "or --gsd; e.g. 13.2,8.8,5472",
+        type=camera_arg,
+        metavar="SENSOR_MM,FOCAL_MM,IMAGE_PX[,IMAGE_H_PX]|NAME",
+        help="camera: sensor width (mm), focal length (mm), image width (px) and, for "
+        "--front-overlap, image height (px), e.g. 13.2,8.8,5472,3648; or a preset: "
+        f"{', '.join(sorted(camera_presets()))}; with --altitude or --gsd",
     )
     which.add_argument(
         "--swath", type=positive_float, metavar="WIDTH_M", help="swath sensor width, metres"
@@ -193,6 +198,7 @@ def _add_spacing(p: argparse.ArgumentParser) -> None:
         metavar="PCT",
         help="side overlap between neighbouring swaths, percent (camera default 70, swath 0)",
     )
+    add_trigger_options(sensor, _percent)
     sensor.add_argument(
         "--nadir-gap",
         type=_non_negative,
@@ -333,13 +339,6 @@ def _point(text: str) -> tuple[float, float]:
     return x, y
 
 
-def _camera(text: str) -> tuple[float, float, float]:
-    sw, f, px = _numbers(text, 3, "SENSOR_MM,FOCAL_MM,IMAGE_PX")
-    if min(sw, f, px) <= 0:
-        raise argparse.ArgumentTypeError(f"camera values must be > 0, got {text!r}")
-    return sw, f, px
-
-
 def _percent(text: str) -> float:
     value = finite_float(text.rstrip("%"))
     if not 0 <= value < 100:
@@ -360,14 +359,8 @@ def _spacing(args: argparse.Namespace, embedded: bool) -> Any:
         raise InvalidParameterError("--gsd needs --camera")
     if args.nadir_gap and args.swath is None:
         raise InvalidParameterError("--nadir-gap needs --swath")
-    if args.camera is not None:
-        sw, f, px = args.camera
-        if args.gsd is not None and args.altitude is not None:
-            raise InvalidParameterError(
-                "give the camera's --altitude or its --gsd, not both (one follows from the other)"
-            )
-        overlap = 70.0 if args.overlap is None else args.overlap
-        return Camera(sw, f, px, altitude=args.altitude, gsd=args.gsd, side_overlap=overlap / 100)
+    if args.camera is not None or args.front_overlap is not None or args.images_in_turns:
+        return camera_from_args(args)
     if args.swath is not None:
         overlap = 0.0 if args.overlap is None else args.overlap
         return Swath(args.swath, overlap / 100, args.nadir_gap)
@@ -427,11 +420,12 @@ def _plot_bytes(mission: Mission, path: str) -> bytes:
         plt.close(fig)
 
 
-def _plan_one(args: argparse.Namespace, area: Area) -> Mission:
+def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:
     spacing = _spacing(args, embedded=args.area is None)
     name = args.objective or ("time" if args.speed is not None else "smith")
     fitness = cli_objectives()[name]()
-    return plan_area(
+    mission = plan_mission(
+        args,
         area,
         spacing,
         method=args.method,
@@ -450,6 +444,7 @@ def _plan_one(args: argparse.Namespace, area: Area) -> Mission:
         force=args.force,
         progress=False if args.quiet else None,
     )
+    return fly(args, mission)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -462,7 +457,8 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidParameterError("--format needs --out FILE")
     areas = _load(args)
     _spacing(args, embedded=args.area is None)  # a missing spacing: one error, not one per field
-    missions = plan_fields(areas, lambda area: _plan_one(args, _validated(args, area)))
+    planned = plan_fields(areas, lambda area: _plan_one(args, _validated(args, area)))
+    missions = [m for ms in planned for m in ms]  # a field's sorties follow one another
     # Render everything before touching any file, so that an error writes nothing.
     outputs: list[tuple[str, bytes | str, str, int | None]] = []
     if args.out is not None:

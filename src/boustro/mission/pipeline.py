@@ -19,6 +19,7 @@ from ..objectives.time import MissionTime
 from ..optimize.cover import CoverCost
 from ..optimize.methods import resolve_method
 from ..sensors import SensorSpacing
+from .camera import camera_trigger, with_camera
 from .defaults import DEFAULT_HULL_TOLERANCE
 from .cover import cover_cost, plan_cover
 from .estimate import SAY_SECONDS, WorkEstimate, check_work, frame_estimate
@@ -165,7 +166,8 @@ def plan_area(
         planned = plan_convex(frame, **settings)
     else:
         planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
-    return map_back(frame, planned, altitude=altitude, turnaround=turnaround)
+    mission = map_back(frame, planned, altitude=altitude, turnaround=turnaround)
+    return with_camera(mission, camera_trigger(spacing))
 
 
 def _plan_for_cost(

@@ -13,6 +13,8 @@ from ..io.crs import Projection
 from ..io.read import Area
 from ..optimize import OptimizeResult
 from ..plan import Coverage, Plan, PlanStats
+from ..sensors import CameraTrigger
+from .flight import Sortie, TerrainRoute
 
 __all__ = ["Mission"]
 
@@ -75,6 +77,11 @@ class Mission:
             (from grid north +y for planar input).
         home, home_lonlat: the take-off / home position: the ``start`` point if given, else the
             first waypoint (area coordinates; WGS 84, ``None`` for planar input).
+        camera: distance triggering of a camera along the lanes (``--front-overlap``), if any;
+            ``photos``: the number of photos it takes.
+        terrain: the waypoints at a constant height above ground from a DEM, if any.
+        sortie: this mission's place among the sorties of a split mission, if any.
+        passes: a crosshatch mission's two passes, as planned (this mission flies both).
     """
 
     name: str
@@ -99,6 +106,11 @@ class Mission:
     home: NDArray[np.float64]
     home_lonlat: NDArray[np.float64] | None
     holes_lonlat: tuple[NDArray[np.float64], ...] = ()
+    camera: CameraTrigger | None = None
+    photos: int | None = None
+    terrain: TerrainRoute | None = None
+    sortie: Sortie | None = None
+    passes: tuple[Mission, ...] = ()
 
     @property
     def crs(self) -> str | None:
@@ -182,4 +194,36 @@ class Mission:
             out["outside_length_m"] = s.outside_length
             if self.plan.notes:
                 out["notes"] = list(self.plan.notes)
+        out.update(self._flight_summary())
+        return out
+
+    def _flight_summary(self) -> dict[str, Any]:
+        """The camera, terrain, sortie and crosshatch entries of :meth:`summary`."""
+        out: dict[str, Any] = {}
+        if self.camera is not None:
+            c = self.camera
+            out["camera"] = {
+                "trigger_distance_m": c.distance,
+                "front_overlap": c.front_overlap,
+                "footprint_along_m": c.footprint_along,
+                "footprint_across_m": c.footprint_across,
+                "gsd_cm_px": c.gsd,
+                "height_m": c.altitude,
+                "images_in_turns": c.images_in_turns,
+                "photos": self.photos,
+            }
+        if self.terrain is not None:
+            out["terrain"] = self.terrain.summary()
+        if self.sortie is not None:
+            out["sortie"] = self.sortie.summary()
+        if self.passes:
+            out["crosshatch"] = [
+                {
+                    "angle_deg": math.degrees(p.plan.angle),
+                    "bearing_deg": p.bearing,
+                    "n_transects": p.stats.n_transects,
+                    "covered_share": None if p.coverage is None else p.coverage.covered_share,
+                }
+                for p in self.passes
+            ]
         return out

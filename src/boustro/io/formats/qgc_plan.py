@@ -5,14 +5,8 @@ from __future__ import annotations
 import json
 from typing import TYPE_CHECKING, Any
 
-from ._common import (
-    MAV_CMD_DO_CHANGE_SPEED,
-    MAV_CMD_NAV_WAYPOINT,
-    MAV_FRAME_GLOBAL_RELATIVE_ALT,
-    MAV_FRAME_MISSION,
-    lonlat,
-    need_altitude,
-)
+from ._common import MAV_CMD_NAV_WAYPOINT, lonlat
+from ._mavlink import home_altitude, mission_items
 from .registry import register_format
 
 if TYPE_CHECKING:
@@ -22,6 +16,9 @@ __all__ = ["to_qgc_plan"]
 
 #: QGroundControl's ``AltitudeModeRelative``.
 _QGC_ALTITUDE_RELATIVE = 1
+#: QGroundControl's ``AltitudeModeCalcAboveTerrain``: an AMSL altitude (``MAV_FRAME_GLOBAL``)
+#: computed from terrain data for a height above ground (the item's ``Altitude``).
+_QGC_ALTITUDE_ABOVE_TERRAIN = 3
 
 
 def _qgc_item(seq: int, command: int, frame: int, params: list[Any], altitude: Any) -> dict:
@@ -45,22 +42,22 @@ def _qgc_item(seq: int, command: int, frame: int, params: list[Any], altitude: A
 
 
 def _mission_items(mission: Mission) -> list[dict[str, Any]]:
-    """The speed item (if the mission has a speed), then one waypoint item per waypoint."""
-    waypoints, _, _, _ = lonlat(mission, "a QGroundControl plan")
-    alt = need_altitude(mission, "a QGroundControl plan")
-    items = []
-    speed = mission.stats.speed
-    if speed is not None:
-        items.append(
-            _qgc_item(1, MAV_CMD_DO_CHANGE_SPEED, MAV_FRAME_MISSION, [1, speed, -1, 0, 0, 0, 0], 0)
-        )
-    for lon, lat in waypoints:
-        params = [0, 0, 0, None, float(lat), float(lon), alt]
-        items.append(
-            _qgc_item(
-                len(items) + 1, MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL_RELATIVE_ALT, params, alt
-            )
-        )
+    """The mission's items (:func:`~boustro.io.formats._mavlink.mission_items`) as QGC
+    ``SimpleItem`` objects: waypoints at a relative altitude, or over terrain at their AMSL
+    altitude in ``MAV_FRAME_GLOBAL`` with QGC's "calculated above terrain" mode."""
+    items: list[dict[str, Any]] = []
+    for item in mission_items(mission, "a QGroundControl plan"):
+        seq = len(items) + 1
+        if item.command != MAV_CMD_NAV_WAYPOINT:
+            items.append(_qgc_item(seq, item.command, item.frame, [*item.params, 0, 0, 0], 0))
+            continue
+        params: list[Any] = [0, 0, 0, None, item.lat, item.lon, item.alt]
+        if item.above_ground is None:
+            items.append(_qgc_item(seq, item.command, item.frame, params, item.alt))
+        else:
+            qgc = _qgc_item(seq, item.command, item.frame, params, item.above_ground)
+            qgc.update(AMSLAltAboveTerrain=item.alt, AltitudeMode=_QGC_ALTITUDE_ABOVE_TERRAIN)
+            items.append(qgc)
     return items
 
 
@@ -71,8 +68,14 @@ def to_qgc_plan(mission: Mission, *, firmware_type: int = 0, vehicle_type: int =
     One ``SimpleItem`` ``MAV_CMD_NAV_WAYPOINT`` per waypoint in ``MAV_FRAME_GLOBAL_RELATIVE_ALT``
     (params ``[hold 0, acceptance 0, pass-through 0, yaw null, lat, lon, altitude]``), preceded
     by a ``MAV_CMD_DO_CHANGE_SPEED`` (ground speed) when the mission has a speed. The planned
-    home position is the mission's home at altitude 0. ``firmware_type`` and ``vehicle_type`` are
-    MAVLink ``MAV_AUTOPILOT`` / ``MAV_TYPE`` values (0: generic).
+    home position is the mission's home at altitude 0. A camera adds
+    ``MAV_CMD_DO_SET_CAM_TRIGG_DIST`` items (params ``[distance, 0, 1, 0, 0, 0, 0]`` after a
+    lane's start, ``[0, 0, 0, 0, 0, 0, 0]`` after its end); over terrain the waypoints are in
+    ``MAV_FRAME_GLOBAL`` at their AMSL altitude (``AltitudeMode`` 3, QGC's "calculated above
+    terrain", ``Altitude`` the height above ground) and home at the ground's altitude; a
+    sortie ends with ``MAV_CMD_NAV_RETURN_TO_LAUNCH`` (:mod:`boustro.io.formats._mavlink`).
+    ``firmware_type`` and ``vehicle_type`` are MAVLink ``MAV_AUTOPILOT`` / ``MAV_TYPE``
+    values (0: generic).
 
     >>> from boustro.io import embedded_field
     >>> from boustro.mission import plan_area
@@ -91,10 +94,12 @@ def to_qgc_plan(mission: Mission, *, firmware_type: int = 0, vehicle_type: int =
         "mission": {
             "cruiseSpeed": 15 if speed is None else speed,
             "firmwareType": int(firmware_type),
-            "globalPlanAltitudeMode": _QGC_ALTITUDE_RELATIVE,
+            "globalPlanAltitudeMode": _QGC_ALTITUDE_RELATIVE
+            if mission.terrain is None
+            else _QGC_ALTITUDE_ABOVE_TERRAIN,
             "hoverSpeed": 5 if speed is None else speed,
             "items": items,
-            "plannedHomePosition": [home_lat, home_lon, 0],
+            "plannedHomePosition": [home_lat, home_lon, home_altitude(mission)],
             "vehicleType": int(vehicle_type),
             "version": 2,
         },

@@ -5,15 +5,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from ._common import (
-    MAV_CMD_DO_CHANGE_SPEED,
-    MAV_CMD_NAV_WAYPOINT,
-    MAV_FRAME_GLOBAL,
-    MAV_FRAME_GLOBAL_RELATIVE_ALT,
-    MAV_FRAME_MISSION,
-    lonlat,
-    need_altitude,
-)
+from ._common import MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL, lonlat
+from ._mavlink import home_altitude, mission_items
 from .registry import register_format
 
 if TYPE_CHECKING:
@@ -41,36 +34,34 @@ def to_wpl(mission: Mission) -> str:
     and QGroundControl write it; then one ``MAV_CMD_NAV_WAYPOINT`` per waypoint in
     ``MAV_FRAME_GLOBAL_RELATIVE_ALT`` (a ``MAV_CMD_DO_CHANGE_SPEED`` first when there is a
     speed). Columns: index, current, frame, command, param1-4, latitude, longitude, altitude,
-    autocontinue.
+    autocontinue. Camera triggers, terrain altitudes (``MAV_FRAME_GLOBAL``, home at the
+    ground's AMSL altitude) and a sortie's return to launch as in
+    :mod:`boustro.io.formats._mavlink`.
 
     >>> from boustro.io import embedded_field
     >>> from boustro.mission import plan_area
     >>> to_wpl(plan_area(embedded_field(), 10.0, altitude=30.0)).splitlines()[0]
     'QGC WPL 110'
     """
-    waypoints, _, _, home = lonlat(mission, _WHAT)
-    alt = need_altitude(mission, _WHAT)
+    _, _, _, home = lonlat(mission, _WHAT)
+    items = mission_items(mission, _WHAT)
     home_lon, home_lat = (float(v) for v in home)
+    home_alt = float(home_altitude(mission))
     rows = [
         "QGC WPL 110",
-        _line(0, 1, MAV_FRAME_GLOBAL, MAV_CMD_NAV_WAYPOINT, [0] * 4, home_lat, home_lon, 0.0),
+        _line(0, 1, MAV_FRAME_GLOBAL, MAV_CMD_NAV_WAYPOINT, [0] * 4, home_lat, home_lon, home_alt),
     ]
-    speed = mission.stats.speed
-    if speed is not None:
-        rows.append(
-            _line(1, 0, MAV_FRAME_MISSION, MAV_CMD_DO_CHANGE_SPEED, [1, speed, -1, 0], 0, 0, 0)
-        )
-    for lon, lat in waypoints:
+    for item in items:
         rows.append(
             _line(
                 len(rows) - 1,
                 0,
-                MAV_FRAME_GLOBAL_RELATIVE_ALT,
-                MAV_CMD_NAV_WAYPOINT,
-                [0] * 4,
-                float(lat),
-                float(lon),
-                alt,
+                item.frame,
+                item.command,
+                item.params,
+                item.lat,
+                item.lon,
+                item.alt,
             )
         )
     return "\n".join(rows) + "\n"

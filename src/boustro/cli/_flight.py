@@ -1,0 +1,90 @@
+"""``boustro plan``'s flight options: sorties (home, limits), terrain (a DEM), crosshatch."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ..errors import InvalidParameterError
+from ..mission import Mission, plan_area
+from ..mission.crosshatch import plan_crosshatch
+from ..mission.sorties import split_mission
+from ..mission.terrain import DEFAULT_TOLERANCE, follow_terrain
+from ._common import positive_float
+
+__all__ = ["add_flight_options", "fly", "plan_mission"]
+
+
+def add_flight_options(p: argparse.ArgumentParser, point: Any) -> None:
+    """The options of this module; ``point`` parses ``X,Y``."""
+    g = p.add_argument_group("flight: sorties, terrain, crosshatch")
+    g.add_argument(
+        "--home",
+        type=point,
+        metavar="X,Y",
+        help="home (take-off and landing) position in AREA's coordinates (LON,LAT for lon/lat); "
+        "the path starts at the lane end nearest it unless --start is given. Default: the "
+        "mission's home (--start, else the first waypoint)",
+    )
+    g.add_argument(
+        "--max-flight-time",
+        type=positive_float,
+        metavar="S",
+        help="split the mission into sorties of at most S seconds each, from home and back "
+        "(needs --speed; --turn-time counts): whole lanes in the mission's order, the cut "
+        "points chosen for the least total time. .plan and .waypoints: one file per sortie "
+        "(FILE-<name>.ext), each ending with a return to launch; GeoJSON, KML, GPX, CSV: one "
+        "file with every sortie",
+    )
+    g.add_argument(
+        "--max-distance",
+        type=positive_float,
+        metavar="M",
+        help="as --max-flight-time, sorties of at most M metres each (home and back included)",
+    )
+    g.add_argument(
+        "--dem",
+        metavar="FILE.tif",
+        help="keep a constant height above ground (--altitude, or the camera's) over the "
+        "terrain of this GeoTIFF DEM (rasterio: pip install 'boustro[terrain]'): waypoint "
+        "altitudes above mean sea level, points added where the terrain bends; .plan and "
+        ".waypoints in MAV_FRAME_GLOBAL (AMSL)",
+    )
+    g.add_argument(
+        "--terrain-tolerance",
+        type=positive_float,
+        default=DEFAULT_TOLERANCE,
+        metavar="M",
+        help="with --dem: largest vertical error between two waypoints, metres (default "
+        f"{DEFAULT_TOLERANCE:g})",
+    )
+    g.add_argument(
+        "--crosshatch",
+        action="store_true",
+        help="fly a second pass at 90 degrees to the first (3D mapping); the angle is chosen "
+        "for the pair (the objective summed over both passes)",
+    )
+
+
+def plan_mission(args: argparse.Namespace, area: Any, spacing: Any, **kwargs: Any) -> Mission:
+    """The mission of one area: :func:`plan_area`, or a crosshatch pair."""
+    if args.home is not None and kwargs.get("start") is None:
+        kwargs["start"] = args.home
+    if args.crosshatch:
+        return plan_crosshatch(area, spacing, **kwargs)
+    return plan_area(area, spacing, **kwargs)
+
+
+def fly(args: argparse.Namespace, mission: Mission) -> list[Mission]:
+    """The mission's sorties (or the mission), each over the terrain with ``--dem``."""
+    if args.terrain_tolerance != DEFAULT_TOLERANCE and args.dem is None:
+        raise InvalidParameterError("--terrain-tolerance needs --dem")
+    missions = split_mission(
+        mission,
+        home=args.home,
+        max_time=args.max_flight_time,
+        max_distance=args.max_distance,
+    )
+    if args.dem is not None:
+        missions = [follow_terrain(m, args.dem, tolerance=args.terrain_tolerance) for m in missions]
+    return missions
