@@ -12,6 +12,7 @@ from ..objectives import FewestTransects, MissionTime
 from ..optimize.cover import CoverCost, cover_optimum
 from ..plan import Plan, build_plan, coverage
 from ..plan.region import plan_region
+from ..plan.types import Layout
 from .project import Frame
 from .steps import Planned, _path_options
 
@@ -43,18 +44,19 @@ def cover_cost(
 def _planner(frame: Frame, layout: str, options: dict[str, Any]) -> Callable[..., Plan]:
     """The plan of one layout, as the final plan is built (convex or region planner)."""
     s_plan = frame.sensor.spacing * frame.proj.scale_min
+    lay: Layout = "chords" if layout == "chords" else "guaranteed"
 
     if frame.region is None:
 
         def convex(angle: float, offset: float) -> Plan:
             plan = build_plan(
-                frame.poly, s_plan, angle, offset, layout=layout, start=frame.start, **options
+                frame.poly, s_plan, angle, offset, layout=lay, start=frame.start, **options
             )
             if frame.given_start:
                 return plan
             # no start given: the corner of the first lane's other end flips the turns' sides
             other = build_plan(
-                frame.poly, s_plan, angle, offset, layout=layout,
+                frame.poly, s_plan, angle, offset, layout=lay,
                 start=plan.waypoints[_first_end(plan)], **options,
             )  # fmt: skip
             return other if _cost_key(other) < _cost_key(plan) else plan
@@ -68,7 +70,7 @@ def _planner(frame: Frame, layout: str, options: dict[str, Any]) -> Callable[...
             decompose_area=False,
             angle=angle,
             offset=offset,
-            layout=layout,  # type: ignore[arg-type]
+            layout=lay,
             start=frame.start if frame.given_start else None,
             **options,
         )
@@ -124,5 +126,5 @@ def plan_cover(
         )
         plan = dataclasses.replace(plan, cells=cells)
     surveyed = frame.surveyed if frame.region is None else frame.region
-    cov = coverage(plan, surveyed) if check_coverage else None  # type: ignore[arg-type]
+    cov = coverage(plan, surveyed) if check_coverage else None
     return Planned(plan, optimum, cov)

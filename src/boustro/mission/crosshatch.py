@@ -174,7 +174,10 @@ def plan_crosshatch(
     if angle is None:
         s_plan = sensor.spacing * frame.proj.scale_min
         target = frame.poly if frame.region is None else frame.region
-        angle, _ = crosshatch_angle(target, s_plan, fitness, _one_pass(frame, s_plan, fitness))
+        # a plan-level objective (mission time) scores flown plans, not lengths: the pair's
+        # angle is then chosen by Eq. 1 and each pass's offset by the objective
+        scan = None if getattr(fitness, "needs_plan", False) else fitness
+        angle, _ = crosshatch_angle(target, s_plan, scan, _one_pass(frame, s_plan, scan))
     first = plan_area(area, spacing, angle=angle, fitness=fitness, start=start, **kwargs)
     second = plan_area(
         area,

@@ -57,7 +57,7 @@ class BandStats(NamedTuple):
 
     * ``length``: measure of the inner set's band projection minus the inner set's hole chords
       on the line (a lower bound on the lane length any sandwiched area gets);
-    * ``count``: pieces of the outer projection minus the outer set's hole chords that hold
+    * ``lanes``: pieces of the outer projection minus the outer set's hole chords that hold
       inner length (a lower bound on the lanes on the line);
     * ``in_lo, in_hi, out_lo, out_hi``: the extremes of the inner and outer projections
       (``nan`` where empty);
@@ -67,7 +67,7 @@ class BandStats(NamedTuple):
 
     k0: int
     length: NDArray[np.float64]
-    count: NDArray[np.int64]
+    lanes: NDArray[np.int64]
     in_lo: NDArray[np.float64]
     in_hi: NDArray[np.float64]
     out_lo: NDArray[np.float64]
@@ -76,7 +76,7 @@ class BandStats(NamedTuple):
 
 
 # -- the loop (plain Python, compiled by numba on first use) ----------------------------------
-def _project(xy, cs, sn, ox, oy):  # type: ignore[no-untyped-def]
+def _project(xy, cs, sn, ox, oy):
     e = xy.shape[0]
     h1 = np.empty(e)
     h2 = np.empty(e)
@@ -91,7 +91,7 @@ def _project(xy, cs, sn, ox, oy):  # type: ignore[no-untyped-def]
     return h1, h2, t1, t2
 
 
-def _band_intervals(h1, h2, t1, t2, d, s, reach, k0, nb):  # type: ignore[no-untyped-def]
+def _band_intervals(h1, h2, t1, t2, d, s, reach, k0, nb):
     """Per band: sorted, merged intervals of the projection (start index, lo, hi arrays)."""
     e = h1.shape[0]
     # pass 1: counts of clipped edges and of crossings of each band's two edge lines
@@ -99,8 +99,8 @@ def _band_intervals(h1, h2, t1, t2, d, s, reach, k0, nb):  # type: ignore[no-unt
     n_x = np.zeros((nb, 2), dtype=np.int64)
     for i in range(e):
         lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
-        ka = max(int(math.ceil((lo - reach - d) / s)), k0)
-        kb = min(int(math.floor((hi + reach - d) / s)), k0 + nb - 1)
+        ka = max(int(math.ceil((lo - reach - d) / s)), k0)  # noqa: RUF046 (numba)
+        kb = min(int(math.floor((hi + reach - d) / s)), k0 + nb - 1)  # noqa: RUF046 (numba)
         for k in range(ka, kb + 1):
             c = d + k * s
             if min(hi, c + reach) >= max(lo, c - reach):
@@ -126,8 +126,8 @@ def _band_intervals(h1, h2, t1, t2, d, s, reach, k0, nb):  # type: ignore[no-unt
     # pass 2: fill
     for i in range(e):
         lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
-        ka = max(int(math.ceil((lo - reach - d) / s)), k0)
-        kb = min(int(math.floor((hi + reach - d) / s)), k0 + nb - 1)
+        ka = max(int(math.ceil((lo - reach - d) / s)), k0)  # noqa: RUF046 (numba)
+        kb = min(int(math.floor((hi + reach - d) / s)), k0 + nb - 1)  # noqa: RUF046 (numba)
         dh = h2[i] - h1[i]
         for k in range(ka, kb + 1):
             c = d + k * s
@@ -177,7 +177,7 @@ def _band_intervals(h1, h2, t1, t2, d, s, reach, k0, nb):  # type: ignore[no-unt
     return start, mcount, ilo, ihi
 
 
-def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):  # type: ignore[no-untyped-def]
+def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):
     """Per band: the chords of the holes on the band's centre line, sorted (lo, hi, hole id)."""
     e = h1.shape[0]
     n_x = np.zeros(nb, dtype=np.int64)
@@ -185,8 +185,8 @@ def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):  # type: ignore[no-untyped
         if hole[i] < 0:
             continue
         lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
-        ka = max(int(math.ceil((lo - d) / s)), k0)
-        kb = min(int(math.floor((hi - d) / s)), k0 + nb - 1)
+        ka = max(int(math.ceil((lo - d) / s)), k0)  # noqa: RUF046 (numba)
+        kb = min(int(math.floor((hi - d) / s)), k0 + nb - 1)  # noqa: RUF046 (numba)
         for k in range(ka, kb + 1):
             line = d + k * s
             if (h1[i] <= line) != (h2[i] <= line):
@@ -201,8 +201,8 @@ def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):  # type: ignore[no-untyped
         if hole[i] < 0:
             continue
         lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
-        ka = max(int(math.ceil((lo - d) / s)), k0)
-        kb = min(int(math.floor((hi - d) / s)), k0 + nb - 1)
+        ka = max(int(math.ceil((lo - d) / s)), k0)  # noqa: RUF046 (numba)
+        kb = min(int(math.floor((hi - d) / s)), k0 + nb - 1)  # noqa: RUF046 (numba)
         for k in range(ka, kb + 1):
             line = d + k * s
             if (h1[i] <= line) != (h2[i] <= line):
@@ -218,7 +218,7 @@ def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):  # type: ignore[no-untyped
     return xstart, xt, xh
 
 
-def _minus(lo, hi, n, glo, ghi, tol):  # type: ignore[no-untyped-def]
+def _minus(lo, hi, n, glo, ghi, tol):
     """Sorted disjoint intervals minus sorted disjoint gaps (pieces longer than ``tol``)."""
     out_lo = np.empty(n + glo.shape[0] + 1)
     out_hi = np.empty(n + glo.shape[0] + 1)
@@ -245,13 +245,35 @@ def _minus(lo, hi, n, glo, ghi, tol):  # type: ignore[no-untyped-def]
     return out_lo[:m], out_hi[:m]
 
 
-def _leaf(inner_xy, inner_hole, outer_xy, outer_hole, cs, sn, d, s, r_in, r_out, ox, oy, k0, nb,
-          tol, length, count, in_lo, in_hi, out_lo, out_hi, cut):  # type: ignore[no-untyped-def]
+def _leaf(
+    inner_xy,
+    inner_hole,
+    outer_xy,
+    outer_hole,
+    cs,
+    sn,
+    d,
+    s,
+    r_in,
+    r_out,
+    ox,
+    oy,
+    k0,
+    nb,
+    tol,
+    length,
+    count,
+    in_lo,
+    in_hi,
+    out_lo,
+    out_hi,
+    cut,
+):
     ih1, ih2, it1, it2 = _project(inner_xy, cs, sn, ox, oy)
     oh1, oh2, ot1, ot2 = _project(outer_xy, cs, sn, ox, oy)
     i_start, i_m, i_lo, i_hi = _band_intervals(ih1, ih2, it1, it2, d, s, r_in, k0, nb)
     o_start, o_m, o_lo, o_hi = _band_intervals(oh1, oh2, ot1, ot2, d, s, r_out, k0, nb)
-    gi_start, gi_t, gi_h = _hole_chords(ih1, ih2, it1, it2, inner_hole, d, s, k0, nb)
+    gi_start, gi_t, _gi_h = _hole_chords(ih1, ih2, it1, it2, inner_hole, d, s, k0, nb)
     go_start, go_t, go_h = _hole_chords(oh1, oh2, ot1, ot2, outer_hole, d, s, k0, nb)
     for b in range(nb):
         p0, m = i_start[b], i_m[b]
@@ -291,8 +313,24 @@ def _leaf(inner_xy, inner_hole, outer_xy, outer_hole, cs, sn, d, s, r_in, r_out,
                     break
 
 
-def _all(inner_xy, inner_hole, outer_xy, outer_hole, cs, sn, d, s, r_in, r_out, ox, oy, k0, nb,
-         n_holes, tol):  # type: ignore[no-untyped-def]
+def _all(
+    inner_xy,
+    inner_hole,
+    outer_xy,
+    outer_hole,
+    cs,
+    sn,
+    d,
+    s,
+    r_in,
+    r_out,
+    ox,
+    oy,
+    k0,
+    nb,
+    n_holes,
+    tol,
+):
     n = cs.shape[0]
     length = np.zeros((n, nb))
     count = np.zeros((n, nb), dtype=np.int64)
@@ -302,9 +340,30 @@ def _all(inner_xy, inner_hole, outer_xy, outer_hole, cs, sn, d, s, r_in, r_out, 
     out_hi = np.full((n, nb), np.nan)
     cut = np.zeros((n, max(n_holes, 1)), dtype=np.bool_)
     for leaf in range(n):
-        _leaf(inner_xy, inner_hole, outer_xy, outer_hole, cs[leaf], sn[leaf], d[leaf], s, r_in,
-              r_out, ox, oy, k0, nb, tol, length[leaf], count[leaf], in_lo[leaf], in_hi[leaf],
-              out_lo[leaf], out_hi[leaf], cut[leaf])
+        _leaf(
+            inner_xy,
+            inner_hole,
+            outer_xy,
+            outer_hole,
+            cs[leaf],
+            sn[leaf],
+            d[leaf],
+            s,
+            r_in,
+            r_out,
+            ox,
+            oy,
+            k0,
+            nb,
+            tol,
+            length[leaf],
+            count[leaf],
+            in_lo[leaf],
+            in_hi[leaf],
+            out_lo[leaf],
+            out_hi[leaf],
+            cut[leaf],
+        )
     return length, count, in_lo, in_hi, out_lo, out_hi, cut
 
 

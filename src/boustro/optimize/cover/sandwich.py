@@ -90,9 +90,7 @@ class Sandwich:
             hid = -1
             if is_hole:
                 point = shapely.Polygon(ring).representative_point()
-                hid = next(
-                    (i for i, hp in enumerate(self.hole_polygons) if hp.contains(point)), -1
-                )
+                hid = next((i for i, hp in enumerate(self.hole_polygons) if hp.contains(point)), -1)
                 kept.append((ring, hid))
             ids.append(hid)
         outer_set = edge_set([r for r, _ in out_rings], ids)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,10 +33,10 @@ FIRST_SEPARATION = math.radians(3.0)
 class _Boxes(NamedTuple):
     """Boxes of layouts: angle ``theta +- delta``, offset ``d +- eta`` (arrays)."""
 
-    theta: NDArray[np.float64]
-    delta: NDArray[np.float64]
-    d: NDArray[np.float64]
-    eta: NDArray[np.float64]
+    theta: NDArray[Any]
+    delta: NDArray[Any]
+    d: NDArray[Any]
+    eta: NDArray[Any]
 
     def take(self, mask: NDArray[np.bool_]) -> _Boxes:
         return _Boxes(*(a[mask] for a in self))
@@ -149,7 +149,7 @@ class CoverSearch:
         order = np.argsort(points)
         if limit is None:
             limit = FIRST_PLANS if first else PLANS_PER_ROUND
-        tried, taken = 0, []
+        tried, taken = 0, list[float]()
         for i in order:
             if tried >= limit or points[i] >= self.best[0]:
                 break
@@ -202,7 +202,10 @@ def _split(boxes: _Boxes, radius: float) -> _Boxes:
             eta = np.where(cd, b.eta / 2, b.eta)
             parts.append(
                 _Boxes(
-                    b.theta + np.where(ct, st * delta, 0.0), delta, b.d + np.where(cd, sd * eta, 0.0), eta
+                    b.theta + np.where(ct, st * delta, 0.0),
+                    delta,
+                    b.d + np.where(cd, sd * eta, 0.0),
+                    eta,
                 )
             )
     return _Boxes(*(np.concatenate([getattr(p, f) for p in parts]) for f in _Boxes._fields))
