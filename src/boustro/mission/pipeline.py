@@ -15,12 +15,22 @@ from ..geometry.region import Region
 from ..io.read import Area
 from ..objectives.smith import SmithFitness
 from ..optimize.methods import resolve_method
+from ..plan import (
+    Router,
+    add_headland,
+    check_headland,
+    coverage,
+    drive_vehicle,
+    inner_field,
+    order_lanes,
+)
 from ..sensors import SensorSpacing
+from ..vehicle import Vehicle
 from .defaults import DEFAULT_HULL_TOLERANCE
 from .estimate import SAY_SECONDS, WorkEstimate, check_work, frame_estimate
 from .map_back import angle_for_bearing, map_back
 from .project import AUTO_CRS, Frame, Sensor, as_area, project, sensor_spacing
-from .steps import plan_concave, plan_convex
+from .steps import Planned, plan_concave, plan_convex
 from .types import Mission
 
 __all__ = ["estimate_work", "plan_area"]
@@ -49,6 +59,8 @@ def plan_area(
     bearing: float | None = None,
     force: bool = False,
     progress: bool | None = False,
+    vehicle: Vehicle | None = None,
+    headland: int = 0,
 ) -> Mission:
     """Plan a survey area end to end: project, optimise, build the path, map it back.
 
@@ -109,6 +121,15 @@ def plan_area(
             the stages of a concave plan, or the optimiser's bars for a convex one (the hybrid
             fallback, grid, gradient); ``None`` says it, and shows the bar if stderr is a
             terminal (what ``boustro plan`` does unless ``-q``); ``False`` (default): silent.
+        vehicle: a :class:`~boustro.vehicle.Vehicle` (metres, m/s, s): the connecting moves
+            become its Dubins turns (Reeds-Shepp with ``reverse``), with their waypoints along
+            the curves, and a convex area's lanes are flown every other one where that turns
+            less (:func:`boustro.plan.drive_vehicle`); its ``speed`` and ``turn_time`` are used
+            where ``speed`` and ``turn_time`` are not given.
+        headland: passes around the boundary and the holes (:mod:`boustro.plan.headland`): the
+            lanes cover the field less a band of ``headland`` spacings, the passes the band,
+            turns stay inside the field (a turn that would leave it keeps the straight move,
+            with a note), coverage is measured on the whole field.
 
     Raises:
         InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError,
@@ -125,9 +146,18 @@ def plan_area(
     fixed = _check_fixed_angle(
         angle if bearing is None else bearing, method=method, decompose=decompose, sweep=sweep
     )
+    passes = check_headland(headland)
+    if vehicle is not None and not isinstance(vehicle, Vehicle):
+        raise InvalidParameterError(f"vehicle must be a boustro.vehicle.Vehicle, got {vehicle!r}")
+    if vehicle is not None:
+        speed = vehicle.speed if speed is None else speed
+        turn_time = vehicle.turn_time if turn_time == 0 else turn_time
     area = as_area(area, crs, holes)
     sensor = Sensor(*sensor_spacing(spacing))
     frame = project(area, sensor, hull_tolerance, decompose, start)
+    field = None
+    if passes:
+        frame, field = _inner_frame(frame, passes)
     angle = fixed if bearing is None or fixed is None else angle_for_bearing(frame, fixed)
     if _narrower_than_the_spacing(frame, sensor):
         # Nothing to optimise: the region planner lays one lane along the area's diameter.
@@ -153,7 +183,50 @@ def plan_area(
         planned = plan_convex(frame, **settings)
     else:
         planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
+    planned = _drive(frame, planned, field, passes, vehicle, check_coverage)
     return map_back(frame, planned, altitude=altitude, turnaround=turnaround)
+
+
+def _inner_frame(frame: Frame, passes: int) -> tuple[Frame, Region]:
+    """The frame of the inner field that the lanes cover, and the whole field (plan frame)."""
+    field = frame.region if frame.region is not None else Region(frame.surveyed)
+    inner = inner_field(field, frame.sensor.spacing * frame.proj.scale_min, passes)
+    convex = inner.is_convex
+    return (
+        frame._replace(
+            poly=inner.shell, surveyed=inner.shell, region=None if convex else inner, depth=0.0
+        ),
+        field,
+    )
+
+
+def _drive(
+    frame: Frame,
+    planned: Planned,
+    field: Region | None,
+    passes: int,
+    vehicle: Vehicle | None,
+    check_coverage: bool,
+) -> Planned:
+    """The headland passes added around the planned inner field, then the vehicle's turns."""
+    plan, cov = planned.plan, planned.coverage
+    router = None
+    if field is not None:
+        scale = frame.proj.scale_min
+        if vehicle is not None:  # a convex inner field: every other lane where that turns less
+            plan = order_lanes(plan, vehicle)
+        plan = add_headland(
+            plan,
+            field,
+            passes,
+            spacing=frame.sensor.spacing * scale,
+            reach=frame.sensor.reach * scale,
+        )
+        cov = coverage(plan, field) if check_coverage else None
+        router = Router(field, reach=0.0)
+    if vehicle is not None:
+        plan = drive_vehicle(plan, vehicle, field=router)
+    return Planned(plan, planned.optimum, cov)
 
 
 def _narrower_than_the_spacing(frame: Frame, sensor: Sensor) -> bool:
