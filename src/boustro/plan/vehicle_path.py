@@ -193,7 +193,8 @@ def _turn_moves(
         )
     s = plan.stats
     scale = plan.ground_scale
-    path_length = s.path_length + (curves - replaced) / scale
+    polyline = float(np.linalg.norm(np.diff(w, axis=0), axis=1).sum())
+    path_length = (polyline - replaced + curves) / scale
     duration = None
     if s.speed is not None:
         duration = path_length / s.speed + s.n_turns * s.turn_time

@@ -23,6 +23,9 @@ __all__ = ["DUBINS_WORDS", "dubins_length", "dubins_path", "dubins_words"]
 #: The six words, in the order of :func:`dubins_words`.
 DUBINS_WORDS = ("LSL", "RSR", "LSR", "RSL", "RLR", "LRL")
 
+#: Rounding tolerated under a square root or an arccosine (squared lengths in turn radii).
+_EPS = 1e-9
+
 
 def _check_radius(radius: float) -> float:
     r = float(radius)
@@ -45,27 +48,37 @@ def dubins_words(x: ArrayLike, y: ArrayLike, phi: ArrayLike) -> dict[str, NDArra
     with np.errstate(invalid="ignore"):
         p2 = 2 + d * d - 2 * cab + 2 * d * (sa - sb)
         t1 = np.arctan2(cb - ca, d + sa - sb)
-        out["LSL"] = _stack(mod2pi(t1 - a), np.sqrt(p2), mod2pi(b - t1))
+        out["LSL"] = _stack(mod2pi(t1 - a), _sqrt(p2), mod2pi(b - t1))
         p2 = 2 + d * d - 2 * cab + 2 * d * (sb - sa)
         t1 = np.arctan2(ca - cb, d - sa + sb)
-        out["RSR"] = _stack(mod2pi(a - t1), np.sqrt(p2), mod2pi(t1 - b))
-        p = np.sqrt(-2 + d * d + 2 * cab + 2 * d * (sa + sb))
+        out["RSR"] = _stack(mod2pi(a - t1), _sqrt(p2), mod2pi(t1 - b))
+        p = _sqrt(-2 + d * d + 2 * cab + 2 * d * (sa + sb))
         t2 = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, p)
         out["LSR"] = _stack(mod2pi(t2 - a), p, mod2pi(t2 - b))
-        p = np.sqrt(-2 + d * d + 2 * cab - 2 * d * (sa + sb))
+        p = _sqrt(-2 + d * d + 2 * cab - 2 * d * (sa + sb))
         t2 = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, p)
         out["RSL"] = _stack(mod2pi(a - t2), p, mod2pi(b - t2))
         c = (6 - d * d + 2 * cab + 2 * d * (sa - sb)) / 8
         ph = np.arctan2(ca - cb, d - sa + sb)
-        p = mod2pi(2 * math.pi - np.arccos(c))
+        p = mod2pi(2 * math.pi - _acos(c))
         t = mod2pi(a - ph + mod2pi(p / 2))
         out["RLR"] = _stack(t, p, mod2pi(a - b - t + mod2pi(p)))
         c = (6 - d * d + 2 * cab + 2 * d * (sb - sa)) / 8
         ph = np.arctan2(ca - cb, d + sa - sb)
-        p = mod2pi(2 * math.pi - np.arccos(c))
+        p = mod2pi(2 * math.pi - _acos(c))
         t = mod2pi(-a - ph + p / 2)
         out["LRL"] = _stack(t, p, mod2pi(b - a - t + mod2pi(p)))
     return out
+
+
+def _sqrt(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``sqrt(x)``, 0 for ``x`` negative by rounding only (a path with no straight), NaN below."""
+    return np.sqrt(np.where(x > -_EPS, np.maximum(x, 0.0), np.nan))
+
+
+def _acos(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``arccos(x)``, clipped where ``|x|`` exceeds 1 by rounding only, NaN beyond."""
+    return np.arccos(np.where(np.abs(x) <= 1 + _EPS, np.clip(x, -1.0, 1.0), np.nan))
 
 
 def _stack(*parts: NDArray[np.float64]) -> NDArray[np.float64]:

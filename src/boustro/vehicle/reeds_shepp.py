@@ -1,8 +1,8 @@
 """Reeds-Shepp paths: the shortest path of bounded curvature, forwards and backwards.
 
 The closed forms of Reeds and Shepp (1990) for the five families CSC, CCC, CCCC, CCSC and
-CCSCC, each with its time-flipped, reflected and backwards variants (48 words), as written in
-OMPL's ``ReedsSheppStateSpace``; vectorised over numpy arrays. Segment lengths are signed
+CCSCC, each with its time-flipped, reflected and backwards variants, as written in OMPL's
+``ReedsSheppStateSpace`` (44 candidates that hold the 48 words of Reeds and Shepp); vectorised over numpy arrays. Segment lengths are signed
 (negative: driven backwards), in turn radii. :func:`reeds_shepp_length` gives the shortest
 length between poses ``(x, y, heading)``, :func:`reeds_shepp_path` the shortest word.
 """
@@ -148,7 +148,7 @@ _SWAP = str.maketrans("LR", "RL")
 
 def reeds_shepp_words(x: ArrayLike, y: ArrayLike, phi: ArrayLike) -> list[tuple[str, Arr]]:
     """Every word from ``(0, 0, 0)`` to ``(x, y, phi)`` (turn radii): ``(letters, (..., k)
-    signed segment lengths)``, NaN where the word does not exist; 48 words."""
+    signed segment lengths)``, NaN where the word does not exist; 44 candidates (the 48 words)."""
     x, y, phi = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (x, y, phi)))
     xb = x * np.cos(phi) + y * np.sin(phi)
     yb = x * np.sin(phi) - y * np.cos(phi)
