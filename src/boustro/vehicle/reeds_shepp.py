@@ -2,9 +2,10 @@
 
 The closed forms of Reeds and Shepp (1990) for the five families CSC, CCC, CCCC, CCSC and
 CCSCC, each with its time-flipped, reflected and backwards variants, as written in OMPL's
-``ReedsSheppStateSpace`` (44 candidates that hold the 48 words of Reeds and Shepp); vectorised over numpy arrays. Segment lengths are signed
-(negative: driven backwards), in turn radii. :func:`reeds_shepp_length` gives the shortest
-length between poses ``(x, y, heading)``, :func:`reeds_shepp_path` the shortest word.
+``ReedsSheppStateSpace`` (44 candidates that hold the 48 words of Reeds and Shepp); vectorised
+over numpy arrays. Segment lengths are signed (negative: driven backwards), in turn radii.
+:func:`reeds_shepp_length` gives the shortest length between poses ``(x, y, heading)``,
+:func:`reeds_shepp_path` the shortest word.
 """
 
 from __future__ import annotations
