@@ -56,7 +56,7 @@ def check_headland(passes: object) -> int:
                 f"headland must be a whole number of passes, got {passes!r}"
             )
         passes = int(value)
-    n = int(passes)  # type: ignore[arg-type]
+    n = int(passes)
     if not 0 <= n <= MAX_HEADLAND:
         raise InvalidParameterError(f"headland must be between 0 and {MAX_HEADLAND}, got {n}")
     return n

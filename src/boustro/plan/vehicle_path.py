@@ -186,10 +186,10 @@ def _turn_moves(
         i += 1
     notes = list(plan.notes)
     if kept:
-        where = "enter a hole" if holes_only else "leave the field or enter a hole"
+        what = "enter a hole" if holes_only else "leave the field or enter a hole"
         notes.append(
             f"{kept} of {len(moves)} moves between passes are straight or routed: the turn of "
-            f"radius {ground.turn_radius:g} m would {where}"
+            f"radius {ground.turn_radius:g} m would {what}"
         )
     s = plan.stats
     scale = plan.ground_scale
