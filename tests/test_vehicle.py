@@ -333,3 +333,17 @@ def test_cli_turn_radius_and_reverse(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:  # argparse: one line on stderr, status 2
         main(["-q", "plan", "--turn-radius", "-3"])
     assert exc.value.code == 2
+
+
+def test_turns_never_enter_a_hole():
+    import shapely
+
+    field = [(0, 0), (60, 0), (60, 20), (25, 20), (25, 50), (0, 50)]
+    pond = [(5, 5), (15, 5), (15, 15), (5, 15)]
+    mission = plan_area(field, 4.0, crs=None, holes=[pond], vehicle=Vehicle(turn_radius=3.0))
+    hole = shapely.Polygon(pond)
+    path = shapely.LineString(mission.waypoints)
+    inside = path.difference(hole.exterior.buffer(1e-7)).intersection(hole)
+    assert inside.length == 0.0  # along its edge (the hole pass), never inside
+    assert "turn" in mission.kinds and mission.summary()["turn_length_m"] > 0
+    assert mission.coverage.covered_share >= 1 - 1e-9

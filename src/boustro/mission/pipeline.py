@@ -16,7 +16,6 @@ from ..io.read import Area
 from ..objectives.smith import SmithFitness
 from ..optimize.methods import resolve_method
 from ..plan import (
-    Router,
     add_headland,
     check_headland,
     coverage,
@@ -210,7 +209,6 @@ def _drive(
 ) -> Planned:
     """The headland passes added around the planned inner field, then the vehicle's turns."""
     plan, cov = planned.plan, planned.coverage
-    router = None
     if field is not None:
         scale = frame.proj.scale_min
         if vehicle is not None:  # a convex inner field: every other lane where that turns less
@@ -223,9 +221,8 @@ def _drive(
             reach=frame.sensor.reach * scale,
         )
         cov = coverage(plan, field) if check_coverage else None
-        router = Router(field, reach=0.0)
     if vehicle is not None:
-        plan = drive_vehicle(plan, vehicle, field=router)
+        plan = drive_vehicle(plan, vehicle, field=field)
     return Planned(plan, planned.optimum, cov)
 
 

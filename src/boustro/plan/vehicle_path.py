@@ -21,8 +21,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
+from ..geometry.region import Region
 from ..vehicle import Turn, Vehicle, lane_order, turn_between
-from .routing import Router
 from .types import Plan
 
 __all__ = ["drive_vehicle", "order_lanes"]
@@ -36,7 +36,7 @@ def drive_vehicle(
     vehicle: Vehicle,
     *,
     tolerance: float = 0.05,
-    field: Router | None = None,
+    field: Region | None = None,
 ) -> Plan:
     """``plan`` with its connecting moves driven as the vehicle's turns.
 
@@ -46,9 +46,10 @@ def drive_vehicle(
             ``ground_scale``.
         tolerance: how far (ground units) a chord between two waypoints of a turn may depart
             from the curve.
-        field: where the turns must stay (a :class:`Router` of the field: a turn that leaves it
-            or enters one of its holes keeps the straight or routed move, with a note);
-            ``None``: turns may reach beyond the area (as run-outs do) but never into a hole.
+        field: where the turns must stay (the field, plan frame: a turn that leaves it or
+            enters one of its holes keeps the straight or routed move, with a note); ``None``:
+            turns may reach beyond the area (as run-outs do) but never into one of the plan's
+            holes.
 
     Example:
         >>> from boustro.plan import build_plan
@@ -66,12 +67,36 @@ def drive_vehicle(
     tol = tolerance * scale
     if plan.region is None and plan.headland == 0:
         plan = _reorder(plan, v)
-    if field is None and plan.region is not None:
-        field = Router(plan.region, reach=math.inf)
-        holes_only = True
-    else:
-        holes_only = False
-    return _turn_moves(plan, v, vehicle, tol, field, holes_only)
+    holes_only = field is None
+    return _turn_moves(plan, v, vehicle, tol, plan.region if field is None else field, holes_only)
+
+
+class _Allowed:
+    """Where turns may go: the closed field, or (``holes_only``) anywhere but inside a hole;
+    tested on the turn's polyline with shapely (prepared geometries, imported here)."""
+
+    def __init__(self, region: Region, holes_only: bool) -> None:
+        import shapely
+
+        tol = 1e-9 * region.diameter
+        self.shapely = shapely
+        if holes_only:
+            holes = [shapely.Polygon(h.vertices).buffer(-tol) for h in region.holes]
+            self.forbidden = shapely.union_all([h for h in holes if not h.is_empty])
+            self.field = None
+        else:
+            rings = [h.vertices for h in region.holes]
+            self.field = shapely.Polygon(region.shell.vertices, rings).buffer(tol)
+            self.forbidden = None
+        for geom in (self.forbidden, self.field):
+            if geom is not None:
+                shapely.prepare(geom)
+
+    def leaves(self, points: NDArray[np.float64]) -> bool:
+        line = self.shapely.LineString(points)
+        if self.field is not None:
+            return not bool(self.field.covers(line))
+        return self.forbidden is not None and bool(self.forbidden.intersects(line))
 
 
 def order_lanes(plan: Plan, vehicle: Vehicle) -> Plan:
@@ -148,7 +173,7 @@ def _moves(plan: Plan) -> list[tuple[int, int]]:
 
 
 def _turn_moves(
-    plan: Plan, v: Vehicle, ground: Vehicle, tol: float, field: Router | None, holes_only: bool
+    plan: Plan, v: Vehicle, ground: Vehicle, tol: float, field: Region | None, holes_only: bool
 ) -> Plan:
     """Every connecting move replaced by the vehicle's turn (where it is allowed)."""
     w = plan.waypoints
@@ -156,15 +181,14 @@ def _turn_moves(
     moves = _moves(plan)
     turns: dict[int, tuple[int, Turn]] = {}
     kept = 0
+    allowed = None if field is None else _Allowed(field, holes_only)
     for i, j in moves:
         a = _heading(w, i, -1, float(angles[plan.lane[i]]))
         b = _heading(w, j, +1, float(angles[plan.lane[j]]))
         turn = turn_between(v, (*w[i], a), (*w[j], b), tol)
-        if field is not None:
-            where = field.classify(turn.points)
-            if np.any(where == 1) or (not holes_only and np.any(where == 2)):
-                kept += 1
-                continue
+        if allowed is not None and allowed.leaves(turn.points):
+            kept += 1
+            continue
         turns[i] = (j, turn)
     points, kinds, lane = [], [], []
     replaced = 0.0
