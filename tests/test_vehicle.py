@@ -191,9 +191,10 @@ def test_turn_waypoints_respect_the_radius():
                 pts = turn.points[np.unique(idx)]
                 if len(pts) >= 3:
                     assert circumradii(pts).min() >= 5.0 * (1 - 1e-6)
-            # Densified: the chords stay within the tolerance of the arcs.
-            steps = np.linalg.norm(np.diff(turn.points, axis=0), axis=1)
-            assert np.all(steps <= 2 * math.sqrt(2 * 5.0 * 0.02) + 1e-9) or "S" in turn.word
+            # Densified: on every arc, the sagitta of the chord between two waypoints (from the
+            # heading turned between them) is within the tolerance; straights keep their ends.
+            turned = np.abs((np.diff(turn.headings) + math.pi) % (2 * math.pi) - math.pi)
+            assert np.all(5.0 * (1 - np.cos(turned / 2)) <= 0.02 + 1e-12)
 
 
 def test_skip_order_and_its_choice():
