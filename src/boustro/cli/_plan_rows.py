@@ -93,6 +93,18 @@ def rows(mission: Mission, written: list[str]) -> list[tuple[str, str]]:
                 f"(overlap {100 * mission.coverage.overlap_share:.2f}%)",
             )
         )
+    vehicle = mission.plan.vehicle
+    if vehicle is not None:
+        back = ", may reverse" if vehicle.reverse else ""
+        rows.append(
+            (
+                "turns",
+                f"{vehicle.kind}, radius {vehicle.turn_radius:g} m{back}: "
+                f"{s.turn_length:.1f} m of curves in the path",
+            )
+        )
+    if mission.plan.headland:
+        rows.append(("headland", f"{mission.plan.headland} pass(es), {s.headland_length:.1f} m"))
     if s.duration is not None:
         rows.append(
             (

@@ -18,6 +18,7 @@ from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission
 from ..mission.camera import camera_presets
 from ..plot.plan import plot_plan
 from ..sensors import Swath
+from ..vehicle import Vehicle
 from ._camera import add_trigger_options, camera_arg, camera_from_args
 from ._common import (
     check_output_path,
@@ -274,6 +275,31 @@ def _add_path(p: argparse.ArgumentParser) -> None:
         "--turn-time", type=_non_negative, default=0.0, metavar="S", help="seconds per turn"
     )
     path.add_argument(
+        "--turn-radius",
+        type=_non_negative,
+        default=None,
+        metavar="M",
+        help="the vehicle's smallest turning radius, metres: the moves between lanes become "
+        "Dubins turns (forward only: fixed-wing, boats, tractors), their waypoints along the "
+        "curves in every export (densified to 5 cm), their length in the path length and "
+        "duration; a convex area's lanes are flown every other one and back when that turns "
+        "less (2R > spacing)",
+    )
+    path.add_argument(
+        "--reverse",
+        action="store_true",
+        help="with --turn-radius: the vehicle may reverse (Reeds-Shepp turns)",
+    )
+    path.add_argument(
+        "--headland",
+        type=_count,
+        default=0,
+        metavar="N",
+        help="N headland passes around the boundary and around the holes, at the spacing; lanes "
+        "clipped to the inner field, turns inside the field, coverage measured on the whole "
+        "field (convex corners are reached by a short pass into the corner and back)",
+    )
+    path.add_argument(
         "--layout",
         choices=("guaranteed", "chords"),
         default="guaranteed",
@@ -343,6 +369,16 @@ def _percent(text: str) -> float:
     value = finite_float(text.rstrip("%"))
     if not 0 <= value < 100:
         raise argparse.ArgumentTypeError(f"expected a percentage in [0, 100), got {text!r}")
+    return value
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
     return value
 
 
@@ -420,6 +456,14 @@ def _plot_bytes(mission: Mission, path: str) -> bytes:
         plt.close(fig)
 
 
+def _vehicle(args: argparse.Namespace) -> Vehicle | None:
+    if args.turn_radius is None:
+        if args.reverse:
+            raise InvalidParameterError("--reverse needs --turn-radius")
+        return None
+    return Vehicle(turn_radius=args.turn_radius, reverse=args.reverse)
+
+
 def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:
     spacing = _spacing(args, embedded=args.area is None)
     name = args.objective or ("time" if args.speed is not None else "smith")
@@ -443,6 +487,8 @@ def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:
         bearing=args.bearing,
         force=args.force,
         progress=False if args.quiet else None,
+        vehicle=_vehicle(args),
+        headland=args.headland,
     )
     return fly(args, mission)
 
@@ -456,6 +502,7 @@ def run(args: argparse.Namespace) -> int:
     if args.format is not None and args.out is None:
         raise InvalidParameterError("--format needs --out FILE")
     areas = _load(args)
+    _vehicle(args)  # --reverse without --turn-radius: one error before any work
     _spacing(args, embedded=args.area is None)  # a missing spacing: one error, not one per field
     planned = plan_fields(areas, lambda area: _plan_one(args, _validated(args, area)))
     missions = [m for ms in planned for m in ms]  # a field's sorties follow one another

@@ -97,19 +97,34 @@ def plan_cover(
     turn_time: float,
     check_coverage: bool,
     angle: float | None = None,
+    finish: Callable[[Plan], Plan] | None = None,
+    boustrophedon: bool | None = None,
 ) -> Planned:
     """The plan of the layout with the least ``cost``, certified by
-    :func:`~boustro.optimize.cover.cover_optimum` (over every angle, or at ``angle``)."""
+    :func:`~boustro.optimize.cover.cover_optimum` (over every angle, or at ``angle``).
+
+    ``finish`` turns a plan into what is flown (headland passes, the vehicle's turns): the
+    costs are of its result; the bound stays valid, since it adds to the path (a turn is never
+    shorter than the straight move it replaces) and no turns; the headland passes' length, the
+    same for every layout, joins the bound as a fixed cost. ``boustrophedon=False`` drops the
+    bound's boustrophedon moves (a vehicle may fly every other lane); the plan returned is not
+    finished."""
     options = _path_options(frame, turnaround, speed, turn_time)
     planner = _planner(frame, layout, options)
     scale = frame.proj.scale
 
     def evaluate(a: float, d: float) -> float:
-        st = planner(a, d).stats
+        plan = planner(a, d)
+        st = (plan if finish is None else finish(plan)).stats
         return cost.of(st.path_length * scale, st.n_turns)
 
     s_plan = frame.sensor.spacing * frame.proj.scale_min
     target = frame.poly if frame.region is None else frame.region
+    if finish is not None:
+        passes = finish(planner(0.0, 0.0)).stats.headland_length * scale
+        cost = dataclasses.replace(cost, fixed=cost.fixed + cost.per_length * passes)
+    if boustrophedon is None:
+        boustrophedon = frame.region is None
     optimum = cover_optimum(
         target,
         s_plan,
@@ -117,7 +132,7 @@ def plan_cover(
         evaluate,
         reach=frame.sensor.reach * frame.proj.scale_min,
         angle=angle,
-        boustrophedon=frame.region is None,
+        boustrophedon=boustrophedon,
     )
     plan = planner(optimum.angle, optimum.offset)
     if plan.cells:  # the one cell carries the certificate

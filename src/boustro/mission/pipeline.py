@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from numpy.typing import ArrayLike
@@ -18,7 +18,17 @@ from ..objectives.smith import SmithFitness
 from ..objectives.time import MissionTime
 from ..optimize.cover import CoverCost
 from ..optimize.methods import resolve_method
+from ..plan import (
+    Plan,
+    add_headland,
+    check_headland,
+    coverage,
+    drive_vehicle,
+    inner_field,
+    order_lanes,
+)
 from ..sensors import SensorSpacing
+from ..vehicle import Vehicle
 from .camera import camera_trigger, with_camera
 from .cover import cover_cost, plan_cover
 from .defaults import DEFAULT_HULL_TOLERANCE
@@ -54,6 +64,8 @@ def plan_area(
     bearing: float | None = None,
     force: bool = False,
     progress: bool | None = False,
+    vehicle: Vehicle | None = None,
+    headland: int = 0,
 ) -> Mission:
     """Plan a survey area end to end: project, optimise, build the path, map it back.
 
@@ -117,6 +129,15 @@ def plan_area(
             the stages of a concave plan, or the optimiser's bars for a convex one (the hybrid
             fallback, grid, gradient); ``None`` says it, and shows the bar if stderr is a
             terminal (what ``boustro plan`` does unless ``-q``); ``False`` (default): silent.
+        vehicle: a :class:`~boustro.vehicle.Vehicle` (metres, m/s, s): the connecting moves
+            become its Dubins turns (Reeds-Shepp with ``reverse``), with their waypoints along
+            the curves, and a convex area's lanes are flown every other one where that turns
+            less (:func:`boustro.plan.drive_vehicle`); its ``speed`` and ``turn_time`` are used
+            where ``speed`` and ``turn_time`` are not given.
+        headland: passes around the boundary and the holes (:mod:`boustro.plan.headland`): the
+            lanes cover the field less a band of ``headland`` spacings, the passes the band,
+            turns stay inside the field (a turn that would leave it keeps the straight move,
+            with a note), coverage is measured on the whole field.
 
     Raises:
         InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError,
@@ -133,9 +154,18 @@ def plan_area(
     fixed = _check_fixed_angle(
         angle if bearing is None else bearing, method=method, decompose=decompose, sweep=sweep
     )
+    passes = check_headland(headland)
+    if vehicle is not None and not isinstance(vehicle, Vehicle):
+        raise InvalidParameterError(f"vehicle must be a boustro.vehicle.Vehicle, got {vehicle!r}")
+    if vehicle is not None:
+        speed = vehicle.speed if speed is None else speed
+        turn_time = vehicle.turn_time if turn_time == 0 else turn_time
     area = as_area(area, crs, holes)
     sensor = Sensor(*sensor_spacing(spacing))
     frame = project(area, sensor, hull_tolerance, decompose, start)
+    field = None
+    if passes:
+        frame, field = _inner_frame(frame, passes)
     angle = fixed if bearing is None or fixed is None else angle_for_bearing(frame, fixed)
     if _narrower_than_the_spacing(frame, sensor):
         # Nothing to optimise: the region planner lays one lane along the area's diameter.
@@ -161,11 +191,19 @@ def plan_area(
         fitness = settings["fitness"] = MissionTime()
     cost = cover_cost(fitness, frame, speed, turn_time, turnaround)
     if cost is not None:
-        planned = _plan_for_cost(frame, cost, decompose, sweep, settings)
+        finish = None
+        if field is not None or vehicle is not None:  # the costs of what is flown
+
+            def finish(plan: Plan) -> Plan:
+                return _drive(frame, Planned(plan, None, None), field, passes, vehicle, False).plan  # type: ignore[arg-type]
+
+        skips = vehicle is not None and vehicle.turn_radius > 0  # every other lane possible
+        planned = _plan_for_cost(frame, cost, decompose, sweep, settings, finish, skips)
     elif frame.region is None:
         planned = plan_convex(frame, **settings)
     else:
         planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
+    planned = _drive(frame, planned, field, passes, vehicle, check_coverage)
     mission = map_back(frame, planned, altitude=altitude, turnaround=turnaround)
     return with_camera(mission, camera_trigger(spacing))
 
@@ -176,31 +214,75 @@ def _plan_for_cost(
     decompose: bool | None,
     sweep: float | None,
     settings: dict[str, Any],
+    finish: Callable[[Plan], Plan] | None = None,
+    skips: bool = False,
 ) -> Planned:
     """A plan-level objective: the certified one-grid plan (:func:`plan_cover`); for a concave
     area or one with holes also the decomposed plan (cells optimised for Eq. 1, not certified),
-    kept only if it costs less (always with ``decompose=True``, never with ``False``)."""
+    kept only if it costs less (always with ``decompose=True``, never with ``False``). Costs are
+    of ``finish(plan)`` (headland passes and the vehicle's turns added) where given."""
     if settings["method"] not in (None, "certified-cover"):
         raise InvalidParameterError(
             f"the {cost.name} objective is optimised by the certified search over the flown "
             f"plan (method 'certified-cover'), not by {settings['method']!r}: leave --method out"
         )
     keys = ("layout", "turnaround", "speed", "turn_time", "check_coverage", "angle")
+    extra: dict[str, Any] = {"finish": finish, "boustrophedon": False if skips else None}
     if frame.region is None or decompose is False or settings["angle"] is not None:
-        return plan_cover(frame, cost, **{k: settings[k] for k in keys})
+        return plan_cover(frame, cost, **extra, **{k: settings[k] for k in keys})
     cells = plan_concave(
         frame, decompose=True, sweep=sweep, **{**settings, "fitness": None, "method": None}
     )
     if decompose:
         return cells
-    one = plan_cover(frame, cost, **{k: settings[k] for k in keys})
-    scale = frame.proj.scale
-    value = cost.of(cells.plan.stats.path_length * scale, cells.plan.stats.n_turns)
+    one = plan_cover(frame, cost, **extra, **{k: settings[k] for k in keys})
+    flown = cells.plan if finish is None else finish(cells.plan)
+    value = cost.of(flown.stats.path_length * frame.proj.scale, flown.stats.n_turns)
     if value < one.optimum.fitness:
         info = {**cells.optimum.info, "objective": cost.name, "one_grid": one.optimum.fitness}
         return cells._replace(optimum=dataclasses.replace(cells.optimum, info=info))
     info = {**one.optimum.info, "decomposed": value}
     return one._replace(optimum=dataclasses.replace(one.optimum, info=info))
+
+
+def _inner_frame(frame: Frame, passes: int) -> tuple[Frame, Region]:
+    """The frame of the inner field that the lanes cover, and the whole field (plan frame)."""
+    field = frame.region if frame.region is not None else Region(frame.surveyed)
+    inner = inner_field(field, frame.sensor.spacing * frame.proj.scale_min, passes)
+    convex = inner.is_convex
+    return (
+        frame._replace(
+            poly=inner.shell, surveyed=inner.shell, region=None if convex else inner, depth=0.0
+        ),
+        field,
+    )
+
+
+def _drive(
+    frame: Frame,
+    planned: Planned,
+    field: Region | None,
+    passes: int,
+    vehicle: Vehicle | None,
+    check_coverage: bool,
+) -> Planned:
+    """The headland passes added around the planned inner field, then the vehicle's turns."""
+    plan, cov = planned.plan, planned.coverage
+    if field is not None:
+        scale = frame.proj.scale_min
+        if vehicle is not None:  # a convex inner field: every other lane where that turns less
+            plan = order_lanes(plan, vehicle)
+        plan = add_headland(
+            plan,
+            field,
+            passes,
+            spacing=frame.sensor.spacing * scale,
+            reach=frame.sensor.reach * scale,
+        )
+        cov = coverage(plan, field) if check_coverage else None
+    if vehicle is not None:
+        plan = drive_vehicle(plan, vehicle, field=field)
+    return Planned(plan, planned.optimum, cov)
 
 
 def _narrower_than_the_spacing(frame: Frame, sensor: Sensor) -> bool:

@@ -176,6 +176,17 @@ class Mission:
             out["reach_m"] = self.reach
         if self.sensor:
             out["sensor"] = self.sensor
+        vehicle = self.plan.vehicle
+        if vehicle is not None:
+            out["vehicle"] = {
+                "turns": vehicle.kind,
+                "turn_radius_m": vehicle.turn_radius,
+                "reverse": vehicle.reverse,
+            }
+            out["turn_length_m"] = s.turn_length
+        if self.plan.headland:
+            out["headland_passes"] = self.plan.headland
+            out["headland_length_m"] = s.headland_length
         if self.plan.region is not None:
             out["holes"] = self.plan.region.n_holes
             out["n_cells"] = s.n_cells

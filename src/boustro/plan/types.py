@@ -25,8 +25,10 @@ __all__ = [
 
 #: What each waypoint is: run-in point before a transect, its start, its end, the run-out point;
 #: for areas with holes or cells also ``via`` (a corner of a connecting move that goes around an
-#: obstacle) and ``loop`` (a corner of a pass around a hole).
-KINDS = ("run_in", "start", "end", "run_out", "via", "loop")
+#: obstacle) and ``loop`` (a corner of a pass around a hole); with a vehicle model ``turn`` (a
+#: point of a turn's curve, :func:`boustro.plan.drive_vehicle`); with headlands ``headland`` (a
+#: point of a pass around the field inside its headland, :func:`boustro.plan.plan_headland`).
+KINDS = ("run_in", "start", "end", "run_out", "via", "loop", "turn", "headland")
 Layout = Literal["guaranteed", "chords"]
 
 
@@ -49,6 +51,9 @@ class PlanStats:
         hole_pass_length: length of the passes around holes (included in ``path_length``).
         outside_length: length of the connecting moves outside the area (ends of lanes that
             reach beyond the boundary, and moves between them; included in ``path_length``).
+        turn_length: with a vehicle model, the length of the turns' curves (exact, included in
+            ``path_length``); 0 otherwise.
+        headland_length: the length of the headland passes (included in ``path_length``).
 
     For a plan over an area with holes or a decomposed plan, ``n_transects`` counts the lane
     segments driven and ``n_turns`` the connecting moves between consecutive passes (a lane
@@ -66,6 +71,8 @@ class PlanStats:
     n_cells: int = 1
     hole_pass_length: float = 0.0
     outside_length: float = 0.0
+    turn_length: float = 0.0
+    headland_length: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -123,6 +130,9 @@ class Plan:
         roles: ``"lane"`` or ``"hole"`` per transect (empty: all lanes).
         transect_cells: ``(T,)`` the cell of each transect (-1 for passes around holes).
         notes: what the plan could not do as asked (e.g. moves that leave the area).
+        vehicle: the :class:`~boustro.vehicle.Vehicle` whose turns the path drives (plan
+            units), or ``None`` (straight connecting moves).
+        headland: headland passes around the field (0: none).
     """
 
     polygon: Polygon
@@ -146,6 +156,8 @@ class Plan:
     roles: tuple[str, ...] = ()
     transect_cells: NDArray[np.int64] | None = None
     notes: tuple[str, ...] = ()
+    vehicle: Any = None
+    headland: int = 0
 
     @property
     def n_transects(self) -> int:

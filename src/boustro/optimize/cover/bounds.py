@@ -71,4 +71,4 @@ def lower_bounds(
         moves = np.where(np.isfinite(exact), np.maximum(moves, exact), moves)
     length = st.length.sum(axis=1) + 2.0 * cost.turnaround * n_lanes + moves + perimeter
     turns = np.maximum(n_lanes + n_passes - 1, 0)
-    return cost.per_length * length + cost.per_turn * turns
+    return cost.per_length * length + cost.per_turn * turns + cost.fixed

@@ -21,7 +21,8 @@ class CoverCost:
     connecting moves, passes around holes) and ``turns`` the moves between consecutive passes
     (lanes or hole passes): ``passes - 1``. Mission time is ``per_length = 1 / (speed *
     ground_scale)`` seconds per plan unit and ``per_turn`` = the time of a turn;
-    ``turnaround`` is the run-in and run-out beyond each lane end (plan units).
+    ``turnaround`` is the run-in and run-out beyond each lane end (plan units); ``fixed`` a cost
+    every plan pays whatever its layout (e.g. headland passes), part of the lower bounds.
 
     >>> c = CoverCost.time(speed=5.0, turn_time=10.0)
     >>> c.per_length, c.per_turn, c.name
@@ -32,12 +33,14 @@ class CoverCost:
     per_turn: float
     turnaround: float = 0.0
     name: str = "time"
+    fixed: float = 0.0
 
     def __post_init__(self) -> None:
         for label, value in (
             ("per_length", self.per_length),
             ("per_turn", self.per_turn),
             ("turnaround", self.turnaround),
+            ("fixed", self.fixed),
         ):
             if not (math.isfinite(value) and value >= 0):
                 raise InvalidParameterError(f"{label} must be a finite number >= 0, got {value}")

@@ -1,0 +1,257 @@
+"""Headlands: passes around the field's boundary and its holes, lanes in the inner field.
+
+``passes`` headland passes at ``(k - 1/2) * spacing`` inside the boundary (``k = 1 .. passes``;
+shapely's inward buffers of the field, so each pass also goes around every hole) cover the band
+of width ``passes * spacing`` along the boundary, and the lanes cover the inner field, the
+field buffered inwards by that width (:func:`inner_field`, a little larger so that the polygonal
+arcs of the buffers leave no sliver between them). Where a corner of a pass's band (for the
+outermost pass, a corner of the field) lies farther than ``reach`` from the pass (every convex
+corner), the pass drives into the corner and back (a *spike*, driven in reverse or turned on
+the spot: the vehicle's turn radius applies to the moves between passes, not to the passes'
+corners), so that the footprints cover the whole field; the path never leaves it.
+:func:`add_headland` appends the passes to a plan of the inner field, innermost first, each
+begun at its point nearest the vehicle, joined by moves inside the field. The passes'
+waypoints have the kind ``headland`` (first ``start``, last ``end``) and their edges are
+transects with the role ``"headland"``, measured like passes around holes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InvalidParameterError, InvalidPolygonError
+from ..geometry.region import Region
+from .routing import Router
+from .types import Plan
+
+__all__ = ["MAX_HEADLAND", "add_headland", "check_headland", "headland_rings", "inner_field"]
+
+#: Most headland passes (a guard against a typo: 1000 passes at 10 m is a 10 km band).
+MAX_HEADLAND = 100
+
+#: Segments per quarter circle of the buffers' arcs (at reflex corners of the field).
+_QUAD_SEGS = 16
+
+#: The inner field reaches this share of a spacing into the innermost headland band: the
+#: chords of the buffers' arcs never leave a sliver uncovered between lanes and passes.
+_OVERLAP = 0.02
+
+
+def check_headland(passes: object) -> int:
+    """``passes`` as an int in ``[0, MAX_HEADLAND]``, or :class:`InvalidParameterError`."""
+    if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)):
+        try:
+            value = float(passes)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            raise InvalidParameterError(
+                f"headland must be a whole number of passes, got {passes!r}"
+            ) from None
+        if not value.is_integer():
+            raise InvalidParameterError(
+                f"headland must be a whole number of passes, got {passes!r}"
+            )
+        passes = int(value)
+    n = int(passes)
+    if not 0 <= n <= MAX_HEADLAND:
+        raise InvalidParameterError(f"headland must be between 0 and {MAX_HEADLAND}, got {n}")
+    return n
+
+
+def _shapely_region(field: Region):
+    import shapely
+
+    return shapely.Polygon(field.shell.vertices, [h.vertices for h in field.holes])
+
+
+def _as_region(geom, what: str) -> Region:
+    """One shapely polygon (the largest part is refused if there are several) as a Region."""
+    import shapely
+
+    geom = shapely.make_valid(geom)
+    parts = [g for g in getattr(geom, "geoms", [geom]) if g.geom_type == "Polygon" and g.area > 0]
+    if not parts:
+        raise InvalidParameterError(f"the headland leaves no {what}: use fewer passes")
+    if len(parts) > 1:
+        areas = ", ".join(f"{p.area:.4g}" for p in sorted(parts, key=lambda p: -p.area))
+        raise InvalidParameterError(
+            f"the headland splits the {what} into {len(parts)} parts (areas {areas}): boustro "
+            "plans one inner field; use fewer passes"
+        )
+    poly = parts[0]
+    try:
+        return Region(
+            np.asarray(poly.exterior.coords)[:-1],
+            [np.asarray(r.coords)[:-1] for r in poly.interiors],
+        )
+    except InvalidPolygonError as exc:
+        raise InvalidParameterError(f"the headland's {what} is not a valid area ({exc})") from None
+
+
+def inner_field(field: Region, spacing: float, passes: int) -> Region:
+    """The field buffered inwards by ``passes * spacing`` (less :data:`_OVERLAP` spacing): where
+    the lanes go. Refused if nothing is left or it falls apart."""
+    import shapely
+
+    depth = (passes - _OVERLAP) * spacing
+    inner = shapely.buffer(_shapely_region(field), -depth, quad_segs=_QUAD_SEGS)
+    return _as_region(inner, "inner field")
+
+
+def headland_rings(field: Region, spacing: float, passes: int) -> list[list[NDArray[np.float64]]]:
+    """The passes' rings: for ``k = 1 .. passes``, the boundary of the field buffered inwards by
+    ``(k - 1/2) * spacing``: its shell, then the rings around holes (each closed: last point =
+    first point)."""
+    import shapely
+
+    region = _shapely_region(field)
+    out = []
+    for k in range(1, passes + 1):
+        geom = shapely.buffer(region, -(k - 0.5) * spacing, quad_segs=_QUAD_SEGS)
+        rings = []
+        for poly in getattr(geom, "geoms", [geom]):
+            if poly.geom_type != "Polygon" or poly.is_empty:
+                continue
+            rings.append(np.asarray(poly.exterior.coords))
+            rings += [np.asarray(r.coords) for r in poly.interiors]
+        if not rings:
+            raise InvalidParameterError(f"the field is too narrow for {passes} headland passes")
+        out.append(rings)
+    return out
+
+
+def _band_corners(field: Region, spacing: float, k: int) -> NDArray[np.float64]:
+    """The vertices of the outer edge of pass ``k``'s band: the field's (``k = 1``), else those
+    of the field buffered inwards by ``(k - 1) * spacing``."""
+    import shapely
+
+    if k == 1:
+        return np.concatenate(field.rings)
+    geom = shapely.buffer(_shapely_region(field), -(k - 1) * spacing, quad_segs=_QUAD_SEGS)
+    return shapely.get_coordinates(shapely.boundary(geom))
+
+
+def _spikes(
+    corners: NDArray[np.float64], rings: list[NDArray[np.float64]], reach: float, router: Router
+) -> list[NDArray[np.float64]]:
+    """The rings of a pass with a spike to every corner of its band farther than ``reach``."""
+    import shapely
+
+    lines = [shapely.LineString(r) for r in rings]
+    inserts: list[list[tuple[float, NDArray[np.float64], NDArray[np.float64]]]] = [
+        [] for _ in rings
+    ]
+    for c in corners:
+        pt = shapely.Point(c)
+        dist = [line.distance(pt) for line in lines]
+        i = int(np.argmin(dist))
+        if dist[i] <= reach * (1 + 1e-9):
+            continue
+        along = lines[i].project(pt)
+        p = np.asarray(lines[i].interpolate(along).coords[0])
+        if router.inside(p, c):
+            inserts[i].append((along, p, c))
+    out = []
+    for ring, line, ins in zip(rings, lines, inserts, strict=True):
+        if not ins:
+            out.append(ring)
+            continue
+        cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(ring, axis=0), axis=1))])
+        pts: list[NDArray[np.float64]] = []
+        ins.sort(key=lambda x: x[0])
+        j = 0
+        for a in range(len(ring)):
+            pts.append(ring[a])
+            nxt = cum[a + 1] if a + 1 < len(ring) else math.inf
+            while j < len(ins) and ins[j][0] < nxt - 1e-12 and a + 1 < len(ring):
+                _, p, c = ins[j]
+                pts += [p, c, p]
+                j += 1
+        out.append(_dedupe(np.asarray(pts), 1e-9 * line.length))
+    return out
+
+
+def _dedupe(points: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(points, axis=0), axis=1) > tol])
+    return points[keep]
+
+
+def _rotate(ring: NDArray[np.float64], near: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A closed ring re-begun at its vertex nearest ``near`` (still closed)."""
+    body = ring[:-1]
+    i = int(np.argmin(np.linalg.norm(body - near, axis=1)))
+    body = np.roll(body, -i, axis=0)
+    return np.concatenate([body, body[:1]])
+
+
+def add_headland(inner: Plan, field: Region, passes: int, *, spacing: float, reach: float) -> Plan:
+    """``inner`` (a plan of :func:`inner_field`) followed by the headland passes, innermost
+    first, in one path inside ``field``; plan units. Statistics recomputed (ground units)."""
+    router = Router(field, reach=0.0)
+    rings = headland_rings(field, spacing, passes)
+    rings = [
+        _spikes(_band_corners(field, spacing, k + 1), r, reach, router) for k, r in enumerate(rings)
+    ]
+    points = list(inner.waypoints)
+    kinds = list(inner.kinds)
+    lane = [int(x) for x in inner.lane]
+    transects = list(inner.transects)
+    angles = list(inner.transect_angle())
+    roles = list(inner.role())
+    cells = list(inner.transect_cells) if inner.transect_cells is not None else [0] * len(angles)
+    positions = list(inner.positions)
+    headland_length = 0.0
+    n_rings = 0
+    for k_rings in reversed(rings):
+        for ring in k_rings:
+            ring = _rotate(ring, points[-1])
+            ti = len(transects)
+            route = router.path(points[-1], ring[0])
+            for p in route.points[1:-1]:
+                points.append(p)
+                kinds.append("via")
+                lane.append(ti)
+            for j, p in enumerate(ring):
+                points.append(p)
+                kinds.append("start" if j == 0 else "end" if j == len(ring) - 1 else "headland")
+                lane.append(ti + max(0, min(j - 1, len(ring) - 2)))
+            for a, b in itertools.pairwise(ring):
+                d = b - a
+                transects.append(np.stack([a, b]))
+                angles.append(math.atan2(d[1], d[0]))
+                roles.append("headland")
+                cells.append(-1)
+                positions.append(math.nan)
+                headland_length += float(np.linalg.norm(d))
+            n_rings += 1
+    w = np.asarray(points)
+    s, scale = inner.stats, inner.ground_scale
+    path_length = float(np.linalg.norm(np.diff(w, axis=0), axis=1).sum()) / scale
+    n_turns = s.n_turns + n_rings
+    duration = None if s.speed is None else path_length / s.speed + n_turns * s.turn_time
+    stats = dataclasses.replace(
+        s,
+        n_turns=n_turns,
+        path_length=path_length,
+        duration=duration,
+        headland_length=headland_length / scale,
+    )
+    return dataclasses.replace(
+        inner,
+        polygon=field.shell,
+        waypoints=w,
+        kinds=tuple(kinds),
+        lane=np.asarray(lane, dtype=np.int64),
+        transects=np.asarray(transects),
+        transect_angles=np.asarray(angles),
+        roles=tuple(roles),
+        transect_cells=np.asarray(cells, dtype=np.int64),
+        positions=np.asarray(positions),
+        stats=stats,
+        region=field,
+        headland=passes,
+    )

@@ -1,0 +1,171 @@
+"""Headlands: passes around the boundary and the holes, lanes in the inner field, turns inside
+the field, the whole field covered (measured with shapely), nothing of the path outside it."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import shapely
+
+from boustro.cli import main
+from boustro.errors import InvalidParameterError
+from boustro.io import embedded_field
+from boustro.io.formats import write_mission
+from boustro.mission import plan_area
+from boustro.vehicle import Vehicle
+
+from .test_vehicle import circumradii
+
+# An L-shaped field with a pond (planar metres): concave corners, convex corners and a hole.
+L_FIELD = [(0, 0), (240, 0), (240, 90), (110, 90), (110, 220), (0, 220)]
+POND = [(45, 120), (65, 120), (65, 140), (45, 140)]
+SQUARE = [(0, 0), (120, 0), (120, 90), (0, 90)]
+
+
+def _field(mission) -> shapely.Polygon:
+    """The whole field as given (projected to the plan frame for lon/lat input)."""
+    area = mission.area
+    proj = mission.projection
+    return shapely.Polygon(proj.to_plan(area.ring), [proj.to_plan(h) for h in area.holes])
+
+
+def _footprints(mission) -> shapely.Geometry:
+    """Every swath, built here with shapely (flat-ended bands along the lanes, round-jointed
+    bands along the headland passes and hole passes), in the plan frame."""
+    plan = mission.plan
+    reach = plan.reach
+    parts = []
+    for seg, role in zip(plan.transects, plan.role(), strict=True):
+        line = shapely.LineString(seg)
+        if role == "lane":
+            parts.append(line.buffer(reach, cap_style="flat"))
+        else:
+            parts.append(line.buffer(reach, quad_segs=64))
+    return shapely.union_all(parts)
+
+
+def _check(mission, passes: int) -> None:
+    field = _field(mission)
+    plan = mission.plan
+    assert plan.headland == passes
+    # The whole field covered, measured on the original boundary.
+    missed = field.difference(_footprints(mission)).area
+    assert missed <= 1e-9 * field.area
+    assert mission.coverage.covered_share >= 1 - 1e-9
+    # Nothing of the path outside the field (boundary included).
+    path = shapely.LineString(plan.waypoints)
+    assert path.difference(field.buffer(1e-7)).length == 0.0
+    # Lanes in the inner field (a lane's line lies within half a spacing of it: its band
+    # reaches into the inner field), headland passes in the band; their kinds and roles.
+    inner = field.buffer(-(passes - 0.02) * plan.spacing).buffer(plan.spacing / 2)
+    roles = plan.role()
+    for seg, role in zip(plan.transects, roles, strict=True):
+        if role == "lane":
+            assert inner.buffer(1e-6).covers(shapely.LineString(seg))
+    assert "headland" in roles and "headland" in mission.kinds
+    assert mission.summary()["headland_length_m"] * plan.ground_scale == pytest.approx(
+        sum(
+            np.linalg.norm(s[1] - s[0])
+            for s, r in zip(plan.transects, roles, strict=True)
+            if r == "headland"
+        )
+    )
+
+
+@pytest.mark.parametrize("passes", [1, 2])
+def test_headland_covers_the_whole_field_with_a_hole(passes):
+    mission = plan_area(L_FIELD, 10.0, crs=None, holes=[POND], headland=passes)
+    _check(mission, passes)
+    # Passes around the hole as well as around the boundary: points within the band around
+    # the pond lie on headland passes.
+    pond = shapely.Polygon(POND)
+    pts = [
+        shapely.Point(p)
+        for p, k in zip(mission.waypoints, mission.kinds, strict=True)
+        if k == "headland"
+    ]
+    near_pond = [p for p in pts if 0 < pond.distance(p) < passes * 10]
+    assert len(near_pond) >= 4 * passes
+
+
+def test_headland_on_a_convex_field_and_the_embedded_field():
+    _check(plan_area(SQUARE, 10.0, crs=None, headland=3), 3)
+    _check(plan_area(embedded_field(), 10.0, headland=2), 2)
+
+
+def test_turns_stay_inside_the_field_and_respect_the_radius():
+    for reverse in (False, True):
+        v = Vehicle(turn_radius=6.0, reverse=reverse, speed=3.0)
+        mission = plan_area(L_FIELD, 10.0, crs=None, holes=[POND], headland=2, vehicle=v)
+        _check(mission, 2)
+        field = _field(mission)
+        turns = np.array([k == "turn" for k in mission.kinds])
+        assert turns.sum() > 50
+        assert field.buffer(1e-7).covers(shapely.MultiPoint(mission.waypoints[turns]))
+        if not reverse:  # forward only: every turn's curvature radius >= 6 m
+            k = mission.kinds
+            i = 0
+            while i < len(k):
+                if k[i] == "turn":
+                    j = i
+                    while k[j] == "turn":
+                        j += 1
+                    run = mission.waypoints[i - 1 : j + 1]
+                    assert circumradii(run).min() >= 6.0 * (1 - 1e-6)
+                    i = j
+                i += 1
+        s = mission.summary()
+        assert s["turn_length_m"] > 0
+        assert s["duration_s"] == pytest.approx(s["path_length_m"] / 3.0)
+
+
+def test_a_narrow_headland_keeps_straight_moves_with_a_note():
+    # One 10 m pass cannot hold a Dubins turn of radius 6 m between neighbouring lanes.
+    mission = plan_area(SQUARE, 10.0, crs=None, headland=1, vehicle=Vehicle(turn_radius=6.0))
+    _check(mission, 1)
+    assert any("would leave the field" in n for n in mission.plan.notes)
+
+
+def test_headland_errors():
+    with pytest.raises(InvalidParameterError, match=r"no inner field|splits"):
+        plan_area(SQUARE, 10.0, crs=None, headland=5)
+    # A band that cuts the inner field in two (the pond 45 m from the sides, 3 passes of 10 m
+    # around it and the boundary) is refused: one inner field is planned.
+    with pytest.raises(InvalidParameterError, match=r"splits the inner field into 2 parts"):
+        plan_area(L_FIELD, 10.0, crs=None, holes=[POND], headland=3)
+    with pytest.raises(InvalidParameterError, match="whole number"):
+        plan_area(SQUARE, 10.0, crs=None, headland=1.5)
+    with pytest.raises(InvalidParameterError, match="between 0 and"):
+        plan_area(SQUARE, 10.0, crs=None, headland=-1)
+
+
+def test_cli_headland_and_export(tmp_path, capsys):
+    wkt = tmp_path / "field.wkt"
+    ring = ", ".join(f"{x} {y}" for x, y in [*L_FIELD, L_FIELD[0]])
+    hole = ", ".join(f"{x} {y}" for x, y in [*POND, POND[0]])
+    wkt.write_text(f"POLYGON (({ring}), ({hole}))")
+    out = tmp_path / "m.csv"
+    argv = ["-q", "plan", str(wkt), "--crs", "planar", "--spacing", "10", "--headland", "2"]
+    assert main([*argv, "--turn-radius", "6", "--json", "--out", str(out)]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["headland_passes"] == 2 and summary["covered_share"] >= 1 - 1e-9
+    text = out.read_text().splitlines()
+    kinds = {line.split(",")[1] for line in text[1:]}
+    assert {"headland", "turn", "start", "end"} <= kinds
+    assert main([*argv[:-1], "9", "--json"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "headland" in err[0]
+
+
+def test_headland_mission_read_by_pymavlink(tmp_path):
+    mavwp = pytest.importorskip("pymavlink.mavwp")
+    mission = plan_area(embedded_field(), 10.0, headland=2, altitude=2.0)
+    path = tmp_path / "m.waypoints"
+    write_mission(mission, path)
+    loader = mavwp.MAVWPLoader()
+    n = loader.load(str(path))
+    assert n == len(mission.waypoints) + 1 or n == len(mission.waypoints) + 2
+    got = np.array([[loader.wp(i).y, loader.wp(i).x] for i in range(n - len(mission.waypoints), n)])
+    np.testing.assert_allclose(got, mission.waypoints_lonlat, atol=1e-9, rtol=0)
