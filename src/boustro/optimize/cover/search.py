@@ -24,9 +24,9 @@ from .sandwich import Sandwich
 __all__ = ["CoverSearch", "cover_optimum"]
 
 #: Plans evaluated per round at most (the layouts with the lowest point bound).
-PLANS_PER_ROUND = 2
+PLANS_PER_ROUND = 3
 #: Plans evaluated at the first round, at angles this far apart (radians) at least.
-FIRST_PLANS = 8
+FIRST_PLANS = 16
 FIRST_SEPARATION = math.radians(3.0)
 
 
@@ -51,6 +51,8 @@ RESOLVE_RTOL = 1e-2
 EDGE_PLANS = 12
 #: Smallest box radius (relative to the spacing) of a routed plan's search.
 RESOLVE_EPS = 1e-3
+#: Plans of the best modelled layouts (one per degree) after the search of a routed plan.
+POLISH_PLANS = 16
 #: Offsets planned at the best angle after the search of a routed plan.
 REFINE_OFFSETS = 8
 #: Offset boxes at the first round of a fixed-angle search.
@@ -83,6 +85,7 @@ class CoverSearch:
         self.bound_evaluations = 0
         self.seen: set[tuple[float, float]] = set()
         self.model_min = math.inf  # the lowest model value at a layout seen
+        self.points: list[NDArray[Any]] = []  # (value, theta, d) of every layout modelled
 
     def k_range(self, eps: float) -> tuple[int, int]:
         far = self.radius + eps + self.reach
@@ -98,6 +101,7 @@ class CoverSearch:
         self.bound_evaluations += len(boxes.theta)
         out = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
         self.model_min = min(self.model_min, float(out.min(initial=math.inf)))
+        self.points.append(np.stack([out, boxes.theta, boxes.d]))
         return out
 
     def box_bounds(self, boxes: _Boxes) -> NDArray[np.float64]:
@@ -126,6 +130,31 @@ class CoverSearch:
             d = (np.arange(EDGE_OFFSETS) + 0.5) * (self.s / EDGE_OFFSETS)
             boxes = _Boxes(np.full(len(d), a), np.zeros(len(d)), d, np.zeros(len(d)))
             self.try_plans(boxes, self.point_values(boxes), limit=1)
+
+    def polish(self) -> None:
+        """Plan the best modelled layout of each degree of angle whose model beats the best
+        plan, lowest model first, :data:`POLISH_PLANS` at most: a routed plan's tour differs
+        between layouts whose bounds are close, so the plans decide."""
+        v, theta, d = np.concatenate(self.points, axis=1)
+        ok = v < self.best[0]
+        v, theta, d = v[ok], theta[ok], d[ok]
+        bins = np.floor(np.degrees(theta % math.pi)).astype(np.int64)
+        order = np.lexsort((v, bins))
+        first = np.ones(len(order), dtype=bool)
+        first[1:] = bins[order][1:] != bins[order][:-1]
+        pick = order[first]
+        pick = pick[np.argsort(v[pick])][:POLISH_PLANS]
+        boxes = _Boxes(theta[pick], np.zeros(len(pick)), d[pick], np.zeros(len(pick)))
+        self.try_plans(boxes, v[pick], limit=len(pick))
+        # and the lanes centred on the area (the first half a spacing inside its extreme) at
+        # those whole degrees: the layout a person, or a brute force over degrees, would fly
+        angles = np.radians(bins[pick].astype(np.float64))
+        verts = self.region.shell.vertices - self.origin
+        normal = np.stack([-np.sin(angles), np.cos(angles)], axis=1)
+        low = (normal @ verts.T).min(axis=1)
+        centred = np.mod(low + self.reach, self.s)
+        boxes = _Boxes(angles, np.zeros(len(pick)), centred, np.zeros(len(pick)))
+        self.try_plans(boxes, self.point_values(boxes), limit=len(pick))
 
     def refine_offsets(self) -> None:
         """Plan :data:`REFINE_OFFSETS` more offsets at the best angle: a routed plan's moves
@@ -337,6 +366,7 @@ def cover_optimum(
             break
         boxes = _split(boxes, search.radius)
     if not boustrophedon and evaluate is not None and math.isfinite(search.best[0]):
+        search.polish()
         search.refine_offsets()
     value, theta, d = search.best
     if not math.isfinite(value):

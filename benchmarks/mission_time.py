@@ -1,0 +1,161 @@
+"""Benchmark (issue 16): the certified fastest mission against a 1-degree brute force.
+
+Fields: Fields2Cover's public demo fields (``data/`` of github.com/Fields2Cover/Fields2Cover; not
+committed here: give the folder with ``--data``; the embedded field is its ``test.json`` and is
+always run) and seeded random concave polygons with holes (``random_region``, ~300 m across).
+Spacing 10 m, 5 m/s, 10 s per turn. For each field:
+
+* ``time``: ``plan_area(..., speed, turn_time)``: the time objective (the default with a speed),
+  certified search over every angle and offset, the decomposed plan when it is faster;
+* ``eq1``: the same with ``fitness=SmithFitness()``: the paper's fitness (today's default plan);
+* ``brute``: the baseline (b) of the issue: every whole degree, lanes centred on the area
+  (the first half a spacing inside its extreme, as Fields2Cover's swaths), the
+  coverage-guaranteed lanes flown by the same planner, the fastest angle kept.
+
+Printed per set: the median and worst ratio of mission time to the brute force's (measured in
+the same run), the share certified, the median gap, lanes, coverage (shapely, the original
+boundary), path outside the area, and planning CPU time (``time.process_time``).
+
+    python benchmarks/mission_time.py --data /path/to/Fields2Cover/data [--random 100]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import statistics
+import time
+
+import numpy as np
+
+from boustro.geometry.region import Region, random_region
+from boustro.io import embedded_field, read_areas
+from boustro.mission import plan_area
+from boustro.objectives import SmithFitness
+
+SPACING = 10.0
+SPEED = 5.0
+TURN_TIME = 10.0
+FILES = ("test_2_cell.json", "test1.xml")
+
+
+def _fields(data: str | None, n_random: int, seed: int) -> list[tuple[str, object, str | None]]:
+    out: list[tuple[str, object, str | None]] = [("f2c test.json", embedded_field(), "auto")]
+    if data:
+        for name in FILES:
+            path = os.path.join(data, name)
+            if os.path.exists(path):
+                for i, area in enumerate(read_areas(path)):
+                    out.append((f"f2c {name}#{i + 1}", area, "auto"))
+    rng = np.random.default_rng(seed)
+    for i in range(n_random):
+        r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
+        k = 300.0 / r.diameter
+        ring = r.shell.vertices * k
+        holes = [h.vertices * k for h in r.holes]
+        out.append((f"random {i}", (ring, holes), None))
+    return out
+
+
+def _plan(area, crs, **kw):
+    if isinstance(area, tuple):
+        ring, holes = area
+        return plan_area(ring, SPACING, crs=None, holes=holes, **kw)
+    return plan_area(area, SPACING, **kw)
+
+
+def _row(area, crs, **kw):
+    t0 = time.process_time()
+    m = _plan(area, crs, speed=SPEED, turn_time=TURN_TIME, **kw)
+    cpu = time.process_time() - t0
+    s = m.summary()
+    return {
+        "time": m.stats.duration,
+        "lanes": s["n_transects"],
+        "covered": s.get("covered_share", float("nan")),
+        "outside": s.get("outside_length_m", 0.0),
+        "certified": bool(s.get("certified")),
+        "gap": s.get("gap") if s.get("gap") is not None else float("nan"),
+        "cpu": cpu,
+        "method": s["method"],
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--data", help="Fields2Cover's data/ folder")
+    ap.add_argument("--random", type=int, default=20, help="random concave areas (default 20)")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args()
+    rows = []
+    for name, area, crs in _fields(args.data, args.random, args.seed):
+        timed = _row(area, crs)
+        eq1 = _row(area, crs, fitness=SmithFitness())
+        brute, brute_cpu = _brute_centred(area, crs)
+        rows.append((name, timed, eq1, brute, brute_cpu))
+        print(
+            f"{name:24s} time {timed['time']:8.1f} s ({timed['method']}, certified "
+            f"{timed['certified']}, gap {timed['gap']:.2f} s, {timed['cpu']:.2f} s CPU) | eq1 "
+            f"{eq1['time']:8.1f} | brute {brute:8.1f} ({brute_cpu:.1f} s CPU) | time/brute "
+            f"{timed['time'] / brute:.4f} covered {timed['covered']:.6f} outside "
+            f"{timed['outside']:.0f} m",
+            flush=True,
+        )
+    _summary(rows)
+
+
+def _brute_centred(area, crs) -> tuple[float, float]:
+    """The brute force of the module docstring: the plan at each whole degree with the first
+    lane half a spacing inside the area's extreme (offset from the shell's vertex mean)."""
+    from boustro.mission import _project, _sensor_spacing, _Sensor
+    from boustro.mission.cover import _planner
+    from boustro.mission.steps import _path_options
+
+    t0 = time.process_time()
+    if isinstance(area, tuple):
+        from boustro.mission import _as_area
+
+        a_obj = _as_area(area[0], None, area[1])
+    else:
+        a_obj = area
+    sensor = _Sensor(*_sensor_spacing(SPACING))
+    frame = _project(a_obj, sensor, 0.5, None, None)
+    plan_of = _planner(frame, "guaranteed", _path_options(frame, 0.0, SPEED, TURN_TIME))
+    target = frame.poly if frame.region is None else frame.region
+    region = target if isinstance(target, Region) else Region(target)
+    verts = region.shell.vertices - region.centre
+    s = SPACING * frame.proj.scale_min
+    best = math.inf
+    for deg in range(180):
+        a = math.radians(deg)
+        n = np.array([-math.sin(a), math.cos(a)])
+        offset = (float((verts @ n).min()) + s / 2) % s
+        best = min(best, plan_of(a, offset).stats.duration)
+    return best, time.process_time() - t0
+
+
+def _summary(rows) -> None:
+    for label, pick in (("Fields2Cover", "f2c"), ("random concave with holes", "random")):
+        sel = [r for r in rows if r[0].startswith(pick)]
+        if not sel:
+            continue
+        ratio = [r[1]["time"] / r[3] for r in sel]
+        eq1 = [r[2]["time"] / r[3] for r in sel]
+        print(f"\n{label}: {len(sel)} fields")
+        print(
+            f"  time objective / brute force: median {statistics.median(ratio):.4f}, worst "
+            f"{max(ratio):.4f}, never longer: {sum(x <= 1 + 1e-9 for x in ratio)}/{len(sel)}"
+        )
+        print(f"  Eq. 1 (today's default) / brute force: median {statistics.median(eq1):.4f}")
+        print(
+            f"  certified {sum(r[1]['certified'] for r in sel)}/{len(sel)}, median gap "
+            f"{statistics.median(r[1]['gap'] / r[1]['time'] for r in sel) * 100:.2f}%, "
+            f"coverage min {min(r[1]['covered'] for r in sel):.6f}, planning CPU median "
+            f"{statistics.median(r[1]['cpu'] for r in sel):.2f} s, max "
+            f"{max(r[1]['cpu'] for r in sel):.2f} s"
+        )
+
+
+if __name__ == "__main__":
+    main()
