@@ -43,7 +43,7 @@ from .limits import (
 )
 from .options import OPTIONS, web_objectives
 
-__all__ = ["ALLOWED_HOSTS", "create_app", "static_dir"]
+__all__ = ["ALLOWED_HOSTS", "create_app", "static_dir", "web_words"]
 
 log = logging.getLogger("boustro.web")
 
@@ -75,6 +75,17 @@ def _starlette() -> Any:
     import starlette
 
     return starlette
+
+
+#: The command line's flags that the library's messages name, and the API's options for them.
+_FLAGS = {"--repair": "options.repair", "--altitude": "options.altitude", "--crs": "options.crs"}
+
+
+def web_words(message: str) -> str:
+    """A library message in the API's words: ``options.repair`` for ``--repair``, etc."""
+    for flag, option in _FLAGS.items():
+        message = message.replace(flag, option)
+    return message
 
 
 def _tile_origin(tiles: str | None) -> str:
@@ -155,7 +166,7 @@ def create_app(tiles: str | None = None, allowed_hosts: tuple[str, ...] = ALLOWE
 
     def error(exc: Exception) -> Any:
         status = 413 if isinstance(exc, RequestTooLargeError) else 400
-        return responses.JSONResponse({"error": str(exc)}, status_code=status)
+        return responses.JSONResponse({"error": web_words(str(exc))}, status_code=status)
 
     def api(work: Any, json_body: bool = True, lock: bool = True) -> Any:
         async def endpoint(request: Any) -> Any:
