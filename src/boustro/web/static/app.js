@@ -8,6 +8,7 @@ const state = {
   outer: [],            // [[lat, lng], ...] the area's outer ring
   holes: [],            // [[[lat, lng], ...], ...]
   draft: null,          // {kind: "outer" | "hole", points: [...]} while drawing
+  name: "",             // the area's name (from a file)
   start: null,          // [lat, lng] or null
   pickingStart: false,
   fields: [],           // features of the last opened file
@@ -121,7 +122,8 @@ function stopDrawing() {
 function closeDraft() {
   const d = state.draft;
   if (!d || d.points.length < 3) return;
-  if (d.kind === "outer") { state.outer = d.points; state.holes = []; } else state.holes.push(d.points);
+  if (d.kind === "outer") { state.outer = d.points; state.holes = []; state.name = ""; }
+  else state.holes.push(d.points);
   stopDrawing();
   $("hint").textContent = "Drag a vertex to move it; the plan follows.";
   drawArea();
@@ -188,7 +190,8 @@ function options() {
 
 function areaGeoJSON() {
   const ring = (pts) => { const r = pts.map(([lat, lng]) => [lng, lat]); r.push(r[0]); return r; };
-  return { type: "Polygon", coordinates: [ring(state.outer), ...state.holes.map(ring)] };
+  const geometry = { type: "Polygon", coordinates: [ring(state.outer), ...state.holes.map(ring)] };
+  return { type: "Feature", properties: state.name ? { name: state.name } : {}, geometry };
 }
 
 function request(extra) {
@@ -322,6 +325,7 @@ function fmt(v, digits) { return v === null || v === undefined ? "—" : Number(
 
 function summary(p, fields) {
   const rows = [
+    ["field", p.name || "(drawn)"],
     ["lanes", `${p.n_transects} (${p.layout})`],
     ["turns", p.n_turns],
     ["path length", `${fmt(p.path_length_m, 1)} m (lanes ${fmt(p.transect_length_m, 1)} m)`],
@@ -376,6 +380,7 @@ function useFeature(f) {
   const rings = f.geometry.coordinates.map((r) => r.slice(0, -1).map(([x, y]) => [y, x]));
   state.outer = rings[0];
   state.holes = rings.slice(1);
+  state.name = f.properties.name || "";
   stopDrawing();
   drawArea();
   map.fitBounds(L.latLngBounds(state.outer), { padding: [30, 30] });
@@ -416,7 +421,7 @@ mapEl.addEventListener("drop", (e) => {
 $("draw").addEventListener("click", () => startDrawing("outer"));
 $("hole").addEventListener("click", () => startDrawing("hole"));
 $("clear").addEventListener("click", () => {
-  state.outer = []; state.holes = []; stopDrawing(); drawArea(); clearPlan(); $("error").hidden = true;
+  state.outer = []; state.holes = []; state.name = ""; stopDrawing(); drawArea(); clearPlan(); $("error").hidden = true;
 });
 $("example").addEventListener("click", async () => {
   const r = await fetch("/api/embedded");
