@@ -30,7 +30,12 @@ from .test_read_formats import KML
 
 sync_api = pytest.importorskip("playwright.sync_api")
 CHROMIUM = os.environ.get("BOUSTRO_CHROMIUM", "/usr/bin/chromium")
-ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-dev-shm-usage"]
+ARGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-dev-shm-usage",
+]
 ROOT = Path(__file__).resolve().parents[1]
 
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 from importlib import resources
 from typing import Any
 from urllib.parse import urlsplit
@@ -187,7 +188,10 @@ def create_app(tiles: str | None = None, allowed_hosts: tuple[str, ...] = ALLOWE
         return endpoint
 
     def plan(request: Any, body: bytes) -> Any:
-        return responses.JSONResponse(plan_response(plan_request(parse_strict_json(body))))
+        t0 = time.perf_counter()
+        answer = plan_response(plan_request(parse_strict_json(body)))
+        ms = (time.perf_counter() - t0) * 1000  # the page shows planning apart from the rest
+        return responses.JSONResponse(answer, headers={"Server-Timing": f"plan;dur={ms:.1f}"})
 
     def estimate(request: Any, body: bytes) -> Any:
         return responses.JSONResponse(estimate_request(parse_strict_json(body)))

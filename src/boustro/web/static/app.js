@@ -18,6 +18,7 @@ const state = {
   planSeq: 0,           // plans drawn
   errorSeq: 0,          // errors shown
   timings: [],          // ms from the last edit to the drawn plan, per plan
+  serverTimings: [],    // ms of planning in the server (its Server-Timing header), per plan
   lastPlan: null,
 };
 window.boustro = state;
@@ -122,7 +123,9 @@ function stopDrawing() {
 function closeDraft() {
   const d = state.draft;
   if (!d || d.points.length < 3) return;
-  if (d.kind === "outer") { state.outer = d.points; state.holes = []; state.name = ""; }
+  if (d.kind === "outer") {
+    state.outer = d.points; state.holes = []; state.name = ""; $("field-row").hidden = true;
+  }
   else state.holes.push(d.points);
   stopDrawing();
   $("hint").textContent = "Drag a vertex to move it; the plan follows.";
@@ -247,7 +250,11 @@ async function replan() {
   try {
     const r = await postJSON("/api/plan", body);
     if (!r.ok) { showError(await errorOf(r)); clearPlan(); }
-    else if (!state.pending) { drawPlan(await r.json()); }
+    else if (!state.pending) {
+      const timing = (r.headers.get("Server-Timing") || "").match(/plan;dur=([0-9.]+)/);
+      state.serverMs = timing ? Number(timing[1]) : null;
+      drawPlan(await r.json());
+    }
   } catch (e) {
     showError("the server did not answer: " + e);
   } finally {
@@ -317,6 +324,7 @@ function drawPlan(answer) {
   state.lastPlan = plan;
   requestAnimationFrame(() => {
     state.timings.push(performance.now() - state.lastEdit);
+    state.serverTimings.push(state.serverMs);
     state.planSeq += 1;
   });
 }
@@ -421,7 +429,7 @@ mapEl.addEventListener("drop", (e) => {
 $("draw").addEventListener("click", () => startDrawing("outer"));
 $("hole").addEventListener("click", () => startDrawing("hole"));
 $("clear").addEventListener("click", () => {
-  state.outer = []; state.holes = []; state.name = ""; stopDrawing(); drawArea(); clearPlan(); $("error").hidden = true;
+  state.outer = []; state.holes = []; state.name = ""; $("field-row").hidden = true; stopDrawing(); drawArea(); clearPlan(); $("error").hidden = true;
 });
 $("example").addEventListener("click", async () => {
   const r = await fetch("/api/embedded");
