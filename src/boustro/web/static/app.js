@@ -188,6 +188,7 @@ function options() {
   o.layout = $("layout").value;
   if ($("decompose").value) o.decompose = $("decompose").value === "true";
   if (state.start) o.start = [state.start[1], state.start[0]];
+  if ($("repair").checked) o.repair = true;
   return o;
 }
 
