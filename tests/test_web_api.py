@@ -297,6 +297,11 @@ def test_only_epsg_codes_name_a_crs(client, embedded):
     )
     area["crs"] = {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::4326"}}
     assert client.post("/api/plan", json={"area": area, "options": {"spacing": 10}}).is_success
+    area["crs"] = {"type": "name", "properties": {"name": "EPSG:28992"}}  # the member is used
+    answer = client.post("/api/plan", json={"area": area, "options": {"spacing": 10}}).json()
+    assert answer["crs"] == "EPSG:28992"
+    body = {"area": area, "options": {"spacing": 10, "crs": "EPSG:4326"}}  # options win
+    assert client.post("/api/plan", json=body).json()["crs"] == "EPSG:4326"
     wkt = "POLYGON ((5 52, 5.003 52, 5.003 52.002, 5 52.002, 5 52))"
     assert "EPSG code" in _error(_read(client, "f.wkt", wkt, crs="+proj=longlat"))
 

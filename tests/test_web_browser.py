@@ -226,7 +226,12 @@ def test_time_from_the_last_edit_to_the_drawn_plan(page):
     embedded = [_timed_edit(page, s, 30_000) for s in ("12", "10", "12", "10", "12")]
     seq = page.evaluate("window.boustro.planSeq")
     _drop(page, "traced.geojson", _field_geojson(1000))
+    # a long plan: the progress bar fills over the estimate before planning, which it names
+    _until(page, "document.getElementById('progress-text').textContent.includes('estimated')")
+    assert page.locator("#progress").is_visible()
+    assert "1000 vertices" in page.inner_text("#progress-text")
     _wait_plan(page, seq, 240_000)
+    assert page.locator("#progress").is_hidden()
     assert page.evaluate("window.boustro.outer.length") == 1000
     traced = [page.evaluate("window.boustro.timings.at(-1)"), _timed_edit(page, "12", 240_000)]
     print(

@@ -88,13 +88,13 @@ def _checked(areas: list[Area]) -> list[Area]:
 
 def request_areas(area: Any, opts: PlanOptions) -> list[Area]:
     """The areas of a request's ``area`` (a GeoJSON geometry, Feature or FeatureCollection) in
-    ``opts.crs`` (a ``crs`` member, if any, must be an EPSG code), within the limits."""
+    ``opts.crs``, else its ``crs`` member (which must be an EPSG code), else longitude/latitude;
+    within the limits."""
     if not isinstance(area, dict) or "type" not in area:
         raise PolygonFileError(
             "area must be a GeoJSON object: a Polygon, MultiPolygon, Feature or FeatureCollection"
         )
-    member = _member_crs(area)
-    crs = opts.crs if member is None or opts.crs != "EPSG:4326" else member
+    crs = opts.crs or _member_crs(area) or "EPSG:4326"
     areas = _checked(areas_from_object(area, crs=crs, where="area"))
     return _pick(areas, opts.field)
 

@@ -59,11 +59,12 @@ def web_objectives() -> dict[str, Any]:
 @dataclass
 class PlanOptions:
     """Checked options: the spacing (a number or a sensor), ``plan_area``'s keyword arguments,
-    the area's CRS, the field asked for and whether to repair."""
+    the area's CRS (``None``: the area's ``crs`` member, else WGS 84 longitude/latitude), the
+    field asked for and whether to repair."""
 
     spacing: Any
     kwargs: dict[str, Any] = field(default_factory=dict)
-    crs: str = "EPSG:4326"
+    crs: str | None = None
     field: str | None = None
     repair: bool = False
 
@@ -183,7 +184,7 @@ def parse_options(options: Any) -> PlanOptions:
     return PlanOptions(
         spacing=_spacing(options),
         kwargs=kwargs,
-        crs=crs or "EPSG:4326",
+        crs=crs,
         field=None if picked is None else str(picked),
         repair=bool(_flag(options, "repair")),
     )
