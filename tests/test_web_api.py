@@ -400,3 +400,19 @@ def test_import_boustro_loads_no_web_framework():
     code = f"import sys, boustro; print([m for m in {names!r} if m in sys.modules])"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_every_file_of_the_page_is_package_data():
+    """The wheel ships the page and Leaflet (checked on pyproject.toml; a wheel build is slow)."""
+    import fnmatch
+    import re
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "pyproject.toml").read_text()
+    globs = re.findall(r'"([^"]+)"', re.search(r"^boustro = \[(.*)\]$", text, re.M).group(1))
+    static = root / "src" / "boustro" / "web" / "static"
+    files = [p.relative_to(root / "src" / "boustro").as_posix() for p in static.rglob("*")]
+    missing = [f for f in files if (static.parent.parent / f).is_file()]
+    missing = [f for f in missing if not any(fnmatch.fnmatch(f, g) for g in globs)]
+    assert not missing, missing
+    assert "src/boustro/web/static/leaflet/LICENSE" in text  # its licence in the metadata too

@@ -125,7 +125,15 @@ def _plan_one(area: Area, opts: PlanOptions) -> Mission:
 
 
 def plan_request(body: Any) -> list[Mission]:
-    """Plan a request ``{"area": <GeoJSON>, "options": {...}}``: one mission per field."""
+    """Plan a request ``{"area": <GeoJSON>, "options": {...}}``: one mission per field.
+
+    Example:
+        >>> ring = [[5, 52], [5.003, 52], [5.003, 52.002], [5, 52.002], [5, 52]]
+        >>> body = {"area": {"type": "Polygon", "coordinates": [ring]}, "options": {"spacing": 20}}
+        >>> answer = plan_response(plan_request(body))
+        >>> answer["n_transects"], answer["certificate"]["certified"], answer["geojson"]["type"]
+        (12, True, 'FeatureCollection')
+    """
     if not isinstance(body, dict):
         raise InvalidParameterError(
             'the request must be a JSON object {"area": ..., "options": ...}'
