@@ -154,57 +154,75 @@ def _locked(fn: Any, *args: Any) -> Any:
         return fn(*args)
 
 
+def _error(responses: Any, exc: Exception) -> Any:
+    status = 413 if isinstance(exc, RequestTooLargeError) else 400
+    return responses.JSONResponse({"error": web_words(str(exc))}, status_code=status)
+
+
+def _endpoint(responses: Any, work: Any, json_body: bool = True, lock: bool = True) -> Any:
+    """An API endpoint: the body within its limit, ``work(responses, request, body)`` in a
+    worker thread (under the plan lock if ``lock``), errors as ``{"error": ...}``."""
+    from starlette.concurrency import run_in_threadpool
+
+    async def endpoint(request: Any) -> Any:
+        try:
+            body = await _body(request, json_body)
+            if not lock:
+                return await run_in_threadpool(work, responses, request, body)
+            return await run_in_threadpool(_locked, work, responses, request, body)
+        except BoustroError as exc:
+            return _error(responses, exc)
+        except Exception as exc:  # never a stack trace to the client
+            log.exception("boustro web: %s failed", request.url.path)
+            return responses.JSONResponse(
+                {"error": f"internal error ({type(exc).__name__}); see the server's log"},
+                status_code=500,
+            )
+
+    return endpoint
+
+
+def _plan(responses: Any, request: Any, body: bytes) -> Any:
+    t0 = time.perf_counter()
+    answer = plan_response(plan_request(parse_strict_json(body)))
+    ms = (time.perf_counter() - t0) * 1000  # the page shows planning apart from the rest
+    return responses.JSONResponse(answer, headers={"Server-Timing": f"plan;dur={ms:.1f}"})
+
+
+def _estimate(responses: Any, request: Any, body: bytes) -> Any:
+    return responses.JSONResponse(estimate_request(parse_strict_json(body)))
+
+
+def _export(responses: Any, request: Any, body: bytes) -> Any:
+    data, name, media = export_request(parse_strict_json(body))
+    headers = {"Content-Disposition": f'attachment; filename="{name}"'}
+    return responses.Response(data, media_type=media, headers=headers)
+
+
+def _read(responses: Any, request: Any, body: bytes) -> Any:
+    name = request.query_params.get("name", "upload")
+    crs = request.query_params.get("crs") or None
+    return responses.JSONResponse(read_upload(name, body, crs))
+
+
+def _csp(origin: str) -> str:
+    """The page's Content-Security-Policy: everything from this server, images also from the
+    tile server's ``origin`` (if any)."""
+    return (
+        "default-src 'self'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
+        f"img-src 'self' data: blob: {origin}".rstrip()
+        + "; connect-src 'self'; frame-ancestors 'none'"
+    )
+
+
 def create_app(tiles: str | None = None, allowed_hosts: tuple[str, ...] = ALLOWED_HOSTS) -> Any:
     """The Starlette app; ``tiles`` is an optional tile-server URL template for the map
     (``https://tiles.example/{z}/{x}/{y}.png``); without it the map is a plain background with a
     graticule and needs no network."""
     sl = _starlette()
-    from starlette.concurrency import run_in_threadpool
-
     responses, routing = sl.responses, sl.routing
-    origin = _tile_origin(tiles)
+    csp = _csp(_tile_origin(tiles))
     config = _config(tiles)
-
-    def error(exc: Exception) -> Any:
-        status = 413 if isinstance(exc, RequestTooLargeError) else 400
-        return responses.JSONResponse({"error": web_words(str(exc))}, status_code=status)
-
-    def api(work: Any, json_body: bool = True, lock: bool = True) -> Any:
-        async def endpoint(request: Any) -> Any:
-            try:
-                body = await _body(request, json_body)
-                if not lock:
-                    return await run_in_threadpool(work, request, body)
-                return await run_in_threadpool(_locked, work, request, body)
-            except BoustroError as exc:
-                return error(exc)
-            except Exception as exc:  # never a stack trace to the client
-                log.exception("boustro web: %s failed", request.url.path)
-                return responses.JSONResponse(
-                    {"error": f"internal error ({type(exc).__name__}); see the server's log"},
-                    status_code=500,
-                )
-
-        return endpoint
-
-    def plan(request: Any, body: bytes) -> Any:
-        t0 = time.perf_counter()
-        answer = plan_response(plan_request(parse_strict_json(body)))
-        ms = (time.perf_counter() - t0) * 1000  # the page shows planning apart from the rest
-        return responses.JSONResponse(answer, headers={"Server-Timing": f"plan;dur={ms:.1f}"})
-
-    def estimate(request: Any, body: bytes) -> Any:
-        return responses.JSONResponse(estimate_request(parse_strict_json(body)))
-
-    def export(request: Any, body: bytes) -> Any:
-        data, name, media = export_request(parse_strict_json(body))
-        headers = {"Content-Disposition": f'attachment; filename="{name}"'}
-        return responses.Response(data, media_type=media, headers=headers)
-
-    def read(request: Any, body: bytes) -> Any:
-        name = request.query_params.get("name", "upload")
-        crs = request.query_params.get("crs") or None
-        return responses.JSONResponse(read_upload(name, body, crs))
 
     async def page(request: Any) -> Any:
         return responses.FileResponse(f"{static_dir()}/index.html", media_type="text/html")
@@ -215,26 +233,21 @@ def create_app(tiles: str | None = None, allowed_hosts: tuple[str, ...] = ALLOWE
     async def embedded(request: Any) -> Any:
         return responses.JSONResponse(_embedded())
 
-    csp = (
-        "default-src 'self'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
-        f"img-src 'self' data: blob: {origin}".rstrip()
-        + "; connect-src 'self'; frame-ancestors 'none'"
-    )
-
     async def headers(request: Any, call_next: Any) -> Any:
         response = await call_next(request)
         response.headers["Content-Security-Policy"] = csp
         response.headers["X-Content-Type-Options"] = "nosniff"
         return response
 
+    post = ["POST"]
     routes = [
         routing.Route("/", page),
         routing.Route("/api/config", get_config),
         routing.Route("/api/embedded", embedded),
-        routing.Route("/api/plan", api(plan), methods=["POST"]),
-        routing.Route("/api/estimate", api(estimate, lock=False), methods=["POST"]),
-        routing.Route("/api/export", api(export), methods=["POST"]),
-        routing.Route("/api/read", api(read, json_body=False), methods=["POST"]),
+        routing.Route("/api/plan", _endpoint(responses, _plan), methods=post),
+        routing.Route("/api/estimate", _endpoint(responses, _estimate, lock=False), methods=post),
+        routing.Route("/api/export", _endpoint(responses, _export), methods=post),
+        routing.Route("/api/read", _endpoint(responses, _read, json_body=False), methods=post),
         routing.Mount("/static", app=sl.staticfiles.StaticFiles(directory=static_dir())),
     ]
     middleware = [
