@@ -150,7 +150,12 @@ def test_csv_read_back(tmp_path, mission, rd_mission, planar_mission):
 def test_qgc_plan_matches_the_documented_format(tmp_path, mission):
     path = tmp_path / "mission.plan"
     write_mission(mission, path)
-    doc = json.loads(path.read_text())
+    assert_qgc_plan(json.loads(path.read_text()), mission, speed=3.0)
+
+
+def assert_qgc_plan(doc: dict, mission, speed: float | None = None) -> None:
+    """``doc`` is a QGroundControl Plan file as documented, flying ``mission``'s waypoints at
+    its altitude (also the web API's and the browser's downloads, tests/test_web_*.py)."""
     # Top level and mission object as documented for QGroundControl Plan files.
     assert doc["fileType"] == "Plan" and doc["version"] == 1
     assert set(doc) >= {"fileType", "version", "groundStation", "mission"}
@@ -163,13 +168,14 @@ def test_qgc_plan_matches_the_documented_format(tmp_path, mission):
     items = m["items"]
     assert [i["doJumpId"] for i in items] == list(range(1, len(items) + 1))
     assert all(i["type"] == "SimpleItem" and i["autoContinue"] is True for i in items)
-    assert items[0]["command"] == 178 and items[0]["params"][1] == 3.0  # DO_CHANGE_SPEED
+    if speed is not None:
+        assert items[0]["command"] == 178 and items[0]["params"][1] == speed  # DO_CHANGE_SPEED
     nav = [i for i in items if i["command"] == MAV_CMD_NAV_WAYPOINT]
     assert len(nav) == len(mission.waypoints)
     for item in nav:
         assert item["frame"] == MAV_FRAME_GLOBAL_RELATIVE_ALT
         assert len(item["params"]) == 7
-        assert item["params"][6] == item["Altitude"] == 35.0
+        assert item["params"][6] == item["Altitude"] == mission.altitude
         assert item["AltitudeMode"] == 1
     latlon = np.array([i["params"][4:6] for i in nav])
     np.testing.assert_allclose(latlon[:, ::-1], mission.waypoints_lonlat, atol=1e-12, rtol=0)

@@ -1,0 +1,418 @@
+"""The JSON API of ``boustro serve``, in-process (Starlette's test client): the answer is the
+``boustro plan --json`` object, every export format is read back by a real reader, every area
+format is read from an upload, and bad input is one 4xx line, never a trace."""
+
+from __future__ import annotations
+
+import copy
+import csv
+import io
+import json
+import subprocess
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from boustro.io import embedded_field
+from boustro.io.formats import FORMATS
+from boustro.mission import plan_area
+from boustro.web import MAX_BODY_BYTES, MAX_VERTICES, create_app
+from boustro.web import app as web_app
+from boustro.web import server as web_server
+
+from .conftest import run_cli
+from .test_formats import assert_qgc_plan
+from .test_read_formats import KML, PLAN
+
+testclient = pytest.importorskip("starlette.testclient")
+DATA = Path(__file__).parent / "data"
+BOW_TIE = {"type": "Polygon", "coordinates": [[[5, 52], [5.01, 52.01], [5.01, 52], [5, 52.01]]]}
+OPTIONS = {"spacing": 10, "altitude": 35, "speed": 3, "turn_time": 6, "turnaround": 4}
+
+
+@pytest.fixture(scope="module")
+def client():
+    with testclient.TestClient(create_app(), base_url="http://127.0.0.1:8000") as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def embedded(client):
+    return client.get("/api/embedded").json()
+
+
+@pytest.fixture(scope="module")
+def mission():
+    """The mission the API must give for the embedded field with :data:`OPTIONS`."""
+    return plan_area(embedded_field(), 10.0, altitude=35, speed=3, turn_time=6, turnaround=4)
+
+
+def _error(response, status=400) -> str:
+    assert response.status_code == status, response.text
+    message = response.json()["error"]
+    assert "\n" not in message and "Traceback" not in message
+    return message
+
+
+# -- the page ----------------------------------------------------------------------------------
+def test_the_page_and_its_files_are_served_from_the_package(client):
+    page = client.get("/")
+    assert page.status_code == 200 and "text/html" in page.headers["content-type"]
+    assert "default-src 'self'" in page.headers["content-security-policy"]
+    scripts = [s for s in page.text.split('src="')[1:]]
+    assert [s.split('"')[0] for s in scripts] == ["/static/leaflet/leaflet.js", "/static/app.js"]
+    assert "http" not in page.text  # nothing fetched from elsewhere (no CDN)
+    leaflet = client.get("/static/leaflet/leaflet.js")
+    assert leaflet.status_code == 200 and "Leaflet 1.9.4" in leaflet.text[:200]
+    assert "BSD 2-Clause" in client.get("/static/leaflet/LICENSE").text
+    app_js = client.get("/static/app.js").text
+    assert "fetch(" in app_js and "https://" not in app_js and "http://" not in app_js
+
+
+def test_config_lists_every_format_objective_and_limit(client):
+    config = client.get("/api/config").json()
+    assert set(config["formats"]) == set(FORMATS)
+    assert "smith" in config["objectives"] and "fewest-transects" in config["objectives"]
+    assert config["limits"]["vertices"] == MAX_VERTICES and config["tiles"] is None
+
+
+def test_an_other_host_name_is_refused(client):
+    assert client.get("/", headers={"host": "attacker.example"}).status_code == 400
+
+
+# -- planning ----------------------------------------------------------------------------------
+def test_the_answer_is_the_command_line_json_plus_geojson(client, embedded, capsys):
+    answer = client.post("/api/plan", json={"area": embedded, "options": OPTIONS}).json()
+    argv = ["plan", "--spacing", "10", "--altitude", "35", "--speed", "3", "--turn-time", "6"]
+    code, out, _ = run_cli(capsys, "-q", *argv, "--turnaround", "4", "--json")
+    assert code == 0
+    cli = json.loads(out)
+    assert set(answer) == set(cli) | {"geojson", "certificate"}
+    for key, value in cli.items():
+        assert answer[key] == pytest.approx(value, rel=1e-12), key
+    assert answer["n_transects"] == 19 and answer["covered_share"] == pytest.approx(1.0)
+    assert answer["certificate"]["certified"] and answer["certificate"]["gap"] <= 1e-6
+    roles = [f["properties"]["role"] for f in answer["geojson"]["features"]]
+    assert roles.count("transect") == 19 and "path" in roles
+
+
+def test_options_reach_the_planner(client, embedded):
+    def plan(**options):
+        body = {"area": embedded, "options": {"spacing": 10, **options}}
+        response = client.post("/api/plan", json=body)
+        assert response.status_code == 200, response.text
+        return response.json()
+
+    assert plan(spacing=20)["n_transects"] < plan()["n_transects"]
+    assert plan(bearing=0)["bearing_deg"] == pytest.approx(0.0, abs=1e-6)
+    assert plan(angle=30)["angle_deg"] == pytest.approx(30.0, abs=1e-6)
+    assert plan(objective="fewest-transects")["n_transects"] <= 19
+    camera = plan(spacing=None, camera=[13.2, 8.8, 5472], altitude=80)
+    assert camera["spacing_m"] == pytest.approx(36.0) and "camera" in camera["sensor"]
+    swath = plan(spacing=None, swath=20, overlap=10, nadir_gap=2)
+    assert swath["spacing_m"] == pytest.approx(8.1) and swath["nadir_gap_m"] == 2
+    chords = plan(layout="chords", method="hybrid")
+    assert chords["layout"] == "chords" and chords["method"] == "hybrid"
+    start = embedded["features"][0]["geometry"]["coordinates"][0][5]
+    first = plan(start=start)["geojson"]["features"][1]["geometry"]["coordinates"][0]
+    far = plan()["geojson"]["features"][1]["geometry"]["coordinates"][0]
+    assert np.hypot(*np.subtract(first, start)) < np.hypot(*np.subtract(far, start))
+
+
+def test_holes_and_several_fields(client):
+    outer = [[5, 52], [5.004, 52], [5.004, 52.003], [5, 52.003], [5, 52]]
+    hole = [[5.001, 52.001], [5.002, 52.001], [5.002, 52.002], [5.001, 52.002], [5.001, 52.001]]
+    square = {"type": "Polygon", "coordinates": [outer, hole]}
+    answer = client.post("/api/plan", json={"area": square, "options": {"spacing": 20}}).json()
+    assert answer["holes"] == 1 and answer["covered_share"] == pytest.approx(1.0)
+    feature = {"type": "Feature", "properties": {"name": "a"}, "geometry": square}
+    other = copy.deepcopy(feature)
+    other["properties"]["name"] = "b"
+    other["geometry"]["coordinates"] = [[[x + 0.01, y] for x, y in outer]]
+    both = {"type": "FeatureCollection", "features": [feature, other]}
+    answers = client.post("/api/plan", json={"area": both, "options": {"spacing": 20}}).json()
+    assert [a["name"] for a in answers] == ["a", "b"]
+    picked = {"spacing": 20, "field": "b"}
+    assert client.post("/api/plan", json={"area": both, "options": picked}).json()["name"] == "b"
+    csv_text = client.post(
+        "/api/export", json={"area": both, "options": {"spacing": 20}, "format": "csv"}
+    ).text
+    assert {row["field"] for row in csv.DictReader(io.StringIO(csv_text))} == {"a", "b"}
+    refused = client.post(
+        "/api/export", json={"area": both, "options": {"spacing": 20}, "format": "plan"}
+    )
+    assert "options.field" in _error(refused)
+
+
+def test_the_estimate(client, embedded):
+    est = client.post("/api/estimate", json={"area": embedded, "options": {"spacing": 10}}).json()
+    (field,) = est["fields"]
+    assert 0 < field["seconds"] < est["limit_seconds"] and "19 vertices" in field["text"]
+
+
+# -- every export format, read back by a real reader -----------------------------------------
+def _export(client, embedded, fmt, **options):
+    body = {"area": embedded, "options": {**OPTIONS, **options}, "format": fmt}
+    response = client.post("/api/export", json=body)
+    assert response.status_code == 200, response.text
+    assert response.headers["content-disposition"].startswith("attachment; filename=")
+    return response
+
+
+def test_every_format_is_exported_and_read_back(client, embedded, mission, tmp_path):
+    pyogrio = pytest.importorskip("pyogrio")
+    gpxpy = pytest.importorskip("gpxpy")
+    fastkml = pytest.importorskip("fastkml.kml")
+    mavwp = pytest.importorskip("pymavlink.mavwp")
+    lonlat = mission.waypoints_lonlat
+    got = {}
+    for fmt in FORMATS:
+        response = _export(client, embedded, fmt)
+        path = tmp_path / response.headers["content-disposition"].split('"')[1]
+        path.write_bytes(response.content)
+        got[fmt] = path
+    assert got["plan"].name == "test_parcel.plan"
+    doc = json.loads(got["geojson"].read_text())
+    path = next(f for f in doc["features"] if f["properties"]["role"] == "path")
+    np.testing.assert_allclose(path["geometry"]["coordinates"], lonlat, atol=1e-12)
+    geometries = pyogrio.raw.read(got["geojson"])[2]  # GDAL reads every feature
+    assert len(geometries) == len(doc["features"])
+    kml = next(iter(fastkml.KML.from_string(got["kml"].read_bytes()).features))
+    placemarks = {f.name: f for f in kml.features if hasattr(f, "geometry")}
+    np.testing.assert_allclose(np.array(placemarks["Path"].geometry.coords)[:, :2], lonlat)
+    (route,) = gpxpy.parse(got["gpx"].read_text()).routes
+    np.testing.assert_allclose([[p.longitude, p.latitude] for p in route.points], lonlat)
+    rows = list(csv.DictReader(got["csv"].open(newline="")))
+    np.testing.assert_array_equal([[float(r["lon"]), float(r["lat"])] for r in rows], lonlat)
+    assert_qgc_plan(json.loads(got["plan"].read_text()), mission, speed=3.0)
+    loader = mavwp.MAVWPLoader()
+    assert loader.load(str(got["wpl"])) == len(lonlat) + 2  # home, speed, the waypoints
+
+
+def test_a_mission_format_without_an_altitude_says_so(client, embedded):
+    body = {"area": embedded, "options": {"spacing": 10}, "format": "plan"}
+    assert "altitude" in _error(client.post("/api/export", json=body))
+    body["format"] = "shapefile"
+    assert "format must be one of" in _error(client.post("/api/export", json=body))
+
+
+# -- every area format, uploaded -------------------------------------------------------------
+def _read(client, name, data, **params):
+    return client.post(
+        "/api/read",
+        params={"name": name, **params},
+        content=data if isinstance(data, bytes) else data.encode(),
+        headers={"content-type": "application/octet-stream"},
+    )
+
+
+def _ring(response):
+    assert response.status_code == 200, response.text
+    features = response.json()["features"]
+    return features, np.array(features[0]["geometry"]["coordinates"][0])
+
+
+def test_every_area_format_is_read_from_an_upload(client):
+    square = [[5.0, 52.0], [5.003, 52.0], [5.003, 52.002], [5.0, 52.002], [5.0, 52.0]]
+    geojson = json.dumps({"type": "Polygon", "coordinates": [square]})
+    kml = KML.format(name="kml field")
+    kmz = io.BytesIO()
+    with zipfile.ZipFile(kmz, "w") as zf:
+        zf.writestr("doc.kml", kml)
+    wkt = "POLYGON ((5 52, 5.003 52, 5.003 52.002, 5 52.002, 5 52))"
+    for name, data in [
+        ("f.geojson", geojson),
+        ("f.kml", kml),
+        ("f.kmz", kmz.getvalue()),
+        ("f.wkt", wkt),
+        ("m.plan", json.dumps(PLAN)),
+    ]:
+        features, ring = _ring(_read(client, name, data))
+        np.testing.assert_allclose(ring, square, atol=1e-12, err_msg=name)
+    assert [f["properties"]["name"] for f in features] == ["survey 2", "geofence 1"]
+    assert _ring(_read(client, "f.kml", kml))[0][0]["properties"]["name"] == "kml field"
+    features, ring = _ring(_read(client, "Envelope.xml", (DATA / "Envelope.xml").read_bytes()))
+    assert features[0]["properties"]["crs"] == "EPSG:4258"
+    assert 4.25 < ring[:, 0].min() < ring[:, 0].max() < 4.27 and 51.78 < ring[:, 1].min() < 51.8
+    rd = "POLYGON ((155000 463000, 155200 463000, 155200 463150, 155000 463150, 155000 463000))"
+    _, ring = _ring(_read(client, "rd.wkt", rd, crs="EPSG:28992"))
+    assert 5.38 < ring[0, 0] < 5.39 and 52.15 < ring[0, 1] < 52.16  # Amersfoort, lon/lat
+
+
+def test_an_upload_is_read_in_a_temporary_directory_only(client, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    wkt = "POLYGON ((5 52, 5.003 52, 5.003 52.002, 5 52.002, 5 52))"
+    assert _read(client, "../../etc/evil.wkt", wkt).status_code == 200
+    assert _read(client, "broken.kml", "<kml>").status_code == 400
+    assert [p.name for p in tmp_path.iterdir()] == ["scratch"] and not any(scratch.iterdir())
+
+
+def test_a_bad_upload_names_the_upload_not_the_temporary_file(client):
+    message = _error(_read(client, "mine.kml", "<kml><Document></Document></kml>"))
+    assert "mine.kml" in message and "boustro-web-" not in message
+
+
+# -- bad input: one 4xx line -----------------------------------------------------------------
+def test_a_bow_tie_is_refused_with_the_reason(client):
+    message = _error(client.post("/api/plan", json={"area": BOW_TIE, "options": {"spacing": 10}}))
+    assert "self-intersecting" in message.lower() and "Self-intersection at" in message
+    assert "try options.repair" in message
+    repaired = {"spacing": 10, "repair": True}
+    assert "options.repair splits the area into 2 polygons" in _error(
+        client.post("/api/plan", json={"area": BOW_TIE, "options": repaired})
+    )
+
+
+def test_nan_and_infinity_are_refused(client, embedded):
+    for text in ("NaN", "Infinity", "-Infinity"):
+        body = f'{{"area": {json.dumps(embedded)}, "options": {{"spacing": {text}}}}}'
+        response = client.post(
+            "/api/plan", content=body, headers={"content-type": "application/json"}
+        )
+        assert "non-finite" in _error(response)
+        coords = json.dumps(BOW_TIE).replace("5.01, 52.01", f"{text}, 52.01")
+        response = client.post(
+            "/api/plan",
+            content=f'{{"area": {coords}, "options": {{"spacing": 10}}}}',
+            headers={"content-type": "application/json"},
+        )
+        assert "non-finite" in _error(response)
+
+
+def test_only_epsg_codes_name_a_crs(client, embedded):
+    for crs in ("+proj=utm +zone=31 +datum=WGS84", "+init=/etc/passwd", 'PROJCS["x"]', True):
+        body = {"area": embedded, "options": {"spacing": 10, "crs": crs}}
+        assert "EPSG code" in _error(client.post("/api/plan", json=body))
+    area = copy.deepcopy(embedded)
+    area["crs"] = {"type": "name", "properties": {"name": "+proj=longlat +nadgrids=@x.gsb"}}
+    assert "EPSG code" in _error(
+        client.post("/api/plan", json={"area": area, "options": {"spacing": 10}})
+    )
+    area["crs"] = {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::4326"}}
+    assert client.post("/api/plan", json={"area": area, "options": {"spacing": 10}}).is_success
+    area["crs"] = {"type": "name", "properties": {"name": "EPSG:28992"}}  # the member is used
+    answer = client.post("/api/plan", json={"area": area, "options": {"spacing": 10}}).json()
+    assert answer["crs"] == "EPSG:28992"
+    body = {"area": area, "options": {"spacing": 10, "crs": "EPSG:4326"}}  # options win
+    assert client.post("/api/plan", json=body).json()["crs"] == "EPSG:4326"
+    wkt = "POLYGON ((5 52, 5.003 52, 5.003 52.002, 5 52.002, 5 52))"
+    assert "EPSG code" in _error(_read(client, "f.wkt", wkt, crs="+proj=longlat"))
+
+
+def test_a_huge_request_is_refused_before_it_is_read(client):
+    big = b"{" + b" " * MAX_BODY_BYTES + b"}"
+    response = client.post("/api/plan", content=big, headers={"content-type": "application/json"})
+    assert "over the limit" in _error(response, 413)
+    assert "over the limit" in _error(_read(client, "f.kml", big), 413)
+
+
+def test_too_many_vertices_and_too_much_work_are_refused(client):
+    t = np.linspace(0, 2 * np.pi, MAX_VERTICES + 1, endpoint=False)
+    ring = np.column_stack([5 + 0.01 * np.cos(t), 52 + 0.01 * np.sin(t)]).tolist()
+    body = {"area": {"type": "Polygon", "coordinates": [[*ring, ring[0]]]}, "options": {}}
+    body["options"] = {"spacing": 10}
+    assert "vertices" in _error(client.post("/api/plan", json=body), 413)
+    square = [[5, 52], [5.5, 52], [5.5, 52.5], [5, 52.5], [5, 52]]
+    hole = [[5.1, 52.1], [5.2, 52.1], [5.2, 52.2], [5.1, 52.2], [5.1, 52.1]]
+    body = {"area": {"type": "Polygon", "coordinates": [square, hole]}, "options": {"spacing": 1}}
+    assert "limit" in _error(client.post("/api/plan", json=body), 413)
+
+
+@pytest.mark.parametrize(
+    "body, expected",
+    [
+        ({"options": {"spacing": 10}}, 'no "area"'),
+        (
+            {"area": {"type": "Point", "coordinates": [5, 52]}, "options": {"spacing": 10}},
+            "Polygon",
+        ),
+        ({"area": "POLYGON", "options": {"spacing": 10}}, "GeoJSON object"),
+        ({"area": BOW_TIE, "options": {"spacing": -1}}, "options.spacing must be > 0"),
+        ({"area": BOW_TIE, "options": {"spacing": "ten"}}, "must be a number"),
+        ({"area": BOW_TIE, "options": {}}, "exactly one of options.spacing"),
+        ({"area": BOW_TIE, "options": {"spacing": 1, "warp": 9}}, "unknown option(s) 'warp'"),
+        ({"area": BOW_TIE, "options": {"spacing": 1, "layout": "x"}}, "options.layout"),
+        ({"area": BOW_TIE, "options": {"spacing": 1, "start": [1]}}, "options.start"),
+        ({"area": BOW_TIE, "extra": 1}, "unknown member(s) 'extra'"),
+        ([1, 2], "JSON object"),
+    ],
+)
+def test_bad_requests_are_one_line(client, body, expected):
+    assert expected in _error(client.post("/api/plan", json=body))
+
+
+def test_malformed_json_and_the_wrong_content_type(client):
+    response = client.post("/api/plan", content=b"{", headers={"content-type": "application/json"})
+    assert "malformed JSON" in _error(response)
+    response = client.post("/api/plan", content=b"{}", headers={"content-type": "text/plain"})
+    assert "application/json" in _error(response)
+
+
+def test_an_unexpected_failure_is_a_500_line_without_a_trace(client, embedded, monkeypatch):
+    def boom(body):
+        raise RuntimeError("secret internal detail")
+
+    monkeypatch.setattr(web_app, "plan_request", boom)
+    response = client.post("/api/plan", json={"area": embedded, "options": {"spacing": 10}})
+    assert response.status_code == 500
+    assert "secret" not in response.text and "RuntimeError" in response.json()["error"]
+
+
+# -- the server and the command --------------------------------------------------------------
+def test_serve_binds_to_this_machine_by_default(monkeypatch, capsys):
+    uvicorn = pytest.importorskip("uvicorn")
+    calls = []
+    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: calls.append(kw))
+    code, _, err = run_cli(capsys, "serve", "--port", "8123")
+    assert code == 0 and calls == [{"host": "127.0.0.1", "port": 8123, "log_level": "info"}]
+    assert "http://127.0.0.1:8123/" in err
+    code, _, err = run_cli(capsys, "serve", "--port", "70000")
+    assert code == 2 and "--port" in err
+    code, _, err = run_cli(capsys, "serve", "--tiles", "file:///etc/passwd")
+    assert code == 2 and "--tiles must be an http(s) URL" in err
+
+
+def test_serve_without_the_extra_names_it(monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "uvicorn", None)
+    code, _, err = run_cli(capsys, "serve")
+    assert code == 2 and "pip install 'boustro[web]'" in err
+    monkeypatch.setitem(sys.modules, "starlette.applications", None)
+    with pytest.raises(ImportError, match=r"boustro\[web\]"):
+        web_server.create_app()
+
+
+def test_a_tile_server_is_allowed_by_the_page_policy():
+    app = create_app(tiles="https://{s}.tiles.example/{z}/{x}/{y}.png")
+    with testclient.TestClient(app, base_url="http://127.0.0.1") as c:
+        assert "https://*.tiles.example" in c.get("/").headers["content-security-policy"]
+        assert c.get("/api/config").json()["tiles"].startswith("https://{s}.tiles.example")
+
+
+def test_import_boustro_loads_no_web_framework():
+    names = ("starlette", "uvicorn", "boustro.web")
+    code = f"import sys, boustro; print([m for m in {names!r} if m in sys.modules])"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_every_file_of_the_page_is_package_data():
+    """The wheel ships the page and Leaflet (checked on pyproject.toml; a wheel build is slow)."""
+    import fnmatch
+    import re
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "pyproject.toml").read_text()
+    globs = re.findall(r'"([^"]+)"', re.search(r"^boustro = \[(.*)\]$", text, re.M).group(1))
+    static = root / "src" / "boustro" / "web" / "static"
+    files = [p.relative_to(root / "src" / "boustro").as_posix() for p in static.rglob("*")]
+    missing = [f for f in files if (static.parent.parent / f).is_file()]
+    missing = [f for f in missing if not any(fnmatch.fnmatch(f, g) for g in globs)]
+    assert not missing, missing
+    assert "src/boustro/web/static/leaflet/LICENSE" in text  # its licence in the metadata too
