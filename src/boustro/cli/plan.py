@@ -466,8 +466,8 @@ def _vehicle(args: argparse.Namespace) -> Vehicle | None:
 
 def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:
     spacing = _spacing(args, embedded=args.area is None)
-    name = args.objective or ("time" if args.speed is not None else "smith")
-    fitness = cli_objectives()[name]()
+    # no --objective: plan_area's default (mission time with a speed, else Eq. 1)
+    fitness = None if args.objective is None else cli_objectives()[args.objective]()
     mission = plan_mission(
         args,
         area,

@@ -131,7 +131,7 @@ def plan_request(body: Any) -> list[Mission]:
         >>> ring = [[5, 52], [5.003, 52], [5.003, 52.002], [5, 52.002], [5, 52]]
         >>> body = {"area": {"type": "Polygon", "coordinates": [ring]}, "options": {"spacing": 20}}
         >>> answer = plan_response(plan_request(body))
-        >>> answer["n_transects"], answer["certificate"]["certified"], answer["geojson"]["type"]
+        >>> answer["n_transects"], answer["certified"], answer["geojson"]["type"]
         (12, True, 'FeatureCollection')
     """
     if not isinstance(body, dict):
@@ -162,20 +162,13 @@ def _one_answer(mission: Mission) -> dict[str, Any]:
     out = mission.summary()
     out["written"] = []  # as `boustro plan --json`, which lists the files it wrote: none here
     out["geojson"] = json.loads(render(mission, "geojson"))
-    gap = mission.optimum.gap
-    converged = mission.optimum.info.get("converged")
-    out["certificate"] = {
-        "certified": gap is not None and converged is not False,
-        "gap": gap,
-    }
     return out
 
 
 def plan_response(missions: Sequence[Mission]) -> Any:
     """The answer: for each mission the object ``boustro plan --json`` prints, plus
-    ``"geojson"`` (the plan as a FeatureCollection, :mod:`boustro.io.formats.geojson`) and
-    ``"certificate"`` (``certified``, ``gap``: the optimiser's certified gap to the optimum, or
-    null); one field: one object, several: a list, as on the command line."""
+    ``"geojson"`` (the plan as a FeatureCollection, :mod:`boustro.io.formats.geojson`); the
+    certificate is the summary's ``certified`` and ``gap``; one field: one object, several: a list, as on the command line."""
     answers = [_one_answer(m) for m in missions]
     return answers[0] if len(answers) == 1 else answers
 

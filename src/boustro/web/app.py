@@ -8,7 +8,7 @@ Starlette (the ``boustro[web]`` extra) is imported when the app is built, never 
 ``GET /api/config``        formats, objectives, options, limits and the tile URL
 ``GET /api/embedded``      the embedded example field, GeoJSON (longitude/latitude)
 ``POST /api/plan``         ``{"area", "options"}`` -> the ``boustro plan --json`` object(s), plus
-                           ``"geojson"`` and ``"certificate"``
+                           ``"geojson"``
 ``POST /api/estimate``     the same request -> the estimate before planning, no planning
 ``POST /api/export``       the same request plus ``"format"`` -> the mission file
 ``POST /api/read?name=F``  an area file's bytes -> its fields, GeoJSON in longitude/latitude

@@ -27,7 +27,8 @@ OPTIONS: dict[str, str] = {
     "swath": "swath sensor width, metres",
     "overlap": "side overlap, percent (camera default 70, swath 0)",
     "nadir_gap": "swath sensor's blind strip under the vehicle, metres",
-    "objective": "smith (default) or fewest-transects",
+    "objective": "time (the default with a speed), smith (the default without), or "
+    "fewest-transects",
     "method": "optimiser (default: global)",
     "angle": "fixed transect angle, degrees counter-clockwise from east in the plan frame",
     "bearing": "fixed transect direction, degrees clockwise from north",
@@ -95,7 +96,7 @@ def _numbers(options: dict[str, Any], key: str, count: int) -> list[float] | Non
 
 
 def _choice(options: dict[str, Any], key: str, choices: tuple[str, ...], default: str) -> str:
-    value = options.get(key, default)
+    value = options.get(key)
     if value is None:
         return default
     if value not in choices:
@@ -154,7 +155,7 @@ def parse_options(options: Any) -> PlanOptions:
         raise InvalidParameterError(
             f"unknown option(s) {', '.join(map(repr, unknown))}; expected {', '.join(OPTIONS)}"
         )
-    objective = _choice(options, "objective", tuple(sorted(web_objectives())), "smith")
+    objective = _choice(options, "objective", tuple(sorted(web_objectives())), "")
     method = options.get("method")
     if method is not None and not isinstance(method, str):
         raise InvalidParameterError(f"options.method must be a name, got {method!r}")
@@ -164,7 +165,7 @@ def parse_options(options: Any) -> PlanOptions:
     hull = _number(options, "hull_tolerance", 0.0)
     kwargs: dict[str, Any] = dict(
         method=method or None,
-        fitness=web_objectives()[objective](),
+        fitness=web_objectives()[objective]() if objective else None,  # plan_area's default
         start=None if start is None else tuple(start),
         turnaround=_number(options, "turnaround", 0.0) or 0.0,
         speed=_number(options, "speed", 0.0, strict=True),

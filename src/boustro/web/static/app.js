@@ -179,7 +179,7 @@ function options() {
   }
   if (mode === "swath") { o.swath = num("swath"); o.nadir_gap = num("nadir_gap"); }
   if (mode !== "spacing" && num("overlap") !== null) o.overlap = num("overlap");
-  o.objective = $("objective").value || "smith";
+  if ($("objective").value) o.objective = $("objective").value; // else the library's default
   if ($("method").value) o.method = $("method").value;
   if ($("direction").value) o[$("direction").value] = num("direction-value");
   const alt = num("altitude");
@@ -340,7 +340,7 @@ function summary(p, fields) {
     ["path length", `${fmt(p.path_length_m, 1)} m (lanes ${fmt(p.transect_length_m, 1)} m)`],
     ["time", p.duration_s !== undefined ? `${fmt(p.duration_s / 60, 1)} min at ${p.speed_m_s} m/s` : "give a speed"],
     ["coverage", p.covered_share !== undefined ? `${fmt(100 * p.covered_share, 3)}% (overlap ${fmt(100 * p.overlap_share, 1)}%)` : "—"],
-    ["certificate", p.certificate.certified ? `certified optimum, gap ${Number(p.certificate.gap).toExponential(1)}` : `not certified (${p.method})`],
+    ["certificate", p.certified ? `certified optimum (${p.objective}), gap ${Number(p.gap).toExponential(1)}` : (p.gap != null ? `gap ${Number(p.gap).toPrecision(3)} (${p.objective}), not within tolerance` : `not certified (${p.method})`)],
     ["optimiser", `${p.method}, fitness ${p.fitness === null ? "undefined" : fmt(p.fitness, 6)}`],
     ["direction", `${fmt(p.angle_deg, 2)}° from east, bearing ${fmt(p.bearing_deg, 2)}°`],
     ["spacing", `${fmt(p.spacing_m, 2)} m${p.sensor ? " (" + p.sensor + ")" : ""}`],
@@ -452,7 +452,8 @@ document.querySelectorAll("#options input, #options select").forEach((el) => {
   const r = await fetch("/api/config");
   state.config = await r.json();
   $("version").textContent = state.config.version;
-  for (const name of state.config.objectives) $("objective").add(new Option(name, name, name === "smith", name === "smith"));
+  $("objective").add(new Option("default (time with a speed, else smith)", "", true, true));
+  for (const name of state.config.objectives) $("objective").add(new Option(name, name));
   if (state.config.tiles) {
     L.tileLayer(state.config.tiles, { maxZoom: 20, attribution: "tiles: " + new URL(state.config.tiles.replace(/[{}]/g, "")).host }).addTo(map);
   }
