@@ -94,6 +94,25 @@ def _hole_pass(hole: Polygon, max_options: int = 8) -> _Pass:
     return _Pass("hole", -1, 0.0, options)
 
 
+def _boundary_pass(pts: NDArray[np.float64], max_options: int = 8) -> _Pass:
+    """A boundary pass (:mod:`boustro.plan.inside`): a polyline driven either way, or a closed
+    contour entered at up to ``max_options`` of its corners, either way round."""
+    length = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
+    closed = len(pts) > 3 and bool(np.allclose(pts[0], pts[-1], rtol=0.0, atol=1e-12))
+    if not closed:
+        ways = [(pts[0], pts[-1], pts, length), (pts[-1], pts[0], pts[::-1], length)]
+        return _Pass("boundary", -1, 0.0, ways)
+    ring = pts[:-1]
+    starts = np.unique(np.linspace(0, len(ring), max_options, endpoint=False).astype(int))
+    options = []
+    for way in (ring, ring[::-1]):
+        for i in starts:
+            r = np.roll(way, -int(i), axis=0)
+            arr = np.concatenate([r, r[:1]])
+            options.append((arr[0], arr[-1], arr, length))
+    return _Pass("boundary", -1, 0.0, options)
+
+
 #: Orders the 2-opt improvement of a tour evaluates at most (about 0.25 s for 60 passes on the
 #: project's machine): a count, not a time, so that plans do not depend on the machine's load.
 ORDER_BUDGET = 4000
@@ -209,6 +228,7 @@ class _Path(NamedTuple):
     outside: float
     hole_length: float
     blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]]
+    boundary_length: float = 0.0
 
 
 class _Driver:
@@ -227,6 +247,7 @@ class _Driver:
         self.positions: list[float] = []
         self.outside = 0.0
         self.hole_length = 0.0
+        self.boundary_length = 0.0
         self.blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
 
     def point(self, p: NDArray[np.float64], kind: str, transect: int) -> None:
@@ -286,15 +307,30 @@ class _Driver:
         """A pass around a hole: one transect per edge of the loop."""
         ti = len(self.transects)
         self.move_to(pts[0], ti)
-        for j in range(len(pts) - 1):
-            a, b = pts[j], pts[j + 1]
-            d = b - a
-            self.transect(a, b, math.atan2(d[1], d[0]), "hole", -1, math.nan)
-            self.hole_length += float(np.linalg.norm(d))
+        self.hole_length += self._edges(pts, "hole")
         self.point(pts[0], "start", ti)
         for j in range(1, len(pts) - 1):
             self.point(pts[j], "loop", ti + j)
         self.point(pts[-1], "end", ti + len(pts) - 2)
+
+    def boundary(self, pts: NDArray[np.float64]) -> None:
+        """A boundary pass: one transect (role ``boundary``) per edge, every waypoint of kind
+        ``contour``."""
+        ti = len(self.transects)
+        self.move_to(pts[0], ti)
+        self.boundary_length += self._edges(pts, "boundary")
+        for j in range(len(pts)):
+            self.point(pts[j], "contour", ti + min(j, len(pts) - 2))
+
+    def _edges(self, pts: NDArray[np.float64], role: str) -> float:
+        """One transect per edge of the polyline ``pts``, of ``role``; their total length."""
+        total = 0.0
+        for j in range(len(pts) - 1):
+            a, b = pts[j], pts[j + 1]
+            d = b - a
+            self.transect(a, b, math.atan2(d[1], d[0]), role, -1, math.nan)
+            total += float(np.linalg.norm(d))
+        return total
 
     def result(self) -> _Path:
         assert set(self.kinds) <= set(KINDS)
@@ -310,4 +346,5 @@ class _Driver:
             outside=self.outside,
             hole_length=self.hole_length,
             blocked=self.blocked,
+            boundary_length=self.boundary_length,
         )

@@ -25,8 +25,10 @@ __all__ = [
 
 #: What each waypoint is: run-in point before a transect, its start, its end, the run-out point;
 #: for areas with holes or cells also ``via`` (a corner of a connecting move that goes around an
-#: obstacle) and ``loop`` (a corner of a pass around a hole).
-KINDS = ("run_in", "start", "end", "run_out", "via", "loop")
+#: obstacle) and ``loop`` (a corner of a pass around a hole); with ``keep_inside`` also
+#: ``contour`` (every point of a boundary pass: the contour half a spacing inside the edge, or a
+#: patch over a corner or a thin part).
+KINDS = ("run_in", "start", "end", "run_out", "via", "loop", "contour")
 Layout = Literal["guaranteed", "chords"]
 
 
@@ -47,8 +49,12 @@ class PlanStats:
         duration: ``path_length / speed + n_turns * turn_time`` (seconds), ``None`` without speed.
         n_cells: cells of a decomposed plan (1 otherwise).
         hole_pass_length: length of the passes around holes (included in ``path_length``).
-        outside_length: length of the connecting moves outside the area (ends of lanes that
-            reach beyond the boundary, and moves between them; included in ``path_length``).
+        outside_length: length of the path (lanes, run-ins and run-outs, connecting moves)
+            outside the area or inside a hole, measured with shapely segment by segment
+            (:func:`boustro.plan.inside.outside_length`; included in ``path_length``); 0 with
+            ``keep_inside``.
+        boundary_pass_length: length of the boundary passes of a ``keep_inside`` plan
+            (included in ``path_length``).
 
     For a plan over an area with holes or a decomposed plan, ``n_transects`` counts the lane
     segments driven and ``n_turns`` the connecting moves between consecutive passes (a lane
@@ -66,6 +72,7 @@ class PlanStats:
     n_cells: int = 1
     hole_pass_length: float = 0.0
     outside_length: float = 0.0
+    boundary_pass_length: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -120,9 +127,12 @@ class Plan:
         cells: the cells of a decomposed plan (:class:`PlanCell`), or the whole area as one cell.
         transect_angles: ``(T,)`` lane direction of each transect where they differ (cells,
             passes around holes), else ``None`` (all at ``angle``).
-        roles: ``"lane"`` or ``"hole"`` per transect (empty: all lanes).
+        roles: ``"lane"``, ``"hole"`` or ``"boundary"`` (an edge of a boundary pass of a
+            ``keep_inside`` plan) per transect (empty: all lanes).
         transect_cells: ``(T,)`` the cell of each transect (-1 for passes around holes).
         notes: what the plan could not do as asked (e.g. moves that leave the area).
+        keep_inside: planned so that no part of the path leaves the area or enters a hole
+            (:mod:`boustro.plan.inside`).
     """
 
     polygon: Polygon
@@ -146,6 +156,7 @@ class Plan:
     roles: tuple[str, ...] = ()
     transect_cells: NDArray[np.int64] | None = None
     notes: tuple[str, ...] = ()
+    keep_inside: bool = False
 
     @property
     def n_transects(self) -> int:
@@ -158,8 +169,8 @@ class Plan:
         return self.transect_angles
 
     def role(self) -> tuple[str, ...]:
-        """What each transect is: ``"lane"`` (a survey lane) or ``"hole"`` (an edge of a pass
-        around a hole)."""
+        """What each transect is: ``"lane"`` (a survey lane), ``"hole"`` (an edge of a pass
+        around a hole) or ``"boundary"`` (an edge of a boundary pass)."""
         return self.roles or ("lane",) * len(self.transects)
 
     @property

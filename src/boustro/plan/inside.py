@@ -1,0 +1,328 @@
+"""Keeping the path inside the area: lanes cut to it, boundary passes, the length outside.
+
+With ``keep_inside`` (:func:`boustro.plan.plan_region`) no part of the path leaves the area or
+enters a hole. Three pieces make that possible without losing coverage:
+
+* :func:`clip_lanes` cuts every coverage-guaranteed lane to the area (the line's chords): a lane
+  still covers every point of its band whose foot on the lane's line is reached from it inside
+  the area, so what the lanes leave uncovered lies within half a spacing of the boundary;
+* :func:`boundary_passes` finds what they leave (shapely: the area minus the lanes' footprints)
+  and covers it with the parts of the *contour* (the boundary of the area shrunk by half a
+  spacing, ``buffer(-spacing / 2)``) within half a spacing of it, then with short *patches*
+  (the middle line of each piece still uncovered, cut to the area) for the corners and the
+  parts narrower than a spacing, which no contour reaches;
+* connecting moves are routed inside the area (:class:`boustro.plan.routing.Router` with no
+  reach outside: its visibility graph holds the shell's reflex vertices as well as the holes').
+
+:func:`outside_length` measures, segment by segment with shapely, how much of a path lies
+outside an area or inside one of its holes (the ``outside_length`` statistic of every plan).
+Shapely is imported inside the functions (``import boustro.plan`` does not load it).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..geometry import Polygon
+from ..geometry.region import Region, as_region
+from .cells import _frame
+from .coverage import _aligned_boxes, _axes
+from .lanes import Lanes, _intervals_on_lines
+
+__all__ = [
+    "MAX_PATCHES",
+    "MERGE_GAP",
+    "boundary_passes",
+    "clip_lanes",
+    "outside_length",
+    "shapely_area",
+]
+
+#: Patches (short passes over corners and thin parts) placed at most; more means the area has
+#: thousands of slivers narrower than a spacing, and what is left is reported as not covered.
+MAX_PATCHES = 5000
+
+
+def shapely_area(area: Region | Polygon | ArrayLike) -> Any:
+    """The area (shell and holes) as a shapely Polygon."""
+    import shapely
+
+    r = as_region(area)
+    return shapely.Polygon(r.shell.vertices, [h.vertices for h in r.holes])
+
+
+def clip_lanes(lanes: Lanes, area: Region, tol: float) -> Lanes:
+    """The lanes cut to their parts inside ``area`` (a lane across a bay becomes two; parts
+    shorter than ``tol`` are dropped: what they covered is left to the boundary passes)."""
+    u, n = _frame(lanes.angle)
+    rows = _intervals_on_lines(area.edges - lanes.origin, u, n, lanes.c)
+    k, c, t0, t1 = [], [], [], []
+    for i, row in enumerate(rows):
+        for a, b in row:
+            lo, hi = max(a, float(lanes.t0[i])), min(b, float(lanes.t1[i]))
+            if hi - lo > tol:
+                k.append(int(lanes.k[i]))
+                c.append(float(lanes.c[i]))
+                t0.append(lo)
+                t1.append(hi)
+    return Lanes(
+        lanes.angle,
+        lanes.origin,
+        np.array(k, dtype=np.int64),
+        np.array(c, dtype=np.float64),
+        np.array(t0, dtype=np.float64),
+        np.array(t1, dtype=np.float64),
+        lanes.cut,
+    )
+
+
+def _lane_footprint(
+    segments: NDArray[np.float64],
+    angles: NDArray[np.float64],
+    origin: NDArray[np.float64],
+    reach: float,
+    spacing: float,
+) -> Any:
+    """The union of the lanes' footprints (rectangles ``reach`` either side), built per lane
+    direction in that direction's frame as :func:`boustro.plan.coverage.footprint` does."""
+    import shapely
+
+    parts = []
+    for angle in np.unique(angles):
+        pick = angles == angle
+        t_lo, lo, t_hi, hi = _aligned_boxes(
+            segments[pick], float(angle), origin, [(-reach, reach)], spacing
+        )
+        real = (t_hi > t_lo) & (hi > lo)
+        union = shapely.union_all(shapely.box(t_lo, lo, t_hi, hi)[real])
+        u, n = _axes(float(angle))
+        parts.append(
+            shapely.transform(union, lambda p, u=u, n=n: origin + p[:, :1] * u + p[:, 1:] * n)
+        )
+    return shapely.union_all(parts) if parts else shapely.Polygon()
+
+
+def _pieces(geometry: Any, eps: float) -> list[Any]:
+    """The polygons of ``geometry`` that are more than a rounding sliver (they survive a
+    negative buffer of ``eps``)."""
+    import shapely
+
+    polys = [g for g in shapely.get_parts(geometry) if g.geom_type == "Polygon" and not g.is_empty]
+    return [g for g in polys if not g.buffer(-eps).is_empty]
+
+
+def _lines(geometry: Any, tol: float) -> list[NDArray[np.float64]]:
+    """The line parts of ``geometry`` (merged where they meet) longer than ``tol``, as arrays."""
+    import shapely
+
+    merged = shapely.line_merge(geometry) if geometry.geom_type == "MultiLineString" else geometry
+    out = []
+    for g in shapely.get_parts(merged):
+        if g.geom_type in ("LineString", "LinearRing") and g.length > tol:
+            out.append(np.asarray(g.coords, dtype=np.float64))
+    return out
+
+
+def _contour_passes(
+    target: Any, residual: Any, half: float, reach: float, tol: float
+) -> list[NDArray[np.float64]]:
+    """The parts of the contour (the boundary of ``target`` shrunk by ``half``) within reach of
+    the uncovered ``residual``: each covers its side of the residual near the boundary (a
+    point within ``half`` of the boundary and in a disk of radius ``half`` inside the area is
+    within ``half`` of the contour). Each ring is sampled every ``half / 2``; a stretch between
+    two samples is kept when both are within ``reach`` plus the step of the residual (so every
+    needed point is kept), and kept stretches less than :data:`MERGE_GAP` spacings apart are
+    driven as one pass."""
+    import shapely
+
+    inner = target.buffer(-half, quad_segs=8)
+    if inner.is_empty:
+        return []
+    shapely.prepare(residual)
+    step = half / 2
+    out: list[NDArray[np.float64]] = []
+    for ring in shapely.get_parts(shapely.boundary(inner)):
+        v = np.asarray(ring.coords, dtype=np.float64)
+        if len(v) < 4:
+            continue
+        at = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(v, axis=0), axis=1))])
+        total = float(at[-1])
+        n = max(8, math.ceil(total / step))
+        s = np.linspace(0.0, total, n + 1)[:-1]
+        pts = np.stack([np.interp(s, at, v[:, 0]), np.interp(s, at, v[:, 1])], axis=1)
+        near = shapely.distance(shapely.points(pts), residual) <= reach + total / n
+        runs = _runs(near, s, total, MERGE_GAP * 2 * half)
+        if runs is None:
+            out.append(v)
+            continue
+        for a, b in runs:
+            out.append(_arc(v, at, a, b))
+    return [line for line in out if np.linalg.norm(np.diff(line, axis=0), axis=1).sum() > tol]
+
+
+#: Kept stretches of a contour closer than this many spacings along it are driven as one pass.
+MERGE_GAP = 2.0
+
+
+def _runs(
+    flag: NDArray[np.bool_], s: NDArray[np.float64], total: float, gap: float
+) -> list[tuple[float, float]] | None:
+    """The stretches ``(a, b)`` (arc length; ``b`` may pass ``total``: round the ring) between
+    flagged samples at ``s`` of a ring, neighbouring flagged samples joined, stretches closer
+    than ``gap`` merged; ``None`` for the whole ring."""
+    n = len(flag)
+    if flag.all():
+        return None
+    first = int(np.argmin(flag))  # start the scan at an unflagged sample
+    idx = (np.arange(n) + first) % n
+    pos = s[idx] + np.where(idx < first, total, 0.0)
+    runs: list[list[float]] = []
+    i = 0
+    while i < n:
+        if not flag[idx[i]]:
+            i += 1
+            continue
+        j = i
+        while j + 1 < n and flag[idx[j + 1]]:
+            j += 1
+        a = pos[i - 1]  # the unflagged neighbours bound the stretch
+        b = pos[j + 1] if j + 1 < n else pos[0] + total
+        if runs and a - runs[-1][1] < gap:
+            runs[-1][1] = b
+        else:
+            runs.append([a, b])
+        i = j + 1
+    if len(runs) > 1 and runs[0][0] + total - runs[-1][1] < gap:
+        runs[0][0] = runs.pop()[0] - total
+    if any(b - a >= total for a, b in runs):
+        return None
+    return [(a, b) for a, b in runs]
+
+
+def _arc(
+    v: NDArray[np.float64], at: NDArray[np.float64], a: float, b: float
+) -> NDArray[np.float64]:
+    """The part of the closed polyline ``v`` (arc lengths ``at``) from ``a`` to ``b``."""
+    total = float(at[-1])
+    ring_at = np.concatenate([at[:-1] - total, at[:-1], at[:-1] + total, [2 * total]])
+    ring_v = np.concatenate([v[:-1], v[:-1], v[:-1], v[:1]])
+    inner = (ring_at > a) & (ring_at < b)
+
+    def point(x: float) -> NDArray[np.float64]:
+        return np.array([np.interp(x, ring_at, ring_v[:, 0]), np.interp(x, ring_at, ring_v[:, 1])])
+
+    return np.concatenate([point(a)[None], ring_v[inner], point(b)[None]])
+
+
+def _patch(piece: Any, target: Any, reach: float, tol: float) -> list[NDArray[np.float64]]:
+    """Short passes over one uncovered ``piece``: the middle line of its narrowest enclosing
+    rectangle when that is at most two reaches wide (cut to the area), else a short segment
+    through a point inside it (every patch removes some of the piece)."""
+    import shapely
+
+    env = shapely.oriented_envelope(piece)
+    if env.geom_type == "Polygon":
+        c = np.asarray(env.exterior.coords)[:4]
+        sides = np.linalg.norm(c[[1, 2]] - c[[0, 1]], axis=1)
+        long_first = sides[0] >= sides[1]
+        width = float(sides[1] if long_first else sides[0])
+        if width <= 2 * reach * (1 - 1e-6):
+            if long_first:  # c0 -> c1 is a long side: the middle line joins mid(c0 c3), mid(c1 c2)
+                line = np.stack([(c[0] + c[3]) / 2, (c[1] + c[2]) / 2])
+            else:
+                line = np.stack([(c[0] + c[1]) / 2, (c[3] + c[2]) / 2])
+            lines = _lines(shapely.intersection(shapely.LineString(line), target), tol)
+            if lines:
+                return lines
+    p = np.asarray(piece.representative_point().coords[0])
+    delta = reach / 4
+    for _ in range(30):
+        for a in np.linspace(0, math.pi, 8, endpoint=False):
+            d = delta * np.array([math.cos(a), math.sin(a)])
+            seg = np.stack([p - d, p + d])
+            if target.covers(shapely.LineString(seg)):
+                return [seg]
+        delta /= 2
+    return []
+
+
+def boundary_passes(
+    area: Region,
+    lanes: list[Lanes],
+    spacing: float,
+    reach: float,
+) -> tuple[list[NDArray[np.float64]], float]:
+    """Passes that cover what lanes cut to ``area`` leave uncovered (module docstring).
+
+    Returns:
+        ``(passes, uncovered)``: each pass an ``(P, 2)`` polyline inside the area (closed when
+        its first and last points agree), contour parts first, then patches; ``uncovered`` the
+        area still uncovered after them (0 unless :data:`MAX_PATCHES` ran out).
+    """
+    import shapely
+
+    target = shapely_area(area)
+    eps = 1e-8 * spacing
+    tol = 1e-9 * area.diameter
+    segments = [ls.segments for ls in lanes if len(ls.k)]
+    if segments:
+        angles = np.concatenate([np.full(len(ls.k), ls.angle) for ls in lanes if len(ls.k)])
+        covered = _lane_footprint(np.concatenate(segments), angles, area.centre, reach, spacing)
+        residual = shapely.difference(target, covered)
+    else:
+        residual = target
+    if not _pieces(residual, eps):
+        return [], 0.0
+    shapely.prepare(target)
+    passes = _contour_passes(target, residual, spacing / 2, reach, tol)
+    inner = reach * (1 - 1e-6)  # the footprints measured a little smaller than they are
+
+    def cover(lines: list[NDArray[np.float64]], rest: Any) -> Any:
+        if not lines:
+            return rest
+        geoms = [shapely.LineString(line) for line in lines]
+        band = shapely.union_all(shapely.buffer(geoms, inner, quad_segs=64))
+        return shapely.difference(rest, band)
+
+    residual = cover(passes, residual)
+    placed = 0
+    pieces = _pieces(residual, eps)
+    while pieces and placed < MAX_PATCHES:
+        new: list[NDArray[np.float64]] = []
+        for piece in pieces:
+            new += _patch(piece, target, reach, tol)
+        if not new:
+            break
+        placed += len(new)
+        passes += new
+        residual = cover(new, shapely.union_all(pieces))
+        pieces = _pieces(residual, eps)
+    return passes, float(sum(p.area for p in pieces))
+
+
+def outside_length(waypoints: ArrayLike, area: Region | Polygon | ArrayLike) -> float:
+    """The length of the path through ``waypoints`` outside ``area`` or inside one of its holes
+    (plan units), measured with shapely segment by segment (a path that doubles back over
+    itself outside counts each time); a point within ``1e-9`` of the area's diameter of its
+    boundary counts as on it."""
+    import shapely
+
+    w = np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)
+    if len(w) < 2:
+        return 0.0
+    segs = np.stack([w[:-1], w[1:]], axis=1)
+    lengths = np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1)
+    keep = lengths > 0
+    if not keep.any():
+        return 0.0
+    r = as_region(area)
+    # within 1e-9 of the diameter of the boundary counts as on it (the routing's convention)
+    target = shapely_area(r).buffer(1e-9 * r.diameter, join_style="mitre")
+    shapely.prepare(target)
+    lines = shapely.linestrings(segs[keep])
+    inside = shapely.length(shapely.intersection(lines, target))
+    return float(np.sum(np.maximum(lengths[keep] - inside, 0.0)))
