@@ -150,14 +150,30 @@ def _order(
     forced = np.full(len(entry_idx[first_pass]), math.inf)
     forced[first_option] = 0.0
 
-    def cost(order: list[int]) -> tuple[float, list[int]]:
-        first = order[0]
+    blocks: dict[tuple[int, int], NDArray[np.float64]] = {}
+
+    def block(prev: int, cur: int) -> NDArray[np.float64]:
+        """The moves from ``prev``'s exits to ``cur``'s entries (computed once)."""
+        b = blocks.get((prev, cur))
+        if b is None:
+            b = blocks[(prev, cur)] = dist[np.ix_(exit_idx[prev], entry_idx[cur])]
+        return b
+
+    def head(first: int) -> NDArray[np.float64]:
         acc = dist[0, entry_idx[first]] + internal[first]
-        if force_start:
-            acc = acc + forced
+        return acc + forced if force_start else acc
+
+    def run(acc: NDArray[np.float64], seq: list[int]) -> NDArray[np.float64]:
+        """The best cost ending in each option of ``seq[-1]``, from ``acc`` at ``seq[0]``."""
+        for prev, cur in itertools.pairwise(seq):
+            acc = (block(prev, cur) + acc[:, None]).min(axis=0) + internal[cur]
+        return acc
+
+    def cost(order: list[int]) -> tuple[float, list[int]]:
+        acc = head(order[0])
         back = []
         for prev, cur in itertools.pairwise(order):
-            trans = dist[np.ix_(exit_idx[prev], entry_idx[cur])] + acc[:, None]
+            trans = block(prev, cur) + acc[:, None]
             arg = np.argmin(trans, axis=0)
             back.append(arg)
             acc = trans[arg, np.arange(trans.shape[1])] + internal[cur]
@@ -180,7 +196,7 @@ def _order(
         order.append(best[1])
         remaining.discard(best[1])
         here = exit_idx[best[1]][best[2] : best[2] + 1]
-    best_cost, choice = cost(order)
+    best_cost = cost(order)[0]
     # 2-opt within a budget of evaluated orders, not of seconds, so that the same input gives
     # the same plan on a busy machine and an idle one
     left = budget
@@ -188,18 +204,23 @@ def _order(
     while improved and left > 0:
         improved = False
         for i in range(int(force_start), len(order) - 1):  # a forced first pass stays first
+            # the cost up to order[i - 1] is the same for every j (the same sums as cost())
+            prefix = run(head(order[0]), order[:i]) if i else None
             for j in range(i + 1, len(order)):
                 cand = order[:i] + order[i : j + 1][::-1] + order[j + 1 :]
-                c, ch = cost(cand)
+                if prefix is None:
+                    c = float(run(head(cand[0]), cand).min())
+                else:
+                    c = float(run(prefix, cand[i - 1 :]).min())
                 left -= 1
                 if c < best_cost - 1e-9:
-                    order, best_cost, choice = cand, c, ch
-                    improved = True
+                    order, best_cost = cand, c
+                    improved = True  # order[:i], hence the prefix, is unchanged
                 if left <= 0:
                     break
             if left <= 0:
                 break
-    return order, choice
+    return order, cost(order)[1]
 
 
 # -- driving the tour ------------------------------------------------------------------------
