@@ -48,6 +48,7 @@ def plan_area(
     angle: float | None = None,
     bearing: float | None = None,
     force: bool = False,
+    keep_inside: bool = False,
     progress: bool | None = False,
 ) -> Mission:
     """Plan a survey area end to end: project, optimise, build the path, map it back.
@@ -103,6 +104,12 @@ def plan_area(
             :data:`~boustro.mission.estimate.MAX_AREA_KM2` km^2 or an estimated time over
             :data:`~boustro.mission.estimate.MAX_SECONDS` s (the hard limits, e.g.
             :data:`boustro.models.MAX_TRANSECTS`, still hold).
+        keep_inside: no part of the path leaves the area or enters a hole: lanes end at the
+            boundary, connecting moves follow the inside, and boundary passes (the contour half
+            a spacing inside the edge, patches over corners and thin parts; transects of role
+            ``"boundary"``, waypoints of kind ``"contour"``) cover what the lanes leave, so the
+            coverage stays 100% (:mod:`boustro.plan.inside`). A nearly convex area is then
+            planned on the area, not its hull. Not with ``turnaround`` or a nadir gap.
         progress: for a plan whose estimate is over
             :data:`~boustro.mission.estimate.SAY_SECONDS`: ``True`` says it on stderr
             ("boustro: planning ~N lanes over V vertices, estimated T s") and shows a bar over
@@ -148,12 +155,21 @@ def plan_area(
         check_coverage=check_coverage,
         angle=angle,
         progress=show,
+        keep_inside=_check_flag("keep_inside", keep_inside),
     )
     if frame.region is None:
         planned = plan_convex(frame, **settings)
     else:
         planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
+    if keep_inside:  # planned on the area, not its hull: nothing reaches beyond it
+        frame = frame._replace(depth=0.0)
     return map_back(frame, planned, altitude=altitude, turnaround=turnaround)
+
+
+def _check_flag(name: str, value: Any) -> bool:
+    if value not in (True, False):
+        raise InvalidParameterError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
 
 
 def _narrower_than_the_spacing(frame: Frame, sensor: Sensor) -> bool:

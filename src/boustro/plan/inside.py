@@ -34,10 +34,12 @@ from .coverage import _aligned_boxes, _axes
 from .lanes import Lanes, _intervals_on_lines
 
 __all__ = [
+    "MARGINS",
     "MAX_PATCHES",
     "MERGE_GAP",
     "boundary_passes",
     "clip_lanes",
+    "inside_layout",
     "outside_length",
     "shapely_area",
 ]
@@ -55,11 +57,15 @@ def shapely_area(area: Region | Polygon | ArrayLike) -> Any:
     return shapely.Polygon(r.shell.vertices, [h.vertices for h in r.holes])
 
 
-def clip_lanes(lanes: Lanes, area: Region, tol: float) -> Lanes:
-    """The lanes cut to their parts inside ``area`` (a lane across a bay becomes two; parts
-    shorter than ``tol`` are dropped: what they covered is left to the boundary passes)."""
+def clip_lanes(lanes: Lanes, area: Region, tol: float, margin: float = 0.0) -> Lanes:
+    """The lanes cut to their parts inside ``area`` (a lane across a bay becomes two), or with
+    ``margin > 0`` inside the area shrunk by ``margin`` (shapely); parts shorter than ``tol`` are
+    dropped: what they covered is left to the boundary passes."""
     u, n = _frame(lanes.angle)
-    rows = _intervals_on_lines(area.edges - lanes.origin, u, n, lanes.c)
+    if margin > 0:
+        rows = _shrunk_intervals(lanes, area, margin)
+    else:
+        rows = _intervals_on_lines(area.edges - lanes.origin, u, n, lanes.c)
     k, c, t0, t1 = [], [], [], []
     for i, row in enumerate(rows):
         for a, b in row:
@@ -78,6 +84,27 @@ def clip_lanes(lanes: Lanes, area: Region, tol: float) -> Lanes:
         np.array(t1, dtype=np.float64),
         lanes.cut,
     )
+
+
+def _shrunk_intervals(lanes: Lanes, area: Region, margin: float) -> list[list[tuple[float, float]]]:
+    """Per lane, the intervals (along it) of its line inside the area shrunk by ``margin``."""
+    import shapely
+
+    u, _ = _frame(lanes.angle)
+    inner = shapely_area(area).buffer(-margin, quad_segs=8)
+    if len(lanes.k) == 0 or inner.is_empty:
+        return [[] for _ in lanes.k]
+    shapely.prepare(inner)
+    parts = shapely.intersection(shapely.linestrings(lanes.segments), inner)
+    rows = []
+    for g in parts:
+        row = []
+        for line in shapely.get_parts(g):
+            if line.geom_type == "LineString" and not line.is_empty:
+                t = (np.asarray(line.coords) - lanes.origin) @ u
+                row.append((float(t.min()), float(t.max())))
+        rows.append(row)
+    return rows
 
 
 def _lane_footprint(
@@ -302,6 +329,34 @@ def boundary_passes(
         residual = cover(new, shapely.union_all(pieces))
         pieces = _pieces(residual, eps)
     return passes, float(sum(p.area for p in pieces))
+
+
+#: The margins (in spacings) inside the boundary at which :func:`inside_layout` tries cutting
+#: the lanes: at the boundary, and half a spacing inside (where the contour runs).
+MARGINS = (0.0, 0.5)
+
+
+def inside_layout(
+    area: Region, lanes: list[Lanes], spacing: float, reach: float
+) -> tuple[list[Lanes], list[NDArray[np.float64]], float]:
+    """The lanes cut inside ``area`` and the boundary passes that complete their coverage
+    (:func:`boundary_passes`), for the margin of :data:`MARGINS` whose lanes and passes are the
+    shortest together (the moves between them are not counted; a tie keeps the first).
+
+    Returns:
+        ``(lanes, passes, uncovered)``, as :func:`clip_lanes` and :func:`boundary_passes`.
+    """
+    tol = 1e-9 * area.diameter
+    best: tuple[float, list[Lanes], list[NDArray[np.float64]], float] | None = None
+    for m in MARGINS:
+        cut = [clip_lanes(ls, area, tol, m * spacing) for ls in lanes]
+        passes, uncovered = boundary_passes(area, cut, spacing, reach)
+        length = sum(float(np.sum(ls.t1 - ls.t0)) for ls in cut)
+        length += sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)
+        if best is None or (uncovered, length) < (best[3], best[0] - tol):
+            best = (length, cut, passes, uncovered)
+    assert best is not None
+    return best[1], best[2], best[3]
 
 
 def outside_length(waypoints: ArrayLike, area: Region | Polygon | ArrayLike) -> float:

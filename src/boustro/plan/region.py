@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any, Literal, NamedTuple
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError, InvalidPolygonError, NoTransectError
 from ..geometry import Polygon
@@ -18,7 +19,7 @@ from ..models import check_spacing
 from ..optimize import OptimizeResult
 from ..optimize.problem import _progress_bar
 from .cells import _TOL, _check_float
-from .inside import boundary_passes, clip_lanes, outside_length
+from .inside import inside_layout, outside_length
 from .lanes import Lanes, region_lanes
 from .region_opt import _cells_for_sweep, _estimate, choose_sweep, optimize_region
 from .routing import Router
@@ -77,6 +78,8 @@ class _CellLanes(NamedTuple):
 
     cells: list[PlanCell]
     lanes: list[Lanes]
+    boundary: list[NDArray[np.float64]] | None = None  # keep_inside: the boundary passes
+    uncovered: float = 0.0  # keep_inside: the area they could not cover (plan units)
 
 
 class _Tour(NamedTuple):
@@ -260,7 +263,7 @@ def _check_options(r: Region, spacing: float, **kw: Any) -> PlanOptions:
     if kw["keep_inside"] and (turnaround > 0 or nadir_gap > 0):
         what = "a turnaround beyond the lane ends" if turnaround > 0 else "a nadir gap"
         raise InvalidParameterError(
-            f"keep_inside does not take {what}: the lanes end at the boundary"
+            f"keep_inside (--keep-inside) does not take {what}: the lanes end at the boundary"
             + (
                 " (no room to run in)"
                 if turnaround > 0
@@ -342,12 +345,17 @@ def _plan_lanes(r: Region, cells: _Cells, opts: PlanOptions) -> _CellLanes:
             holes=r.holes,
             layout=opts.layout,
         )
-        if opts.keep_inside:
-            lanes = clip_lanes(lanes, r, _TOL * r.diameter)
         out.lanes.append(lanes)
         out.cells.append(PlanCell(cell, cell_angle, cell_offset, value, len(lanes.k), opt))
     if sum(len(lanes.k) for lanes in out.lanes) == 0:
         raise NoTransectError(f"no lane crosses the area at spacing {opts.spacing:g}")
+    if opts.keep_inside and opts.layout == "guaranteed":
+        cut, boundary, uncovered = inside_layout(r, out.lanes, opts.spacing, opts.reach)
+        counted = [
+            dataclasses.replace(c, n_transects=len(ls.k))
+            for c, ls in zip(out.cells, cut, strict=True)
+        ]
+        return _CellLanes(counted, cut, boundary, uncovered)
     return out
 
 
@@ -361,8 +369,12 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
             passes.append(_chain_pass(lanes, chain, ci))
     cut = set().union(*(lanes.cut for lanes in cl.lanes))
     if opts.keep_inside:
-        if opts.layout == "guaranteed":
-            _add_boundary_passes(r, cl, opts, passes, notes)
+        passes += [_boundary_pass(line) for line in cl.boundary or []]
+        if cl.uncovered > 0:
+            notes.append(
+                f"{cl.uncovered / opts.ground_scale**2:.6g} m2 near the boundary is not covered: "
+                "more slivers than boundary patches allowed"
+            )
     elif opts.layout == "guaranteed" and opts.hole_passes:
         for hi in sorted(cut):
             passes.append(_hole_pass(r.holes[hi]))
@@ -381,19 +393,6 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
             raise InvalidParameterError(f"start must be a finite (x, y) pair, got {start!r}")
     order, choice = _order(passes, start_pt, router, force_start=start is not None)
     return _Tour(passes, order, choice, router)
-
-
-def _add_boundary_passes(
-    r: Region, cl: _CellLanes, opts: PlanOptions, passes: list[_Pass], notes: list[str]
-) -> None:
-    """The boundary passes of a ``keep_inside`` plan (:func:`boundary_passes`), as passes."""
-    lines, uncovered = boundary_passes(r, cl.lanes, opts.spacing, opts.reach)
-    passes += [_boundary_pass(line) for line in lines]
-    if uncovered > 0:
-        notes.append(
-            f"{uncovered / opts.ground_scale**2:.6g} m2 near the boundary is not covered: more "
-            "slivers than boundary patches allowed"
-        )
 
 
 # -- step 5: drive ----------------------------------------------------------------------------
