@@ -166,7 +166,8 @@ def _contour_passes(
     driven as one pass."""
     import shapely
 
-    inner = target.buffer(-half, quad_segs=8)
+    # the shrunk area without its slivers (a strip exactly a spacing wide shrinks to one)
+    inner = shapely.union_all(_pieces(target.buffer(-half, quad_segs=8), 1e-7 * half))
     if inner.is_empty:
         return []
     shapely.prepare(residual)
@@ -257,7 +258,7 @@ def _patch(piece: Any, target: Any, reach: float, tol: float) -> list[NDArray[np
         sides = np.linalg.norm(c[[1, 2]] - c[[0, 1]], axis=1)
         long_first = sides[0] >= sides[1]
         width = float(sides[1] if long_first else sides[0])
-        if width <= 2 * reach * (1 - 1e-6):
+        if width <= 2 * reach * (1 + 1e-9):  # its middle line covers it
             if long_first:  # c0 -> c1 is a long side: the middle line joins mid(c0 c3), mid(c1 c2)
                 line = np.stack([(c[0] + c[3]) / 2, (c[1] + c[2]) / 2])
             else:
@@ -293,7 +294,7 @@ def boundary_passes(
     import shapely
 
     target = shapely_area(area)
-    eps = 1e-8 * spacing
+    eps = 1e-7 * spacing  # slivers thinner than this are rounding
     tol = 1e-9 * area.diameter
     segments = [ls.segments for ls in lanes if len(ls.k)]
     if segments:
@@ -306,7 +307,7 @@ def boundary_passes(
         return [], 0.0
     shapely.prepare(target)
     passes = _contour_passes(target, residual, spacing / 2, reach, tol)
-    inner = reach * (1 - 1e-6)  # the footprints measured a little smaller than they are
+    inner = reach  # as boustro.plan.coverage measures the passes (quad_segs=64)
 
     def cover(lines: list[NDArray[np.float64]], rest: Any) -> Any:
         if not lines:
@@ -316,19 +317,66 @@ def boundary_passes(
         return shapely.difference(rest, band)
 
     residual = cover(passes, residual)
-    placed = 0
+    patches: list[NDArray[np.float64]] = []
     pieces = _pieces(residual, eps)
-    while pieces and placed < MAX_PATCHES:
+    while pieces and len(patches) < MAX_PATCHES:
         new: list[NDArray[np.float64]] = []
         for piece in pieces:
             new += _patch(piece, target, reach, tol)
         if not new:
             break
-        placed += len(new)
-        passes += new
+        patches += new
         residual = cover(new, shapely.union_all(pieces))
         pieces = _pieces(residual, eps)
-    return passes, float(sum(p.area for p in pieces))
+    rest = _attach(passes, patches, target, spacing)
+    return [_dedupe(p, tol) for p in passes + rest], float(sum(p.area for p in pieces))
+
+
+def _dedupe(line: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
+    """``line`` without points within ``tol`` of the one before (no zero-length edges)."""
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(line, axis=0), axis=1) > tol])
+    return line[keep]
+
+
+def _attach(
+    contours: list[NDArray[np.float64]],
+    patches: list[NDArray[np.float64]],
+    target: Any,
+    spacing: float,
+) -> list[NDArray[np.float64]]:
+    """Each short patch near a contour pass (the patch and the way to it and back at most two
+    spacings) becomes a spur of it (in place): from the contour's nearest point out along the
+    patch and back, when both legs stay in ``target``;
+    returns the patches left as passes of their own. A spur into a corner costs a few
+    centimetres where a pass of its own would cost a move there and back."""
+    import shapely
+
+    if not contours:
+        return patches
+    rest = []
+    for patch in patches:
+        seg = shapely.LineString(patch)
+        lines = [shapely.LineString(c) for c in contours]
+        d = shapely.distance(lines, seg)
+        ci = int(np.argmin(d))
+        if 2 * d[ci] + seg.length > 2 * spacing:  # a long spur would drive its patch twice
+            rest.append(patch)
+            continue
+        line = contours[ci]
+        at = lines[ci].project(shapely.Point(patch[len(patch) // 2]))
+        q = np.asarray(lines[ci].interpolate(at).coords[0])
+        a = patch[::-1] if np.linalg.norm(patch[-1] - q) < np.linalg.norm(patch[0] - q) else patch
+        if not (
+            target.covers(shapely.LineString([q, a[0]]))
+            and target.covers(shapely.LineString([a[-1], q]))
+        ):
+            rest.append(patch)
+            continue
+        cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(line, axis=0), axis=1))])
+        i = int(np.clip(np.searchsorted(cum, at, side="right") - 1, 0, len(line) - 2))
+        spur = [q[None], a, q[None]]
+        contours[ci] = np.concatenate([line[: i + 1], *spur, line[i + 1 :]])
+    return rest
 
 
 #: The margins (in spacings) inside the boundary at which :func:`inside_layout` tries cutting
