@@ -189,7 +189,46 @@ def _contour_passes(
             continue
         for a, b in runs:
             out.append(_arc(v, at, a, b))
-    return [line for line in out if np.linalg.norm(np.diff(line, axis=0), axis=1).sum() > tol]
+    out = [line for line in out if np.linalg.norm(np.diff(line, axis=0), axis=1).sum() > tol]
+    return [_corner_spurs(line, target, half, reach, tol) for line in out]
+
+
+def _corner_spurs(
+    line: NDArray[np.float64], target: Any, half: float, reach: float, tol: float
+) -> NDArray[np.float64]:
+    """``line`` (a contour part) with a spur into every convex corner of the area it does not
+    reach: from the contour's corner ``V`` towards the area's corner ``C`` to the point ``P``
+    half a spacing short of it and back. The swath of ``V -> P`` covers the corner (every point
+    between ``C``, ``V`` and the feet of ``V`` on the two edges is within half a spacing of
+    it); the spur is ``|VC| - spacing / 2`` long, millimetres at an obtuse corner, where a
+    patch of its own would cost a move there and back."""
+    import shapely
+
+    corners = shapely.get_coordinates(shapely.boundary(target))
+    contour = shapely.LineString(line)
+    d = shapely.distance(shapely.points(corners), contour)
+    pick = (d > reach * (1 + 1e-9)) & (d < 4 * half)
+    grown = target.buffer(tol, join_style="mitre")
+    spurs: dict[int, list[NDArray[np.float64]]] = {}
+    _, first = np.unique(corners, axis=0, return_index=True)
+    for i in np.flatnonzero(pick)[np.isin(np.flatnonzero(pick), first)]:
+        c = corners[i]
+        j = int(np.argmin(np.linalg.norm(line - c, axis=1)))
+        v = line[j]
+        gap = float(np.linalg.norm(v - c))
+        if gap <= half or gap > d[i] * (1 + 1e-6) + tol:  # V must be the contour's corner
+            continue
+        p = c + (v - c) / gap * (half * (1 - 1e-3))  # C inside the polygonised swath
+        if grown.covers(shapely.LineString([v, p])):
+            spurs.setdefault(j, []).extend([p, v])
+    if not spurs:
+        return line
+    parts = []
+    for j, point in enumerate(line):
+        parts.append(point[None])
+        if j in spurs:
+            parts.append(np.asarray(spurs[j]))
+    return np.concatenate(parts)
 
 
 #: Kept stretches of a contour closer than this many spacings along it are driven as one pass.
