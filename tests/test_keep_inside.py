@@ -296,3 +296,54 @@ def test_command_line(tmp_path, capsys):
         run_cli(capsys, "plan", "--help")
     text = capsys.readouterr().out
     assert "--keep-inside" in text and "boundary passes" in text
+
+
+@pytest.mark.parametrize(
+    ("shell", "spacing"),
+    [
+        ([(0, 0), (3, 0), (0, 2)], 10.0),  # smaller than the spacing: one patch, no lane
+        ([(0, 0), (10, 0), (10, 1.5), (0, 1.5)], 2.0),  # narrower than a spacing
+        ([(0, 0), (100, 0), (50, 3)], 5.0),  # a sliver with two sharp corners
+    ],
+)
+def test_areas_no_lane_fits_in_are_covered_by_passes(shell, spacing):
+    plan = plan_region(Region(shell), spacing, keep_inside=True)
+    assert plan.stats.n_transects == 0 and len(plan.transects) > 0
+    _check_inside_and_covered(plan, _shapely(shell))
+
+
+def test_chords_stay_inside_without_passes():
+    m = plan_area(
+        [(0, 0), (30, 0), (30, 20), (0, 20)], 5.0, crs=None, keep_inside=True, layout="chords"
+    )
+    assert set(m.plan.role()) == {"lane"} and m.stats.outside_length == 0.0
+    area = _shapely([(0, 0), (30, 0), (30, 20), (0, 20)])
+    assert area.buffer(1e-9).contains(shapely.LineString(m.plan.waypoints))
+    assert m.coverage.covered_share < 1  # chords promise no coverage, passes or not
+
+
+def test_every_field_of_a_file(tmp_path, capsys):
+    doc = {
+        "type": "FeatureCollection",
+        "features": [
+            {
+                "type": "Feature",
+                "properties": {"name": name},
+                "geometry": {"type": "Polygon", "coordinates": [ring]},
+            }
+            for name, ring in [
+                ("L", [[0, 0], [60, 0], [60, 20], [25, 20], [25, 50], [0, 50], [0, 0]]),
+                ("square", [[100, 0], [140, 0], [140, 40], [100, 40], [100, 0]]),
+            ]
+        ],
+    }
+    path = tmp_path / "fields.geojson"
+    path.write_text(json.dumps(doc))
+    code, text, err = run_cli(
+        capsys, "-q", "plan", path, "--crs", "planar", "--spacing", "6", "--keep-inside", "--json"
+    )
+    assert code == 0, err
+    out = json.loads(text)
+    assert [f["name"] for f in out] == ["L", "square"]
+    assert all(f["keep_inside"] and f["outside_length_m"] == 0.0 for f in out)
+    assert all(f["covered_share"] >= 1 - 1e-9 for f in out)

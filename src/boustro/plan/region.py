@@ -428,6 +428,9 @@ def _assemble(
             f"{b.round(3).tolist()}: the straight line is used"
         )
     scale = opts.ground_scale
+    outside = outside_length(path.waypoints, r)
+    if opts.keep_inside and outside > 0:  # never seen; said rather than hidden
+        notes.append(f"keep_inside: {outside / scale:.6g} m of the path leaves the area")
     speed = opts.speed
     duration = None if speed is None else path_length / scale / speed + n_turns * opts.turn_time
     cells = cl.cells
@@ -442,7 +445,7 @@ def _assemble(
         duration=duration,
         n_cells=len(cells),
         hole_pass_length=path.hole_length / scale,
-        outside_length=outside_length(path.waypoints, r) / scale,
+        outside_length=outside / scale,
         boundary_pass_length=path.boundary_length / scale,
     )
     main = max(range(len(cells)), key=lambda i: cells[i].polygon.area)
