@@ -190,12 +190,25 @@ def test_boundary_passes_join_the_tour():
 
 
 def test_bad_combinations_are_one_clear_error(capsys):
-    with pytest.raises(InvalidParameterError, match="turnaround"):
-        plan_region(Region(L_SHAPE), 4.0, keep_inside=True, turnaround=2.0)
+    with pytest.raises(InvalidParameterError, match="nadir gap"):
+        plan_region(Region(L_SHAPE), 4.0, keep_inside=True, nadir_gap=1.0)
     with pytest.raises(InvalidParameterError, match="keep_inside must be"):
         plan_area(embedded_field(), 10.0, keep_inside="yes")
-    code, out, err = run_cli(capsys, "plan", "--keep-inside", "--turnaround", "3")
+    code, out, err = run_cli(capsys, "plan", "--keep-inside", "--swath", "20", "--nadir-gap", "3")
     assert code == 2 and out == "" and err.count("\n") == 1 and "--keep-inside" in err
+
+
+def test_run_ins_end_at_the_boundary():
+    plan = plan_region(Region(L_SHAPE, HOLES), 4.0, keep_inside=True, turnaround=3.0)
+    _check_inside_and_covered(plan, _shapely(L_SHAPE, HOLES))
+    kinds = np.array(plan.kinds)
+    w = plan.waypoints
+    assert (kinds == "run_in").any() and (kinds == "run_out").any()
+    step = np.linalg.norm(np.diff(w, axis=0), axis=1)
+    # a run-in leads to its lane's start, a run-out follows its end, none longer than asked
+    assert np.all(step[kinds[:-1] == "run_in"] <= 3.0 + 1e-9)
+    assert np.all(step[kinds[1:] == "run_out"] <= 3.0 + 1e-9)
+    assert np.all(step > 0)
 
 
 @pytest.fixture(scope="module")

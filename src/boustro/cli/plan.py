@@ -308,7 +308,7 @@ def _add_path(p: argparse.ArgumentParser) -> None:
         "corners and thin parts) cover what the lane ends leave, so coverage stays 100%%; "
         "exported as transects of pass 'boundary', waypoints of kind 'contour'. Without it, "
         "outside_length_m (--json) is the length of the path outside the area or in a hole. "
-        "Not with --turnaround or --nadir-gap",
+        "Run-ins and run-outs (--turnaround) end at the boundary. Not with --nadir-gap",
     )
     path.add_argument(
         "--sweep",

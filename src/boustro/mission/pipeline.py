@@ -109,7 +109,8 @@ def plan_area(
             a spacing inside the edge, patches over corners and thin parts; transects of role
             ``"boundary"``, waypoints of kind ``"contour"``) cover what the lanes leave, so the
             coverage stays 100% (:mod:`boustro.plan.inside`). A nearly convex area is then
-            planned on the area, not its hull. Not with ``turnaround`` or a nadir gap.
+            planned on the area, not its hull. Run-ins and run-outs (``turnaround``) end at the
+            boundary. Not with a nadir gap.
         progress: for a plan whose estimate is over
             :data:`~boustro.mission.estimate.SAY_SECONDS`: ``True`` says it on stderr
             ("boustro: planning ~N lanes over V vertices, estimated T s") and shows a bar over

@@ -150,8 +150,8 @@ def plan_region(
         keep_inside: no part of the path leaves the area or enters a hole: lanes are cut at
             the boundary, connecting moves follow the inside, and boundary passes (the contour
             half a spacing inside the edge, and patches over corners and thin parts) cover what
-            the cut lanes leave (:mod:`boustro.plan.inside`; guaranteed layout; no
-            ``turnaround`` or ``nadir_gap``). The passes replace the passes around holes.
+            the cut lanes leave (:mod:`boustro.plan.inside`; guaranteed layout; run-ins end at
+            the boundary; no ``nadir_gap``). The passes replace the passes around holes.
         progress: a tqdm bar on stderr over the stages (optimisation of the cells, lanes,
             tour and routing, path); ``None``: if stderr is a terminal.
 
@@ -260,15 +260,10 @@ def _check_options(r: Region, spacing: float, **kw: Any) -> PlanOptions:
         )
     if kw["keep_inside"] not in (True, False):
         raise InvalidParameterError(f"keep_inside must be True or False, got {kw['keep_inside']!r}")
-    if kw["keep_inside"] and (turnaround > 0 or nadir_gap > 0):
-        what = "a turnaround beyond the lane ends" if turnaround > 0 else "a nadir gap"
+    if kw["keep_inside"] and nadir_gap > 0:
         raise InvalidParameterError(
-            f"keep_inside (--keep-inside) does not take {what}: the lanes end at the boundary"
-            + (
-                " (no room to run in)"
-                if turnaround > 0
-                else " and the boundary passes would not cover their own blind strip"
-            )
+            "keep_inside (--keep-inside) does not take a nadir gap: the boundary passes would "
+            "not cover their own blind strip"
         )
     min_width = kw["min_width"]
     min_width = 2 * s if min_width is None else _check_float("min_width", min_width, 0.0)
@@ -398,7 +393,7 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
 # -- step 5: drive ----------------------------------------------------------------------------
 def _drive(tour: _Tour, cl: _CellLanes, opts: PlanOptions) -> _Path:
     """The waypoints of the tour: every pass in order, joined by connecting moves."""
-    driver = _Driver(tour.router, opts.turnaround)
+    driver = _Driver(tour.router, opts.turnaround, opts.keep_inside)
     for pi, oi in zip(tour.order, tour.choice, strict=True):
         p = tour.passes[pi]
         _, _, pts, _ = p.options[oi]

@@ -225,11 +225,12 @@ def _order(
 
 # -- driving the tour ------------------------------------------------------------------------
 def _extension_end(
-    router: Router, p: NDArray[np.float64], q: NDArray[np.float64]
+    router: Router, p: NDArray[np.float64], q: NDArray[np.float64], inside: bool = False
 ) -> NDArray[np.float64]:
-    """``q``, or the point where ``p -> q`` first enters a hole (run-ins never enter holes)."""
+    """``q``, or the point where ``p -> q`` first enters a hole (run-ins never enter holes), or
+    with ``inside`` first leaves the area."""
     br, cls = router._pieces(p, q)
-    bad = np.flatnonzero(cls == 1)
+    bad = np.flatnonzero(cls != 0 if inside else cls == 1)
     if len(bad) == 0:
         return q
     return p + br[bad[0]] * (q - p)
@@ -255,9 +256,10 @@ class _Path(NamedTuple):
 class _Driver:
     """Collects the waypoints and transects while the tour is driven pass by pass."""
 
-    def __init__(self, router: Router, turnaround: float) -> None:
+    def __init__(self, router: Router, turnaround: float, inside: bool = False) -> None:
         self.router = router
         self.turnaround = turnaround
+        self.inside = inside  # run-ins and run-outs end at the boundary
         self.points: list[NDArray[np.float64]] = []
         self.kinds: list[str] = []
         self.lane_of: list[int] = []
@@ -314,15 +316,22 @@ class _Driver:
             d = b - a
             length = float(np.linalg.norm(d))
             direction = d / length if length > 0 else (u if j % 4 == 0 else -u)
-            run_in = _extension_end(self.router, a, a - t * direction) if t else a
+            run_in = _extension_end(self.router, a, a - t * direction, self.inside) if t else a
             self.move_to(run_in, ti)
-            if t:
+            if t and self._extends(run_in, a):
                 self.point(run_in, "run_in", ti)
             self.point(a, "start", ti)
             self.point(b, "end", ti)
             if t:
-                self.point(_extension_end(self.router, b, b + t * direction), "run_out", ti)
+                out = _extension_end(self.router, b, b + t * direction, self.inside)
+                if self._extends(out, b):
+                    self.point(out, "run_out", ti)
             self.transect(a, b, angle, "lane", cell, float((a - origin) @ n))
+
+    def _extends(self, p: NDArray[np.float64], end: NDArray[np.float64]) -> bool:
+        """Whether a run-in or run-out ending at ``p`` is kept: always, except a run-in or
+        run-out of a ``keep_inside`` plan that the boundary cut to nothing."""
+        return not self.inside or float(np.linalg.norm(p - end)) > self.router.tol
 
     def hole(self, pts: NDArray[np.float64]) -> None:
         """A pass around a hole: one transect per edge of the loop."""
