@@ -3,14 +3,17 @@
 With ``keep_inside`` (:func:`boustro.plan.plan_region`) no part of the path leaves the area or
 enters a hole. Three pieces make that possible without losing coverage:
 
-* :func:`clip_lanes` cuts every coverage-guaranteed lane to the area (the line's chords): a lane
-  still covers every point of its band whose foot on the lane's line is reached from it inside
-  the area, so what the lanes leave uncovered lies within half a spacing of the boundary;
+* :func:`clip_lanes` cuts every coverage-guaranteed lane to the area (the line's chords), or to
+  the area shrunk by half a spacing (:func:`inside_layout` keeps whichever needs less driving
+  with its passes): a lane still covers every point of its band whose foot on the lane's line
+  is reached from it inside the area, so what the lanes leave uncovered lies near the boundary;
 * :func:`boundary_passes` finds what they leave (shapely: the area minus the lanes' footprints)
   and covers it with the parts of the *contour* (the boundary of the area shrunk by half a
-  spacing, ``buffer(-spacing / 2)``) within half a spacing of it, then with short *patches*
-  (the middle line of each piece still uncovered, cut to the area) for the corners and the
-  parts narrower than a spacing, which no contour reaches;
+  spacing, ``buffer(-spacing / 2)``) within reach of it, with a spur into every convex corner
+  the contour does not reach (:mod:`boustro.plan.contour`), then with short *patches* (the
+  middle line of each piece still uncovered, cut to the area) for sharp corners and the parts
+  narrower than a spacing, which no contour reaches (a short one near a contour becomes a
+  spur of it);
 * connecting moves are routed inside the area (:class:`boustro.plan.routing.Router` with no
   reach outside: its visibility graph holds the shell's reflex vertices as well as the holes').
 
