@@ -142,17 +142,18 @@ def _convex_cost(poly, s, cost):
     return evaluate
 
 
-def _region_cost(region, s, cost):
+def _region_cost(region, s, cost, keep_inside=False):
     def evaluate(a, d):
         st = plan_region(
-            region, s, decompose_area=False, angle=a, offset=d, speed=5.0, turn_time=10.0
-        ).stats
+            region, s, decompose_area=False, angle=a, offset=d, speed=5.0, turn_time=10.0,
+            keep_inside=keep_inside,
+        ).stats  # fmt: skip
         return cost.of(st.path_length, st.n_turns)
 
     return evaluate
 
 
-@pytest.mark.parametrize("case", ["convex", "concave"])
+@pytest.mark.parametrize("case", ["convex", "concave", "inside"])
 def test_box_bounds_never_exceed_a_plan_in_the_box(case):
     """Soundness: the lower bound of a box is at most the cost of the real plan of every layout
     in it (sampled), for convex plans (boustrophedon bound) and routed plans over holes."""
@@ -163,16 +164,19 @@ def test_box_bounds_never_exceed_a_plan_in_the_box(case):
         evaluate = _convex_cost(region.shell, 9.0, cost)
     else:
         region = L_SHAPE
-        evaluate = _region_cost(region, 9.0, cost)
-    search = CoverSearch(region, 9.0, 4.5, cost, None, boustrophedon=not region.holes)
+        evaluate = _region_cost(region, 9.0, cost, keep_inside=case == "inside")
+    search = CoverSearch(
+        region, 9.0, 4.5, cost, None, not region.holes, keep_inside=case == "inside"
+    )
     for _ in range(12):
         theta, d = rng.uniform(0, math.pi), rng.uniform(0, 9.0)
         delta, eta = rng.uniform(0, 0.05), rng.uniform(0, 2.0)
         eps = delta * search.radius + eta
-        lv = search.sandwich.level(eps)
+        lv = search.sandwich.level(eps, search.shrink)
         st = band_stats(
-            lv.inner, lv.outer, np.array([theta]), np.array([d]), 9.0, 4.5, search.origin,
-            search.k_range(eps), len(region.holes), search.tol, inner_reach=4.5 - 2 * search.tol,
+            lv.inner, lv.outer, np.array([theta]), np.array([d]), 9.0, search.band,
+            search.origin, search.k_range(eps), len(region.holes), search.tol,
+            inner_reach=search._inner_reach(),
         )  # fmt: skip
         bound = lower_bounds(st, lv, cost, 9.0, boustrophedon=search.boustrophedon)[0]
         for _ in range(4):
@@ -293,3 +297,13 @@ def test_cost_rejects_bad_values():
         CoverCost(float("nan"), 1.0)
     with pytest.raises(InvalidParameterError):
         CoverCost(0.0, 0.0)
+
+
+def test_keep_inside_time_plan_stays_inside_and_covers():
+    from boustro.io import embedded_field
+
+    m = plan_area(embedded_field(), 10.0, speed=5.0, turn_time=10.0, keep_inside=True)
+    assert m.optimum.method == "certified-cover"
+    assert m.stats.outside_length == 0.0
+    assert m.coverage.covered_share == pytest.approx(1.0, abs=1e-9)
+    assert m.optimum.info["lower_bound"] <= m.stats.duration

@@ -85,6 +85,17 @@ def rows(mission: Mission, written: list[str]) -> list[tuple[str, str]]:
         ("transect length", f"{s.transect_length:.1f} m"),
         ("path length", f"{s.path_length:.1f} m"),
     ]
+    if mission.plan.keep_inside:
+        rows.append(
+            (
+                "inside",
+                f"the whole path (--keep-inside), boundary passes {s.boundary_pass_length:.1f} m",
+            )
+        )
+    elif s.outside_length > 0:
+        rows.append(
+            ("outside", f"{s.outside_length:.1f} m of the path (--keep-inside keeps it inside)")
+        )
     if mission.coverage is not None:
         rows.append(
             (

@@ -84,6 +84,15 @@ concave areas and holes:
   boundary and the holes. Connecting moves go around holes; a hole that cuts lanes gets one
   pass around it so that the area along its edge is covered too.
 
+keeping inside (--keep-inside):
+  by default lanes run up to half a spacing past the boundary (their strip must cover the area
+  up to it) and moves between lanes may cut across outside; outside_length_m in --json says
+  how much of the path is outside the area or in a hole. --keep-inside keeps all of it inside:
+  lanes are cut at the boundary (or half a spacing inside it, whichever needs less driving),
+  moves follow the inside, and boundary passes along the contour half a spacing inside the edge
+  (plus short patches over corners and parts narrower than a spacing) cover what the cut lanes
+  leave; coverage is still checked with shapely on the area itself.
+
 coverage:
   every transect covers the strip of width SPACING centred on it, and its segment spans the
   whole part of the area inside that strip, so no part of the area is left outside every swath
@@ -91,10 +100,13 @@ coverage:
   layout the optimiser scores; --layout chords flies the lines' chords instead (no guarantee).
 
 output formats (--out, by extension or --format):
-  .geojson/.json  area, path, transects and waypoints (area coordinates)
-  .kml            area, path, transects (WGS 84)
-  .gpx            route of waypoints + transects as track segments (WGS 84)
-  .csv            one row per waypoint
+  .geojson/.json  area, path, transects (property 'pass': lane, hole, boundary) and waypoints
+                  (property 'kind') (area coordinates)
+  .kml            area, path, transects named 'Transect N', 'Hole pass N', 'Boundary pass N'
+                  (WGS 84)
+  .gpx            route of waypoints (<type> their kind) + transects as track segments, the
+                  boundary passes as a track of <type>boundary</type> (WGS 84)
+  .csv            one row per waypoint (with its kind; 'contour': a boundary pass)
   .plan           QGroundControl plan, MAV_CMD_NAV_WAYPOINT items (needs --altitude)
   .waypoints/.txt MAVLink 'QGC WPL 110' (needs --altitude)
   Files are written atomically: an error never leaves a half-written file.
@@ -323,6 +335,17 @@ def _add_path(p: argparse.ArgumentParser) -> None:
         "promises fewer turns. Either also turns off the hull rule of --hull-tolerance",
     )
     path.add_argument(
+        "--keep-inside",
+        action="store_true",
+        help="no part of the path leaves the area or enters a hole (a boat on a lake, a "
+        "tractor at a fence): lanes end at the boundary, moves between them follow the inside, "
+        "and boundary passes (the contour half a spacing inside the edge, short patches over "
+        "corners and thin parts) cover what the lane ends leave, so coverage stays 100%%; "
+        "exported as transects of pass 'boundary', waypoints of kind 'contour'. Without it, "
+        "outside_length_m (--json) is the length of the path outside the area or in a hole. "
+        "Run-ins and run-outs (--turnaround) end at the boundary. Not with --nadir-gap",
+    )
+    path.add_argument(
         "--sweep",
         type=finite_float,
         metavar="DEG",
@@ -486,6 +509,7 @@ def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:
         angle=None if args.angle is None else math.radians(args.angle),
         bearing=args.bearing,
         force=args.force,
+        keep_inside=args.keep_inside,
         progress=False if args.quiet else None,
         vehicle=_vehicle(args),
         headland=args.headland,

@@ -8,6 +8,8 @@ from collections.abc import Callable
 from typing import Any
 
 from ..errors import InvalidParameterError
+from ..geometry import Polygon
+from ..geometry.region import Region
 from ..objectives import FewestTransects, MissionTime
 from ..optimize.cover import CoverCost, cover_optimum
 from ..plan import Plan, build_plan, coverage
@@ -41,12 +43,15 @@ def cover_cost(
     return None
 
 
-def _planner(frame: Frame, layout: str, options: dict[str, Any]) -> Callable[..., Plan]:
-    """The plan of one layout, as the final plan is built (convex or region planner)."""
+def _planner(
+    frame: Frame, layout: str, options: dict[str, Any], keep_inside: bool = False
+) -> Callable[..., Plan]:
+    """The plan of one layout, as the final plan is built (convex or region planner; with
+    ``keep_inside`` the region planner over the area itself, not its hull)."""
     s_plan = frame.sensor.spacing * frame.proj.scale_min
     lay: Layout = "chords" if layout == "chords" else "guaranteed"
 
-    if frame.region is None:
+    if frame.region is None and not keep_inside:
 
         def convex(angle: float, offset: float) -> Plan:
             plan = build_plan(
@@ -63,19 +68,30 @@ def _planner(frame: Frame, layout: str, options: dict[str, Any]) -> Callable[...
 
         return convex
 
+    area = _area(frame, keep_inside)
+
     def region(angle: float, offset: float) -> Plan:
         return plan_region(
-            frame.region,  # type: ignore[arg-type]
+            area,
             s_plan,
             decompose_area=False,
             angle=angle,
             offset=offset,
             layout=lay,
             start=frame.start if frame.given_start else None,
+            keep_inside=keep_inside,
             **options,
         )
 
     return region
+
+
+def _area(frame: Frame, keep_inside: bool) -> Polygon | Region:
+    """What the plans cover: the area (a region), or the convex polygon planned (the hull of a
+    nearly convex area, unless ``keep_inside``)."""
+    if frame.region is not None:
+        return frame.region
+    return Region(frame.surveyed) if keep_inside else frame.poly
 
 
 def _first_end(plan: Plan) -> int:
@@ -99,6 +115,7 @@ def plan_cover(
     angle: float | None = None,
     finish: Callable[[Plan], Plan] | None = None,
     boustrophedon: bool | None = None,
+    keep_inside: bool = False,
 ) -> Planned:
     """The plan of the layout with the least ``cost``, certified by
     :func:`~boustro.optimize.cover.cover_optimum` (over every angle, or at ``angle``).
@@ -110,7 +127,7 @@ def plan_cover(
     bound's boustrophedon moves (a vehicle may fly every other lane); the plan returned is not
     finished."""
     options = _path_options(frame, turnaround, speed, turn_time)
-    planner = _planner(frame, layout, options)
+    planner = _planner(frame, layout, options, keep_inside)
     scale = frame.proj.scale
 
     def evaluate(a: float, d: float) -> float:
@@ -119,7 +136,7 @@ def plan_cover(
         return cost.of(st.path_length * scale, st.n_turns)
 
     s_plan = frame.sensor.spacing * frame.proj.scale_min
-    target = frame.poly if frame.region is None else frame.region
+    target = _area(frame, keep_inside)
     if finish is not None:
         passes = finish(planner(0.0, 0.0)).stats.headland_length * scale
         cost = dataclasses.replace(cost, fixed=cost.fixed + cost.per_length * passes)
@@ -133,6 +150,7 @@ def plan_cover(
         reach=frame.sensor.reach * frame.proj.scale_min,
         angle=angle,
         boustrophedon=boustrophedon,
+        keep_inside=keep_inside,
     )
     plan = planner(optimum.angle, optimum.offset)
     if plan.cells:  # the one cell carries the certificate
@@ -140,6 +158,6 @@ def plan_cover(
             dataclasses.replace(c, fitness=optimum.fitness, optimum=optimum) for c in plan.cells
         )
         plan = dataclasses.replace(plan, cells=cells)
-    surveyed = frame.surveyed if frame.region is None else frame.region
+    surveyed = frame.surveyed if frame.region is None else frame.region  # not the hull
     cov = coverage(plan, surveyed) if check_coverage else None
     return Planned(plan, optimum, cov)

@@ -63,6 +63,7 @@ def plan_area(
     angle: float | None = None,
     bearing: float | None = None,
     force: bool = False,
+    keep_inside: bool = False,
     progress: bool | None = False,
     vehicle: Vehicle | None = None,
     headland: int = 0,
@@ -123,6 +124,13 @@ def plan_area(
             :data:`~boustro.mission.estimate.MAX_AREA_KM2` km^2 or an estimated time over
             :data:`~boustro.mission.estimate.MAX_SECONDS` s (the hard limits, e.g.
             :data:`boustro.models.MAX_TRANSECTS`, still hold).
+        keep_inside: no part of the path leaves the area or enters a hole: lanes end at the
+            boundary, connecting moves follow the inside, and boundary passes (the contour half
+            a spacing inside the edge, patches over corners and thin parts; transects of role
+            ``"boundary"``, waypoints of kind ``"contour"``) cover what the lanes leave, so the
+            coverage stays 100% (:mod:`boustro.plan.inside`). A nearly convex area is then
+            planned on the area, not its hull. Run-ins and run-outs (``turnaround``) end at the
+            boundary. Not with a nadir gap.
         progress: for a plan whose estimate is over
             :data:`~boustro.mission.estimate.SAY_SECONDS`: ``True`` says it on stderr
             ("boustro: planning ~N lanes over V vertices, estimated T s") and shows a bar over
@@ -186,6 +194,7 @@ def plan_area(
         check_coverage=check_coverage,
         angle=angle,
         progress=show,
+        keep_inside=_check_flag("keep_inside", keep_inside),
     )
     if fitness is None and speed is not None:
         fitness = settings["fitness"] = MissionTime()
@@ -204,6 +213,8 @@ def plan_area(
     else:
         planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
     planned = _drive(frame, planned, field, passes, vehicle, check_coverage)
+    if keep_inside:  # planned on the area, not its hull: nothing reaches beyond it
+        frame = frame._replace(depth=0.0)
     mission = map_back(frame, planned, altitude=altitude, turnaround=turnaround)
     return with_camera(mission, camera_trigger(spacing))
 
@@ -226,7 +237,7 @@ def _plan_for_cost(
             f"the {cost.name} objective is optimised by the certified search over the flown "
             f"plan (method 'certified-cover'), not by {settings['method']!r}: leave --method out"
         )
-    keys = ("layout", "turnaround", "speed", "turn_time", "check_coverage", "angle")
+    keys = ("layout", "turnaround", "speed", "turn_time", "check_coverage", "angle", "keep_inside")
     extra: dict[str, Any] = {"finish": finish, "boustrophedon": False if skips else None}
     if frame.region is None or decompose is False or settings["angle"] is not None:
         return plan_cover(frame, cost, **extra, **{k: settings[k] for k in keys})
@@ -283,6 +294,12 @@ def _drive(
     if vehicle is not None:
         plan = drive_vehicle(plan, vehicle, field=field)
     return Planned(plan, planned.optimum, cov)
+
+
+def _check_flag(name: str, value: Any) -> bool:
+    if value not in (True, False):
+        raise InvalidParameterError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
 
 
 def _narrower_than_the_spacing(frame: Frame, sensor: Sensor) -> bool:

@@ -10,10 +10,13 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..errors import InvalidParameterError, ProblemTooLargeError
+from ..geometry.region import Region
 from ..optimize import OptimizeResult, optimize
 from ..optimize.fixed_angle import optimize_offset
 from ..optimize.methods import resolve_method
 from ..plan import Coverage, Plan, build_plan, coverage
+from ..plan.cells import _frame
+from ..plan.inside import outside_length
 from ..plan.region import plan_region
 from .defaults import DEFAULT_METHOD, FALLBACK_METHOD, METHOD_OPTIONS, REGION_OPTIONS, log
 from .project import Frame
@@ -56,14 +59,21 @@ def plan_convex(
     check_coverage: bool,
     angle: float | None = None,
     progress: bool = False,
+    keep_inside: bool = False,
 ) -> Planned:
     """A convex area (or the hull of a nearly convex one): optimise, then build the plan; at a
-    fixed ``angle`` (radians, plan frame) only the offset is optimised (:func:`optimize_offset`)."""
+    fixed ``angle`` (radians, plan frame) only the offset is optimised (:func:`optimize_offset`).
+    With ``keep_inside`` the optimum's lanes are planned inside the area itself (not its hull)
+    by :func:`plan_region`."""
     s_plan = frame.sensor.spacing * frame.proj.scale_min
     if angle is not None:
         optimum = optimize_offset(frame.poly, s_plan, angle, fitness=fitness)
     else:
         optimum = _optimize_convex(frame, s_plan, method, fitness, options, progress)
+    if keep_inside:
+        planned = _convex_inside(frame, optimum, s_plan, layout, turnaround, speed, turn_time)
+        cov = coverage(planned.plan, frame.surveyed) if check_coverage else None
+        return planned._replace(coverage=cov)
     plan = build_plan(
         frame.poly,
         s_plan,
@@ -73,8 +83,44 @@ def plan_convex(
         start=frame.start,
         **_path_options(frame, turnaround, speed, turn_time),
     )
+    plan = _with_outside(plan, frame.surveyed)
     cov = coverage(plan, frame.surveyed) if check_coverage else None
     return Planned(plan, optimum, cov)
+
+
+def _with_outside(plan: Plan, area: Any) -> Plan:
+    """The plan with its ``outside_length`` measured against the area (not its hull)."""
+    outside = outside_length(plan.waypoints, area) / plan.ground_scale
+    return dataclasses.replace(plan, stats=dataclasses.replace(plan.stats, outside_length=outside))
+
+
+def _convex_inside(
+    frame: Frame,
+    optimum: OptimizeResult,
+    s_plan: float,
+    layout: str,
+    turnaround: float,
+    speed: Any,
+    turn_time: float,
+) -> Planned:
+    """The convex optimum's grid planned with ``keep_inside`` over the area itself (the offset
+    moved from the hull's vertex mean to the area's)."""
+    area = Region(frame.surveyed)
+    _, n = _frame(optimum.angle)
+    offset = optimum.offset + float((frame.poly.centre - area.centre) @ n)
+    plan = plan_region(
+        area,
+        s_plan,
+        decompose_area=False,
+        angle=optimum.angle,
+        offset=offset,
+        layout=layout,  # type: ignore[arg-type]
+        start=frame.start,
+        keep_inside=True,
+        **_path_options(frame, turnaround, speed, turn_time),
+    )
+    cell = dataclasses.replace(plan.cells[0], fitness=optimum.fitness, optimum=optimum)
+    return Planned(dataclasses.replace(plan, cells=(cell,)), optimum, None)
 
 
 def _optimize_convex(
@@ -118,6 +164,7 @@ def plan_concave(
     sweep: float | None,
     angle: float | None = None,
     progress: bool = False,
+    keep_inside: bool = False,
 ) -> Planned:
     """A concave area or one with holes: cells, lanes and a tour (:func:`plan_region`); at a
     fixed ``angle`` one grid over the whole area, its offset optimised (:func:`optimize_offset`)."""
@@ -145,6 +192,7 @@ def plan_concave(
         start=frame.start if frame.given_start else None,  # None: the shortest tour
         **_path_options(frame, turnaround, speed, turn_time),
         **opts,
+        keep_inside=keep_inside,
         progress=progress,
     )
     if fixed is None:

@@ -164,6 +164,10 @@ class Mission:
             "turnaround_m": self.turnaround,
             "hull_depth_m": self.hull_depth,
         }
+        out["outside_length_m"] = s.outside_length
+        if self.plan.keep_inside:
+            out["keep_inside"] = True
+            out["boundary_pass_length_m"] = s.boundary_pass_length
         if s.duration is not None:
             out.update(speed_m_s=s.speed, turn_time_s=s.turn_time, duration_s=s.duration)
         if self.altitude is not None:
@@ -202,7 +206,6 @@ class Mission:
                 for c in self.plan.cells
             ]
             out["hole_pass_length_m"] = s.hole_pass_length
-            out["outside_length_m"] = s.outside_length
             if self.plan.notes:
                 out["notes"] = list(self.plan.notes)
         out.update(self._flight_summary())

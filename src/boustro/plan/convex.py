@@ -18,6 +18,7 @@ from ..scoring import Segments, as_polygon, transect_segments
 if TYPE_CHECKING:
     pass
 
+from .inside import outside_length
 from .types import Layout, Plan, PlanStats
 
 __all__ = [
@@ -222,6 +223,7 @@ def _convex_stats(
     area: float,
     speed: float | None,
     turn_time: float,
+    outside: float = 0.0,
 ) -> PlanStats:
     """Statistics of a single-grid plan (ground units): one turn between consecutive transects."""
     duration = None if speed is None else path_length / speed + (n_t - 1) * turn_time
@@ -234,6 +236,7 @@ def _convex_stats(
         speed=speed,
         turn_time=turn_time,
         duration=duration,
+        outside_length=outside,
     )
 
 
@@ -330,6 +333,7 @@ def build_plan(
         poly.area / ground_scale**2 if area is None else float(area),
         speed,
         turn_time,
+        outside_length(waypoints, poly) / ground_scale,
     )
     return Plan(
         polygon=poly,

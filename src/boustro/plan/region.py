@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any, Literal, NamedTuple
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError, InvalidPolygonError, NoTransectError
 from ..geometry import Polygon
@@ -18,10 +19,20 @@ from ..models import check_spacing
 from ..optimize import OptimizeResult
 from ..optimize.problem import _progress_bar
 from .cells import _TOL, _check_float
+from .inside import inside_layout, outside_length
 from .lanes import Lanes, region_lanes
 from .region_opt import _cells_for_sweep, _estimate, choose_sweep, optimize_region
 from .routing import Router
-from .tour import _chain_pass, _chains, _Driver, _hole_pass, _order, _Pass, _Path
+from .tour import (
+    _boundary_pass,
+    _chain_pass,
+    _chains,
+    _Driver,
+    _hole_pass,
+    _order,
+    _Pass,
+    _Path,
+)
 from .types import Layout, Plan, PlanCell, PlanStats
 
 __all__ = ["PlanOptions", "plan_region"]
@@ -52,6 +63,7 @@ class PlanOptions:
     hole_passes: bool = True
     area: float | None = None
     merge_angle: float = math.radians(15.0)
+    keep_inside: bool = False
 
 
 class _Cells(NamedTuple):
@@ -66,6 +78,8 @@ class _CellLanes(NamedTuple):
 
     cells: list[PlanCell]
     lanes: list[Lanes]
+    boundary: list[NDArray[np.float64]] | None = None  # keep_inside: the boundary passes
+    uncovered: float = 0.0  # keep_inside: the area they could not cover (plan units)
 
 
 class _Tour(NamedTuple):
@@ -100,6 +114,7 @@ def plan_region(
     area: float | None = None,
     min_width: float | None = None,
     merge_angle: float = math.radians(15.0),
+    keep_inside: bool = False,
     progress: bool | None = False,
 ) -> Plan:
     """Plan a concave area or an area with holes: lanes, hole passes, one connected path.
@@ -132,6 +147,11 @@ def plan_region(
             (default two spacings), see :func:`decompose`.
         merge_angle: neighbouring cells whose optimised angles differ by less than this
             (radians, default 15 degrees) are merged and optimised again as one cell.
+        keep_inside: no part of the path leaves the area or enters a hole: lanes are cut at
+            the boundary, connecting moves follow the inside, and boundary passes (the contour
+            half a spacing inside the edge, and patches over corners and thin parts) cover what
+            the cut lanes leave (:mod:`boustro.plan.inside`; guaranteed layout; run-ins end at
+            the boundary; no ``nadir_gap``). The passes replace the passes around holes.
         progress: a tqdm bar on stderr over the stages (optimisation of the cells, lanes,
             tour and routing, path); ``None``: if stderr is a terminal.
 
@@ -172,6 +192,7 @@ def plan_region(
         area=area,
         min_width=min_width,
         merge_angle=merge_angle,
+        keep_inside=keep_inside,
     )
     notes: list[str] = []
     bar = _Stages(progress)
@@ -236,6 +257,13 @@ def _check_options(r: Region, spacing: float, **kw: Any) -> PlanOptions:
     if kw["decompose_area"] not in (True, False, "auto"):
         raise InvalidParameterError(
             f"decompose_area must be True, False or 'auto', got {kw['decompose_area']!r}"
+        )
+    if kw["keep_inside"] not in (True, False):
+        raise InvalidParameterError(f"keep_inside must be True or False, got {kw['keep_inside']!r}")
+    if kw["keep_inside"] and nadir_gap > 0:
+        raise InvalidParameterError(
+            "keep_inside (--keep-inside) does not take a nadir gap: the boundary passes would "
+            "not cover their own blind strip"
         )
     min_width = kw["min_width"]
     min_width = 2 * s if min_width is None else _check_float("min_width", min_width, 0.0)
@@ -316,6 +344,13 @@ def _plan_lanes(r: Region, cells: _Cells, opts: PlanOptions) -> _CellLanes:
         out.cells.append(PlanCell(cell, cell_angle, cell_offset, value, len(lanes.k), opt))
     if sum(len(lanes.k) for lanes in out.lanes) == 0:
         raise NoTransectError(f"no lane crosses the area at spacing {opts.spacing:g}")
+    if opts.keep_inside and opts.layout == "guaranteed":
+        cut, boundary, uncovered = inside_layout(r, out.lanes, opts.spacing, opts.reach)
+        counted = [
+            dataclasses.replace(c, n_transects=len(ls.k))
+            for c, ls in zip(out.cells, cut, strict=True)
+        ]
+        return _CellLanes(counted, cut, boundary, uncovered)
     return out
 
 
@@ -328,7 +363,14 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
         for chain in _chains(lanes, tol):
             passes.append(_chain_pass(lanes, chain, ci))
     cut = set().union(*(lanes.cut for lanes in cl.lanes))
-    if opts.layout == "guaranteed" and opts.hole_passes:
+    if opts.keep_inside:
+        passes += [_boundary_pass(line) for line in cl.boundary or []]
+        if cl.uncovered > 0:
+            notes.append(
+                f"{cl.uncovered / opts.ground_scale**2:.6g} m2 near the boundary is not covered: "
+                "more slivers than boundary patches allowed"
+            )
+    elif opts.layout == "guaranteed" and opts.hole_passes:
         for hi in sorted(cut):
             passes.append(_hole_pass(r.holes[hi]))
     elif cut and opts.layout == "guaranteed":
@@ -336,7 +378,7 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
             f"{len(cut)} hole(s) cut lanes and hole passes are off: the area along their edges "
             "is not fully covered"
         )
-    router = Router(r, reach=max(opts.reach, opts.turnaround))
+    router = Router(r, reach=0.0 if opts.keep_inside else max(opts.reach, opts.turnaround))
     start = opts.start
     if start is None:
         start_pt = r.shell.vertices[0]
@@ -351,12 +393,14 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
 # -- step 5: drive ----------------------------------------------------------------------------
 def _drive(tour: _Tour, cl: _CellLanes, opts: PlanOptions) -> _Path:
     """The waypoints of the tour: every pass in order, joined by connecting moves."""
-    driver = _Driver(tour.router, opts.turnaround)
+    driver = _Driver(tour.router, opts.turnaround, opts.keep_inside)
     for pi, oi in zip(tour.order, tour.choice, strict=True):
         p = tour.passes[pi]
         _, _, pts, _ = p.options[oi]
         if p.kind == "chain":
             driver.chain(pts, p.angle, p.cell, cl.lanes[p.cell].origin)
+        elif p.kind == "boundary":
+            driver.boundary(pts)
         else:
             driver.hole(pts)
     return driver.result()
@@ -372,13 +416,16 @@ def _assemble(
     transect_length = float(np.linalg.norm(tr[:, 1] - tr[:, 0], axis=1)[lane_role].sum())
     path_length = float(np.linalg.norm(np.diff(path.waypoints, axis=0), axis=1).sum())
     n_lanes = int(lane_role.sum())
-    n_turns = n_lanes + sum(1 for p in tour.passes if p.kind == "hole") - 1  # passes - 1
+    n_turns = n_lanes + sum(1 for p in tour.passes if p.kind != "chain") - 1  # passes - 1
     for a, b in path.blocked:
         notes.append(
             f"no connecting move inside the area from {a.round(3).tolist()} to "
             f"{b.round(3).tolist()}: the straight line is used"
         )
     scale = opts.ground_scale
+    outside = outside_length(path.waypoints, r)
+    if opts.keep_inside and outside > 0:  # never seen; said rather than hidden
+        notes.append(f"keep_inside: {outside / scale:.6g} m of the path leaves the area")
     speed = opts.speed
     duration = None if speed is None else path_length / scale / speed + n_turns * opts.turn_time
     cells = cl.cells
@@ -393,7 +440,8 @@ def _assemble(
         duration=duration,
         n_cells=len(cells),
         hole_pass_length=path.hole_length / scale,
-        outside_length=path.outside / scale,
+        outside_length=outside / scale,
+        boundary_pass_length=path.boundary_length / scale,
     )
     main = max(range(len(cells)), key=lambda i: cells[i].polygon.area)
     return Plan(
@@ -418,4 +466,5 @@ def _assemble(
         roles=path.roles,
         transect_cells=path.cells,
         notes=tuple(notes),
+        keep_inside=opts.keep_inside,
     )

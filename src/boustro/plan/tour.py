@@ -94,6 +94,25 @@ def _hole_pass(hole: Polygon, max_options: int = 8) -> _Pass:
     return _Pass("hole", -1, 0.0, options)
 
 
+def _boundary_pass(pts: NDArray[np.float64], max_options: int = 8) -> _Pass:
+    """A boundary pass (:mod:`boustro.plan.inside`): a polyline driven either way, or a closed
+    contour entered at up to ``max_options`` of its corners, either way round."""
+    length = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
+    closed = len(pts) > 3 and bool(np.allclose(pts[0], pts[-1], rtol=0.0, atol=1e-12))
+    if not closed:
+        ways = [(pts[0], pts[-1], pts, length), (pts[-1], pts[0], pts[::-1], length)]
+        return _Pass("boundary", -1, 0.0, ways)
+    ring = pts[:-1]
+    starts = np.unique(np.linspace(0, len(ring), max_options, endpoint=False).astype(int))
+    options = []
+    for way in (ring, ring[::-1]):
+        for i in starts:
+            r = np.roll(way, -int(i), axis=0)
+            arr = np.concatenate([r, r[:1]])
+            options.append((arr[0], arr[-1], arr, length))
+    return _Pass("boundary", -1, 0.0, options)
+
+
 #: Orders the 2-opt improvement of a tour evaluates at most (about 0.25 s for 60 passes on the
 #: project's machine): a count, not a time, so that plans do not depend on the machine's load.
 ORDER_BUDGET = 4000
@@ -131,14 +150,30 @@ def _order(
     forced = np.full(len(entry_idx[first_pass]), math.inf)
     forced[first_option] = 0.0
 
-    def cost(order: list[int]) -> tuple[float, list[int]]:
-        first = order[0]
+    blocks: dict[tuple[int, int], NDArray[np.float64]] = {}
+
+    def block(prev: int, cur: int) -> NDArray[np.float64]:
+        """The moves from ``prev``'s exits to ``cur``'s entries (computed once)."""
+        b = blocks.get((prev, cur))
+        if b is None:
+            b = blocks[(prev, cur)] = dist[np.ix_(exit_idx[prev], entry_idx[cur])]
+        return b
+
+    def head(first: int) -> NDArray[np.float64]:
         acc = dist[0, entry_idx[first]] + internal[first]
-        if force_start:
-            acc = acc + forced
+        return acc + forced if force_start else acc
+
+    def run(acc: NDArray[np.float64], seq: list[int]) -> NDArray[np.float64]:
+        """The best cost ending in each option of ``seq[-1]``, from ``acc`` at ``seq[0]``."""
+        for prev, cur in itertools.pairwise(seq):
+            acc = (block(prev, cur) + acc[:, None]).min(axis=0) + internal[cur]
+        return acc
+
+    def cost(order: list[int]) -> tuple[float, list[int]]:
+        acc = head(order[0])
         back = []
         for prev, cur in itertools.pairwise(order):
-            trans = dist[np.ix_(exit_idx[prev], entry_idx[cur])] + acc[:, None]
+            trans = block(prev, cur) + acc[:, None]
             arg = np.argmin(trans, axis=0)
             back.append(arg)
             acc = trans[arg, np.arange(trans.shape[1])] + internal[cur]
@@ -161,7 +196,7 @@ def _order(
         order.append(best[1])
         remaining.discard(best[1])
         here = exit_idx[best[1]][best[2] : best[2] + 1]
-    best_cost, choice = cost(order)
+    best_cost = cost(order)[0]
     # 2-opt within a budget of evaluated orders, not of seconds, so that the same input gives
     # the same plan on a busy machine and an idle one
     left = budget
@@ -169,27 +204,33 @@ def _order(
     while improved and left > 0:
         improved = False
         for i in range(int(force_start), len(order) - 1):  # a forced first pass stays first
+            # the cost up to order[i - 1] is the same for every j (the same sums as cost())
+            prefix = run(head(order[0]), order[:i]) if i else None
             for j in range(i + 1, len(order)):
                 cand = order[:i] + order[i : j + 1][::-1] + order[j + 1 :]
-                c, ch = cost(cand)
+                if prefix is None:
+                    c = float(run(head(cand[0]), cand).min())
+                else:
+                    c = float(run(prefix, cand[i - 1 :]).min())
                 left -= 1
                 if c < best_cost - 1e-9:
-                    order, best_cost, choice = cand, c, ch
-                    improved = True
+                    order, best_cost = cand, c
+                    improved = True  # order[:i], hence the prefix, is unchanged
                 if left <= 0:
                     break
             if left <= 0:
                 break
-    return order, choice
+    return order, cost(order)[1]
 
 
 # -- driving the tour ------------------------------------------------------------------------
 def _extension_end(
-    router: Router, p: NDArray[np.float64], q: NDArray[np.float64]
+    router: Router, p: NDArray[np.float64], q: NDArray[np.float64], inside: bool = False
 ) -> NDArray[np.float64]:
-    """``q``, or the point where ``p -> q`` first enters a hole (run-ins never enter holes)."""
+    """``q``, or the point where ``p -> q`` first enters a hole (run-ins never enter holes), or
+    with ``inside`` first leaves the area."""
     br, cls = router._pieces(p, q)
-    bad = np.flatnonzero(cls == 1)
+    bad = np.flatnonzero(cls != 0 if inside else cls == 1)
     if len(bad) == 0:
         return q
     return p + br[bad[0]] * (q - p)
@@ -209,14 +250,16 @@ class _Path(NamedTuple):
     outside: float
     hole_length: float
     blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]]
+    boundary_length: float = 0.0
 
 
 class _Driver:
     """Collects the waypoints and transects while the tour is driven pass by pass."""
 
-    def __init__(self, router: Router, turnaround: float) -> None:
+    def __init__(self, router: Router, turnaround: float, inside: bool = False) -> None:
         self.router = router
         self.turnaround = turnaround
+        self.inside = inside  # run-ins and run-outs end at the boundary
         self.points: list[NDArray[np.float64]] = []
         self.kinds: list[str] = []
         self.lane_of: list[int] = []
@@ -227,6 +270,7 @@ class _Driver:
         self.positions: list[float] = []
         self.outside = 0.0
         self.hole_length = 0.0
+        self.boundary_length = 0.0
         self.blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
 
     def point(self, p: NDArray[np.float64], kind: str, transect: int) -> None:
@@ -272,29 +316,51 @@ class _Driver:
             d = b - a
             length = float(np.linalg.norm(d))
             direction = d / length if length > 0 else (u if j % 4 == 0 else -u)
-            run_in = _extension_end(self.router, a, a - t * direction) if t else a
+            run_in = _extension_end(self.router, a, a - t * direction, self.inside) if t else a
             self.move_to(run_in, ti)
-            if t:
+            if t and self._extends(run_in, a):
                 self.point(run_in, "run_in", ti)
             self.point(a, "start", ti)
             self.point(b, "end", ti)
             if t:
-                self.point(_extension_end(self.router, b, b + t * direction), "run_out", ti)
+                out = _extension_end(self.router, b, b + t * direction, self.inside)
+                if self._extends(out, b):
+                    self.point(out, "run_out", ti)
             self.transect(a, b, angle, "lane", cell, float((a - origin) @ n))
+
+    def _extends(self, p: NDArray[np.float64], end: NDArray[np.float64]) -> bool:
+        """Whether a run-in or run-out ending at ``p`` is kept: always, except a run-in or
+        run-out of a ``keep_inside`` plan that the boundary cut to nothing."""
+        return not self.inside or float(np.linalg.norm(p - end)) > self.router.tol
 
     def hole(self, pts: NDArray[np.float64]) -> None:
         """A pass around a hole: one transect per edge of the loop."""
         ti = len(self.transects)
         self.move_to(pts[0], ti)
-        for j in range(len(pts) - 1):
-            a, b = pts[j], pts[j + 1]
-            d = b - a
-            self.transect(a, b, math.atan2(d[1], d[0]), "hole", -1, math.nan)
-            self.hole_length += float(np.linalg.norm(d))
+        self.hole_length += self._edges(pts, "hole")
         self.point(pts[0], "start", ti)
         for j in range(1, len(pts) - 1):
             self.point(pts[j], "loop", ti + j)
         self.point(pts[-1], "end", ti + len(pts) - 2)
+
+    def boundary(self, pts: NDArray[np.float64]) -> None:
+        """A boundary pass: one transect (role ``boundary``) per edge, every waypoint of kind
+        ``contour``."""
+        ti = len(self.transects)
+        self.move_to(pts[0], ti)
+        self.boundary_length += self._edges(pts, "boundary")
+        for j in range(len(pts)):
+            self.point(pts[j], "contour", ti + min(j, len(pts) - 2))
+
+    def _edges(self, pts: NDArray[np.float64], role: str) -> float:
+        """One transect per edge of the polyline ``pts``, of ``role``; their total length."""
+        total = 0.0
+        for j in range(len(pts) - 1):
+            a, b = pts[j], pts[j + 1]
+            d = b - a
+            self.transect(a, b, math.atan2(d[1], d[0]), role, -1, math.nan)
+            total += float(np.linalg.norm(d))
+        return total
 
     def result(self) -> _Path:
         assert set(self.kinds) <= set(KINDS)
@@ -310,4 +376,5 @@ class _Driver:
             outside=self.outside,
             hole_length=self.hole_length,
             blocked=self.blocked,
+            boundary_length=self.boundary_length,
         )

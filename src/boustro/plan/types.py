@@ -27,8 +27,10 @@ __all__ = [
 #: for areas with holes or cells also ``via`` (a corner of a connecting move that goes around an
 #: obstacle) and ``loop`` (a corner of a pass around a hole); with a vehicle model ``turn`` (a
 #: point of a turn's curve, :func:`boustro.plan.drive_vehicle`); with headlands ``headland`` (a
-#: point of a pass around the field inside its headland, :func:`boustro.plan.plan_headland`).
-KINDS = ("run_in", "start", "end", "run_out", "via", "loop", "turn", "headland")
+#: point of a pass around the field inside its headland, :func:`boustro.plan.plan_headland`); with
+#: ``keep_inside`` ``contour`` (every point of a boundary pass: the contour half a spacing inside
+#: the edge, or a patch over a corner or a thin part).
+KINDS = ("run_in", "start", "end", "run_out", "via", "loop", "turn", "headland", "contour")
 Layout = Literal["guaranteed", "chords"]
 
 
@@ -49,8 +51,12 @@ class PlanStats:
         duration: ``path_length / speed + n_turns * turn_time`` (seconds), ``None`` without speed.
         n_cells: cells of a decomposed plan (1 otherwise).
         hole_pass_length: length of the passes around holes (included in ``path_length``).
-        outside_length: length of the connecting moves outside the area (ends of lanes that
-            reach beyond the boundary, and moves between them; included in ``path_length``).
+        outside_length: length of the path (lanes, run-ins and run-outs, connecting moves)
+            outside the area or inside a hole, measured with shapely segment by segment
+            (:func:`boustro.plan.inside.outside_length`; included in ``path_length``); 0 with
+            ``keep_inside``.
+        boundary_pass_length: length of the boundary passes of a ``keep_inside`` plan
+            (included in ``path_length``).
         turn_length: with a vehicle model, the length of the turns' curves (exact, included in
             ``path_length``); 0 otherwise.
         headland_length: the length of the headland passes (included in ``path_length``).
@@ -73,6 +79,7 @@ class PlanStats:
     outside_length: float = 0.0
     turn_length: float = 0.0
     headland_length: float = 0.0
+    boundary_pass_length: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -127,12 +134,15 @@ class Plan:
         cells: the cells of a decomposed plan (:class:`PlanCell`), or the whole area as one cell.
         transect_angles: ``(T,)`` lane direction of each transect where they differ (cells,
             passes around holes), else ``None`` (all at ``angle``).
-        roles: ``"lane"`` or ``"hole"`` per transect (empty: all lanes).
+        roles: ``"lane"``, ``"hole"`` or ``"boundary"`` (an edge of a boundary pass of a
+            ``keep_inside`` plan) per transect (empty: all lanes).
         transect_cells: ``(T,)`` the cell of each transect (-1 for passes around holes).
         notes: what the plan could not do as asked (e.g. moves that leave the area).
         vehicle: the :class:`~boustro.vehicle.Vehicle` whose turns the path drives (plan
             units), or ``None`` (straight connecting moves).
         headland: headland passes around the field (0: none).
+        keep_inside: planned so that no part of the path leaves the area or enters a hole
+            (:mod:`boustro.plan.inside`).
     """
 
     polygon: Polygon
@@ -158,6 +168,7 @@ class Plan:
     notes: tuple[str, ...] = ()
     vehicle: Any = None
     headland: int = 0
+    keep_inside: bool = False
 
     @property
     def n_transects(self) -> int:
@@ -170,8 +181,8 @@ class Plan:
         return self.transect_angles
 
     def role(self) -> tuple[str, ...]:
-        """What each transect is: ``"lane"`` (a survey lane) or ``"hole"`` (an edge of a pass
-        around a hole)."""
+        """What each transect is: ``"lane"`` (a survey lane), ``"hole"`` (an edge of a pass
+        around a hole) or ``"boundary"`` (an edge of a boundary pass)."""
         return self.roles or ("lane",) * len(self.transects)
 
     @property

@@ -163,14 +163,15 @@ def _draw_path(sc: _Scene, artists: dict[str, Any], *, swaths: bool) -> None:
     wp = local(core.waypoints)
     artists["path"] = ax.plot(*wp.T, color="0.35", lw=0.8, label="path", zorder=3)[0]
     tr = local(core.transects)
-    colours = ["#1155cc" if role == "lane" else "#8e7cc3" for role in core.role()]
+    palette = {"lane": "#1155cc", "boundary": "#cc4125"}  # passes around holes: violet
+    colours = [palette.get(role, "#8e7cc3") for role in core.role()]
     artists["transects"] = ax.add_collection(
         LineCollection(list(tr), colors=colours, linewidths=2.0, label="transects", zorder=4)
     )
     arrows = []
-    for seg in tr:
+    for seg, role in zip(tr, core.role(), strict=True):
         d = seg[1] - seg[0]
-        if np.linalg.norm(d) == 0:
+        if np.linalg.norm(d) == 0 or role == "boundary":  # boundary passes: many short edges
             continue
         mid = (seg[0] + seg[1]) / 2
         arrows.append(

@@ -168,7 +168,8 @@ def _one_answer(mission: Mission) -> dict[str, Any]:
 def plan_response(missions: Sequence[Mission]) -> Any:
     """The answer: for each mission the object ``boustro plan --json`` prints, plus
     ``"geojson"`` (the plan as a FeatureCollection, :mod:`boustro.io.formats.geojson`); the
-    certificate is the summary's ``certified`` and ``gap``; one field: one object, several: a list, as on the command line."""
+    certificate is the summary's ``certified`` and ``gap``; one field: one object, several: a
+    list, as on the command line."""
     answers = [_one_answer(m) for m in missions]
     return answers[0] if len(answers) == 1 else answers
 

@@ -90,7 +90,8 @@ def to_geojson(mission: Mission) -> str:
 
     Features carry a ``role`` property (``area`` (with its holes), ``path``, ``transect``,
     ``waypoint``, and ``cell`` for each cell of a decomposed plan);
-    transects also ``pass`` (``lane``, or ``hole`` for an edge of a pass around a hole);
+    transects also ``pass`` (``lane``, ``hole`` for an edge of a pass around a hole, or
+    ``boundary`` for an edge of a boundary pass of a ``keep_inside`` plan);
     waypoints also ``seq``, ``kind`` (:data:`boustro.plan.KINDS`) and ``transect``. The mission's
     summary is the foreign member ``boustro``.
 

@@ -55,12 +55,24 @@ def gpx_route(mission: Mission) -> list[str]:
 
 
 def gpx_track(mission: Mission) -> list[str]:
-    """The mission's transects as one GPX ``trk`` with a segment each (lines)."""
+    """The mission's transects as a GPX ``trk`` with a segment each (lines); the edges of the
+    boundary passes of a ``keep_inside`` plan as a second ``trk`` of ``<type>boundary</type>``."""
     _, transects, _, _ = lonlat(mission, "GPX")
     name = xml_text(mission.name or "boustro plan")
-    out = [f"<trk><name>{name} transects</name>"]
-    for seg in transects:
-        pts = "".join(f'<trkpt lat="{lat:.10f}" lon="{lon:.10f}"></trkpt>' for lon, lat in seg)
-        out.append(f"<trkseg>{pts}</trkseg>")
-    out.append("</trk>")
+    boundary = [role == "boundary" for role in mission.plan.role()]
+    out = []
+    for title, kind, pick in (
+        ("transects", "", [not b for b in boundary]),
+        ("boundary passes", "<type>boundary</type>", boundary),
+    ):
+        if title != "transects" and not any(pick):
+            continue
+        out.append(f"<trk><name>{name} {title}</name>{kind}")
+        for seg, keep in zip(transects, pick, strict=True):
+            if keep:
+                pts = "".join(
+                    f'<trkpt lat="{lat:.10f}" lon="{lon:.10f}"></trkpt>' for lon, lat in seg
+                )
+                out.append(f"<trkseg>{pts}</trkseg>")
+        out.append("</trk>")
     return out

@@ -38,13 +38,17 @@ def _area_placemark(area: NDArray[np.float64], holes: Sequence[NDArray[np.float6
     )
 
 
+#: The name of each transect's placemark by its role (``Plan.role()``), then its number.
+_LABELS = {"lane": "Transect", "hole": "Hole pass", "boundary": "Boundary pass"}
+
+
 def _transect_placemarks(mission: Mission, transects: NDArray[np.float64], mode: str) -> list[str]:
     alt = mission.altitude
     out = []
-    counts = {"lane": 0, "hole": 0}
+    counts = {"lane": 0, "hole": 0, "boundary": 0}
     for seg, role in zip(transects, mission.plan.role(), strict=True):
         counts[role] = counts.get(role, 0) + 1
-        label = "Transect" if role == "lane" else "Hole pass"  # lanes and passes numbered apart
+        label = _LABELS.get(role, role)  # lanes and each kind of pass numbered apart
         out.append(
             f"<Placemark><name>{label} {counts[role]}</name><LineString><tessellate>1</tessellate>"
             + mode

@@ -61,7 +61,7 @@ class Sandwich:
         self.polygon = shapely.Polygon(region.shell.vertices, self.holes)
         self.hole_polygons = [shapely.Polygon(h) for h in self.holes]
         shapely.prepare(self.hole_polygons)
-        self._levels: dict[float, Level] = {}
+        self._levels: dict[tuple[float, float], Level] = {}
 
     @cached_property
     def exact(self) -> Level:
@@ -70,18 +70,20 @@ class Sandwich:
         es = edge_set(rings, [-1, *range(len(self.holes))])
         return Level(0.0, es, es, self._perimeters([(h, i) for i, h in enumerate(self.holes)]))
 
-    def level(self, eps: float) -> Level:
-        """The sandwich at radius ``eps > 0`` (cached)."""
-        if eps not in self._levels:
-            self._levels[eps] = self._build(eps)
-        return self._levels[eps]
+    def level(self, eps: float, shrink: float = 0.0) -> Level:
+        """The sandwich at radius ``eps >= 0`` (cached), its inner set eroded by ``shrink``
+        more (a plan whose lanes may stop that far inside the area)."""
+        key = (eps, shrink)
+        if key not in self._levels:
+            self._levels[key] = self._build(eps, shrink)
+        return self._levels[key]
 
-    def _build(self, eps: float) -> Level:
+    def _build(self, eps: float, shrink: float = 0.0) -> Level:
         import shapely
 
         pad = 1e-9 * self.region.diameter
         outer = self.polygon.buffer(eps + pad, join_style="mitre", mitre_limit=5.0)
-        inner = self.polygon.buffer(-(eps * ARC_FACTOR + pad), quad_segs=QUAD_SEGS)
+        inner = self.polygon.buffer(-((eps + shrink) * ARC_FACTOR + pad), quad_segs=QUAD_SEGS)
         in_rings = _rings(inner)
         inner_set = edge_set([r for r, _ in in_rings], [0 if h else -1 for _, h in in_rings])
         out_rings = _rings(outer)

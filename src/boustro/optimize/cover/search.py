@@ -71,9 +71,15 @@ class CoverSearch:
         cost: CoverCost,
         evaluate: Callable[[float, float], float] | None,
         boustrophedon: bool,
+        keep_inside: bool = False,
     ) -> None:
         self.region, self.s, self.reach, self.cost = region, spacing, reach, cost
-        self.evaluate, self.boustrophedon = evaluate, boustrophedon
+        self.evaluate, self.boustrophedon = evaluate, boustrophedon and not keep_inside
+        # lanes cut to the area or to the area shrunk by half a spacing (keep_inside): the
+        # bound takes the lines' chords (reach 0) through the shrunk inner set
+        self.keep_inside = keep_inside
+        self.shrink = spacing / 2 if keep_inside else 0.0
+        self.band = 0.0 if keep_inside else reach
         self.sandwich = Sandwich(region)
         self.origin = region.centre
         self.radius = float(np.linalg.norm(region.shell.vertices - self.origin, axis=1).max())
@@ -87,16 +93,19 @@ class CoverSearch:
         self.model_min = math.inf  # the lowest model value at a layout seen
         self.points: list[NDArray[Any]] = []  # (value, theta, d) of every layout modelled
 
+    def _inner_reach(self) -> float:
+        return 0.0 if self.keep_inside else self.reach - 2 * self.tol
+
     def k_range(self, eps: float) -> tuple[int, int]:
         far = self.radius + eps + self.reach
         return math.floor(-far / self.s) - 1, math.ceil(far / self.s) + 1
 
     def point_values(self, boxes: _Boxes) -> NDArray[np.float64]:
         """The bound at each box's centre with the region itself (a layout's own model)."""
-        lv = self.sandwich.exact
+        lv = self.sandwich.level(0.0, self.shrink) if self.keep_inside else self.sandwich.exact
         st = band_stats(
-            lv.inner, lv.outer, boxes.theta, boxes.d, self.s, self.reach, self.origin,
-            self.k_range(0.0), self.n_holes, self.tol, inner_reach=self.reach - 2 * self.tol,
+            lv.inner, lv.outer, boxes.theta, boxes.d, self.s, self.band, self.origin,
+            self.k_range(0.0), self.n_holes, self.tol, inner_reach=self._inner_reach(),
         )  # fmt: skip
         self.bound_evaluations += len(boxes.theta)
         out = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
@@ -113,11 +122,11 @@ class CoverSearch:
         out = np.empty(len(eps))
         for r in np.unique(radius):
             sel = radius == r
-            lv = self.sandwich.level(float(r))
+            lv = self.sandwich.level(float(r), self.shrink)
             st = band_stats(
-                lv.inner, lv.outer, boxes.theta[sel], boxes.d[sel], self.s, self.reach,
+                lv.inner, lv.outer, boxes.theta[sel], boxes.d[sel], self.s, self.band,
                 self.origin, self.k_range(float(r)), self.n_holes, self.tol,
-                inner_reach=self.reach - 2 * self.tol,
+                inner_reach=self._inner_reach(),
             )  # fmt: skip
             out[sel] = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
         self.bound_evaluations += len(eps)
@@ -265,6 +274,7 @@ def cover_optimum(
     reach: float | None = None,
     boustrophedon: bool | None = None,
     angle: float | None = None,
+    keep_inside: bool = False,
     rtol: float = 1e-3,
     n_angles: int = 90,
     min_eps: float | None = None,
@@ -293,6 +303,10 @@ def cover_optimum(
         evaluate: the cost of the plan of one layout; ``None``: the bound at the layout
             itself (then the certificate is about that model).
         angle: search only this angle (radians): the best offset at a fixed angle.
+        keep_inside: the plans keep inside the area (:mod:`boustro.plan.inside`): their lanes
+            stop at the boundary or half a spacing inside it, so the bound takes each line's
+            chord through the inner set eroded by half a spacing more, with no boustrophedon
+            moves.
         boustrophedon: whether plans fly one lane per line in boustrophedon order (the convex
             planner); default: the region is a convex polygon without holes.
 
@@ -309,7 +323,8 @@ def cover_optimum(
         raise InvalidParameterError(f"reach must be > 0, got {reach}")
     if boustrophedon is None:
         boustrophedon = not r.holes and r.shell.is_convex
-    search = CoverSearch(r, s, reach, cost, evaluate, boustrophedon)
+    search = CoverSearch(r, s, reach, cost, evaluate, boustrophedon, keep_inside)
+    boustrophedon = search.boustrophedon
     if min_eps is None:
         min_eps = (1e-6 if boustrophedon else RESOLVE_EPS) * s
     resolve = rtol if boustrophedon else max(rtol, RESOLVE_RTOL)

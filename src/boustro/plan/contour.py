@@ -1,0 +1,166 @@
+"""The contour passes of a ``keep_inside`` plan (:mod:`boustro.plan.inside`): the boundary of
+the area shrunk by half a spacing, the stretches of it that the lanes need, and a spur into
+every convex corner of the area that it does not reach. Shapely is imported inside the
+functions."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["MERGE_GAP"]
+
+
+def _pieces(geometry: Any, eps: float) -> list[Any]:
+    """The polygons of ``geometry`` that are more than a rounding sliver (they survive a
+    negative buffer of ``eps``)."""
+    import shapely
+
+    polys = [g for g in shapely.get_parts(geometry) if g.geom_type == "Polygon" and not g.is_empty]
+    return [g for g in polys if not g.buffer(-eps).is_empty]
+
+
+def _lines(geometry: Any, tol: float) -> list[NDArray[np.float64]]:
+    """The line parts of ``geometry`` (merged where they meet) longer than ``tol``, as arrays."""
+    import shapely
+
+    merged = shapely.line_merge(geometry) if geometry.geom_type == "MultiLineString" else geometry
+    out = []
+    for g in shapely.get_parts(merged):
+        if g.geom_type in ("LineString", "LinearRing") and g.length > tol:
+            out.append(np.asarray(g.coords, dtype=np.float64))
+    return out
+
+
+def _contour_passes(
+    target: Any, residual: Any, half: float, reach: float, tol: float
+) -> list[NDArray[np.float64]]:
+    """The parts of the contour (the boundary of ``target`` shrunk by ``half``) within reach of
+    the uncovered ``residual``: each covers its side of the residual near the boundary (a
+    point within ``half`` of the boundary and in a disk of radius ``half`` inside the area is
+    within ``half`` of the contour). Each ring is sampled every ``half / 2``; a stretch between
+    two samples is kept when both are within ``reach`` plus the step of the residual (so every
+    needed point is kept), and kept stretches less than :data:`MERGE_GAP` spacings apart are
+    driven as one pass."""
+    import shapely
+
+    # the shrunk area without its slivers (a strip exactly a spacing wide shrinks to one)
+    inner = shapely.union_all(_pieces(target.buffer(-half, quad_segs=8), 1e-7 * half))
+    if inner.is_empty:
+        return []
+    shapely.prepare(residual)
+    step = half / 2
+    out: list[NDArray[np.float64]] = []
+    for ring in shapely.get_parts(shapely.boundary(inner)):
+        v = np.asarray(ring.coords, dtype=np.float64)
+        if len(v) < 4:
+            continue
+        at = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(v, axis=0), axis=1))])
+        total = float(at[-1])
+        n = max(8, math.ceil(total / step))
+        s = np.linspace(0.0, total, n + 1)[:-1]
+        pts = np.stack([np.interp(s, at, v[:, 0]), np.interp(s, at, v[:, 1])], axis=1)
+        near = shapely.distance(shapely.points(pts), residual) <= reach + total / n
+        runs = _runs(near, s, total, MERGE_GAP * 2 * half)
+        if runs is None:
+            out.append(v)
+            continue
+        for a, b in runs:
+            out.append(_arc(v, at, a, b))
+    out = [line for line in out if np.linalg.norm(np.diff(line, axis=0), axis=1).sum() > tol]
+    return [_corner_spurs(line, target, half, reach, tol) for line in out]
+
+
+def _corner_spurs(
+    line: NDArray[np.float64], target: Any, half: float, reach: float, tol: float
+) -> NDArray[np.float64]:
+    """``line`` (a contour part) with a spur into every convex corner of the area it does not
+    reach: from the contour's corner ``V`` towards the area's corner ``C`` to the point ``P``
+    half a spacing short of it and back. The swath of ``V -> P`` covers the corner (every point
+    between ``C``, ``V`` and the feet of ``V`` on the two edges is within half a spacing of
+    it); the spur is ``|VC| - spacing / 2`` long, millimetres at an obtuse corner, where a
+    patch of its own would cost a move there and back."""
+    import shapely
+
+    corners = shapely.get_coordinates(shapely.boundary(target))
+    contour = shapely.LineString(line)
+    d = shapely.distance(shapely.points(corners), contour)
+    pick = (d > reach * (1 + 1e-9)) & (d < 4 * half)
+    grown = target.buffer(tol, join_style="mitre")
+    spurs: dict[int, list[NDArray[np.float64]]] = {}
+    _, first = np.unique(corners, axis=0, return_index=True)
+    for i in np.flatnonzero(pick)[np.isin(np.flatnonzero(pick), first)]:
+        c = corners[i]
+        j = int(np.argmin(np.linalg.norm(line - c, axis=1)))
+        v = line[j]
+        gap = float(np.linalg.norm(v - c))
+        if gap <= half or gap > d[i] * (1 + 1e-6) + tol:  # V must be the contour's corner
+            continue
+        p = c + (v - c) / gap * (half * (1 - 1e-3))  # C inside the polygonised swath
+        if grown.covers(shapely.LineString([v, p])):
+            spurs.setdefault(j, []).extend([p, v])
+    if not spurs:
+        return line
+    parts = []
+    for j, point in enumerate(line):
+        parts.append(point[None])
+        if j in spurs:
+            parts.append(np.asarray(spurs[j]))
+    return np.concatenate(parts)
+
+
+#: Kept stretches of a contour closer than this many spacings along it are driven as one pass.
+MERGE_GAP = 2.0
+
+
+def _runs(
+    flag: NDArray[np.bool_], s: NDArray[np.float64], total: float, gap: float
+) -> list[tuple[float, float]] | None:
+    """The stretches ``(a, b)`` (arc length; ``b`` may pass ``total``: round the ring) between
+    flagged samples at ``s`` of a ring, neighbouring flagged samples joined, stretches closer
+    than ``gap`` merged; ``None`` for the whole ring."""
+    n = len(flag)
+    if flag.all():
+        return None
+    first = int(np.argmin(flag))  # start the scan at an unflagged sample
+    idx = (np.arange(n) + first) % n
+    pos = s[idx] + np.where(idx < first, total, 0.0)
+    runs: list[list[float]] = []
+    i = 0
+    while i < n:
+        if not flag[idx[i]]:
+            i += 1
+            continue
+        j = i
+        while j + 1 < n and flag[idx[j + 1]]:
+            j += 1
+        a = pos[i - 1]  # the unflagged neighbours bound the stretch
+        b = pos[j + 1] if j + 1 < n else pos[0] + total
+        if runs and a - runs[-1][1] < gap:
+            runs[-1][1] = b
+        else:
+            runs.append([a, b])
+        i = j + 1
+    if len(runs) > 1 and runs[0][0] + total - runs[-1][1] < gap:
+        runs[0][0] = runs.pop()[0] - total
+    if any(b - a >= total for a, b in runs):
+        return None
+    return [(a, b) for a, b in runs]
+
+
+def _arc(
+    v: NDArray[np.float64], at: NDArray[np.float64], a: float, b: float
+) -> NDArray[np.float64]:
+    """The part of the closed polyline ``v`` (arc lengths ``at``) from ``a`` to ``b``."""
+    total = float(at[-1])
+    ring_at = np.concatenate([at[:-1] - total, at[:-1], at[:-1] + total, [2 * total]])
+    ring_v = np.concatenate([v[:-1], v[:-1], v[:-1], v[:1]])
+    inner = (ring_at > a) & (ring_at < b)
+
+    def point(x: float) -> NDArray[np.float64]:
+        return np.array([np.interp(x, ring_at, ring_v[:, 0]), np.interp(x, ring_at, ring_v[:, 1])])
+
+    return np.concatenate([point(a)[None], ring_v[inner], point(b)[None]])

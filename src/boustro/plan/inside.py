@@ -1,0 +1,321 @@
+"""Keeping the path inside the area: lanes cut to it, boundary passes, the length outside.
+
+With ``keep_inside`` (:func:`boustro.plan.plan_region`) no part of the path leaves the area or
+enters a hole. Three pieces make that possible without losing coverage:
+
+* :func:`clip_lanes` cuts every coverage-guaranteed lane to the area (the line's chords), or to
+  the area shrunk by half a spacing (:func:`inside_layout` keeps whichever needs less driving
+  with its passes): a lane still covers every point of its band whose foot on the lane's line
+  is reached from it inside the area, so what the lanes leave uncovered lies near the boundary;
+* :func:`boundary_passes` finds what they leave (shapely: the area minus the lanes' footprints)
+  and covers it with the parts of the *contour* (the boundary of the area shrunk by half a
+  spacing, ``buffer(-spacing / 2)``) within reach of it, with a spur into every convex corner
+  the contour does not reach (:mod:`boustro.plan.contour`), then with short *patches* (the
+  middle line of each piece still uncovered, cut to the area) for sharp corners and the parts
+  narrower than a spacing, which no contour reaches (a short one near a contour becomes a
+  spur of it);
+* connecting moves are routed inside the area (:class:`boustro.plan.routing.Router` with no
+  reach outside: its visibility graph holds the shell's reflex vertices as well as the holes').
+
+:func:`outside_length` measures, segment by segment with shapely, how much of a path lies
+outside an area or inside one of its holes (the ``outside_length`` statistic of every plan).
+Shapely is imported inside the functions (``import boustro.plan`` does not load it).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..geometry import Polygon
+from ..geometry.region import Region, as_region
+from .cells import _frame
+from .contour import _contour_passes, _lines, _pieces
+from .coverage import _aligned_boxes, _axes
+from .lanes import Lanes, _intervals_on_lines
+
+__all__ = [
+    "MARGINS",
+    "MAX_PATCHES",
+    "boundary_passes",
+    "clip_lanes",
+    "inside_layout",
+    "outside_length",
+    "shapely_area",
+]
+
+#: Patches (short passes over corners and thin parts) placed at most; more means the area has
+#: thousands of slivers narrower than a spacing, and what is left is reported as not covered.
+MAX_PATCHES = 5000
+
+
+def shapely_area(area: Region | Polygon | ArrayLike) -> Any:
+    """The area (shell and holes) as a shapely Polygon."""
+    import shapely
+
+    r = as_region(area)
+    return shapely.Polygon(r.shell.vertices, [h.vertices for h in r.holes])
+
+
+def clip_lanes(lanes: Lanes, area: Region, tol: float, margin: float = 0.0) -> Lanes:
+    """The lanes cut to their parts inside ``area`` (a lane across a bay becomes two), or with
+    ``margin > 0`` inside the area shrunk by ``margin`` (shapely); parts shorter than ``tol`` are
+    dropped: what they covered is left to the boundary passes."""
+    u, n = _frame(lanes.angle)
+    if margin > 0:
+        rows = _shrunk_intervals(lanes, area, margin)
+    else:
+        rows = _intervals_on_lines(area.edges - lanes.origin, u, n, lanes.c)
+    k, c, t0, t1 = [], [], [], []
+    for i, row in enumerate(rows):
+        for a, b in row:
+            lo, hi = max(a, float(lanes.t0[i])), min(b, float(lanes.t1[i]))
+            if hi - lo > tol:
+                k.append(int(lanes.k[i]))
+                c.append(float(lanes.c[i]))
+                t0.append(lo)
+                t1.append(hi)
+    return Lanes(
+        lanes.angle,
+        lanes.origin,
+        np.array(k, dtype=np.int64),
+        np.array(c, dtype=np.float64),
+        np.array(t0, dtype=np.float64),
+        np.array(t1, dtype=np.float64),
+        lanes.cut,
+    )
+
+
+def _shrunk_intervals(lanes: Lanes, area: Region, margin: float) -> list[list[tuple[float, float]]]:
+    """Per lane, the intervals (along it) of its line inside the area shrunk by ``margin``."""
+    import shapely
+
+    u, _ = _frame(lanes.angle)
+    inner = shapely_area(area).buffer(-margin, quad_segs=8)
+    if len(lanes.k) == 0 or inner.is_empty:
+        return [[] for _ in lanes.k]
+    shapely.prepare(inner)
+    parts = shapely.intersection(shapely.linestrings(lanes.segments), inner)
+    rows = []
+    for g in parts:
+        row = []
+        for line in shapely.get_parts(g):
+            if line.geom_type == "LineString" and not line.is_empty:
+                t = (np.asarray(line.coords) - lanes.origin) @ u
+                row.append((float(t.min()), float(t.max())))
+        rows.append(row)
+    return rows
+
+
+def _lane_footprint(
+    segments: NDArray[np.float64],
+    angles: NDArray[np.float64],
+    origin: NDArray[np.float64],
+    reach: float,
+    spacing: float,
+) -> Any:
+    """The union of the lanes' footprints (rectangles ``reach`` either side), built per lane
+    direction in that direction's frame as :func:`boustro.plan.coverage.footprint` does."""
+    import shapely
+
+    parts = []
+    for angle in np.unique(angles):
+        pick = angles == angle
+        t_lo, lo, t_hi, hi = _aligned_boxes(
+            segments[pick], float(angle), origin, [(-reach, reach)], spacing
+        )
+        real = (t_hi > t_lo) & (hi > lo)
+        union = shapely.union_all(shapely.box(t_lo, lo, t_hi, hi)[real])
+        u, n = _axes(float(angle))
+        parts.append(
+            shapely.transform(union, lambda p, u=u, n=n: origin + p[:, :1] * u + p[:, 1:] * n)
+        )
+    return shapely.union_all(parts) if parts else shapely.Polygon()
+
+
+def _patch(piece: Any, target: Any, reach: float, tol: float) -> list[NDArray[np.float64]]:
+    """Short passes over one uncovered ``piece``: the middle line of its narrowest enclosing
+    rectangle when that is at most two reaches wide (cut to the area), else a short segment
+    through a point inside it (every patch removes some of the piece)."""
+    import shapely
+
+    env = shapely.oriented_envelope(piece)
+    if env.geom_type == "Polygon":
+        c = np.asarray(env.exterior.coords)[:4]
+        sides = np.linalg.norm(c[[1, 2]] - c[[0, 1]], axis=1)
+        long_first = sides[0] >= sides[1]
+        width = float(sides[1] if long_first else sides[0])
+        if width <= 2 * reach * (1 + 1e-9):  # its middle line covers it
+            if long_first:  # c0 -> c1 is a long side: the middle line joins mid(c0 c3), mid(c1 c2)
+                line = np.stack([(c[0] + c[3]) / 2, (c[1] + c[2]) / 2])
+            else:
+                line = np.stack([(c[0] + c[1]) / 2, (c[3] + c[2]) / 2])
+            lines = _lines(shapely.intersection(shapely.LineString(line), target), tol)
+            if lines:
+                return lines
+    p = np.asarray(piece.representative_point().coords[0])
+    delta = reach / 4
+    for _ in range(30):
+        for a in np.linspace(0, math.pi, 8, endpoint=False):
+            d = delta * np.array([math.cos(a), math.sin(a)])
+            seg = np.stack([p - d, p + d])
+            if target.covers(shapely.LineString(seg)):
+                return [seg]
+        delta /= 2
+    return []
+
+
+def boundary_passes(
+    area: Region,
+    lanes: list[Lanes],
+    spacing: float,
+    reach: float,
+) -> tuple[list[NDArray[np.float64]], float]:
+    """Passes that cover what lanes cut to ``area`` leave uncovered (module docstring).
+
+    Returns:
+        ``(passes, uncovered)``: each pass an ``(P, 2)`` polyline inside the area (closed when
+        its first and last points agree), contour parts first, then patches; ``uncovered`` the
+        area still uncovered after them (0 unless :data:`MAX_PATCHES` ran out).
+    """
+    import shapely
+
+    target = shapely_area(area)
+    eps = 1e-7 * spacing  # slivers thinner than this are rounding
+    tol = 1e-9 * area.diameter
+    segments = [ls.segments for ls in lanes if len(ls.k)]
+    if segments:
+        angles = np.concatenate([np.full(len(ls.k), ls.angle) for ls in lanes if len(ls.k)])
+        covered = _lane_footprint(np.concatenate(segments), angles, area.centre, reach, spacing)
+        residual = shapely.difference(target, covered)
+    else:
+        residual = target
+    if not _pieces(residual, eps):
+        return [], 0.0
+    shapely.prepare(target)
+    passes = _contour_passes(target, residual, spacing / 2, reach, tol)
+    inner = reach  # as boustro.plan.coverage measures the passes (quad_segs=64)
+
+    def cover(lines: list[NDArray[np.float64]], rest: Any) -> Any:
+        if not lines:
+            return rest
+        geoms = [shapely.LineString(line) for line in lines]
+        band = shapely.union_all(shapely.buffer(geoms, inner, quad_segs=64))
+        return shapely.difference(rest, band)
+
+    residual = cover(passes, residual)
+    patches: list[NDArray[np.float64]] = []
+    pieces = _pieces(residual, eps)
+    while pieces and len(patches) < MAX_PATCHES:
+        new: list[NDArray[np.float64]] = []
+        for piece in pieces:
+            new += _patch(piece, target, reach, tol)
+        if not new:
+            break
+        patches += new
+        residual = cover(new, shapely.union_all(pieces))
+        pieces = _pieces(residual, eps)
+    rest = _attach(passes, patches, target, spacing)
+    return [_dedupe(p, tol) for p in passes + rest], float(sum(p.area for p in pieces))
+
+
+def _dedupe(line: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
+    """``line`` without points within ``tol`` of the one before (no zero-length edges)."""
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(line, axis=0), axis=1) > tol])
+    return line[keep]
+
+
+def _attach(
+    contours: list[NDArray[np.float64]],
+    patches: list[NDArray[np.float64]],
+    target: Any,
+    spacing: float,
+) -> list[NDArray[np.float64]]:
+    """Each short patch near a contour pass (the patch and the way to it and back at most two
+    spacings) becomes a spur of it (in place): from the contour's nearest point out along the
+    patch and back, when both legs stay in ``target``;
+    returns the patches left as passes of their own. A spur into a corner costs a few
+    centimetres where a pass of its own would cost a move there and back."""
+    import shapely
+
+    if not contours:
+        return patches
+    rest = []
+    for patch in patches:
+        seg = shapely.LineString(patch)
+        lines = [shapely.LineString(c) for c in contours]
+        d = shapely.distance(lines, seg)
+        ci = int(np.argmin(d))
+        if 2 * d[ci] + seg.length > 2 * spacing:  # a long spur would drive its patch twice
+            rest.append(patch)
+            continue
+        line = contours[ci]
+        at = lines[ci].project(shapely.Point(patch[len(patch) // 2]))
+        q = np.asarray(lines[ci].interpolate(at).coords[0])
+        a = patch[::-1] if np.linalg.norm(patch[-1] - q) < np.linalg.norm(patch[0] - q) else patch
+        if not (
+            target.covers(shapely.LineString([q, a[0]]))
+            and target.covers(shapely.LineString([a[-1], q]))
+        ):
+            rest.append(patch)
+            continue
+        cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(line, axis=0), axis=1))])
+        i = int(np.clip(np.searchsorted(cum, at, side="right") - 1, 0, len(line) - 2))
+        spur = [q[None], a, q[None]]
+        contours[ci] = np.concatenate([line[: i + 1], *spur, line[i + 1 :]])
+    return rest
+
+
+#: The margins (in spacings) inside the boundary at which :func:`inside_layout` tries cutting
+#: the lanes: at the boundary, and half a spacing inside (where the contour runs).
+MARGINS = (0.0, 0.5)
+
+
+def inside_layout(
+    area: Region, lanes: list[Lanes], spacing: float, reach: float
+) -> tuple[list[Lanes], list[NDArray[np.float64]], float]:
+    """The lanes cut inside ``area`` and the boundary passes that complete their coverage
+    (:func:`boundary_passes`), for the margin of :data:`MARGINS` whose lanes and passes are the
+    shortest together (the moves between them are not counted; a tie keeps the first).
+
+    Returns:
+        ``(lanes, passes, uncovered)``, as :func:`clip_lanes` and :func:`boundary_passes`.
+    """
+    tol = 1e-9 * area.diameter
+    best: tuple[float, list[Lanes], list[NDArray[np.float64]], float] | None = None
+    for m in MARGINS:
+        cut = [clip_lanes(ls, area, tol, m * spacing) for ls in lanes]
+        passes, uncovered = boundary_passes(area, cut, spacing, reach)
+        length = sum(float(np.sum(ls.t1 - ls.t0)) for ls in cut)
+        length += sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)
+        if best is None or (uncovered, length) < (best[3], best[0] - tol):
+            best = (length, cut, passes, uncovered)
+    assert best is not None
+    return best[1], best[2], best[3]
+
+
+def outside_length(waypoints: ArrayLike, area: Region | Polygon | ArrayLike) -> float:
+    """The length of the path through ``waypoints`` outside ``area`` or inside one of its holes
+    (plan units), measured with shapely segment by segment (a path that doubles back over
+    itself outside counts each time); a point within ``1e-9`` of the area's diameter of its
+    boundary counts as on it."""
+    import shapely
+
+    w = np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)
+    if len(w) < 2:
+        return 0.0
+    segs = np.stack([w[:-1], w[1:]], axis=1)
+    lengths = np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1)
+    keep = lengths > 0
+    if not keep.any():
+        return 0.0
+    r = as_region(area)
+    # within 1e-9 of the diameter of the boundary counts as on it (the routing's convention)
+    target = shapely_area(r).buffer(1e-9 * r.diameter, join_style="mitre")
+    shapely.prepare(target)
+    lines = shapely.linestrings(segs[keep])
+    inside = shapely.length(shapely.intersection(lines, target))
+    return float(np.sum(np.maximum(lengths[keep] - inside, 0.0)))
