@@ -9,11 +9,12 @@ reader sees either the previous complete file or the new one. pyogrio is importe
 
 from __future__ import annotations
 
+import logging
 import os
 import tempfile
 
 from ..errors import InvalidParameterError
-from ..io.read_gdal import _pyogrio
+from ..io.read_gdal import _one_line, _pyogrio
 from .gpkg import LAYERS
 
 __all__ = ["export_layers", "layer_paths"]
@@ -48,12 +49,28 @@ def export_layers(store: str, targets: dict[str, str]) -> None:
         kind = "Unknown" if layer == "fields" else "LineString"
         if driver == "ESRI Shapefile" and layer == "fields":
             kind = "Polygon"  # a Shapefile needs one type; it holds multipolygons in it
+        # FlatGeobuf's spatial index takes no null geometry (a field reported without one)
+        extra = {"SPATIAL_INDEX": "NO"} if driver == "FlatGeobuf" else {}
         with tempfile.TemporaryDirectory(prefix=".boustro-", dir=folder) as tmp:
             path = os.path.join(tmp, os.path.basename(target))
-            pyogrio.raw.write(
-                path, geometry, data, meta["fields"], crs=meta["crs"], driver=driver,
-                geometry_type=kind,
-            )  # fmt: skip
+            quiet = logging.getLogger("pyogrio")
+            level = quiet.level
+            quiet.setLevel(logging.WARNING)  # not "Created N records" on the command line
+            try:
+                pyogrio.raw.write(
+                    path, geometry, data, meta["fields"], crs=meta["crs"], driver=driver,
+                    geometry_type=kind, **extra,
+                )  # fmt: skip
+            except pyogrio.errors.DataSourceError as exc:
+                raise InvalidParameterError(
+                    f"--out {target}: GDAL cannot write it: {_one_line(exc)}"
+                ) from None
+            except (pyogrio.errors.DataLayerError, pyogrio.errors.FeatureError) as exc:
+                raise InvalidParameterError(
+                    f"--out {target}: GDAL cannot write layer {layer}: {_one_line(exc)}"
+                ) from None
+            finally:
+                quiet.setLevel(level)
             stem = os.path.splitext(os.path.basename(target))[0]
             for name in sorted(os.listdir(tmp)):  # a Shapefile is several files
                 if name.startswith(stem):

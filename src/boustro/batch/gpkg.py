@@ -125,10 +125,14 @@ class Store:
         crs: the CRS of every geometry (the input's), ``None`` for planar coordinates.
         settings: the run's settings, plain JSON; an existing file made with other settings is
             refused (resuming it would mix two plans).
+        label: how messages name the output (default ``path``).
     """
 
-    def __init__(self, path: str, crs: str | None, settings: dict[str, Any]) -> None:
+    def __init__(
+        self, path: str, crs: str | None, settings: dict[str, Any], label: str | None = None
+    ) -> None:
         self.path = path
+        self.label = label or path
         fresh = not os.path.exists(path) or os.path.getsize(path) == 0
         self.db = sqlite3.connect(path, isolation_level=None, timeout=60)
         try:
@@ -188,14 +192,14 @@ class Store:
             found = described[len(_SETTINGS) :]
         except (sqlite3.Error, TypeError, AttributeError):
             raise InvalidParameterError(
-                f"--out {self.path}: exists and is not the output of a boustro batch; give "
+                f"--out {self.label}: exists and is not the output of a boustro batch; give "
                 "another file name (or delete it)"
             ) from None
         if found != settings:
             old, new = json.loads(found), json.loads(settings)
             diff = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
             raise InvalidParameterError(
-                f"--out {self.path}: was made with other settings ({', '.join(diff)} differ); "
+                f"--out {self.label}: was made with other settings ({', '.join(diff)} differ); "
                 "resume it with the same command, or give another file name"
             )
         return int(srs_id)

@@ -170,14 +170,16 @@ def batch(
         options = PlanOptions(**plan_options)
     elif plan_options:
         raise InvalidParameterError("give options= or option keywords, not both")
-    options.spacing_arg()  # no spacing at all: one error, not one per field
+    # No spacing at all: one error, not one per field (columns checked with a placeholder).
+    options.for_field({c: 1.0 for c in options.columns.values()}).spacing_arg()
     fmt = _check_missions(None if missions is None else os.fspath(missions), mission_format)
     out = os.fspath(out)
     source = _source(fields, layer, crs, options)
     settings = {"options": options.settings(), "crs": source.crs, "missions": fmt}
     targets = layer_paths(out)  # an unknown format: refused before any work
     t0 = time.perf_counter()
-    store = Store(store_path(out), source.crs, settings)
+    label = out if not targets else f"{out} (its state {store_path(out)})"
+    store = Store(store_path(out), source.crs, settings, label)
     try:
         done = store.done()
         todo = [f for f in source.features if f.field_id not in done]
