@@ -17,6 +17,7 @@ import json
 import os
 import sqlite3
 import struct
+import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -56,7 +57,7 @@ LAYERS = (
         "fields",
         "GEOMETRY",
         (("field_id", "INTEGER"), ("name", "TEXT"), ("status", "TEXT"), ("error", "TEXT"),
-         ("parts", "INTEGER"), ("lanes", "INTEGER"), ("turns", "INTEGER"),
+         ("parts", "INTEGER"), ("lanes", "INTEGER"), ("segments", "INTEGER"), ("turns", "INTEGER"),
          ("transect_length_m", "REAL"), ("path_length_m", "REAL"), ("duration_s", "REAL"),
          ("covered_share", "REAL"), ("certified", "BOOLEAN"), ("gap", "REAL"),
          ("method", "TEXT"), ("angle_deg", "REAL"), ("bearing_deg", "REAL"),
@@ -133,26 +134,46 @@ class Store:
     ) -> None:
         self.path = path
         self.label = label or path
-        fresh = not os.path.exists(path) or os.path.getsize(path) == 0
+        text = json.dumps(settings, sort_keys=True)
+        if not os.path.exists(path) or os.path.getsize(path) == 0:
+            self._create_file(crs, text)
         self.db = sqlite3.connect(path, isolation_level=None, timeout=60)
         try:
-            text = json.dumps(settings, sort_keys=True)
-            if fresh:  # the header first: GDAL reads it from the file, not through the WAL
-                self.db.execute(f"PRAGMA application_id = {_APPLICATION_ID}")
-                self.db.execute(f"PRAGMA user_version = {_USER_VERSION}")
             self.db.execute("PRAGMA journal_mode=WAL")
-            if fresh:
-                self.srs_id = self._create(crs, text)
-            else:
-                self.srs_id = self._check(text)
+            self.srs_id = self._check(text)
         except BaseException:
             self.db.close()
             raise
         self._extents: dict[str, list[float]] = {}
 
-    def _create(self, crs: str | None, settings: str) -> int:
+    def _create_file(self, crs: str | None, settings: str) -> None:
+        """A new, empty GeoPackage, made beside ``path`` and renamed into place (a reader
+        never sees it half-made)."""
+        folder = os.path.dirname(os.path.abspath(self.path))
+        if not os.path.isdir(folder):
+            raise InvalidParameterError(f"--out {self.label}: no such folder {folder}")
+        fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(self.path)}.", dir=folder)
+        os.close(fd)
+        try:
+            db = sqlite3.connect(tmp, isolation_level=None)
+            try:
+                db.execute(f"PRAGMA application_id = {_APPLICATION_ID}")
+                db.execute(f"PRAGMA user_version = {_USER_VERSION}")
+                self._create(db, crs, settings)
+            finally:
+                db.close()
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)  # as a new file (mkstemp makes it private)
+            os.replace(tmp, self.path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+
+    @staticmethod
+    def _create(db: sqlite3.Connection, crs: str | None, settings: str) -> None:
         srs = _srs_row(crs)
-        db = self.db
         db.execute("BEGIN")
         for sql in (_SRS_TABLE, _CONTENTS_TABLE, _GEOMETRY_TABLE):
             db.execute(sql)
@@ -180,7 +201,6 @@ class Store:
             )
         db.execute("CREATE INDEX fields_field_id ON fields (field_id)")
         db.execute("COMMIT")
-        return srs[1]
 
     def _check(self, settings: str) -> int:
         try:

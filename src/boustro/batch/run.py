@@ -71,7 +71,7 @@ def _chunks(features: list[Feature], size: int) -> Iterator[list[Feature]]:
 def _lost(chunk: list[Feature], exc: BaseException, job: Job) -> list[FieldResult]:
     """Error rows for the fields of a chunk that its worker lost."""
     text = " ".join(f"{type(exc).__name__}: {exc}".split())
-    empty: list[Any] = [None] * 17
+    empty: list[Any] = [None] * 18
     return [
         FieldResult(f.field_id, "error", {"fields": [(None, f.field_id, f.name, "error",
                     f"the worker planning it failed: {text}", *empty)]})

@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import math
 import os
+import sqlite3
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from ..errors import InvalidParameterError, PolygonFileError
@@ -59,6 +61,25 @@ def _plain(value: Any) -> Any:
     return value
 
 
+def _gdal_undefined(path: str) -> bool:
+    """A GeoPackage whose geometry columns all use GDAL's "Undefined SRS" (what GDAL writes for
+    a layer without a CRS): no CRS, so each field is reported, not the file refused."""
+    try:
+        db = sqlite3.connect(Path(path).resolve().as_uri() + "?mode=ro", uri=True)
+        try:
+            rows = db.execute(
+                "SELECT definition FROM gpkg_spatial_ref_sys WHERE srs_id IN "
+                "(SELECT srs_id FROM gpkg_geometry_columns)"
+            ).fetchall()
+        finally:
+            db.close()
+    except sqlite3.Error:
+        return False  # the full check says what is wrong
+    return bool(rows) and all(
+        isinstance(d, str) and d.startswith('LOCAL_CS["Undefined SRS"') for (d,) in rows
+    )
+
+
 def _pick_layer(pyogrio: Any, path: str, layer: str | None, where: str) -> str:
     layers = [(str(n), k) for n, k in pyogrio.list_layers(path)]
     if layer is not None:
@@ -99,7 +120,8 @@ def read_source(
     if crs is None and name.lower().endswith(".shp"):
         _check_prj(name, where)
     if crs is None and (name.lower().endswith(".gpkg") or _is_sqlite(name)):
-        _check_gpkg(name, where)
+        if not _gdal_undefined(name):
+            _check_gpkg(name, where)
     try:
         chosen = _pick_layer(pyogrio, name, layer, where)
         info = pyogrio.read_info(name, layer=chosen)

@@ -163,7 +163,7 @@ def plan_feature(feature: Feature, job: Job) -> FieldResult:
             area = _area(poly, feature, job.crs, k, len(polygons))
             planned.append(_plan_part(area, options))
     except Exception as exc:  # every failure is the field's error row, never the run's
-        empty: list[Any] = [None] * 17
+        empty: list[Any] = [None] * 18
         row = (geometry, feature.field_id, feature.name, "error", _one_line(exc), *empty)
         return FieldResult(feature.field_id, "error", {"fields": [row]})
     return _result(feature, job, geometry, planned, time.perf_counter() - t0)
@@ -203,7 +203,7 @@ def _result(
     notes = "; ".join(n for _, ns in planned for n in ns) or None
     row = (
         geometry, feature.field_id, feature.name, "ok", None, len(missions),
-        sum(s.n_transects for s in stats), sum(s.n_turns for s in stats),
+        sum(s.n_transects for s in stats), len(lanes), sum(s.n_turns for s in stats),
         sum(s.transect_length for s in stats), sum(s.path_length for s in stats),
         None if None in durations else sum(d for d in durations if d is not None),
         sum(covered) / area if len(covered) == len(missions) and area > 0 else None,
