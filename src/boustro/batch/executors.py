@@ -4,8 +4,10 @@ Each runner takes an iterator of chunks (lists of features) and yields ``(chunk,
 chunks finish, in completion order, keeping a bounded number in flight (memory stays flat on a
 million fields). A chunk that fails as a whole (a worker process killed, a Dask worker lost)
 yields ``(chunk, exc)``; the caller turns it into error rows, so nothing is lost. The local pool
-starts its processes with ``spawn`` (no torch state forked) and imports
-:mod:`boustro.batch.worker` once in each.
+forks its processes from a fork server that imported :mod:`boustro.batch.worker` once (no
+torch state of the caller is forked; ``spawn`` where there is no fork server). As with any
+``multiprocessing`` code, a script that calls :func:`boustro.batch` with several workers needs
+the ``if __name__ == "__main__":`` guard (its main module is imported in the workers).
 """
 
 from __future__ import annotations
@@ -63,6 +65,16 @@ def _first_done(futures: list[Future]) -> set[Future]:
     return wait(futures, return_when=FIRST_COMPLETED)[0]
 
 
+def _context() -> Any:
+    """Worker processes forked from a fork server that imported this module once (each worker
+    starts in milliseconds, with nothing of this process's torch state), else spawned."""
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload([__name__, "shapely", "pyproj"])  # imported on use else
+    return context
+
+
 def run_local(
     chunks: Iterable[list[Feature]], job: Job, workers: int, rounds: int = 3
 ) -> Iterator[Outcome]:
@@ -70,7 +82,7 @@ def run_local(
     memory) is retried one field at a time on a new pool, the last of ``rounds`` one field at
     a time, so that only a field that kills its worker itself is lost: it is yielded with the
     exception."""
-    context = multiprocessing.get_context("spawn")
+    context = _context()
     in_flight = 2 * workers if rounds > 1 else 1
     retry: list[list[Feature]] = []
     pools = [ProcessPoolExecutor(workers, mp_context=context, initializer=start_worker)]

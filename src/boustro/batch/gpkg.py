@@ -61,7 +61,8 @@ LAYERS = (
          ("transect_length_m", "REAL"), ("path_length_m", "REAL"), ("duration_s", "REAL"),
          ("covered_share", "REAL"), ("certified", "BOOLEAN"), ("gap", "REAL"),
          ("method", "TEXT"), ("angle_deg", "REAL"), ("bearing_deg", "REAL"),
-         ("spacing_m", "REAL"), ("area_m2", "REAL"), ("seconds", "REAL"), ("mission", "TEXT"),
+         ("spacing_m", "REAL"), ("area_m2", "REAL"), ("seconds", "REAL"), ("cpu_seconds", "REAL"),
+         ("mission", "TEXT"),
          ("note", "TEXT")),
     ),
 )  # fmt: skip

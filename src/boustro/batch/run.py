@@ -71,7 +71,7 @@ def _chunks(features: list[Feature], size: int) -> Iterator[list[Feature]]:
 def _lost(chunk: list[Feature], exc: BaseException, job: Job) -> list[FieldResult]:
     """Error rows for the fields of a chunk that its worker lost."""
     text = " ".join(f"{type(exc).__name__}: {exc}".split())
-    empty: list[Any] = [None] * 18
+    empty: list[Any] = [None] * 19
     return [
         FieldResult(f.field_id, "error", {"fields": [(None, f.field_id, f.name, "error",
                     f"the worker planning it failed: {text}", *empty)]})
@@ -218,17 +218,17 @@ def _outcomes(
 ) -> Iterator[Outcome]:  # fmt: skip
     if chunk_size < 1:
         raise InvalidParameterError(f"chunk_size must be >= 1, got {chunk_size!r}")
-    chunks = _chunks(todo, chunk_size)
     if client is not None or scheduler is not None:
-        yield from _on_dask(chunks, job, client, scheduler)
+        yield from _on_dask(_chunks(todo, chunk_size), job, client, scheduler)
         return
     count = (os.cpu_count() or 1) if workers is None else workers
     if count < 1:
         raise InvalidParameterError(f"workers must be >= 1, got {workers!r}")
-    if count == 1 or len(todo) <= chunk_size:
-        yield from run_inline(chunks, job)
-    else:
-        yield from run_local(chunks, job, count)
+    if count == 1 or len(todo) <= 1:
+        yield from run_inline(_chunks(todo, chunk_size), job)
+    else:  # chunks small enough that every worker gets several (few fields: no idle worker)
+        size = max(1, min(chunk_size, len(todo) // (4 * count)))
+        yield from run_local(_chunks(todo, size), job, count)
 
 
 def _on_dask(chunks: Iterator[list[Feature]], job: Job, client: Any, scheduler: str | None):

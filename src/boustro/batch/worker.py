@@ -147,7 +147,7 @@ def plan_feature(feature: Feature, job: Job) -> FieldResult:
     """Plan one feature (each polygon of a multi-part one); never raises for bad input."""
     import shapely
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.thread_time()
     geometry = None
     try:
         geom, polygons = _polygons(feature)
@@ -163,10 +163,11 @@ def plan_feature(feature: Feature, job: Job) -> FieldResult:
             area = _area(poly, feature, job.crs, k, len(polygons))
             planned.append(_plan_part(area, options))
     except Exception as exc:  # every failure is the field's error row, never the run's
-        empty: list[Any] = [None] * 18
+        empty: list[Any] = [None] * 19
         row = (geometry, feature.field_id, feature.name, "error", _one_line(exc), *empty)
         return FieldResult(feature.field_id, "error", {"fields": [row]})
-    return _result(feature, job, geometry, planned, time.perf_counter() - t0)
+    seconds = (time.perf_counter() - t0, time.thread_time() - c0)
+    return _result(feature, job, geometry, planned, seconds)
 
 
 def _result(
@@ -174,7 +175,7 @@ def _result(
     job: Job,
     geometry: bytes | None,
     planned: list[tuple[Mission, list[str]]],
-    seconds: float,
+    seconds: tuple[float, float],
 ) -> FieldResult:
     lanes, paths, files = [], [], []
     missions = [m for m, _ in planned]
@@ -209,7 +210,7 @@ def _result(
         sum(covered) / area if len(covered) == len(missions) and area > 0 else None,
         certified, None if None in gaps else max(g for g in gaps if g is not None),
         first.optimum.method, math.degrees(first.plan.angle), first.bearing, first.spacing,
-        area, seconds, ",".join(n for n, _ in files) or None, notes,
+        area, *seconds, ",".join(n for n, _ in files) or None, notes,
     )  # fmt: skip
     rows: dict[str, list[tuple[Any, ...]]] = {"lanes": lanes, "paths": paths, "fields": [row]}
     return FieldResult(feature.field_id, "ok", rows, files)
