@@ -180,25 +180,25 @@ class Store:
             db.execute(sql)
         rows = _UNDEFINED + ([srs] if srs[1] not in (-1, 0) else [])
         db.executemany("INSERT INTO gpkg_spatial_ref_sys VALUES (?, ?, ?, ?, ?, ?)", rows)
-        for layer in LAYERS:
-            columns = "".join(f', "{c}" {t}' for c, t in layer.columns)
+        for table in LAYERS:
+            columns = "".join(f', "{c}" {t}' for c, t in table.columns)
             db.execute(
-                f'CREATE TABLE "{layer.name}" (fid INTEGER PRIMARY KEY AUTOINCREMENT, '
-                f"geom {layer.geometry_type}{columns})"
+                f'CREATE TABLE "{table.name}" (fid INTEGER PRIMARY KEY AUTOINCREMENT, '
+                f"geom {table.geometry_type}{columns})"
             )
             db.execute(
                 "INSERT INTO gpkg_contents (table_name, data_type, identifier, description, "
                 "srs_id) VALUES (?, 'features', ?, ?, ?)",
                 (
-                    layer.name,
-                    layer.name,
-                    _SETTINGS + settings if layer.name == "fields" else "",
+                    table.name,
+                    table.name,
+                    _SETTINGS + settings if table.name == "fields" else "",
                     srs[1],
                 ),
             )
             db.execute(
                 "INSERT INTO gpkg_geometry_columns VALUES (?, 'geom', ?, ?, 0, 0)",
-                (layer.name, layer.geometry_type, srs[1]),
+                (table.name, table.geometry_type, srs[1]),
             )
         db.execute("CREATE INDEX fields_field_id ON fields (field_id)")
         db.execute("COMMIT")
@@ -237,23 +237,23 @@ class Store:
         db = self.db
         db.execute("BEGIN IMMEDIATE")
         try:
-            for layer in LAYERS:
-                marks = ", ".join("?" * (len(layer.columns) + 1))
-                names = ", ".join(["geom"] + [f'"{c}"' for c, _ in layer.columns])
+            for table in LAYERS:
+                marks = ", ".join("?" * (len(table.columns) + 1))
+                names = ", ".join(["geom"] + [f'"{c}"' for c, _ in table.columns])
                 db.executemany(
-                    f'INSERT INTO "{layer.name}" ({names}) VALUES ({marks})',
-                    rows.get(layer.name, ()),
+                    f'INSERT INTO "{table.name}" ({names}) VALUES ({marks})',
+                    rows.get(table.name, ()),
                 )
             db.execute("COMMIT")
         except BaseException:
             db.execute("ROLLBACK")
             raise
 
-    def _extend(self, layer: str, blob: bytes | None) -> None:
+    def _extend(self, name: str, blob: bytes | None) -> None:
         if blob is None or blob[3] & 0b1110 != 0b0010:  # no xy envelope
             return
         x0, x1, y0, y1 = struct.unpack_from("<4d", blob, 8)
-        box = self._extents.setdefault(layer, [x0, y0, x1, y1])
+        box = self._extents.setdefault(name, [x0, y0, x1, y1])
         box[:] = [min(box[0], x0), min(box[1], y0), max(box[2], x1), max(box[3], y1)]
 
     def close(self) -> None:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import os
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -108,8 +108,8 @@ class _Writer:
         for r in results:
             for path, data in r.files:  # written before the row that names them is committed
                 atomic_write(os.path.join(self.missions or ".", path), data)
-            for layer, rows in r.rows.items():
-                self.pending.setdefault(layer, []).extend(rows)
+            for name, rows in r.rows.items():
+                self.pending.setdefault(name, []).extend(rows)
             self.planned += r.status == "ok"
             self.failed += r.status != "ok"
         self.count += len(results)
@@ -186,11 +186,13 @@ def batch(
         job = Job(options, source.crs, source.crs_missing, store.srs_id, fmt)
         writer = _Writer(store, None if missions is None else os.fspath(missions),
                          _bar(len(todo), progress))  # fmt: skip
+        outcomes = _outcomes(todo, job, workers, client, scheduler, chunk_size)
         try:
-            for chunk, outcome in _outcomes(todo, job, workers, client, scheduler, chunk_size):
+            for chunk, outcome in outcomes:
                 writer.add(_lost(chunk, outcome, job) if isinstance(outcome, BaseException)
                            else outcome)  # fmt: skip
         finally:
+            outcomes.close()  # the pool stopped now (Ctrl-C: the running chunks end first)
             writer.commit()
             writer.bar.close()
     finally:
@@ -215,7 +217,7 @@ def _source(fields: Any, layer: str | None, crs: str | None, options: PlanOption
 def _outcomes(
     todo: list[Feature], job: Job, workers: int | None, client: Any, scheduler: str | None,
     chunk_size: int,
-) -> Iterator[Outcome]:  # fmt: skip
+) -> Generator[Outcome, None, None]:  # fmt: skip
     if chunk_size < 1:
         raise InvalidParameterError(f"chunk_size must be >= 1, got {chunk_size!r}")
     if client is not None or scheduler is not None:

@@ -74,10 +74,14 @@ class FieldResult:
 
 
 def start_worker() -> None:
-    """Initialise a worker process: one torch thread (the processes are the parallelism)."""
+    """Initialise a worker process: one torch thread (the processes are the parallelism), and
+    Ctrl-C left to the parent (which commits what is done and stops the pool)."""
+    import signal
+
     import torch
 
     torch.set_num_threads(1)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def plan_chunk(features: list[Feature], job: Job) -> list[FieldResult]:
