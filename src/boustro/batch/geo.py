@@ -114,7 +114,7 @@ def plan_area(
         >>> import shapely
         >>> plan = plan_area(shapely.box(0, 0, 100, 60), 10.0)
         >>> plan.lanes.geom_type, len(plan.lanes.geoms), plan.path.geom_type
-        ('MultiLineString', 6, 'LineString')
+        ('MultiLineString', 8, 'LineString')
     """
     return GeoPlan(tuple(_plan_each(areas_from_object(geometry, crs), spacing, repair, options)))
 
