@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from ..errors import InvalidParameterError
+from ..mission.defaults import DEFAULT_HULL_TOLERANCE
 from ..objectives import get_objective
 from ..sensors import Camera, Swath
 
@@ -61,7 +62,7 @@ class PlanOptions:
     speed: float | None = None
     turn_time: float = 0.0
     layout: str = "guaranteed"
-    hull_tolerance: float = 0.5
+    hull_tolerance: float = DEFAULT_HULL_TOLERANCE
     decompose: bool | None = None
     sweep: float | None = None
     force: bool = False

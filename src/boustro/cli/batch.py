@@ -72,6 +72,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     _add_spacing(p)
     _add_optimiser(p)
     _add_path(p)
+    for action in p._actions:  # a start point is one field's: refused (see _options), unlisted
+        if action.dest == "start":
+            action.help = argparse.SUPPRESS
     columns = p.add_argument_group(
         "per-field values", "take an option from an attribute column of each field"
     )
