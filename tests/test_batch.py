@@ -5,6 +5,7 @@ entry ``boustro.plan_area`` and the GeoDataFrame helpers."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import sqlite3
@@ -451,3 +452,43 @@ def test_import_boustro_stays_light():
     env = {**os.environ, "PYTHONPATH": str(SRC)}
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert done.stdout.splitlines() == ["", "True boustro.batch.geo"]
+
+
+@dataclasses.dataclass(frozen=True)
+class _Killer(PlanOptions):
+    """Options whose field with spacing 13 kills its worker process (an out-of-memory kill)."""
+
+    def for_field(self, values):
+        if values.get("sp") == 13.0:
+            os._exit(3)
+        return super().for_field(values)
+
+
+def test_a_field_that_kills_its_worker_is_its_own_error_row(tmp_path):
+    path = tmp_path / "killer.gpkg"
+    rng = np.random.default_rng(5)
+    spacing = [10.0] * 12
+    spacing[5] = 13.0
+    _write(path, [_convex(rng) for _ in range(12)], [f"f{i}" for i in range(12)], spacing)
+    out = tmp_path / "out.gpkg"
+    options = _Killer(spacing=10.0, columns={"spacing": "sp"})
+    result = boustro.batch(path, out, options, workers=2, chunk_size=4)
+    rows = _consistent(out)
+    assert (result.planned, result.failed) == (11, 1)
+    error = dict(zip(rows["name"], rows["error"], strict=True))["f5"]
+    assert error.startswith("the worker planning it failed: BrokenProcessPool")
+
+
+def test_multipolygon_feature_is_planned_part_by_part_with_a_progress_bar(tmp_path, capsys):
+    path = tmp_path / "multi.gpkg"
+    multi = shapely.MultiPolygon([shapely.box(0, 0, 100, 60), shapely.box(300, 0, 380, 80)])
+    _write(path, [multi], ["two parts"], [10.0])
+    out = tmp_path / "out.gpkg"
+    result = boustro.batch(path, out, spacing=10.0, workers=1, progress=True)
+    assert result.planned == 1 and "field/s" in capsys.readouterr().err
+    rows, paths = _consistent(out), _layer(out, "paths")
+    parts = [plan_area(Area(np.asarray(p.exterior.coords)[:-1], CRS, "p", "t"), 10.0)
+             for p in multi.geoms]  # fmt: skip
+    assert rows["parts"].tolist() == [2] and paths["part"].tolist() == [1, 2]
+    assert rows["lanes"].tolist() == [sum(m.stats.n_transects for m in parts)]
+    assert rows["path_length_m"][0] == pytest.approx(sum(m.stats.path_length for m in parts))
