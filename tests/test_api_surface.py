@@ -25,6 +25,8 @@ SURFACE = {
     # plans and sensors
     "Plan", "PlanStats", "build_plan", "coverage", "guaranteed_segments", "optimize_region",
     "plan_region", "Camera", "Swath",
+    # batch and the geo stack (resolved on first use: import boustro loads neither)
+    "batch", "plan_area",
     "__version__",
 }  # fmt: skip
 

@@ -70,6 +70,23 @@ from .plan.region_opt import optimize_region
 from .scoring import Score, Segments, make_model, score, transect_segments
 from .sensors import Camera, Swath
 
+#: Names resolved on first use (``"module:attribute"``), so that ``import boustro`` loads no file
+#: formats or projections: the batch (a callable package) and the geo-stack entry.
+_LAZY = {"batch": "boustro.batch", "plan_area": "boustro.batch.geo:plan_area"}
+
+
+def __getattr__(name: str) -> object:
+    """``boustro.batch`` and ``boustro.plan_area``, imported on first use (see :data:`_LAZY`)."""
+    target = _LAZY.get(name)
+    if target is None:
+        raise AttributeError(f"module 'boustro' has no attribute {name!r}")
+    import importlib
+
+    module, _, attribute = target.partition(":")
+    found = importlib.import_module(module)
+    return getattr(found, attribute) if attribute else found
+
+
 __all__ = [
     "DEFAULT_SMOOTHING",
     "GRID_200",
@@ -104,6 +121,7 @@ __all__ = [
     "TransectLengths",
     "TransectModel",
     "__version__",
+    "batch",
     "best_offset",
     "build_plan",
     "coverage",
@@ -121,6 +139,7 @@ __all__ = [
     "optimize_region",
     "paper_lengths",
     "path_length",
+    "plan_area",
     "plan_region",
     "region_segments",
     "register_method",

@@ -19,7 +19,7 @@ from ..errors import BoustroError
 __all__ = ["build_parser", "main"]
 
 #: Subcommand modules, in the order ``--help`` lists them.
-SUBCOMMANDS = ("score", "optimize", "plan", "serve", "train", "reproduce")
+SUBCOMMANDS = ("score", "optimize", "plan", "batch", "serve", "train", "reproduce")
 
 
 def build_parser() -> argparse.ArgumentParser:

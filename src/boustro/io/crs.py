@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -31,6 +33,14 @@ __all__ = [
 
 
 log = logging.getLogger("boustro")
+
+
+@functools.lru_cache(maxsize=64)
+def _transformer(source: str | None, target: str | None, thread: int) -> Any:
+    """``pyproj.Transformer.from_crs(source, target)``, made once per thread (making one takes
+    ~15 ms, more than planning a small field: a batch plans thousands in the same CRSs)."""
+    return _pyproj().Transformer.from_crs(source, target, always_xy=True)
+
 
 _PLANAR_NAMES = ("planar", "local", "none")
 
@@ -204,12 +214,11 @@ class Projection:
             self._transformers(plan_crs, source_crs)
 
     def _transformers(self, plan_crs: str | None, source_crs: str) -> None:
-        pyproj = _pyproj()
         if plan_crs != source_crs:
-            self._fwd = pyproj.Transformer.from_crs(source_crs, plan_crs, always_xy=True)
-            self._inv = pyproj.Transformer.from_crs(plan_crs, source_crs, always_xy=True)
-        self._lonlat = pyproj.Transformer.from_crs(plan_crs, LONLAT, always_xy=True)
-        self._geod = pyproj.Geod(ellps="WGS84")
+            self._fwd = _transformer(source_crs, plan_crs, threading.get_ident())
+            self._inv = _transformer(plan_crs, source_crs, threading.get_ident())
+        self._lonlat = _transformer(plan_crs, LONLAT, threading.get_ident())
+        self._geod = _pyproj().Geod(ellps="WGS84")
 
     def __repr__(self) -> str:
         return (

@@ -1,0 +1,77 @@
+"""A batch's layers in another vector format than GeoPackage: one file per layer.
+
+The run appends to its GeoPackage (:func:`boustro.batch.run.store_path`); for an output named
+``plans.fgb`` (or ``.shp``, ``.geojson``, any format GDAL writes and pyogrio recognises by its
+extension) each layer is then written as ``plans.lanes.fgb``, ``plans.paths.fgb``,
+``plans.fields.fgb``: into a temporary folder beside them, then renamed into place, so that a
+reader sees either the previous complete file or the new one. pyogrio is imported on use.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import tempfile
+
+from ..errors import InvalidParameterError
+from ..io.read_gdal import _one_line, _pyogrio
+from .gpkg import LAYERS
+
+__all__ = ["export_layers", "layer_paths"]
+
+
+def layer_paths(out: str) -> dict[str, str]:
+    """``{layer: file}`` for an output that is not a GeoPackage (``{}`` for one).
+
+    Raises:
+        InvalidParameterError: GDAL writes no format of that extension (or several).
+    """
+    if out.lower().endswith(".gpkg"):
+        return {}
+    pyogrio = _pyogrio("a batch's output in another format than GeoPackage")
+    try:
+        pyogrio.raw.detect_write_driver(out)
+    except ValueError as exc:
+        raise InvalidParameterError(
+            f"--out {out}: {' '.join(str(exc).split())} (a .gpkg holds every layer in one file)"
+        ) from None
+    stem, ext = os.path.splitext(out)
+    return {layer.name: f"{stem}.{layer.name}{ext}" for layer in LAYERS}
+
+
+def export_layers(store: str, targets: dict[str, str]) -> None:
+    """Write each layer of the GeoPackage ``store`` to its file in ``targets``."""
+    pyogrio = _pyogrio("a batch's output in another format than GeoPackage")
+    for layer, target in targets.items():
+        folder = os.path.dirname(os.path.abspath(target))
+        driver = pyogrio.raw.detect_write_driver(target)
+        meta, _, geometry, data = pyogrio.raw.read(store, layer=layer)
+        kind = "Unknown" if layer == "fields" else "LineString"
+        if driver == "ESRI Shapefile" and layer == "fields":
+            kind = "Polygon"  # a Shapefile needs one type; it holds multipolygons in it
+        # FlatGeobuf's spatial index takes no null geometry (a field reported without one)
+        extra = {"SPATIAL_INDEX": "NO"} if driver == "FlatGeobuf" else {}
+        with tempfile.TemporaryDirectory(prefix=".boustro-", dir=folder) as tmp:
+            path = os.path.join(tmp, os.path.basename(target))
+            quiet = logging.getLogger("pyogrio")
+            level = quiet.level
+            quiet.setLevel(logging.WARNING)  # not "Created N records" on the command line
+            try:
+                pyogrio.raw.write(
+                    path, geometry, data, meta["fields"], crs=meta["crs"], driver=driver,
+                    geometry_type=kind, **extra,
+                )  # fmt: skip
+            except pyogrio.errors.DataSourceError as exc:
+                raise InvalidParameterError(
+                    f"--out {target}: GDAL cannot write it: {_one_line(exc)}"
+                ) from None
+            except (pyogrio.errors.DataLayerError, pyogrio.errors.FeatureError) as exc:
+                raise InvalidParameterError(
+                    f"--out {target}: GDAL cannot write layer {layer}: {_one_line(exc)}"
+                ) from None
+            finally:
+                quiet.setLevel(level)
+            stem = os.path.splitext(os.path.basename(target))[0]
+            for name in sorted(os.listdir(tmp)):  # a Shapefile is several files
+                if name.startswith(stem):
+                    os.replace(os.path.join(tmp, name), os.path.join(folder, name))
