@@ -23,6 +23,9 @@ from .sandwich import Sandwich
 
 __all__ = ["CoverSearch", "cover_optimum"]
 
+#: Work budget of a search: boxes bounded (and modelled) times the area's edges (about 0.25 s
+#: per million on the project's machine).
+MAX_WORK = 4e6
 #: Plans evaluated per round at most (the layouts with the lowest point bound).
 PLANS_PER_ROUND = 3
 #: Plans evaluated at the first round, at angles this far apart (radians) at least.
@@ -52,7 +55,7 @@ EDGE_PLANS = 12
 #: Smallest box radius (relative to the spacing) of a routed plan's search.
 RESOLVE_EPS = 1e-3
 #: Plans of the best modelled layouts (one per degree) after the search of a routed plan.
-POLISH_PLANS = 16
+POLISH_PLANS = 32
 #: Offsets planned at the best angle after the search of a routed plan.
 REFINE_OFFSETS = 8
 #: Offset boxes at the first round of a fixed-angle search.
@@ -278,7 +281,7 @@ def cover_optimum(
     rtol: float = 1e-3,
     n_angles: int = 90,
     min_eps: float | None = None,
-    max_boxes: int = 400_000,
+    max_work: float = MAX_WORK,
     max_seconds: float | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> OptimizeResult:
@@ -293,7 +296,8 @@ def cover_optimum(
     boxes are evaluated by ``evaluate(angle, offset) -> cost`` (the real planner: upper bounds);
     a box whose bound is within ``rtol`` of the best plan is discarded, the others are halved,
     until none is left or the radius falls below ``min_eps`` (default ``1e-6`` of the
-    spacing), ``max_boxes`` boxes were bounded or ``max_seconds`` passed.
+    spacing), the boxes bounded times the area's edges exceed ``max_work`` (a count, not a
+    time, so that plans do not depend on the machine's load) or ``max_seconds`` passed.
 
     Args:
         region: the area (plan units), convex or not, with holes.
@@ -371,9 +375,10 @@ def cover_optimum(
             boxes = boxes.take(~fine)
             if not len(boxes.theta):
                 break
-        if search.bound_evaluations + 4 * len(boxes.theta) > max_boxes:
+        edges = len(search.sandwich.exact.outer.xy)
+        if (search.bound_evaluations + 8 * len(boxes.theta)) * edges > max_work:
             floor = min(floor, float(bounds[~fine].min()))
-            stopped = f"{max_boxes} boxes bounded"
+            stopped = f"the work budget ({max_work:.0e} box edges) was spent"
             break
         if max_seconds is not None and time.perf_counter() - t0 > max_seconds:
             floor = min(floor, float(bounds[~fine].min()))
