@@ -54,7 +54,7 @@ class PlanOptions:
     overlap: float | None = None
     nadir_gap: float = 0.0
     method: str | None = None
-    objective: str = "smith"
+    objective: str | None = None  # plan_area's default: mission time with a speed, else Eq. 1
     angle: float | None = None
     bearing: float | None = None
     turnaround: float = 0.0
@@ -76,7 +76,8 @@ class PlanOptions:
                 f"no per-field column for {', '.join(unknown)}; columns can give "
                 f"{', '.join(COLUMN_OPTIONS)}"
             )
-        get_objective(self.objective)  # an unknown objective: one error before any field
+        if self.objective is not None:
+            get_objective(self.objective)  # an unknown objective: one error before any field
 
     def settings(self) -> dict[str, Any]:
         """Plain JSON of the options (stored with the output)."""
@@ -123,7 +124,7 @@ class PlanOptions:
         """The keyword arguments of :func:`boustro.mission.plan_area` besides the spacing."""
         return dict(
             method=self.method,
-            fitness=get_objective(self.objective),
+            fitness=None if self.objective is None else get_objective(self.objective),
             turnaround=self.turnaround,
             speed=self.speed,
             turn_time=self.turn_time,
