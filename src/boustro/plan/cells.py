@@ -79,22 +79,46 @@ class Trapezoids(NamedTuple):
         )
 
 
+def _crossing_pairs(
+    edges: NDArray[np.float64], u: NDArray[np.float64], n: NDArray[np.float64], c: ArrayLike
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64]]:
+    """Every crossing of lines ``n . p = c`` with ``edges (E, 2, 2)`` as ``(line, t, edge)``,
+    sorted by line, then ``t``, then edge: a sweep (each edge spans a run of the sorted lines),
+    ``O((E + K) log K + crossings)``, never the dense ``(K, E)`` test."""
+    c = np.asarray(c, dtype=np.float64).reshape(-1)
+    c1, c2 = edges[:, 0] @ n, edges[:, 1] @ n
+    t1, t2 = edges[:, 0] @ u, edges[:, 1] @ u
+    order = np.argsort(c, kind="stable")
+    cs = c[order]
+    # line c crosses edge i iff (c1 <= c) != (c2 <= c), i.e. min(c1, c2) <= c < max(c1, c2)
+    first = np.searchsorted(cs, np.minimum(c1, c2), side="left")
+    last = np.searchsorted(cs, np.maximum(c1, c2), side="left")
+    counts = np.maximum(last - first, 0)
+    edge = np.repeat(np.arange(len(c1)), counts)
+    start = np.repeat(np.cumsum(counts) - counts, counts)
+    line = order[np.repeat(first, counts) + (np.arange(len(edge)) - start)]
+    dc = c2 - c1
+    slope = (t2 - t1) / np.where(dc == 0, 1.0, dc)
+    t = t1[edge] + (c[line] - c1[edge]) * slope[edge]
+    by = np.lexsort((edge, t, line))
+    return line[by].astype(np.int64), t[by], edge[by].astype(np.int64)
+
+
 def _crossings(
     edges: NDArray[np.float64], u: NDArray[np.float64], n: NDArray[np.float64], c: ArrayLike
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
     """Sorted crossings of lines ``n . p = c`` with ``edges (E, 2, 2)``: ``(t, edge, count)``
-    with ``t, edge`` ``(K, E)`` (padded with inf / -1) and ``count (K,)``."""
-    c = np.asarray(c, dtype=np.float64).reshape(-1)
-    c1, c2 = edges[:, 0] @ n, edges[:, 1] @ n
-    t1, t2 = edges[:, 0] @ u, edges[:, 1] @ u
-    cross = (c1[None] <= c[:, None]) != (c2[None] <= c[:, None])
-    dc = c2 - c1
-    slope = (t2 - t1) / np.where(dc == 0, 1.0, dc)
-    t = np.where(cross, t1[None] + (c[:, None] - c1[None]) * slope[None], np.inf)
-    order = np.argsort(t, axis=1, kind="stable")
-    t = np.take_along_axis(t, order, axis=1)
-    count = cross.sum(axis=1)
-    edge = np.where(np.isfinite(t), order, -1)
+    with ``t, edge`` ``(K, W)`` (``W`` the most crossings of a line; padded with inf / -1)
+    and ``count (K,)``."""
+    k = np.asarray(c, dtype=np.float64).reshape(-1).shape[0]
+    line, t_pairs, e_pairs = _crossing_pairs(edges, u, n, c)
+    count = np.bincount(line, minlength=k).astype(np.int64)
+    width = int(count.max()) if k else 0
+    slot = np.arange(len(line)) - np.repeat(np.cumsum(count) - count, count)
+    t = np.full((k, width), np.inf)
+    edge = np.full((k, width), -1, dtype=np.int64)
+    t[line, slot] = t_pairs
+    edge[line, slot] = e_pairs
     return t, edge, count
 
 

@@ -54,9 +54,8 @@ class EdgeIndex:
             return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
         parts_i, parts_e = [], []
         for k in range(0, len(lo), CHUNK):
-            boxes = shapely.box(
-                lo[k : k + CHUNK, 0], lo[k : k + CHUNK, 1], hi[k : k + CHUNK, 0], hi[k : k + CHUNK, 1]
-            )
+            a, b = lo[k : k + CHUNK], hi[k : k + CHUNK]
+            boxes = shapely.box(a[:, 0], a[:, 1], b[:, 0], b[:, 1])
             i, e = self.tree.query(boxes)
             parts_i.append(i.astype(np.int64) + k)
             parts_e.append(e.astype(np.int64))
@@ -72,6 +71,19 @@ class EdgeIndex:
         if len(i):
             d = _point_segment_distance(p[i], self.e1[e], self.e2[e])
             out[i[d <= self.tol]] = True
+        return out
+
+    def within(self, p: NDArray[np.float64], r: float, n_edges: int) -> NDArray[np.bool_]:
+        """``(P,)``: whether each point is within ``r`` of one of the first ``n_edges`` edges
+        (the shell's)."""
+        pad = r * (1 + 1e-6) + self.tol
+        i, e = self.box_pairs(p - pad, p + pad)
+        keep = e < n_edges
+        i, e = i[keep], e[keep]
+        out = np.zeros(len(p), dtype=bool)
+        if len(i):
+            d = _point_segment_distance(p[i], self.e1[e], self.e2[e])
+            out[i[d <= r]] = True
         return out
 
     def classify(self, p: NDArray[np.float64]) -> NDArray[np.int64]:

@@ -8,7 +8,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..geometry.region import Region, _point_segment_distance, as_region
+from ..geometry.region import Region, as_region
 from .edge_index import CHUNK, EdgeIndex
 from .route_domain import MAX_NODES, inner_domains, nearest_in
 
@@ -66,10 +66,6 @@ class Router:
         self._graph()
 
     # -- membership --------------------------------------------------------------------------
-    def _shell_distance(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
-        s = self._shell_edges
-        return _point_segment_distance(p[:, None, :], s[None, :, 0], s[None, :, 1]).min(axis=1)
-
     def classify(self, points: ArrayLike) -> NDArray[np.int64]:
         """``(P,)``: 0 in the closed area, 1 strictly inside a hole, 2 strictly outside the
         shell (within ``1e-9`` of the diameter of a ring counts as on it, i.e. in the area)."""
@@ -147,7 +143,7 @@ class Router:
         for a, b in zip(br[:-1][out], br[1:][out], strict=True):
             n = max(2, math.ceil((b - a) * length / step) + 1)
             pts = p + np.linspace(a, b, n)[:, None] * (q - p)
-            if np.max(self._shell_distance(pts)) > self.reach * (1 + 1e-9):
+            if not self._index.within(pts, self.reach * (1 + 1e-9), len(self._shell_edges)).all():
                 return False, outside
         return True, outside
 
@@ -303,7 +299,7 @@ class Router:
         elif len(self.nodes):
             v = self._to_nodes(pa)  # (M, N)
             w = np.concatenate(  # (M, N), in blocks of rows: memory O(64 N^2)
-                [np.min(v[r0 : r0 + 64, :, None] + self._dist[None], axis=1) for r0 in range(0, m, 64)]
+                [np.min(v[r : r + 64, :, None] + self._dist[None], axis=1) for r in range(0, m, 64)]
             )
             for r0 in range(0, m, 64):  # (M, M) in blocks of rows: memory O(64 M N)
                 via = np.min(w[r0 : r0 + 64, None, :] + v[None, :, :], axis=-1)
@@ -326,7 +322,8 @@ class Router:
         blocked = np.flatnonzero(~ok)
         if len(blocked):  # the nearest point is hidden (a dent): the nearest visible vertex
             v = np.concatenate([d.vertices for d in self._domains])
-            owner = np.repeat(np.arange(len(self._domains)), [len(d.vertices) for d in self._domains])
+            sizes = [len(d.vertices) for d in self._domains]
+            owner = np.repeat(np.arange(len(self._domains)), sizes)
             a = np.repeat(pa[blocked], len(v), axis=0)
             b = np.tile(v, (len(blocked), 1))
             vis = self._visible_many(a, b).reshape(len(blocked), len(v))

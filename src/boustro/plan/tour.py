@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 from ..geometry import Polygon
 from .cells import _frame
 from .lanes import Lanes
+from .order_kernel import improve_order
 from .routing import Router
 from .types import KINDS
 
@@ -161,25 +162,16 @@ def _order(
         order.append(best[1])
         remaining.discard(best[1])
         here = exit_idx[best[1]][best[2] : best[2] + 1]
-    best_cost, choice = cost(order)
+    best_cost, _ = cost(order)
     # 2-opt within a budget of evaluated orders, not of seconds, so that the same input gives
-    # the same plan on a busy machine and an idle one
-    left = budget
-    improved = len(order) > 2
-    while improved and left > 0:
-        improved = False
-        for i in range(int(force_start), len(order) - 1):  # a forced first pass stays first
-            for j in range(i + 1, len(order)):
-                cand = order[:i] + order[i : j + 1][::-1] + order[j + 1 :]
-                c, ch = cost(cand)
-                left -= 1
-                if c < best_cost - 1e-9:
-                    order, best_cost, choice = cand, c, ch
-                    improved = True
-                if left <= 0:
-                    break
-            if left <= 0:
-                break
+    # the same plan on a busy machine and an idle one (compiled: the same orders and costs)
+    first_cost = [dist[0, entry_idx[k]] + internal[k] for k in range(len(passes))]
+    if force_start:
+        first_cost[first_pass] = first_cost[first_pass] + forced
+    order = improve_order(
+        order, best_cost, budget, int(force_start), first_cost, dist, entry_idx, exit_idx, internal
+    )
+    _, choice = cost(order)
     return order, choice
 
 
