@@ -1,5 +1,16 @@
 """Inner and outer sets around a region: every rigid motion of it by at most ``eps`` lies
-between them (shapely buffers, made conservative for their polygonal arcs)."""
+between them (shapely buffers, made conservative for their polygonal arcs).
+
+Simplified sandwiches (a region with many vertices: a traced field). With a ``tolerance``
+``h > 0`` the level of radius ``eps`` is built at radius ``eps + t`` (``t = eps / 2``)
+and then simplified (GEOS, Douglas-Peucker, topology preserved) with tolerance ``0.99 t``.
+A simplification replaces chains of the boundary by chords, each chain within the tolerance of
+its chord, so every point the simplification adds or removes lies within ``t`` of the set's
+boundary: the simplified erosion lies in ``erosion(eps + t) + t ⊆ erosion(eps)``, and the
+simplified dilation contains every point at least ``t`` inside ``dilation(eps + t)``, i.e.
+``dilation(eps)``. Both are still a sandwich at radius ``eps``, with far fewer edges (the
+bound is that of a radius up to ``eps + t``: a little weaker, never invalid).
+"""
 
 from __future__ import annotations
 
@@ -17,6 +28,8 @@ __all__ = ["Level", "Sandwich"]
 
 #: Segments per quarter circle of the erosion's round arcs.
 QUAD_SEGS = 8
+#: Share of the slack ``t`` used as the simplification tolerance (the rest: rounding margin).
+SIMPLIFY_SHARE = 0.99
 #: The erosion radius is divided by the cosine of half a segment's angle, so that the
 #: polygonal arcs (vertices on the circle, chords inside) stay outside the true circle.
 ARC_FACTOR = 1.0 / math.cos(math.pi / (4 * QUAD_SEGS))
@@ -53,10 +66,11 @@ class Sandwich:
     so that its polygonal arcs lie inside the true erosion.
     """
 
-    def __init__(self, region: Region) -> None:
+    def __init__(self, region: Region, tolerance: float = 0.0) -> None:
         import shapely
 
         self.region = region
+        self.tolerance = float(tolerance)
         self.holes = [np.asarray(h.vertices, dtype=np.float64) for h in region.holes]
         self.polygon = shapely.Polygon(region.shell.vertices, self.holes)
         self.hole_polygons = [shapely.Polygon(h) for h in self.holes]
@@ -70,6 +84,19 @@ class Sandwich:
         es = edge_set(rings, [-1, *range(len(self.holes))])
         return Level(0.0, es, es, self._perimeters([(h, i) for i, h in enumerate(self.holes)]))
 
+    def slack(self, eps: float) -> float:
+        """How much farther than ``eps`` the level of radius ``eps`` reaches (0 unsimplified)."""
+        return eps / 2 if self.tolerance > 0 else 0.0
+
+    @cached_property
+    def approximate(self) -> Level:
+        """The region simplified with the tolerance (the region itself without one): a model
+        of the region with fewer edges, not a bound."""
+        if self.tolerance <= 0:
+            return self.exact
+        geom = self.polygon.simplify(self.tolerance, preserve_topology=True)
+        return self._level(0.0, geom, geom)
+
     def level(self, eps: float) -> Level:
         """The sandwich at radius ``eps > 0`` (cached)."""
         if eps not in self._levels:
@@ -77,11 +104,22 @@ class Sandwich:
         return self._levels[eps]
 
     def _build(self, eps: float) -> Level:
+        pad = 1e-9 * self.region.diameter
+        t = self.slack(eps)
+        if t > 0:  # simplified (module docstring); round dilation: fewer spikes than mitres
+            r = eps + t
+            outer = self.polygon.buffer(r * ARC_FACTOR + pad, quad_segs=QUAD_SEGS)
+            inner = self.polygon.buffer(-(r * ARC_FACTOR + pad), quad_segs=QUAD_SEGS)
+            outer = outer.simplify(SIMPLIFY_SHARE * t, preserve_topology=True)
+            inner = inner.simplify(SIMPLIFY_SHARE * t, preserve_topology=True)
+        else:
+            outer = self.polygon.buffer(eps + pad, join_style="mitre", mitre_limit=5.0)
+            inner = self.polygon.buffer(-(eps * ARC_FACTOR + pad), quad_segs=QUAD_SEGS)
+        return self._level(eps, inner, outer)
+
+    def _level(self, eps: float, inner: Any, outer: Any) -> Level:
         import shapely
 
-        pad = 1e-9 * self.region.diameter
-        outer = self.polygon.buffer(eps + pad, join_style="mitre", mitre_limit=5.0)
-        inner = self.polygon.buffer(-(eps * ARC_FACTOR + pad), quad_segs=QUAD_SEGS)
         in_rings = _rings(inner)
         inner_set = edge_set([r for r, _ in in_rings], [0 if h else -1 for _, h in in_rings])
         out_rings = _rings(outer)
@@ -90,9 +128,7 @@ class Sandwich:
             hid = -1
             if is_hole:
                 point = shapely.Polygon(ring).representative_point()
-                hid = next(
-                    (i for i, hp in enumerate(self.hole_polygons) if hp.contains(point)), -1
-                )
+                hid = next((i for i, hp in enumerate(self.hole_polygons) if hp.contains(point)), -1)
                 kept.append((ring, hid))
             ids.append(hid)
         outer_set = edge_set([r for r, _ in out_rings], ids)

@@ -23,6 +23,10 @@ from .sandwich import Sandwich
 
 __all__ = ["CoverSearch", "cover_optimum"]
 
+#: Regions with more edges than this are searched with simplified sandwiches
+#: (:class:`Sandwich` with a tolerance of :data:`SIMPLIFY_SPACING` spacings).
+SIMPLIFY_EDGES = 256
+SIMPLIFY_SPACING = 0.05
 #: Plans evaluated per round at most (the layouts with the lowest point bound).
 PLANS_PER_ROUND = 2
 #: Plans evaluated at the first round, at angles this far apart (radians) at least.
@@ -72,7 +76,8 @@ class CoverSearch:
     ) -> None:
         self.region, self.s, self.reach, self.cost = region, spacing, reach, cost
         self.evaluate, self.boustrophedon = evaluate, boustrophedon
-        self.sandwich = Sandwich(region)
+        simplify = len(region.edges) > SIMPLIFY_EDGES
+        self.sandwich = Sandwich(region, SIMPLIFY_SPACING * spacing if simplify else 0.0)
         self.origin = region.centre
         self.radius = float(np.linalg.norm(region.shell.vertices - self.origin, axis=1).max())
         self.n_holes = len(region.holes)
@@ -88,9 +93,11 @@ class CoverSearch:
         far = self.radius + eps + self.reach
         return math.floor(-far / self.s) - 1, math.ceil(far / self.s) + 1
 
-    def point_values(self, boxes: _Boxes) -> NDArray[np.float64]:
-        """The bound at each box's centre with the region itself (a layout's own model)."""
-        lv = self.sandwich.exact
+    def point_values(self, boxes: _Boxes, exact: bool = False) -> NDArray[np.float64]:
+        """The bound at each box's centre with the region itself (a layout's own model); of
+        the simplified region (:attr:`Sandwich.approximate`) unless ``exact``: the search only
+        ranks and retires boxes by these, a plan's value is always exact."""
+        lv = self.sandwich.exact if exact else self.sandwich.approximate
         st = band_stats(
             lv.inner, lv.outer, boxes.theta, boxes.d, self.s, self.reach, self.origin,
             self.k_range(0.0), self.n_holes, self.tol, inner_reach=self.reach - 2 * self.tol,
@@ -99,6 +106,16 @@ class CoverSearch:
         out = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
         self.model_min = min(self.model_min, float(out.min(initial=math.inf)))
         return out
+
+    def plan_value(self, boxes: _Boxes, i: int, points: NDArray[np.float64]) -> float:
+        """The cost of the plan at box ``i``'s centre (``evaluate``, or the exact model)."""
+        theta, d = float(boxes.theta[i]), float(boxes.d[i])
+        if self.evaluate is not None:
+            return float(self.evaluate(theta, d))
+        if self.sandwich.tolerance <= 0:
+            return float(points[i])
+        one = _Boxes(*(a[i : i + 1] for a in boxes))
+        return float(self.point_values(one, exact=True)[0])
 
     def box_bounds(self, boxes: _Boxes) -> NDArray[np.float64]:
         """A lower bound on the cost over each box: the sandwich at the radius that holds
@@ -110,9 +127,10 @@ class CoverSearch:
         for r in np.unique(radius):
             sel = radius == r
             lv = self.sandwich.level(float(r))
+            reach_out = float(r) + self.sandwich.slack(float(r))
             st = band_stats(
                 lv.inner, lv.outer, boxes.theta[sel], boxes.d[sel], self.s, self.reach,
-                self.origin, self.k_range(float(r)), self.n_holes, self.tol,
+                self.origin, self.k_range(reach_out), self.n_holes, self.tol,
                 inner_reach=self.reach - 2 * self.tol,
             )  # fmt: skip
             out[sel] = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
@@ -165,7 +183,7 @@ class CoverSearch:
             taken.append(float(boxes.theta[i]))
             self.seen.add(key)
             theta, d = float(boxes.theta[i]), float(boxes.d[i])
-            value = float(points[i]) if self.evaluate is None else float(self.evaluate(theta, d))
+            value = self.plan_value(boxes, int(i), points)
             self.plans += 1
             tried += 1
             if value < self.best[0]:
