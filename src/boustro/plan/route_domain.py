@@ -8,8 +8,8 @@ shortest paths ``O(N^3)``. Above :data:`MAX_NODES` reflex vertices the router ro
 boundary by at most its tolerance, and the polygonal arcs of the buffer lie within
 ``eps (1 - cos(pi / 8))`` of the true erosion, so every domain lies inside the area with a
 clearance of at least ``0.42 eps``: a route through a domain never leaves the area. ``eps``
-starts at ``reach / 8`` and doubles (up to ``reach``) until at most :data:`MAX_NODES` reflex
-vertices remain. Routes are then at most a few ``eps`` longer per bend than the shortest (the
+starts at ``reach / 8`` (``reach``: the lanes' half-width, or 1/100 of the diameter without
+one) and doubles (up to ``reach``) until at most :data:`MAX_NODES` reflex vertices remain. Routes are then at most a few ``eps`` longer per bend than the shortest (the
 detour around the clearance, shortened again by string pulling in the area itself).
 shapely is imported on use.
 """
@@ -65,6 +65,8 @@ def inner_domains(region: Region, reach: float) -> list[Region]:
     import shapely
 
     poly = shapely.Polygon(region.shell.vertices, [h.vertices for h in region.holes])
+    if reach <= 0:  # no lane width to scale by: a hundredth of the diameter
+        reach = 1e-2 * region.diameter
     eps = reach / 8
     domains: list[Region] = []
     while True:
