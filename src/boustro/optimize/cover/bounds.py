@@ -51,16 +51,25 @@ def lower_bounds(
     holds such length, each with its run-in and run-out. Hole passes: every original hole whose
     outer-set chord overlaps the inner projection is cut in every such plan, so it gets its pass
     (a closed loop around it: at least the perimeter of the convex hull of its outer-set
-    remains) and one more turn. Moves: a path visiting lines ``k_min .. k_max`` travels at least
-    ``(k_max - k_min) spacing`` across them; with ``boustrophedon`` (the convex planner: one lane
+    remains) and one more turn; so does every hole that ``st.rigid`` says every plan of the box
+    cuts, with the perimeter of its own convex hull (the plans of a box are rigid images of the
+    area, and a pass around a hole is at least that long). Moves: a path visiting lines
+    ``k_min .. k_max`` travels at least ``(k_max - k_min) spacing`` across them; with
+    ``boustrophedon`` (the convex planner: one lane
     per line, consecutive lines joined end to end) each move is at least the distance between
     the ranges of its two ends.
     """
     n_lanes = st.count.sum(axis=1)
     holes = level.hole_perimeter.shape[0]
     cut = st.cut[:, :holes]
-    n_passes = cut.sum(axis=1)
-    perimeter = (cut * level.hole_perimeter[None, :]).sum(axis=1) if holes else 0.0
+    rigid = st.rigid[:, :holes] & ~cut  # cut by every rigid image: a pass as long as the hole
+    n_passes = cut.sum(axis=1) + rigid.sum(axis=1)
+    perimeter = (
+        (cut * level.hole_perimeter[None, :]).sum(axis=1)
+        + (rigid * level.hull_perimeter[None, :]).sum(axis=1)
+        if holes
+        else 0.0
+    )
     used = st.count >= 1
     idx = np.arange(st.count.shape[1])
     k_max = np.where(used, idx, -1).max(axis=1)

@@ -2,7 +2,7 @@
 between them (shapely buffers, made conservative for their polygonal arcs).
 
 Simplified sandwiches (a region with many vertices: a traced field). With a ``tolerance``
-``h > 0`` the level of radius ``eps`` is built at radius ``eps + t`` (``t = eps / 2``)
+``h > 0`` the level of radius ``eps`` is built at radius ``eps + t`` (``t = eps / 8``)
 and then simplified (GEOS, Douglas-Peucker, topology preserved) with tolerance ``0.99 t``.
 A simplification replaces chains of the boundary by chords, each chain within the tolerance of
 its chord, so every point the simplification adds or removes lies within ``t`` of the set's
@@ -37,12 +37,14 @@ ARC_FACTOR = 1.0 / math.cos(math.pi / (4 * QUAD_SEGS))
 
 class Level(NamedTuple):
     """The sandwich at one radius: inner and outer edge sets, and per original hole the
-    perimeter of the convex hull of what remains of it in the outer set (0 if nothing)."""
+    perimeter of the convex hull of what remains of it in the outer set (0 if nothing) and
+    of the hole itself."""
 
     eps: float
     inner: EdgeSet
     outer: EdgeSet
     hole_perimeter: NDArray[np.float64]
+    hull_perimeter: NDArray[np.float64]
 
 
 def _rings(geom: Any) -> list[tuple[NDArray[np.float64], bool]]:
@@ -82,11 +84,16 @@ class Sandwich:
         """The region itself (inner = outer)."""
         rings = [self.region.shell.vertices, *self.holes]
         es = edge_set(rings, [-1, *range(len(self.holes))])
-        return Level(0.0, es, es, self._perimeters([(h, i) for i, h in enumerate(self.holes)]))
+        return Level(0.0, es, es, self.hull_perimeter, self.hull_perimeter)
+
+    @cached_property
+    def hull_perimeter(self) -> NDArray[np.float64]:
+        """Per hole, the perimeter of its convex hull."""
+        return self._perimeters([(h, i) for i, h in enumerate(self.holes)])
 
     def slack(self, eps: float) -> float:
         """How much farther than ``eps`` the level of radius ``eps`` reaches (0 unsimplified)."""
-        return eps / 2 if self.tolerance > 0 else 0.0
+        return eps / 8 if self.tolerance > 0 else 0.0
 
     @cached_property
     def approximate(self) -> Level:
@@ -132,7 +139,7 @@ class Sandwich:
                 kept.append((ring, hid))
             ids.append(hid)
         outer_set = edge_set([r for r, _ in out_rings], ids)
-        return Level(eps, inner_set, outer_set, self._perimeters(kept))
+        return Level(eps, inner_set, outer_set, self._perimeters(kept), self.hull_perimeter)
 
     def _perimeters(self, rings: list[tuple[NDArray[np.float64], int]]) -> NDArray[np.float64]:
         import shapely

@@ -16,7 +16,7 @@ from ...geometry import Polygon
 from ...geometry.region import Region, as_region
 from ...models import check_spacing
 from ..result import OptimizeResult, canonical
-from .bands import band_stats
+from .bands import RigidBoxes, band_stats
 from .bounds import lower_bounds
 from .cost import CoverCost
 from .sandwich import Sandwich
@@ -81,6 +81,9 @@ class CoverSearch:
         self.origin = region.centre
         self.radius = float(np.linalg.norm(region.shell.vertices - self.origin, axis=1).max())
         self.n_holes = len(region.holes)
+        rings = [h.vertices for h in region.holes]
+        self.hole_xy = np.concatenate(rings) if rings else np.zeros((0, 2))
+        self.hole_start = np.concatenate([[0], np.cumsum([len(h) for h in rings])]).astype(np.int64)
         self.tol = 1e-9 * region.diameter
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
@@ -128,10 +131,11 @@ class CoverSearch:
             sel = radius == r
             lv = self.sandwich.level(float(r))
             reach_out = float(r) + self.sandwich.slack(float(r))
+            rigid = RigidBoxes(self.hole_xy, self.hole_start, boxes.delta[sel], boxes.eta[sel])
             st = band_stats(
                 lv.inner, lv.outer, boxes.theta[sel], boxes.d[sel], self.s, self.reach,
                 self.origin, self.k_range(reach_out), self.n_holes, self.tol,
-                inner_reach=self.reach - 2 * self.tol,
+                inner_reach=self.reach - 2 * self.tol, rigid=rigid,
             )  # fmt: skip
             out[sel] = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
         self.bound_evaluations += len(eps)
@@ -141,7 +145,7 @@ class CoverSearch:
         """Plan the best offset (by the model) along each of the longest edges' directions:
         areas with parallel sides often have their optimum exactly there."""
         for a in _edge_angles(self.region, EDGE_PLANS):
-            d = (np.arange(EDGE_OFFSETS) + 0.5) * (self.s / EDGE_OFFSETS)
+            d = (np.arange(EDGE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / EDGE_OFFSETS)
             boxes = _Boxes(np.full(len(d), a), np.zeros(len(d)), d, np.zeros(len(d)))
             self.try_plans(boxes, self.point_values(boxes), limit=1)
 
@@ -149,7 +153,7 @@ class CoverSearch:
         """Plan :data:`REFINE_OFFSETS` more offsets at the best angle: a routed plan's moves
         differ between offsets that the bound (lanes, turns) cannot tell apart."""
         theta = self.best[1]
-        d = (np.arange(REFINE_OFFSETS) + 0.5) * (self.s / REFINE_OFFSETS)
+        d = (np.arange(REFINE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / REFINE_OFFSETS)
         boxes = _Boxes(np.full(len(d), theta), np.zeros(len(d)), d, np.zeros(len(d)))
         points = self.point_values(boxes)
         self.try_plans(boxes, points, limit=REFINE_OFFSETS)
@@ -167,7 +171,7 @@ class CoverSearch:
         order = np.argsort(points)
         if limit is None:
             limit = FIRST_PLANS if first else PLANS_PER_ROUND
-        tried, taken = 0, []
+        tried, taken = 0, list[float]()
         for i in order:
             if tried >= limit or points[i] >= self.best[0]:
                 break
@@ -220,7 +224,10 @@ def _split(boxes: _Boxes, radius: float) -> _Boxes:
             eta = np.where(cd, b.eta / 2, b.eta)
             parts.append(
                 _Boxes(
-                    b.theta + np.where(ct, st * delta, 0.0), delta, b.d + np.where(cd, sd * eta, 0.0), eta
+                    b.theta + np.where(ct, st * delta, 0.0),
+                    delta,
+                    b.d + np.where(cd, sd * eta, 0.0),
+                    eta,
                 )
             )
     return _Boxes(*(np.concatenate([getattr(p, f) for p in parts]) for f in _Boxes._fields))
@@ -230,14 +237,14 @@ def _initial(search: CoverSearch, n_angles: int, angle: float | None) -> _Boxes:
     if angle is not None:  # one angle: boxes of offsets only
         n = FIXED_OFFSETS
         eta = search.s / (2 * n)
-        d = (np.arange(n) + 0.5) * (2 * eta)
+        d = (np.arange(n, dtype=np.float64) + 0.5) * (2 * eta)
         return _Boxes(np.full(n, angle), np.zeros(n), d, np.full(n, eta))
     delta = math.pi / (2 * n_angles)
     n_off = max(1, math.ceil(search.s / (2 * delta * search.radius)))
     eta = search.s / (2 * n_off)
     theta = (np.arange(n_angles) + 0.5) * (2 * delta)
-    d = (np.arange(n_off) + 0.5) * (2 * eta)
-    tt, dd = np.meshgrid(theta, d, indexing="ij")
+    offsets = (np.arange(n_off) + 0.5) * (2 * eta)
+    tt, dd = np.meshgrid(theta, offsets, indexing="ij")
     n = tt.size
     return _Boxes(tt.ravel(), np.full(n, delta), dd.ravel(), np.full(n, eta))
 
