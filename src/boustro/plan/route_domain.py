@@ -9,8 +9,9 @@ boundary by at most its tolerance, and the polygonal arcs of the buffer lie with
 ``eps (1 - cos(pi / 8))`` of the true erosion, so every domain lies inside the area with a
 clearance of at least ``0.42 eps``: a route through a domain never leaves the area. ``eps``
 starts at ``reach / 8`` (``reach``: the lanes' half-width, or 1/100 of the diameter without
-one) and doubles (up to ``reach``) until at most :data:`MAX_NODES` reflex vertices remain. Routes are then at most a few ``eps`` longer per bend than the shortest (the
-detour around the clearance, shortened again by string pulling in the area itself).
+one) and doubles (up to ``reach``) until at most :data:`MAX_NODES` reflex vertices remain.
+Routes are then at most a few ``eps`` longer per bend than the shortest (the detour around
+the clearance, shortened again by string pulling in the area itself).
 shapely is imported on use.
 """
 

@@ -14,6 +14,9 @@ from .route_domain import MAX_NODES, inner_domains, nearest_in
 
 __all__ = ["Route", "Router"]
 
+#: Domain vertices tried at a time from a point whose nearest domain point is hidden.
+_NEAREST = 16
+
 
 def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
@@ -324,14 +327,19 @@ class Router:
             v = np.concatenate([d.vertices for d in self._domains])
             sizes = [len(d.vertices) for d in self._domains]
             owner = np.repeat(np.arange(len(self._domains)), sizes)
-            a = np.repeat(pa[blocked], len(v), axis=0)
-            b = np.tile(v, (len(blocked), 1))
-            vis = self._visible_many(a, b).reshape(len(blocked), len(v))
-            far = np.where(vis, np.linalg.norm(pa[blocked, None] - v[None], axis=-1), math.inf)
-            best = np.argmin(far, axis=1)
-            found = np.isfinite(far[np.arange(len(blocked)), best])
-            pd[blocked[found]] = v[best[found]]
-            which[blocked[found]] = owner[best[found]]
+            near = np.argsort(np.linalg.norm(pa[blocked, None] - v[None], axis=-1), axis=1)
+            left = np.arange(len(blocked))
+            for k in range(0, len(v), _NEAREST):  # nearest vertices first, a batch at a time
+                cand = near[left, k : k + _NEAREST]  # (B, <= _NEAREST), by distance
+                a = np.repeat(pa[blocked[left]], cand.shape[1], axis=0)
+                vis = self._visible_many(a, v[cand.ravel()]).reshape(cand.shape)
+                hit = vis.any(axis=1)
+                first = cand[np.arange(len(left)), np.argmax(vis, axis=1)]
+                pd[blocked[left[hit]]] = v[first[hit]]
+                which[blocked[left[hit]]] = owner[first[hit]]
+                left = left[~hit]
+                if not len(left):
+                    break
         return pd, which, np.linalg.norm(pd - pa, axis=1)
 
     def _coarse_path(
