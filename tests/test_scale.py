@@ -19,6 +19,8 @@ import numpy as np
 import pytest
 import shapely
 
+from boustro.geometry import Polygon
+from boustro.geometry.region import Region
 from boustro.geometry.traced import traced_field
 from boustro.optimize.cover import CoverCost, Sandwich, cover_optimum
 from boustro.optimize.cover.search import SIMPLIFY_EDGES, CoverSearch, _Boxes
@@ -265,7 +267,9 @@ def test_a_2000_vertex_plan_with_10_holes_stays_under_1_gb():
     code = textwrap.dedent(
         """
         import json, resource, time
-        from boustro.geometry.traced import traced_field
+        from boustro.geometry import Polygon
+from boustro.geometry.region import Region
+from boustro.geometry.traced import traced_field
         from boustro.plan.region import plan_region
         r = traced_field(2000, 10)
         t = time.process_time()
@@ -286,3 +290,18 @@ def test_a_2000_vertex_plan_with_10_holes_stays_under_1_gb():
     got = json.loads(out.stdout.strip().splitlines()[-1])
     assert got["lanes"] > 50
     assert got["rss_mb"] < 1024, got
+
+
+def test_a_narrow_noisy_corridor_plans_without_error():
+    """A zigzag strip 6 m wide with a noisy boundary (hundreds of reflex vertices), lanes 10 m
+    apart: the inner domains may erode away; the plan still completes and covers the strip."""
+    rng = np.random.default_rng(2)
+    x = np.linspace(0, 400, 300)
+    y = 40 * np.abs(((x / 80) % 2) - 1)
+    lower = np.c_[x, y - 3 + rng.normal(0, 0.2, len(x))]
+    upper = np.c_[x[::-1], y[::-1] + 3 + rng.normal(0, 0.2, len(x))]
+    r = Region(Polygon(np.concatenate([lower, upper])), [])
+    assert Router(r, reach=5.0)._coarse is not None
+    plan = plan_region(r, 10.0, decompose_area=False, angle=0.0, offset=0.0)
+    assert plan.stats.n_transects > 10
+    assert coverage(plan).covered_share == pytest.approx(1.0, abs=1e-9)

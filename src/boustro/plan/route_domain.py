@@ -69,13 +69,16 @@ def inner_domains(region: Region, reach: float) -> list[Region]:
     if reach <= 0:  # no lane width to scale by: a hundredth of the diameter
         reach = 1e-2 * region.diameter
     eps = reach / 8
-    domains: list[Region] = []
+    last: list[Region] = []
     while True:
         inner = poly.buffer(-eps, quad_segs=_QUAD_SEGS).simplify(eps / 2, preserve_topology=True)
         domains = _as_regions(inner)
+        if not domains:  # eroded away (a strip narrower than 2 eps): the last domains found
+            return last
         count = sum(reflex_count(d.rings) for d in domains)
         if count <= MAX_NODES or eps >= reach:
             return domains
+        last = domains
         eps = min(2 * eps, reach)
 
 

@@ -276,8 +276,9 @@ class Router:
 
         The straight move is tested only towards each point's ``nearest`` neighbours (by
         straight-line distance); other pairs are measured through the visibility graph (exact
-        where the straight move is blocked, an upper bound otherwise). Points outside the area
-        are measured from their nearest point of it, plus that leg.
+        where the straight move is blocked, an upper bound otherwise), or the straight line
+        where no move inside the area is found. Points outside the area are measured from their
+        nearest point of it, plus that leg.
         """
         p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         m = len(p)
@@ -309,6 +310,9 @@ class Router:
                 direct[r0 : r0 + 64] = np.minimum(direct[r0 : r0 + 64], via)
         else:  # a convex shell without holes: every straight move stays inside
             direct = euclid
+        # no move inside the area found (a pocket no route reaches): the straight line, as
+        # :meth:`path` then flies it
+        direct = np.where(np.isfinite(direct), direct, euclid)
         out = direct + legs[:, None] + legs[None, :]
         np.fill_diagonal(out, 0.0)
         return out
