@@ -267,9 +267,7 @@ def test_a_2000_vertex_plan_with_10_holes_stays_under_1_gb():
     code = textwrap.dedent(
         """
         import json, resource, time
-        from boustro.geometry import Polygon
-from boustro.geometry.region import Region
-from boustro.geometry.traced import traced_field
+        from boustro.geometry.traced import traced_field
         from boustro.plan.region import plan_region
         r = traced_field(2000, 10)
         t = time.process_time()
