@@ -9,7 +9,6 @@ import math
 import numpy as np
 import pytest
 import shapely
-from .conftest import random_regions, run_cli, shapely_region
 
 from boustro.geometry import Polygon
 from boustro.geometry.random import random_convex_polygon
@@ -21,6 +20,8 @@ from boustro.optimize.cover.search import CoverSearch
 from boustro.plan import build_plan
 from boustro.plan.lanes import region_lanes
 from boustro.plan.region import plan_region
+
+from .conftest import random_regions, run_cli, shapely_region
 
 L_SHAPE = Region(
     Polygon([(0, 0), (100, 0), (100, 40), (40, 40), (40, 100), (0, 100)]),
@@ -69,13 +70,23 @@ def test_band_projection_agrees_with_shapely(region):
         c = offset + (st.k0 + b) * s
         far = 10 * region.diameter
         band = shapely.Polygon(
-            [o + c1 * n + t * u for c1, t in ((c - s / 2, -far), (c - s / 2, far), (c + s / 2, far), (c + s / 2, -far))]
+            [
+                o + c1 * n + t * u
+                for c1, t in (
+                    (c - s / 2, -far),
+                    (c - s / 2, far),
+                    (c + s / 2, far),
+                    (c + s / 2, -far),
+                )
+            ]
         )
         part = area.intersection(band)
         if part.area < 1e-9 * s * s:
             assert np.isnan(lo[b]) or hi[b] - lo[b] < 1e-6 * s
             continue
-        ts = [np.asarray(g.exterior.coords) @ u for g in getattr(part, "geoms", [part]) if g.area > 0]
+        ts = [
+            np.asarray(g.exterior.coords) @ u for g in getattr(part, "geoms", [part]) if g.area > 0
+        ]
         assert lo[b] == pytest.approx(min(t.min() for t in ts) - o @ u, abs=1e-7 * s)
         assert hi[b] == pytest.approx(max(t.max() for t in ts) - o @ u, abs=1e-7 * s)
 
@@ -133,7 +144,9 @@ def _convex_cost(poly, s, cost):
 
 def _region_cost(region, s, cost):
     def evaluate(a, d):
-        st = plan_region(region, s, decompose_area=False, angle=a, offset=d, speed=5.0, turn_time=10.0).stats
+        st = plan_region(
+            region, s, decompose_area=False, angle=a, offset=d, speed=5.0, turn_time=10.0
+        ).stats
         return cost.of(st.path_length, st.n_turns)
 
     return evaluate

@@ -22,7 +22,8 @@ import shapely
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region
 from boustro.geometry.traced import traced_field
-from boustro.optimize.cover import CoverCost, Sandwich, cover_optimum
+from boustro.optimize.cover import CoverCost, Sandwich, band_stats, cover_optimum
+from boustro.optimize.cover.bands import RigidBoxes
 from boustro.optimize.cover.search import SIMPLIFY_EDGES, CoverSearch, _Boxes
 from boustro.plan import cells as cells_module
 from boustro.plan import coverage
@@ -303,3 +304,36 @@ def test_a_narrow_noisy_corridor_plans_without_error():
     plan = plan_region(r, 10.0, decompose_area=False, angle=0.0, offset=0.0)
     assert plan.stats.n_transects > 10
     assert coverage(plan).covered_share == pytest.approx(1.0, abs=1e-9)
+
+
+def test_rigid_hole_cuts_fire_and_bound_the_real_plans():
+    """Holes every rigid image of a box cuts (``BandStats.rigid``) beyond those the sandwich
+    sees are found, and where they are, the bound stays at most the real plans' cost."""
+    region = traced_field(150, 3, seed=3)
+    s, cost = 10.0, CoverCost.time(5.0, 10.0)
+    search = CoverSearch(region, s, s / 2, cost, None, boustrophedon=False)
+    search.top_eps = 8.0
+    rng = np.random.default_rng(11)
+    fired = []
+    for _ in range(120):
+        theta, d = rng.uniform(0, math.pi), rng.uniform(0, s)
+        delta, eta = rng.uniform(0, 0.005), rng.uniform(0, 1.0)
+        box = _Boxes(*(np.array([v]) for v in (theta, delta, d, eta)))
+        eps = delta * search.radius + eta
+        level = search.sandwich.level(eps)
+        rigid = RigidBoxes(search.hole_xy, search.hole_start, box.delta, box.eta)
+        st = band_stats(
+            level.inner, level.outer, box.theta, box.d, s, s / 2, search.origin,
+            search.k_range(eps), 3, search.tol, inner_reach=s / 2 - 2 * search.tol, rigid=rigid,
+        )  # fmt: skip
+        if (st.rigid & ~st.cut).any():
+            fired.append(box)
+    assert len(fired) >= 5  # the rule adds holes the sandwich alone does not see
+    for box in fired[:4]:
+        bound = search.box_bounds(box)[0]
+        theta, delta, d, eta = (float(v[0]) for v in box)
+        for _ in range(2):
+            a, o = theta + rng.uniform(-delta, delta), d + rng.uniform(-eta, eta)
+            plan = plan_region(region, s, decompose_area=False, angle=a, offset=o, speed=5.0,
+                               turn_time=10.0)  # fmt: skip
+            assert bound <= cost.of(plan.stats.path_length, plan.stats.n_turns) + 1e-9

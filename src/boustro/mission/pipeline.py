@@ -19,8 +19,8 @@ from ..objectives.time import MissionTime
 from ..optimize.cover import CoverCost
 from ..optimize.methods import resolve_method
 from ..sensors import SensorSpacing
-from .defaults import DEFAULT_HULL_TOLERANCE
 from .cover import cover_cost, plan_cover
+from .defaults import DEFAULT_HULL_TOLERANCE
 from .estimate import SAY_SECONDS, WorkEstimate, check_work, frame_estimate
 from .map_back import angle_for_bearing, map_back
 from .project import AUTO_CRS, Frame, Sensor, as_area, project, sensor_spacing
