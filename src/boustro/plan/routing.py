@@ -375,6 +375,9 @@ class Router:
     def _coarse_distances(self, pa: NDArray[np.float64]) -> NDArray[np.float64]:
         """``(M, M)`` lengths of the moves through the domains (``inf`` between domains)."""
         assert self._coarse is not None
+        uniq, back = np.unique(pa, axis=0, return_inverse=True)  # passes share their ends
+        if len(uniq) < len(pa):
+            return self._coarse_distances(uniq)[np.ix_(back.ravel(), back.ravel())]
         m = len(pa)
         out = np.full((m, m), math.inf)
         pd, which, leg = self._to_domains(pa)
