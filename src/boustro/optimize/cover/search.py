@@ -26,7 +26,7 @@ __all__ = ["CoverSearch", "cover_optimum"]
 #: Regions with more edges than this are searched with simplified sandwiches
 #: (:class:`Sandwich` with a tolerance of :data:`SIMPLIFY_SPACING` spacings).
 SIMPLIFY_EDGES = 256
-SIMPLIFY_SPACING = 0.05
+SIMPLIFY_SPACING = 0.1
 #: Plans evaluated per round at most (the layouts with the lowest point bound).
 PLANS_PER_ROUND = 2
 #: Plans evaluated at the first round, at angles this far apart (radians) at least.
