@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import heapq
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -79,22 +80,46 @@ class Trapezoids(NamedTuple):
         )
 
 
+def _crossing_pairs(
+    edges: NDArray[np.float64], u: NDArray[np.float64], n: NDArray[np.float64], c: ArrayLike
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64]]:
+    """Every crossing of lines ``n . p = c`` with ``edges (E, 2, 2)`` as ``(line, t, edge)``,
+    sorted by line, then ``t``, then edge: a sweep (each edge spans a run of the sorted lines),
+    ``O((E + K) log K + crossings)``, never the dense ``(K, E)`` test."""
+    c = np.asarray(c, dtype=np.float64).reshape(-1)
+    c1, c2 = edges[:, 0] @ n, edges[:, 1] @ n
+    t1, t2 = edges[:, 0] @ u, edges[:, 1] @ u
+    order = np.argsort(c, kind="stable")
+    cs = c[order]
+    # line c crosses edge i iff (c1 <= c) != (c2 <= c), i.e. min(c1, c2) <= c < max(c1, c2)
+    first = np.searchsorted(cs, np.minimum(c1, c2), side="left")
+    last = np.searchsorted(cs, np.maximum(c1, c2), side="left")
+    counts = np.maximum(last - first, 0)
+    edge = np.repeat(np.arange(len(c1)), counts)
+    start = np.repeat(np.cumsum(counts) - counts, counts)
+    line = order[np.repeat(first, counts) + (np.arange(len(edge)) - start)]
+    dc = c2 - c1
+    slope = (t2 - t1) / np.where(dc == 0, 1.0, dc)
+    t = t1[edge] + (c[line] - c1[edge]) * slope[edge]
+    by = np.lexsort((edge, t, line))
+    return line[by].astype(np.int64), t[by], edge[by].astype(np.int64)
+
+
 def _crossings(
     edges: NDArray[np.float64], u: NDArray[np.float64], n: NDArray[np.float64], c: ArrayLike
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
     """Sorted crossings of lines ``n . p = c`` with ``edges (E, 2, 2)``: ``(t, edge, count)``
-    with ``t, edge`` ``(K, E)`` (padded with inf / -1) and ``count (K,)``."""
-    c = np.asarray(c, dtype=np.float64).reshape(-1)
-    c1, c2 = edges[:, 0] @ n, edges[:, 1] @ n
-    t1, t2 = edges[:, 0] @ u, edges[:, 1] @ u
-    cross = (c1[None] <= c[:, None]) != (c2[None] <= c[:, None])
-    dc = c2 - c1
-    slope = (t2 - t1) / np.where(dc == 0, 1.0, dc)
-    t = np.where(cross, t1[None] + (c[:, None] - c1[None]) * slope[None], np.inf)
-    order = np.argsort(t, axis=1, kind="stable")
-    t = np.take_along_axis(t, order, axis=1)
-    count = cross.sum(axis=1)
-    edge = np.where(np.isfinite(t), order, -1)
+    with ``t, edge`` ``(K, W)`` (``W`` the most crossings of a line; padded with inf / -1)
+    and ``count (K,)``."""
+    k = np.asarray(c, dtype=np.float64).reshape(-1).shape[0]
+    line, t_pairs, e_pairs = _crossing_pairs(edges, u, n, c)
+    count = np.bincount(line, minlength=k).astype(np.int64)
+    width = int(count.max()) if k else 0
+    slot = np.arange(len(line)) - np.repeat(np.cumsum(count) - count, count)
+    t = np.full((k, width), np.inf)
+    edge = np.full((k, width), -1, dtype=np.int64)
+    t[line, slot] = t_pairs
+    edge[line, slot] = e_pairs
     return t, edge, count
 
 
@@ -354,6 +379,58 @@ def _shared_lengths(
     return shared_m
 
 
+def _merge_narrow(
+    links: list[tuple[float, int, int, bool]],
+    uf: _UnionFind,
+    q: int,
+    width: Callable[[int], float],
+    join: Callable[[int, int], None],
+    min_width: float,
+) -> None:
+    """Merge the narrowest cell (width under ``min_width``) that has a neighbour into the one
+    it shares the longest boundary with (ties: the larger root pair), until none is left.
+
+    Incremental: the links of each cell are kept, and after a merge only the merged cell's
+    shared lengths are summed again (in link order, as a full recount would, so the same
+    floating-point sums and the same choices), instead of recounting every link per merge.
+    """
+    by_root: dict[int, list[int]] = {}
+    for k, (_, i, j, _) in enumerate(links):
+        ri, rj = uf.find(i), uf.find(j)
+        if ri != rj:
+            by_root.setdefault(ri, []).append(k)
+            by_root.setdefault(rj, []).append(k)
+
+    def shared_of(rt: int) -> dict[int, float]:
+        out: dict[int, float] = {}
+        for k in by_root.get(rt, []):
+            overlap, i, j, _ = links[k]
+            ri, rj = uf.find(i), uf.find(j)
+            if ri != rj:
+                other = rj if ri == rt else ri
+                out[other] = out.get(other, 0.0) + overlap
+        return out
+
+    roots = {uf.find(i) for i in range(q)}
+    heap = [(width(rt), rt) for rt in roots if width(rt) < min_width]
+    heapq.heapify(heap)
+    while heap:
+        w, rt = heapq.heappop(heap)
+        if uf.find(rt) != rt or width(rt) != w:
+            continue  # stale: merged, or widened by a merge (pushed again then)
+        nbrs = shared_of(rt)
+        if not nbrs:
+            continue  # no neighbour now, none later (merges add no links)
+        _, key = max((length, (min(rt, o), max(rt, o))) for o, length in nbrs.items())
+        a, b = key
+        join(a, b)
+        new = uf.find(a)
+        merged = sorted(set(by_root.pop(a, [])) | set(by_root.pop(b, [])))
+        by_root[new] = merged
+        if width(new) < min_width:
+            heapq.heappush(heap, (width(new), new))
+
+
 def decompose(
     region: Region | Polygon | ArrayLike,
     sweep: float,
@@ -413,29 +490,7 @@ def decompose(
             if ri != rj and top[ri] == tr.slab[i] and bottom[rj] == tr.slab[j]:
                 join(ri, rj)
     if min_width > 0:
-        while True:
-            shared: dict[tuple[int, int], float] = {}
-            for overlap, i, j, _ in links:
-                ri, rj = uf.find(i), uf.find(j)
-                if ri != rj:
-                    key = (min(ri, rj), max(ri, rj))
-                    shared[key] = shared.get(key, 0.0) + overlap
-            roots = {uf.find(i) for i in range(q)}
-            narrow = sorted(
-                (hi_c[rt] - lo_c[rt], rt) for rt in roots if hi_c[rt] - lo_c[rt] < min_width
-            )
-            done = False
-            for _, rt in narrow:
-                best = max(
-                    ((length, key) for key, length in shared.items() if rt in key),
-                    default=None,
-                )
-                if best is not None:
-                    join(*best[1])
-                    done = True
-                    break
-            if not done:
-                break
+        _merge_narrow(links, uf, q, lambda rt: hi_c[rt] - lo_c[rt], join, min_width)
     membership = _membership(tr, [uf.find(i) for i in range(q)])
     n_cells = int(membership.max()) + 1 if q else 0
     lo = np.full(n_cells, np.inf)

@@ -8,9 +8,14 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..geometry.region import Region, _point_segment_distance, as_region, points_in_ring
+from ..geometry.region import Region, as_region
+from .edge_index import CHUNK, EdgeIndex
+from .route_domain import MAX_NODES, inner_domains, nearest_in
 
 __all__ = ["Route", "Router"]
+
+#: Domain vertices tried at a time from a point whose nearest domain point is hidden.
+_NEAREST = 16
 
 
 def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -30,10 +35,6 @@ class Route(NamedTuple):
     found: bool = True
 
 
-#: Segment x edge pairs tested at once by the visibility test (memory: a few bytes each).
-_VISIBILITY_CHUNK = 1 << 22
-
-
 class Router:
     """Shortest connecting moves in a region (module docstring).
 
@@ -50,7 +51,7 @@ class Router:
         self._e1, self._e2 = e[:, 0], e[:, 1]
         n_shell = len(self.region.shell)
         self._shell_edges = e[:n_shell]
-        self._hole_rings = [h.vertices for h in self.region.holes]
+        self._index = EdgeIndex(self.region, self.tol)
         # Vertices where the free space is reflex: a right turn along rings with the area on
         # their left (the shell CCW, holes CW).
         nodes = []
@@ -58,28 +59,20 @@ class Router:
             turn = _cross(ring - np.roll(ring, 1, axis=0), np.roll(ring, -1, axis=0) - ring)
             nodes.append(ring[turn < 0])
         self.nodes = np.concatenate(nodes) if nodes else np.zeros((0, 2))
+        # Too many reflex vertices (a traced boundary): route through the reflex vertices of
+        # inner simplified domains instead (:mod:`boustro.plan.route_domain`).
+        self._coarse: list[Router] | None = None
+        if len(self.nodes) > MAX_NODES:
+            self._domains = inner_domains(self.region, self.reach)
+            self._coarse = [Router(d) for d in self._domains]
+            self.nodes = np.zeros((0, 2))
         self._graph()
 
     # -- membership --------------------------------------------------------------------------
-    def _boundary_distance(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
-        return _point_segment_distance(p[:, None, :], self._e1[None], self._e2[None]).min(axis=1)
-
-    def _shell_distance(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
-        s = self._shell_edges
-        return _point_segment_distance(p[:, None, :], s[None, :, 0], s[None, :, 1]).min(axis=1)
-
     def classify(self, points: ArrayLike) -> NDArray[np.int64]:
         """``(P,)``: 0 in the closed area, 1 strictly inside a hole, 2 strictly outside the
         shell (within ``1e-9`` of the diameter of a ring counts as on it, i.e. in the area)."""
-        p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        out = np.zeros(len(p), dtype=np.int64)
-        if len(p) == 0:
-            return out
-        near = self._boundary_distance(p) <= self.tol
-        out[~points_in_ring(p, self.region.shell.vertices) & ~near] = 2
-        for ring in self._hole_rings:
-            out[points_in_ring(p, ring) & ~near] = 1
-        return out
+        return self._index.classify(np.asarray(points, dtype=np.float64).reshape(-1, 2))
 
     def anchor(self, points: ArrayLike) -> NDArray[np.float64]:
         """Each point if it lies in the closed area, else the nearest point of the area's
@@ -153,33 +146,24 @@ class Router:
         for a, b in zip(br[:-1][out], br[1:][out], strict=True):
             n = max(2, math.ceil((b - a) * length / step) + 1)
             pts = p + np.linspace(a, b, n)[:, None] * (q - p)
-            if np.max(self._shell_distance(pts)) > self.reach * (1 + 1e-9):
+            if not self._index.within(pts, self.reach * (1 + 1e-9), len(self._shell_edges)).all():
                 return False, outside
         return True, outside
 
     def _visible_many(self, a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.bool_]:
         """Whether each segment ``a[i] -> b[i]`` stays in the closed area, ``(M,)``.
 
-        Only the edges whose bounding box meets the segment's are tested (flat arrays)."""
+        Only the edges whose bounding box meets the segment's are tested (an STRtree)."""
         m = len(a)
         if m == 0:
             return np.zeros(0, dtype=bool)
-        e1, e2 = self._e1, self._e2
-        chunk = max(1, _VISIBILITY_CHUNK // max(1, len(e1)))
-        if m > chunk:  # bounded memory: the (segments x edges) test in slices
+        if m > CHUNK:  # bounded memory: the candidate pairs in slices
             return np.concatenate(
-                [self._visible_many(a[k : k + chunk], b[k : k + chunk]) for k in range(0, m, chunk)]
+                [self._visible_many(a[k : k + CHUNK], b[k : k + CHUNK]) for k in range(0, m, CHUNK)]
             )
+        e1, e2 = self._e1, self._e2
         tol = self.tol
-        lo, hi = np.minimum(a, b) - tol, np.maximum(a, b) + tol
-        elo, ehi = np.minimum(e1, e2), np.maximum(e1, e2)
-        cand = (
-            (lo[:, None, 0] <= ehi[None, :, 0])
-            & (hi[:, None, 0] >= elo[None, :, 0])
-            & (lo[:, None, 1] <= ehi[None, :, 1])
-            & (hi[:, None, 1] >= elo[None, :, 1])
-        )
-        mi, ei = np.nonzero(cand)
+        mi, ei = self._index.box_pairs(np.minimum(a, b) - tol, np.maximum(a, b) + tol)
         pa, pb = a[mi], b[mi]
         q1, q2 = e1[ei], e2[ei]
         r = pb - pa
@@ -261,6 +245,12 @@ class Router:
         legs = float(np.linalg.norm(pa - p) + np.linalg.norm(qa - q))
         if self._visible_many(pa[None], qa[None])[0]:
             middle = [pa, qa]
+        elif self._coarse is not None:
+            through = self._coarse_path(pa, qa)
+            if through is None:
+                length = float(np.linalg.norm(q - p))
+                return Route(np.stack([p, q]), length, length, True, False)
+            middle = list(through)
         else:
             dp, dq = self._to_nodes(pa[None])[0], self._to_nodes(qa[None])[0]
             total = dp[:, None] + self._dist + dq[None, :]
@@ -286,8 +276,9 @@ class Router:
 
         The straight move is tested only towards each point's ``nearest`` neighbours (by
         straight-line distance); other pairs are measured through the visibility graph (exact
-        where the straight move is blocked, an upper bound otherwise). Points outside the area
-        are measured from their nearest point of it, plus that leg.
+        where the straight move is blocked, an upper bound otherwise), or the straight line
+        where no move inside the area is found. Points outside the area are measured from their
+        nearest point of it, plus that leg.
         """
         p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         m = len(p)
@@ -307,14 +298,92 @@ class Router:
             direct[i[vis], j[vis]] = euclid[i[vis], j[vis]]
             direct[j[vis], i[vis]] = euclid[i[vis], j[vis]]
         np.fill_diagonal(direct, 0.0)
-        if len(self.nodes):
+        if self._coarse is not None:
+            direct = np.minimum(direct, self._coarse_distances(pa))
+        elif len(self.nodes):
             v = self._to_nodes(pa)  # (M, N)
-            w = np.min(v[:, :, None] + self._dist[None], axis=1)  # (M, N)
+            w = np.concatenate(  # (M, N), in blocks of rows: memory O(64 N^2)
+                [np.min(v[r : r + 64, :, None] + self._dist[None], axis=1) for r in range(0, m, 64)]
+            )
             for r0 in range(0, m, 64):  # (M, M) in blocks of rows: memory O(64 M N)
                 via = np.min(w[r0 : r0 + 64, None, :] + v[None, :, :], axis=-1)
                 direct[r0 : r0 + 64] = np.minimum(direct[r0 : r0 + 64], via)
         else:  # a convex shell without holes: every straight move stays inside
             direct = euclid
+        # no move inside the area found (a pocket no route reaches): the straight line, as
+        # :meth:`path` then flies it
+        direct = np.where(np.isfinite(direct), direct, euclid)
         out = direct + legs[:, None] + legs[None, :]
         np.fill_diagonal(out, 0.0)
+        return out
+
+    # -- traced boundaries: routes through the inner domains ---------------------------------
+    def _to_domains(
+        self, pa: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
+        """Each anchored point's nearest point of a domain, the domain (``-1``: none reached
+        by a straight move inside the area) and the length of that leg."""
+        pd, which = nearest_in(self._domains, pa)
+        ok = self._visible_many(pa, pd)
+        which = np.where(ok, which, -1)
+        blocked = np.flatnonzero(~ok)
+        if len(blocked):  # the nearest point is hidden (a dent): the nearest visible vertex
+            v = np.concatenate([d.vertices for d in self._domains])
+            sizes = [len(d.vertices) for d in self._domains]
+            owner = np.repeat(np.arange(len(self._domains)), sizes)
+            near = np.argsort(np.linalg.norm(pa[blocked, None] - v[None], axis=-1), axis=1)
+            left = np.arange(len(blocked))
+            for k in range(0, len(v), _NEAREST):  # nearest vertices first, a batch at a time
+                cand = near[left, k : k + _NEAREST]  # (B, <= _NEAREST), by distance
+                a = np.repeat(pa[blocked[left]], cand.shape[1], axis=0)
+                vis = self._visible_many(a, v[cand.ravel()]).reshape(cand.shape)
+                hit = vis.any(axis=1)
+                first = cand[np.arange(len(left)), np.argmax(vis, axis=1)]
+                pd[blocked[left[hit]]] = v[first[hit]]
+                which[blocked[left[hit]]] = owner[first[hit]]
+                left = left[~hit]
+                if not len(left):
+                    break
+        return pd, which, np.linalg.norm(pd - pa, axis=1)
+
+    def _coarse_path(
+        self, pa: NDArray[np.float64], qa: NDArray[np.float64]
+    ) -> NDArray[np.float64] | None:
+        """The move from ``pa`` to ``qa`` (both in the area) through a domain, its corners
+        pulled tight in the area; ``None`` if none is found."""
+        assert self._coarse is not None
+        pd, which, _ = self._to_domains(np.stack([pa, qa]))
+        if which[0] < 0 or which[0] != which[1]:
+            return None
+        sub = self._coarse[int(which[0])].path(pd[0], pd[1])
+        if not sub.found:
+            return None
+        return self._pull(np.concatenate([pa[None], sub.points, qa[None]]))
+
+    def _pull(self, pts: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The polyline with every corner dropped that a straight move in the area skips
+        (greedily, the farthest visible point first)."""
+        out = [0]
+        while out[-1] < len(pts) - 1:
+            i = out[-1]
+            later = np.arange(i + 1, len(pts))
+            vis = self._visible_many(np.repeat(pts[i : i + 1], len(later), axis=0), pts[later])
+            vis[0] = True  # consecutive points of a route are joined by its own moves
+            out.append(int(later[np.flatnonzero(vis)[-1]]))
+        return pts[out]
+
+    def _coarse_distances(self, pa: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(M, M)`` lengths of the moves through the domains (``inf`` between domains)."""
+        assert self._coarse is not None
+        uniq, back = np.unique(pa, axis=0, return_inverse=True)  # passes share their ends
+        if len(uniq) < len(pa):
+            return self._coarse_distances(uniq)[np.ix_(back.ravel(), back.ravel())]
+        m = len(pa)
+        out = np.full((m, m), math.inf)
+        pd, which, leg = self._to_domains(pa)
+        for k, sub in enumerate(self._coarse):
+            idx = np.flatnonzero(which == k)
+            if len(idx):
+                d = sub.distances(pd[idx]) + leg[idx, None] + leg[None, idx]
+                out[np.ix_(idx, idx)] = d
         return out

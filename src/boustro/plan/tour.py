@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 from ..geometry import Polygon
 from .cells import _frame
 from .lanes import Lanes
+from .order_kernel import improve_order
 from .routing import Router
 from .types import KINDS
 
@@ -163,12 +164,6 @@ def _order(
         acc = dist[0, entry_idx[first]] + internal[first]
         return acc + forced if force_start else acc
 
-    def run(acc: NDArray[np.float64], seq: list[int]) -> NDArray[np.float64]:
-        """The best cost ending in each option of ``seq[-1]``, from ``acc`` at ``seq[0]``."""
-        for prev, cur in itertools.pairwise(seq):
-            acc = (block(prev, cur) + acc[:, None]).min(axis=0) + internal[cur]
-        return acc
-
     def cost(order: list[int]) -> tuple[float, list[int]]:
         acc = head(order[0])
         back = []
@@ -196,31 +191,17 @@ def _order(
         order.append(best[1])
         remaining.discard(best[1])
         here = exit_idx[best[1]][best[2] : best[2] + 1]
-    best_cost = cost(order)[0]
+    best_cost, _ = cost(order)
     # 2-opt within a budget of evaluated orders, not of seconds, so that the same input gives
-    # the same plan on a busy machine and an idle one
-    left = budget
-    improved = len(order) > 2
-    while improved and left > 0:
-        improved = False
-        for i in range(int(force_start), len(order) - 1):  # a forced first pass stays first
-            # the cost up to order[i - 1] is the same for every j (the same sums as cost())
-            prefix = run(head(order[0]), order[:i]) if i else None
-            for j in range(i + 1, len(order)):
-                cand = order[:i] + order[i : j + 1][::-1] + order[j + 1 :]
-                if prefix is None:
-                    c = float(run(head(cand[0]), cand).min())
-                else:
-                    c = float(run(prefix, cand[i - 1 :]).min())
-                left -= 1
-                if c < best_cost - 1e-9:
-                    order, best_cost = cand, c
-                    improved = True  # order[:i], hence the prefix, is unchanged
-                if left <= 0:
-                    break
-            if left <= 0:
-                break
-    return order, cost(order)[1]
+    # the same plan on a busy machine and an idle one (compiled: the same orders and costs)
+    first_cost = [dist[0, entry_idx[k]] + internal[k] for k in range(len(passes))]
+    if force_start:
+        first_cost[first_pass] = first_cost[first_pass] + forced
+    order = improve_order(
+        order, best_cost, budget, int(force_start), first_cost, dist, entry_idx, exit_idx, internal
+    )
+    _, choice = cost(order)
+    return order, choice
 
 
 # -- driving the tour ------------------------------------------------------------------------

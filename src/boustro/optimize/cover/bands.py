@@ -24,7 +24,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["BandStats", "EdgeSet", "band_stats", "edge_set"]
+__all__ = ["BandStats", "EdgeSet", "RigidBoxes", "band_stats", "edge_set"]
 
 
 class EdgeSet(NamedTuple):
@@ -57,22 +57,40 @@ class BandStats(NamedTuple):
 
     * ``length``: measure of the inner set's band projection minus the inner set's hole chords
       on the line (a lower bound on the lane length any sandwiched area gets);
-    * ``lanes``: pieces of the outer projection minus the outer set's hole chords that hold
+    * ``count``: pieces of the outer projection minus the outer set's hole chords that hold
       inner length (a lower bound on the lanes on the line);
     * ``in_lo, in_hi, out_lo, out_hi``: the extremes of the inner and outer projections
       (``nan`` where empty);
     * ``cut (L, H)``: original holes whose outer-set chord overlaps the inner projection on some
-      line (a hole every sandwiched plan cuts, hence passes around).
+      line (a hole every sandwiched plan cuts, hence passes around);
+    * ``rigid (L, H)``: original holes that every plan of the box cuts, by the box's rigid
+      motions (:func:`band_stats` with ``rigid``; all false without): a line ``k`` lies
+      strictly inside the hole's extent across the lines shrunk by ``m = delta rho + eta``
+      (``rho``: the hole's farthest vertex from the origin; every point of the hole moves by
+      at most ``m``), so it crosses every moved hole (connected), and one inner projection
+      interval of band ``k`` covers the hole's extent along the line grown by ``m``, so the
+      chord lies inside every such plan's lane.
     """
 
     k0: int
     length: NDArray[np.float64]
-    lanes: NDArray[np.int64]
+    count: NDArray[np.int64]  # type: ignore[assignment]  # (shadows tuple.count)
     in_lo: NDArray[np.float64]
     in_hi: NDArray[np.float64]
     out_lo: NDArray[np.float64]
     out_hi: NDArray[np.float64]
     cut: NDArray[np.bool_]
+    rigid: NDArray[np.bool_]
+
+
+class RigidBoxes(NamedTuple):
+    """The holes' vertices ``xy (V, 2)`` (hole ``h``: rows ``start[h]:start[h + 1]``) and the
+    boxes' half-widths ``delta`` (angle) and ``eta`` (offset), ``(L,)``: for ``rigid``."""
+
+    xy: NDArray[np.float64]
+    start: NDArray[np.int64]
+    delta: NDArray[np.float64]
+    eta: NDArray[np.float64]
 
 
 # -- the loop (plain Python, compiled by numba on first use) ----------------------------------
@@ -99,8 +117,8 @@ def _band_intervals(h1, h2, t1, t2, d, s, reach, k0, nb):
     n_x = np.zeros((nb, 2), dtype=np.int64)
     for i in range(e):
         lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
-        ka = max(int(math.ceil((lo - reach - d) / s)), k0)  # noqa: RUF046 (numba)
-        kb = min(int(math.floor((hi + reach - d) / s)), k0 + nb - 1)  # noqa: RUF046 (numba)
+        ka = max(math.ceil((lo - reach - d) / s), k0)
+        kb = min(math.floor((hi + reach - d) / s), k0 + nb - 1)
         for k in range(ka, kb + 1):
             c = d + k * s
             if min(hi, c + reach) >= max(lo, c - reach):
@@ -126,8 +144,8 @@ def _band_intervals(h1, h2, t1, t2, d, s, reach, k0, nb):
     # pass 2: fill
     for i in range(e):
         lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
-        ka = max(int(math.ceil((lo - reach - d) / s)), k0)  # noqa: RUF046 (numba)
-        kb = min(int(math.floor((hi + reach - d) / s)), k0 + nb - 1)  # noqa: RUF046 (numba)
+        ka = max(math.ceil((lo - reach - d) / s), k0)
+        kb = min(math.floor((hi + reach - d) / s), k0 + nb - 1)
         dh = h2[i] - h1[i]
         for k in range(ka, kb + 1):
             c = d + k * s
@@ -185,8 +203,8 @@ def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):
         if hole[i] < 0:
             continue
         lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
-        ka = max(int(math.ceil((lo - d) / s)), k0)  # noqa: RUF046 (numba)
-        kb = min(int(math.floor((hi - d) / s)), k0 + nb - 1)  # noqa: RUF046 (numba)
+        ka = max(math.ceil((lo - d) / s), k0)
+        kb = min(math.floor((hi - d) / s), k0 + nb - 1)
         for k in range(ka, kb + 1):
             line = d + k * s
             if (h1[i] <= line) != (h2[i] <= line):
@@ -201,8 +219,8 @@ def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):
         if hole[i] < 0:
             continue
         lo, hi = min(h1[i], h2[i]), max(h1[i], h2[i])
-        ka = max(int(math.ceil((lo - d) / s)), k0)  # noqa: RUF046 (numba)
-        kb = min(int(math.floor((hi - d) / s)), k0 + nb - 1)  # noqa: RUF046 (numba)
+        ka = max(math.ceil((lo - d) / s), k0)
+        kb = min(math.floor((hi - d) / s), k0 + nb - 1)
         for k in range(ka, kb + 1):
             line = d + k * s
             if (h1[i] <= line) != (h2[i] <= line):
@@ -268,11 +286,37 @@ def _leaf(
     out_lo,
     out_hi,
     cut,
+    hxy,
+    hstart,
+    delta,
+    eta,
+    rigid,
 ):
     ih1, ih2, it1, it2 = _project(inner_xy, cs, sn, ox, oy)
     oh1, oh2, ot1, ot2 = _project(outer_xy, cs, sn, ox, oy)
     i_start, i_m, i_lo, i_hi = _band_intervals(ih1, ih2, it1, it2, d, s, r_in, k0, nb)
     o_start, o_m, o_lo, o_hi = _band_intervals(oh1, oh2, ot1, ot2, d, s, r_out, k0, nb)
+    if delta >= 0:
+        _rigid_cuts(
+            hxy,
+            hstart,
+            cs,
+            sn,
+            d,
+            s,
+            ox,
+            oy,
+            k0,
+            nb,
+            delta,
+            eta,
+            i_start,
+            i_m,
+            i_lo,
+            i_hi,
+            tol,
+            rigid,
+        )
     gi_start, gi_t, _gi_h = _hole_chords(ih1, ih2, it1, it2, inner_hole, d, s, k0, nb)
     go_start, go_t, go_h = _hole_chords(oh1, oh2, ot1, ot2, outer_hole, d, s, k0, nb)
     for b in range(nb):
@@ -313,6 +357,36 @@ def _leaf(
                     break
 
 
+def _rigid_cuts(
+    hxy, hstart, cs, sn, d, s, ox, oy, k0, nb, delta, eta, i_start, i_m, i_lo, i_hi, tol, rigid
+):
+    """``rigid[h]``: hole ``h`` is cut by every plan of the box (:class:`BandStats`)."""
+    for h in range(hstart.shape[0] - 1):
+        n_lo, n_hi, u_lo, u_hi, rho = np.inf, -np.inf, np.inf, -np.inf, 0.0
+        for v in range(hstart[h], hstart[h + 1]):
+            x, y = hxy[v, 0] - ox, hxy[v, 1] - oy
+            nv, uv = -sn * x + cs * y, cs * x + sn * y
+            n_lo, n_hi = min(n_lo, nv), max(n_hi, nv)
+            u_lo, u_hi = min(u_lo, uv), max(u_hi, uv)
+            rho = max(rho, math.sqrt(x * x + y * y))
+        m = delta * rho + eta + tol
+        ka = max(math.ceil((n_lo + m - d) / s), k0)
+        kb = min(math.floor((n_hi - m - d) / s), k0 + nb - 1)
+        for k in range(ka, kb + 1):
+            c = d + k * s
+            if not (n_lo + m < c < n_hi - m):
+                continue
+            b = k - k0
+            found = False
+            for j in range(i_start[b], i_start[b] + i_m[b]):
+                if i_lo[j] <= u_lo - m and i_hi[j] >= u_hi + m:
+                    found = True
+                    break
+            if found:
+                rigid[h] = True
+                break
+
+
 def _all(
     inner_xy,
     inner_hole,
@@ -330,6 +404,10 @@ def _all(
     nb,
     n_holes,
     tol,
+    hxy,
+    hstart,
+    delta,
+    eta,
 ):
     n = cs.shape[0]
     length = np.zeros((n, nb))
@@ -339,6 +417,7 @@ def _all(
     out_lo = np.full((n, nb), np.nan)
     out_hi = np.full((n, nb), np.nan)
     cut = np.zeros((n, max(n_holes, 1)), dtype=np.bool_)
+    rigid = np.zeros((n, max(n_holes, 1)), dtype=np.bool_)
     for leaf in range(n):
         _leaf(
             inner_xy,
@@ -363,8 +442,13 @@ def _all(
             out_lo[leaf],
             out_hi[leaf],
             cut[leaf],
+            hxy,
+            hstart,
+            delta[leaf],
+            eta[leaf],
+            rigid[leaf],
         )
-    return length, count, in_lo, in_hi, out_lo, out_hi, cut
+    return length, count, in_lo, in_hi, out_lo, out_hi, cut, rigid
 
 
 @cache
@@ -376,7 +460,7 @@ def _compiled() -> Any:
         return _all
     jit = numba.njit(cache=True)
     g = globals()
-    for name in ("_project", "_band_intervals", "_hole_chords", "_minus", "_leaf"):
+    for name in ("_project", "_band_intervals", "_hole_chords", "_minus", "_rigid_cuts", "_leaf"):
         g[name] = jit(g[name])
     return jit(_all)
 
@@ -394,17 +478,26 @@ def band_stats(
     tol: float,
     *,
     inner_reach: float | None = None,
+    rigid: RigidBoxes | None = None,
 ) -> BandStats:
     """:class:`BandStats` of the layouts ``(angles[l], offsets[l])`` for lines ``k`` in
-    ``k_range`` (inclusive; it must hold every line whose band meets the outer set)."""
+    ``k_range`` (inclusive; it must hold every line whose band meets the outer set); with
+    ``rigid``, also the holes every plan of each box cuts (``BandStats.rigid``)."""
     k0, k1 = k_range
     fn = _compiled()
     angles = np.ascontiguousarray(angles, dtype=np.float64)
+    if rigid is None:  # delta < 0: no rigid test
+        rigid = RigidBoxes(np.zeros((0, 2)), np.zeros(1, dtype=np.int64),
+                           np.full(len(angles), -1.0), np.zeros(len(angles)))  # fmt: skip
     out = fn(
         np.ascontiguousarray(inner.xy), np.ascontiguousarray(inner.hole),
         np.ascontiguousarray(outer.xy), np.ascontiguousarray(outer.hole),
         np.cos(angles), np.sin(angles), np.ascontiguousarray(offsets, dtype=np.float64),
         float(spacing), float(reach if inner_reach is None else inner_reach), float(reach),
         float(origin[0]), float(origin[1]), int(k0), int(k1 - k0 + 1), int(n_holes), float(tol),
+        np.ascontiguousarray(rigid.xy, dtype=np.float64),
+        np.ascontiguousarray(rigid.start, dtype=np.int64),
+        np.ascontiguousarray(rigid.delta, dtype=np.float64),
+        np.ascontiguousarray(rigid.eta, dtype=np.float64),
     )  # fmt: skip
     return BandStats(int(k0), *out)

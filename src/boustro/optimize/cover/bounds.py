@@ -26,7 +26,7 @@ def _boustrophedon_moves(st: BandStats, spacing: float) -> NDArray[np.float64]:
     """The shortest moves between consecutive lines of a boustrophedon over one lane per line,
     each end anywhere between the inner and the outer projection's extreme, on the better start
     side; ``nan`` where the lines holding lanes are not contiguous."""
-    used = st.lanes >= 1
+    used = st.count >= 1
     pair = used[:, :-1] & used[:, 1:]
     right = _interval_gap(st.in_hi[:, :-1], st.out_hi[:, :-1], st.in_hi[:, 1:], st.out_hi[:, 1:])
     left = _interval_gap(st.out_lo[:, :-1], st.in_lo[:, :-1], st.out_lo[:, 1:], st.in_lo[:, 1:])
@@ -51,20 +51,29 @@ def lower_bounds(
     holds such length, each with its run-in and run-out. Hole passes: every original hole whose
     outer-set chord overlaps the inner projection is cut in every such plan, so it gets its pass
     (a closed loop around it: at least the perimeter of the convex hull of its outer-set
-    remains) and one more turn. Moves: a path visiting lines ``k_min .. k_max`` travels at least
-    ``(k_max - k_min) spacing`` across them; with ``boustrophedon`` (the convex planner: one lane
+    remains) and one more turn; so does every hole that ``st.rigid`` says every plan of the box
+    cuts, with the perimeter of its own convex hull (the plans of a box are rigid images of the
+    area, and a pass around a hole is at least that long). Moves: a path visiting lines
+    ``k_min .. k_max`` travels at least ``(k_max - k_min) spacing`` across them; with
+    ``boustrophedon`` (the convex planner: one lane
     per line, consecutive lines joined end to end) each move is at least the distance between
     the ranges of its two ends.
     """
-    n_lanes = st.lanes.sum(axis=1)
+    n_lanes = st.count.sum(axis=1)
     holes = level.hole_perimeter.shape[0]
     cut = st.cut[:, :holes]
-    n_passes = cut.sum(axis=1)
-    perimeter = (cut * level.hole_perimeter[None, :]).sum(axis=1) if holes else 0.0
-    used = st.lanes >= 1
-    idx = np.arange(st.lanes.shape[1])
+    rigid = st.rigid[:, :holes] & ~cut  # cut by every rigid image: a pass as long as the hole
+    n_passes = cut.sum(axis=1) + rigid.sum(axis=1)
+    perimeter = (
+        (cut * level.hole_perimeter[None, :]).sum(axis=1)
+        + (rigid * level.hull_perimeter[None, :]).sum(axis=1)
+        if holes
+        else 0.0
+    )
+    used = st.count >= 1
+    idx = np.arange(st.count.shape[1])
     k_max = np.where(used, idx, -1).max(axis=1)
-    k_min = np.where(used, idx, st.lanes.shape[1]).min(axis=1)
+    k_min = np.where(used, idx, st.count.shape[1]).min(axis=1)
     moves = np.where(n_lanes > 0, (k_max - k_min) * spacing, 0.0)
     if boustrophedon:
         exact = _boustrophedon_moves(st, spacing)

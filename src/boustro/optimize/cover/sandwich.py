@@ -1,5 +1,16 @@
 """Inner and outer sets around a region: every rigid motion of it by at most ``eps`` lies
-between them (shapely buffers, made conservative for their polygonal arcs)."""
+between them (shapely buffers, made conservative for their polygonal arcs).
+
+Simplified sandwiches (a region with many vertices: a traced field). With a ``tolerance``
+``h > 0`` the level of radius ``eps`` is built at radius ``eps + t`` (``t = eps / 8``)
+and then simplified (GEOS, Douglas-Peucker, topology preserved) with tolerance ``0.99 t``.
+A simplification replaces chains of the boundary by chords, each chain within the tolerance of
+its chord, so every point the simplification adds or removes lies within ``t`` of the set's
+boundary: the simplified erosion lies in ``erosion(eps + t) + t ⊆ erosion(eps)``, and the
+simplified dilation contains every point at least ``t`` inside ``dilation(eps + t)``, i.e.
+``dilation(eps)``. Both are still a sandwich at radius ``eps``, with far fewer edges (the
+bound is that of a radius up to ``eps + t``: a little weaker, never invalid).
+"""
 
 from __future__ import annotations
 
@@ -17,6 +28,8 @@ __all__ = ["Level", "Sandwich"]
 
 #: Segments per quarter circle of the erosion's round arcs.
 QUAD_SEGS = 8
+#: Share of the slack ``t`` used as the simplification tolerance (the rest: rounding margin).
+SIMPLIFY_SHARE = 0.99
 #: The erosion radius is divided by the cosine of half a segment's angle, so that the
 #: polygonal arcs (vertices on the circle, chords inside) stay outside the true circle.
 ARC_FACTOR = 1.0 / math.cos(math.pi / (4 * QUAD_SEGS))
@@ -24,12 +37,14 @@ ARC_FACTOR = 1.0 / math.cos(math.pi / (4 * QUAD_SEGS))
 
 class Level(NamedTuple):
     """The sandwich at one radius: inner and outer edge sets, and per original hole the
-    perimeter of the convex hull of what remains of it in the outer set (0 if nothing)."""
+    perimeter of the convex hull of what remains of it in the outer set (0 if nothing) and
+    of the hole itself."""
 
     eps: float
     inner: EdgeSet
     outer: EdgeSet
     hole_perimeter: NDArray[np.float64]
+    hull_perimeter: NDArray[np.float64]
 
 
 def _rings(geom: Any) -> list[tuple[NDArray[np.float64], bool]]:
@@ -53,10 +68,11 @@ class Sandwich:
     so that its polygonal arcs lie inside the true erosion.
     """
 
-    def __init__(self, region: Region) -> None:
+    def __init__(self, region: Region, tolerance: float = 0.0) -> None:
         import shapely
 
         self.region = region
+        self.tolerance = float(tolerance)
         self.holes = [np.asarray(h.vertices, dtype=np.float64) for h in region.holes]
         self.polygon = shapely.Polygon(region.shell.vertices, self.holes)
         self.hole_polygons = [shapely.Polygon(h) for h in self.holes]
@@ -68,22 +84,51 @@ class Sandwich:
         """The region itself (inner = outer)."""
         rings = [self.region.shell.vertices, *self.holes]
         es = edge_set(rings, [-1, *range(len(self.holes))])
-        return Level(0.0, es, es, self._perimeters([(h, i) for i, h in enumerate(self.holes)]))
+        return Level(0.0, es, es, self.hull_perimeter, self.hull_perimeter)
+
+    @cached_property
+    def hull_perimeter(self) -> NDArray[np.float64]:
+        """Per hole, the perimeter of its convex hull."""
+        return self._perimeters([(h, i) for i, h in enumerate(self.holes)])
+
+    def slack(self, eps: float) -> float:
+        """How much farther than ``eps`` the level of radius ``eps`` reaches (0 unsimplified)."""
+        return eps / 8 if self.tolerance > 0 else 0.0
+
+    @cached_property
+    def approximate(self) -> Level:
+        """The region simplified with the tolerance (the region itself without one): a model
+        of the region with fewer edges, not a bound."""
+        if self.tolerance <= 0:
+            return self.exact
+        geom = self.polygon.simplify(self.tolerance, preserve_topology=True)
+        return self._level(0.0, geom, geom)
 
     def level(self, eps: float, shrink: float = 0.0) -> Level:
         """The sandwich at radius ``eps >= 0`` (cached), its inner set eroded by ``shrink``
-        more (a plan whose lanes may stop that far inside the area)."""
+        more (a plan whose lanes may stop that far inside the area: ``keep_inside``)."""
         key = (eps, shrink)
         if key not in self._levels:
             self._levels[key] = self._build(eps, shrink)
         return self._levels[key]
 
     def _build(self, eps: float, shrink: float = 0.0) -> Level:
+        pad = 1e-9 * self.region.diameter
+        t = self.slack(eps)
+        if t > 0:  # simplified (module docstring); round dilation: fewer spikes than mitres
+            r = eps + t
+            outer = self.polygon.buffer(r * ARC_FACTOR + pad, quad_segs=QUAD_SEGS)
+            inner = self.polygon.buffer(-((r + shrink) * ARC_FACTOR + pad), quad_segs=QUAD_SEGS)
+            outer = outer.simplify(SIMPLIFY_SHARE * t, preserve_topology=True)
+            inner = inner.simplify(SIMPLIFY_SHARE * t, preserve_topology=True)
+        else:
+            outer = self.polygon.buffer(eps + pad, join_style="mitre", mitre_limit=5.0)
+            inner = self.polygon.buffer(-((eps + shrink) * ARC_FACTOR + pad), quad_segs=QUAD_SEGS)
+        return self._level(eps, inner, outer)
+
+    def _level(self, eps: float, inner: Any, outer: Any) -> Level:
         import shapely
 
-        pad = 1e-9 * self.region.diameter
-        outer = self.polygon.buffer(eps + pad, join_style="mitre", mitre_limit=5.0)
-        inner = self.polygon.buffer(-((eps + shrink) * ARC_FACTOR + pad), quad_segs=QUAD_SEGS)
         in_rings = _rings(inner)
         inner_set = edge_set([r for r, _ in in_rings], [0 if h else -1 for _, h in in_rings])
         out_rings = _rings(outer)
@@ -96,7 +141,7 @@ class Sandwich:
                 kept.append((ring, hid))
             ids.append(hid)
         outer_set = edge_set([r for r, _ in out_rings], ids)
-        return Level(eps, inner_set, outer_set, self._perimeters(kept))
+        return Level(eps, inner_set, outer_set, self._perimeters(kept), self.hull_perimeter)
 
     def _perimeters(self, rings: list[tuple[NDArray[np.float64], int]]) -> NDArray[np.float64]:
         import shapely

@@ -16,15 +16,20 @@ from ...geometry import Polygon
 from ...geometry.region import Region, as_region
 from ...models import check_spacing
 from ..result import OptimizeResult, canonical
-from .bands import band_stats
+from .bands import RigidBoxes, band_stats
 from .bounds import lower_bounds
 from .cost import CoverCost
 from .sandwich import Sandwich
 
 __all__ = ["CoverSearch", "cover_optimum"]
 
+#: Regions with more edges than this are searched with simplified sandwiches
+#: (:class:`Sandwich` with a tolerance of :data:`SIMPLIFY_SPACING` spacings).
+SIMPLIFY_EDGES = 256
+SIMPLIFY_SPACING = 0.1
 #: Work budget of a search: boxes bounded (and modelled) times the area's edges (about 0.25 s
-#: per million on the project's machine).
+#: per million on the project's machine): a count, not a time, so that plans do not depend on
+#: the machine's load.
 MAX_WORK = 4e6
 #: Plans evaluated per round at most (the layouts with the lowest point bound).
 PLANS_PER_ROUND = 3
@@ -36,10 +41,10 @@ FIRST_SEPARATION = math.radians(3.0)
 class _Boxes(NamedTuple):
     """Boxes of layouts: angle ``theta +- delta``, offset ``d +- eta`` (arrays)."""
 
-    theta: NDArray[Any]
-    delta: NDArray[Any]
-    d: NDArray[Any]
-    eta: NDArray[Any]
+    theta: NDArray[np.float64]
+    delta: NDArray[np.float64]
+    d: NDArray[np.float64]
+    eta: NDArray[np.float64]
 
     def take(self, mask: NDArray[np.bool_]) -> _Boxes:
         return _Boxes(*(a[mask] for a in self))
@@ -83,10 +88,14 @@ class CoverSearch:
         self.keep_inside = keep_inside
         self.shrink = spacing / 2 if keep_inside else 0.0
         self.band = 0.0 if keep_inside else reach
-        self.sandwich = Sandwich(region)
+        simplify = len(region.edges) > SIMPLIFY_EDGES
+        self.sandwich = Sandwich(region, SIMPLIFY_SPACING * spacing if simplify else 0.0)
         self.origin = region.centre
         self.radius = float(np.linalg.norm(region.shell.vertices - self.origin, axis=1).max())
         self.n_holes = len(region.holes)
+        rings = [h.vertices for h in region.holes]
+        self.hole_xy = np.concatenate(rings) if rings else np.zeros((0, 2))
+        self.hole_start = np.concatenate([[0], np.cumsum([len(h) for h in rings])]).astype(np.int64)
         self.tol = 1e-9 * region.diameter
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
@@ -103,9 +112,14 @@ class CoverSearch:
         far = self.radius + eps + self.reach
         return math.floor(-far / self.s) - 1, math.ceil(far / self.s) + 1
 
-    def point_values(self, boxes: _Boxes) -> NDArray[np.float64]:
-        """The bound at each box's centre with the region itself (a layout's own model)."""
-        lv = self.sandwich.level(0.0, self.shrink) if self.keep_inside else self.sandwich.exact
+    def point_values(self, boxes: _Boxes, exact: bool = False) -> NDArray[np.float64]:
+        """The bound at each box's centre with the region itself (a layout's own model); of
+        the simplified region (:attr:`Sandwich.approximate`) unless ``exact``: the search only
+        ranks and retires boxes by these, a plan's value is always exact."""
+        if self.keep_inside:  # a relaxation of the plan even at one layout
+            lv = self.sandwich.level(0.0, self.shrink)
+        else:
+            lv = self.sandwich.exact if exact else self.sandwich.approximate
         st = band_stats(
             lv.inner, lv.outer, boxes.theta, boxes.d, self.s, self.band, self.origin,
             self.k_range(0.0), self.n_holes, self.tol, inner_reach=self._inner_reach(),
@@ -115,6 +129,16 @@ class CoverSearch:
         self.model_min = min(self.model_min, float(out.min(initial=math.inf)))
         self.points.append(np.stack([out, boxes.theta, boxes.d]))
         return out
+
+    def plan_value(self, boxes: _Boxes, i: int, points: NDArray[np.float64]) -> float:
+        """The cost of the plan at box ``i``'s centre (``evaluate``, or the exact model)."""
+        theta, d = float(boxes.theta[i]), float(boxes.d[i])
+        if self.evaluate is not None:
+            return float(self.evaluate(theta, d))
+        if self.sandwich.tolerance <= 0 and not self.keep_inside:
+            return float(points[i])
+        one = _Boxes(*(a[i : i + 1] for a in boxes))
+        return float(self.point_values(one, exact=True)[0])
 
     def box_bounds(self, boxes: _Boxes) -> NDArray[np.float64]:
         """A lower bound on the cost over each box: the sandwich at the radius that holds
@@ -126,10 +150,15 @@ class CoverSearch:
         for r in np.unique(radius):
             sel = radius == r
             lv = self.sandwich.level(float(r), self.shrink)
+            reach_out = float(r) + self.sandwich.slack(float(r))
+            # rigid hole cuts assume lanes spanning their bands: not with keep_inside
+            rigid = None
+            if not self.keep_inside:
+                rigid = RigidBoxes(self.hole_xy, self.hole_start, boxes.delta[sel], boxes.eta[sel])
             st = band_stats(
                 lv.inner, lv.outer, boxes.theta[sel], boxes.d[sel], self.s, self.band,
-                self.origin, self.k_range(float(r)), self.n_holes, self.tol,
-                inner_reach=self._inner_reach(),
+                self.origin, self.k_range(reach_out), self.n_holes, self.tol,
+                inner_reach=self._inner_reach(), rigid=rigid,
             )  # fmt: skip
             out[sel] = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
         self.bound_evaluations += len(eps)
@@ -139,14 +168,15 @@ class CoverSearch:
         """Plan the best offset (by the model) along each of the longest edges' directions:
         areas with parallel sides often have their optimum exactly there."""
         for a in _edge_angles(self.region, EDGE_PLANS):
-            d = (np.arange(EDGE_OFFSETS) + 0.5) * (self.s / EDGE_OFFSETS)
+            d = (np.arange(EDGE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / EDGE_OFFSETS)
             boxes = _Boxes(np.full(len(d), a), np.zeros(len(d)), d, np.zeros(len(d)))
             self.try_plans(boxes, self.point_values(boxes), limit=1)
 
     def polish(self) -> None:
         """Plan the best modelled layout of each degree of angle whose model beats the best
-        plan, lowest model first, :data:`POLISH_PLANS` at most: a routed plan's tour differs
-        between layouts whose bounds are close, so the plans decide."""
+        plan, lowest model first, :data:`POLISH_PLANS` at most, and the lanes centred on the
+        area at those whole degrees: a routed plan's tour differs between layouts whose bounds
+        are close, so the plans decide."""
         v, theta, d = np.concatenate(self.points, axis=1)
         ok = v < self.best[0]
         v, theta, d = v[ok], theta[ok], d[ok]
@@ -158,8 +188,8 @@ class CoverSearch:
         pick = pick[np.argsort(v[pick])][:POLISH_PLANS]
         boxes = _Boxes(theta[pick], np.zeros(len(pick)), d[pick], np.zeros(len(pick)))
         self.try_plans(boxes, v[pick], limit=len(pick))
-        # and the lanes centred on the area (the first half a spacing inside its extreme) at
-        # those whole degrees: the layout a person, or a brute force over degrees, would fly
+        # the first lane half a spacing inside the area's extreme: the layout a person, or a
+        # brute force over degrees, would fly
         angles = np.radians(bins[pick].astype(np.float64))
         verts = self.region.shell.vertices - self.origin
         normal = np.stack([-np.sin(angles), np.cos(angles)], axis=1)
@@ -172,7 +202,7 @@ class CoverSearch:
         """Plan :data:`REFINE_OFFSETS` more offsets at the best angle: a routed plan's moves
         differ between offsets that the bound (lanes, turns) cannot tell apart."""
         theta = self.best[1]
-        d = (np.arange(REFINE_OFFSETS) + 0.5) * (self.s / REFINE_OFFSETS)
+        d = (np.arange(REFINE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / REFINE_OFFSETS)
         boxes = _Boxes(np.full(len(d), theta), np.zeros(len(d)), d, np.zeros(len(d)))
         points = self.point_values(boxes)
         self.try_plans(boxes, points, limit=REFINE_OFFSETS)
@@ -206,7 +236,7 @@ class CoverSearch:
             taken.append(float(boxes.theta[i]))
             self.seen.add(key)
             theta, d = float(boxes.theta[i]), float(boxes.d[i])
-            value = float(points[i]) if self.evaluate is None else float(self.evaluate(theta, d))
+            value = self.plan_value(boxes, int(i), points)
             self.plans += 1
             tried += 1
             if value < self.best[0]:
@@ -256,14 +286,14 @@ def _initial(search: CoverSearch, n_angles: int, angle: float | None) -> _Boxes:
     if angle is not None:  # one angle: boxes of offsets only
         n = FIXED_OFFSETS
         eta = search.s / (2 * n)
-        d = (np.arange(n) + 0.5) * (2 * eta)
+        d = (np.arange(n, dtype=np.float64) + 0.5) * (2 * eta)
         return _Boxes(np.full(n, angle), np.zeros(n), d, np.full(n, eta))
     delta = math.pi / (2 * n_angles)
     n_off = max(1, math.ceil(search.s / (2 * delta * search.radius)))
     eta = search.s / (2 * n_off)
     theta = (np.arange(n_angles) + 0.5) * (2 * delta)
-    d = (np.arange(n_off) + 0.5) * (2 * eta)
-    tt, dd = np.meshgrid(theta, d, indexing="ij")
+    offsets = (np.arange(n_off) + 0.5) * (2 * eta)
+    tt, dd = np.meshgrid(theta, offsets, indexing="ij")
     n = tt.size
     return _Boxes(tt.ravel(), np.full(n, delta), dd.ravel(), np.full(n, eta))
 
@@ -296,8 +326,8 @@ def cover_optimum(
     boxes are evaluated by ``evaluate(angle, offset) -> cost`` (the real planner: upper bounds);
     a box whose bound is within ``rtol`` of the best plan is discarded, the others are halved,
     until none is left or the radius falls below ``min_eps`` (default ``1e-6`` of the
-    spacing), the boxes bounded times the area's edges exceed ``max_work`` (a count, not a
-    time, so that plans do not depend on the machine's load) or ``max_seconds`` passed.
+    spacing), the boxes bounded times the area's edges exceed ``max_work`` or ``max_seconds``
+    passed.
 
     Args:
         region: the area (plan units), convex or not, with holes.
@@ -310,7 +340,7 @@ def cover_optimum(
         keep_inside: the plans keep inside the area (:mod:`boustro.plan.inside`): their lanes
             stop at the boundary or half a spacing inside it, so the bound takes each line's
             chord through the inner set eroded by half a spacing more, with no boustrophedon
-            moves.
+            moves and no rigid hole cuts.
         boustrophedon: whether plans fly one lane per line in boustrophedon order (the convex
             planner); default: the region is a convex polygon without holes.
 

@@ -1,0 +1,180 @@
+"""Benchmark: one plan of a traced field against its vertices and spacing, time and peak memory,
+this tree beside a baseline commit in the same run (issue 21).
+
+Each measurement runs in its own subprocess (``python benchmarks/scale.py --worker ...`` with
+``PYTHONPATH`` at the code measured): it builds the field (vertices written by the parent, so
+both codes plan the same field), plans a small field first (imports, numba's compiled kernels
+loaded or compiled), then times ``plan_region(field, spacing, decompose_area=False,
+angle=0.3, offset=1.0)`` (the plan the certified search evaluates) with ``time.process_time``
+and the wall clock, and reports its peak RSS (``resource.getrusage``, the whole process:
+imports included). The baseline is ``git archive``-d from ``--baseline`` (default: the commit
+this work started from) into a temporary directory; a baseline run over ``--timeout`` seconds
+is stopped and reported as ``> timeout``, and larger fields of that series are not tried.
+
+Usage::
+
+    python benchmarks/scale.py                  # vertices 50 .. 5000, 0 and 10 holes
+    python benchmarks/scale.py --part spacing   # 2000 vertices + 10 holes, spacing 1/10 .. 1/500
+    python benchmarks/scale.py --quick          # CI size: 50, 200, 500 vertices
+    python benchmarks/scale.py --part cover --vertices 200 2000 --timeout 60
+                                                # the certified search, model only
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+BASELINE = "42b81be"  # main when issue 21's work started
+VERTICES = (50, 200, 500, 1000, 2000, 5000)
+QUICK_VERTICES = (50, 200, 500)
+HOLES = (0, 10)
+SPACING_FRACTIONS = (10, 50, 100, 250, 500)
+
+
+def worker(path: str, spacing: float, part: str) -> None:
+    """Plan the field in ``path`` (npz: shell, hole_0, ...), or run the certified search's
+    model-only run on it (``part == "cover"``), and print one JSON line."""
+    import resource
+
+    from boustro.geometry import Polygon
+    from boustro.geometry.region import Region
+    from boustro.optimize.cover import CoverCost, cover_optimum
+    from boustro.plan.region import plan_region
+
+    data = np.load(path)
+    shell = data["shell"]
+    holes = [data[k] for k in sorted(data.files) if k.startswith("hole_")]
+    region = Region(Polygon(shell), [Polygon(h) for h in holes])
+    kw = {"decompose_area": False, "angle": 0.3, "offset": 1.0, "speed": 5.0, "turn_time": 10.0}
+    warm = Region(Polygon(data["warm_shell"]), [Polygon(data["warm_hole"])])
+    cost = CoverCost.time(5.0, 10.0)
+    plan_region(warm, 10.0, **kw)
+    if part == "cover":
+        cover_optimum(warm, 10.0, cost, None, n_angles=4)
+    t0, w0 = time.process_time(), time.perf_counter()
+    out: dict = {}
+    if part == "cover":
+        res = cover_optimum(region, spacing, cost, None)
+        out = {"value": res.fitness, "lower": res.info["lower_bound"], "lanes": ""}
+        out["gap"] = res.info["gap"] / res.fitness
+    else:
+        plan = plan_region(region, spacing, **kw)
+        out = {"lanes": plan.stats.n_transects, "path_length": plan.stats.path_length}
+        out["blocked"] = sum("no connecting move" in n for n in plan.notes)
+    out["cpu"], out["wall"] = time.process_time() - t0, time.perf_counter() - w0
+    out["rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # kB on Linux
+    print(json.dumps(out))
+
+
+def _field_file(tmp: Path, n: int, holes: int) -> Path:
+    from boustro.geometry.traced import traced_field
+
+    r = traced_field(n, holes)
+    warm = traced_field(60, 1, seed=1)
+    arrays = {"shell": r.shell.vertices, "warm_shell": warm.shell.vertices}
+    arrays["warm_hole"] = warm.holes[0].vertices
+    for i, h in enumerate(r.holes):
+        arrays[f"hole_{i:03d}"] = h.vertices
+    path = tmp / f"field_{n}_{holes}.npz"
+    np.savez(path, **arrays)
+    return path
+
+
+def _run(src: Path, field: Path, spacing: float, timeout: float, part: str) -> dict | None:
+    env = {**os.environ, "PYTHONPATH": str(src)}
+    cmd = [sys.executable, __file__, "--worker", str(field), "--spacing", str(spacing)]
+    cmd += ["--part", part]
+    try:
+        out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return None
+    if out.returncode != 0:
+        raise RuntimeError(out.stderr.strip().splitlines()[-1])
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _baseline_src(commit: str, tmp: Path) -> Path:
+    archive = tmp / "base.tar"
+    subprocess.run(
+        ["git", "-C", str(ROOT), "archive", "-o", str(archive), commit, "src"], check=True
+    )
+    with tarfile.open(archive) as tar:
+        tar.extractall(tmp / "base", filter="data")
+    return tmp / "base" / "src"
+
+
+def _cell(res: dict | None, timeout: float) -> str:
+    if res is None:
+        return f"> {timeout:g} s"
+    return f"{res['cpu']:.2f} s, {res['rss_mb']:.0f} MB"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--part", choices=("vertices", "spacing", "cover"), default="vertices")
+    ap.add_argument("--vertices", type=int, nargs="+", help="sizes (parts vertices, cover)")
+    ap.add_argument("--quick", action="store_true", help="50, 200, 500 vertices only")
+    ap.add_argument("--baseline", default=BASELINE, help="commit of the code compared against")
+    ap.add_argument("--no-baseline", action="store_true")
+    ap.add_argument("--timeout", type=float, default=15.0, help="seconds a baseline run may take")
+    ap.add_argument("--worker", help=argparse.SUPPRESS)
+    ap.add_argument("--spacing", type=float, default=10.0, help="metres (part vertices)")
+    args = ap.parse_args()
+    if args.worker:
+        worker(args.worker, args.spacing, args.part)
+        return
+    sys.path.insert(0, str(ROOT / "src"))
+    load = os.getloadavg()[0]
+    print(f"# scale benchmark, {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC, load {load:.1f}")
+    with tempfile.TemporaryDirectory() as tmp_name:
+        tmp = Path(tmp_name)
+        base = None if args.no_baseline else _baseline_src(args.baseline, tmp)
+        if args.part in ("vertices", "cover"):
+            sizes = QUICK_VERTICES if args.quick else VERTICES
+            if args.part == "cover":
+                sizes = (200, 500)
+            sizes = tuple(args.vertices or sizes)
+            rows = [(n, h, args.spacing) for h in HOLES for n in sizes]
+        else:
+            from boustro.geometry.traced import traced_field
+
+            diameter = traced_field(2000, 10).diameter
+            rows = [(2000, 10, diameter / f) for f in SPACING_FRACTIONS]
+        what = "certificate" if args.part == "cover" else "lanes"
+        print(f"| vertices | holes | spacing (m) | {what} | this tree | baseline | speed-up |")
+        print("|---:|---:|---:|---:|---|---|---:|")
+        gave_up: set[int] = set()
+        for n, h, s in rows:
+            field = _field_file(tmp, n, h)
+            new = _run(ROOT / "src", field, s, timeout=600.0, part=args.part)
+            old = None
+            tried = base is not None and h not in gave_up
+            if tried:
+                old = _run(base, field, s, timeout=args.timeout, part=args.part)
+                if old is None:
+                    gave_up.add(h)
+            ratio = "" if old is None or new is None else f"{old['cpu'] / new['cpu']:.1f}x"
+            lanes = "" if new is None else new["lanes"]
+            if args.part == "cover" and new is not None:
+                lanes = f"gap {new['gap']:.2%}"
+            base_cell = _cell(old, args.timeout) if tried else "-"
+            print(
+                f"| {n} | {h} | {s:.3g} | {lanes} | {_cell(new, 600)} | {base_cell} | {ratio} |",
+                flush=True,
+            )
+
+
+if __name__ == "__main__":
+    main()
