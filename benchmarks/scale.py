@@ -118,7 +118,8 @@ def _baseline_src(commit: str, tmp: Path) -> Path:
 def _cell(res: dict | None, timeout: float) -> str:
     if res is None:
         return f"> {timeout:g} s"
-    return f"{res['cpu']:.2f} s, {res['rss_mb']:.0f} MB"
+    gap = f", gap {res['gap']:.2%}" if "gap" in res else ""
+    return f"{res['cpu']:.2f} s, {res['rss_mb']:.0f} MB{gap}"
 
 
 def main() -> None:

@@ -64,8 +64,9 @@ class Router:
         self._coarse: list[Router] | None = None
         if len(self.nodes) > MAX_NODES:
             self._domains = inner_domains(self.region, self.reach)
-            self._coarse = [Router(d) for d in self._domains]
-            self.nodes = np.zeros((0, 2))
+            if self._domains:  # else (eroded away: a sliver) the exact graph, however slow
+                self._coarse = [Router(d) for d in self._domains]
+                self.nodes = np.zeros((0, 2))
         self._graph()
 
     # -- membership --------------------------------------------------------------------------
