@@ -298,6 +298,74 @@ def _initial(search: CoverSearch, n_angles: int, angle: float | None) -> _Boxes:
     return _Boxes(tt.ravel(), np.full(n, delta), dd.ravel(), np.full(n, eta))
 
 
+class _Limits(NamedTuple):
+    """The tolerances and budgets of :func:`cover_optimum` (see its arguments)."""
+
+    rtol: float
+    resolve: float
+    min_eps: float
+    max_work: float
+    max_seconds: float | None
+    t0: float
+
+
+def _branch_and_bound(
+    search: CoverSearch,
+    boxes: _Boxes,
+    lim: _Limits,
+    progress: Callable[[float], None] | None,
+) -> tuple[float, int, str]:
+    """Bound, plan, discard or retire, and halve the boxes until none is left or a limit is
+    reached: ``(the lowest bound of a box taken out, rounds, why it stopped early or "")``."""
+    floor = math.inf  # the lowest bound of a discarded box
+    rounds, stopped = 0, ""
+    while len(boxes.theta):
+        rounds += 1
+        bounds = search.box_bounds(boxes)
+        points = search.point_values(boxes)
+        search.try_plans(boxes, points, first=rounds == 1)
+        best = search.best[0]
+        # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
+        # model at the box's centre, so halving cannot raise it further than the model
+        model_min = search.model_min
+        # settled: the bound is above the lowest model value by a quarter of the gap between
+        # it and the best plan (the certificate's gap cannot get much smaller than that gap)
+        settle = model_min - 0.25 * max(best - model_min, 0.0) - lim.rtol * abs(best)
+        keep = (
+            (bounds < best - lim.rtol * abs(best))
+            & (bounds < points - lim.resolve * abs(best))
+            & (bounds < settle)
+        )
+        if (~keep).any():
+            floor = min(floor, float(bounds[~keep].min()))
+        boxes = boxes.take(keep)
+        bounds = bounds[keep]
+        if progress is not None and math.isfinite(best):
+            low = min(floor, float(bounds.min()) if len(bounds) else math.inf)
+            progress(max(0.0, min(1.0, 1.0 - (best - low) / max(abs(best), 1e-300))))
+        if not len(boxes.theta):
+            break
+        eps = boxes.delta * search.radius + boxes.eta
+        fine = eps <= lim.min_eps
+        if fine.any():
+            floor = min(floor, float(bounds[fine].min()))
+            stopped = stopped or "the boxes reached the smallest radius"
+            boxes = boxes.take(~fine)
+            if not len(boxes.theta):
+                break
+        edges = len(search.sandwich.exact.outer.xy)
+        if (search.bound_evaluations + 8 * len(boxes.theta)) * edges > lim.max_work:
+            floor = min(floor, float(bounds[~fine].min()))
+            stopped = f"the work budget ({lim.max_work:.0e} box edges) was spent"
+            break
+        if lim.max_seconds is not None and time.perf_counter() - lim.t0 > lim.max_seconds:
+            floor = min(floor, float(bounds[~fine].min()))
+            stopped = f"{lim.max_seconds} s passed"
+            break
+        boxes = _split(boxes, search.radius)
+    return floor, rounds, stopped
+
+
 def cover_optimum(
     region: Region | Polygon,
     spacing: float,
@@ -369,52 +437,8 @@ def cover_optimum(
         angle = float(angle) % math.pi
     boxes = _initial(search, n_angles, angle)
     search.top_eps = float((boxes.delta * search.radius + boxes.eta).max())
-    floor = math.inf  # the lowest bound of a discarded box
-    rounds, stopped = 0, ""
-    while len(boxes.theta):
-        rounds += 1
-        bounds = search.box_bounds(boxes)
-        points = search.point_values(boxes)
-        search.try_plans(boxes, points, first=rounds == 1)
-        best = search.best[0]
-        # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
-        # model at the box's centre, so halving cannot raise it further than the model
-        model_min = search.model_min
-        # settled: the bound is above the lowest model value by a quarter of the gap between
-        # it and the best plan (the certificate's gap cannot get much smaller than that gap)
-        settle = model_min - 0.25 * max(best - model_min, 0.0) - rtol * abs(best)
-        keep = (
-            (bounds < best - rtol * abs(best))
-            & (bounds < points - resolve * abs(best))
-            & (bounds < settle)
-        )
-        if (~keep).any():
-            floor = min(floor, float(bounds[~keep].min()))
-        boxes = boxes.take(keep)
-        bounds = bounds[keep]
-        if progress is not None and math.isfinite(best):
-            low = min(floor, float(bounds.min()) if len(bounds) else math.inf)
-            progress(max(0.0, min(1.0, 1.0 - (best - low) / max(abs(best), 1e-300))))
-        if not len(boxes.theta):
-            break
-        eps = boxes.delta * search.radius + boxes.eta
-        fine = eps <= min_eps
-        if fine.any():
-            floor = min(floor, float(bounds[fine].min()))
-            stopped = stopped or "the boxes reached the smallest radius"
-            boxes = boxes.take(~fine)
-            if not len(boxes.theta):
-                break
-        edges = len(search.sandwich.exact.outer.xy)
-        if (search.bound_evaluations + 8 * len(boxes.theta)) * edges > max_work:
-            floor = min(floor, float(bounds[~fine].min()))
-            stopped = f"the work budget ({max_work:.0e} box edges) was spent"
-            break
-        if max_seconds is not None and time.perf_counter() - t0 > max_seconds:
-            floor = min(floor, float(bounds[~fine].min()))
-            stopped = f"{max_seconds} s passed"
-            break
-        boxes = _split(boxes, search.radius)
+    limits = _Limits(rtol, resolve, min_eps, max_work, max_seconds, t0)
+    floor, rounds, stopped = _branch_and_bound(search, boxes, limits, progress)
     if not boustrophedon and evaluate is not None and math.isfinite(search.best[0]):
         search.polish()
         search.refine_offsets()
