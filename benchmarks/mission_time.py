@@ -31,7 +31,9 @@ import numpy as np
 
 from boustro.geometry.region import Region, random_region
 from boustro.io import embedded_field, read_areas
-from boustro.mission import plan_area
+from boustro.mission import _as_area, _project, _Sensor, _sensor_spacing, plan_area
+from boustro.mission.cover import _planner
+from boustro.mission.steps import _path_options
 from boustro.objectives import SmithFitness
 
 SPACING = 10.0
@@ -108,14 +110,8 @@ def main() -> None:
 def _brute_centred(area, crs) -> tuple[float, float]:
     """The brute force of the module docstring: the plan at each whole degree with the first
     lane half a spacing inside the area's extreme (offset from the shell's vertex mean)."""
-    from boustro.mission import _project, _sensor_spacing, _Sensor
-    from boustro.mission.cover import _planner
-    from boustro.mission.steps import _path_options
-
     t0 = time.process_time()
     if isinstance(area, tuple):
-        from boustro.mission import _as_area
-
         a_obj = _as_area(area[0], None, area[1])
     else:
         a_obj = area

@@ -74,7 +74,10 @@ def worker(path: str, spacing: float, part: str) -> None:
         out = {"lanes": plan.stats.n_transects, "path_length": plan.stats.path_length}
         out["blocked"] = sum("no connecting move" in n for n in plan.notes)
     out["cpu"], out["wall"] = time.process_time() - t0, time.perf_counter() - w0
-    out["rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # kB on Linux
+    # VmHWM: this program's peak since exec (ru_maxrss inherits the forking parent's peak)
+    hwm = [line for line in open("/proc/self/status") if line.startswith("VmHWM:")]
+    peak_kb = int(hwm[0].split()[1]) if hwm else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    out["rss_mb"] = peak_kb / 1024
     print(json.dumps(out))
 
 
