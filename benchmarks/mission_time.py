@@ -22,7 +22,6 @@ boundary), path outside the area, and planning CPU time (``time.process_time``).
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import statistics
 import time
@@ -35,6 +34,7 @@ from boustro.mission import _as_area, _project, _Sensor, _sensor_spacing, plan_a
 from boustro.mission.cover import _planner
 from boustro.mission.steps import _path_options
 from boustro.objectives import SmithFitness
+from boustro.optimize.cover import centred_offsets
 
 SPACING = 10.0
 SPEED = 5.0
@@ -120,14 +120,10 @@ def _brute_centred(area, crs) -> tuple[float, float]:
     plan_of = _planner(frame, "guaranteed", _path_options(frame, 0.0, SPEED, TURN_TIME))
     target = frame.poly if frame.region is None else frame.region
     region = target if isinstance(target, Region) else Region(target)
-    verts = region.shell.vertices - region.centre
     s = SPACING * frame.proj.scale_min
-    best = math.inf
-    for deg in range(180):
-        a = math.radians(deg)
-        n = np.array([-math.sin(a), math.cos(a)])
-        offset = (float((verts @ n).min()) + s / 2) % s
-        best = min(best, plan_of(a, offset).stats.duration)
+    angles = np.radians(np.arange(180.0))
+    offsets = centred_offsets(region, angles, s, s / 2)
+    best = min(plan_of(a, d).stats.duration for a, d in zip(angles, offsets, strict=True))
     return best, time.process_time() - t0
 
 

@@ -70,6 +70,46 @@ def shapely_region(region: Region):
     return shapely.Polygon(region.shell.vertices, [h.vertices for h in region.holes])
 
 
+def polygon_of_edges(es):
+    """The shapely area bounded by an :class:`~boustro.optimize.cover.EdgeSet` (its rings,
+    combined by the even-odd rule)."""
+    import shapely
+
+    rings, current, start = [], [], None
+    for row in es.xy:
+        if start is None:
+            start = row[:2]
+        current.append(row[:2])
+        if np.allclose(row[2:], start):
+            rings.append(np.array(current))
+            current, start = [], None
+    out = shapely.Polygon()
+    for ring in rings:
+        out = out.symmetric_difference(shapely.Polygon(ring))
+    return out
+
+
+def assert_sandwiched(region: Region, level, eps: float, count: int, seed: int = 0) -> None:
+    """``count`` random rigid motions of ``region``, each moving no point more than ``eps``,
+    lie between ``level``'s inner and outer sets (a cover-search sandwich)."""
+    import shapely
+
+    inner, outer = polygon_of_edges(level.inner), polygon_of_edges(level.outer)
+    base = shapely_region(region)
+    radius = np.linalg.norm(region.shell.vertices - region.centre, axis=1).max()
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        phi = rng.uniform(-1, 1) * 0.5 * eps / radius
+        shift = rng.normal(size=2)
+        shift *= rng.uniform(0, 0.5 * eps) / np.linalg.norm(shift)
+        moved = shapely.affinity.translate(
+            shapely.affinity.rotate(base, phi, origin=tuple(region.centre), use_radians=True),
+            *shift,
+        )
+        assert moved.buffer(1e-9 * region.diameter).contains(inner)
+        assert outer.buffer(1e-9 * region.diameter).contains(moved)
+
+
 def run_cli(capsys, *argv):
     """Run ``boustro ARGV...`` in-process: ``(exit code, stdout, stderr)``."""
     from boustro.cli import main

@@ -21,7 +21,7 @@ from boustro.plan import build_plan
 from boustro.plan.lanes import region_lanes
 from boustro.plan.region import plan_region
 
-from .conftest import random_regions, run_cli, shapely_region
+from .conftest import assert_sandwiched, random_regions, run_cli, shapely_region
 
 L_SHAPE = Region(
     Polygon([(0, 0), (100, 0), (100, 40), (40, 40), (40, 100), (0, 100)]),
@@ -93,40 +93,8 @@ def test_band_projection_agrees_with_shapely(region):
 
 def test_sandwich_holds_every_small_rigid_motion():
     region = random_regions(2, 1, n_holes=(2, 2))[0]
-    sw = Sandwich(region)
     eps = region.diameter * 0.02
-    lv = sw.level(eps)
-    inner = _polygon_of(lv.inner)
-    outer = _polygon_of(lv.outer)
-    rng = np.random.default_rng(0)
-    base = shapely_region(region)
-    radius = np.linalg.norm(region.shell.vertices - region.centre, axis=1).max()
-    for _ in range(10):
-        phi = rng.uniform(-1, 1) * 0.5 * eps / radius
-        shift = rng.normal(size=2)
-        shift *= rng.uniform(0, 0.5 * eps) / np.linalg.norm(shift)
-        moved = shapely.affinity.translate(
-            shapely.affinity.rotate(base, phi, origin=tuple(region.centre), use_radians=True),
-            *shift,
-        )
-        assert moved.buffer(1e-9 * region.diameter).contains(inner)
-        assert outer.buffer(1e-9 * region.diameter).contains(moved)
-
-
-def _polygon_of(es):
-    rings, current, start = [], [], None
-    for row in es.xy:
-        if start is None:
-            start = row[:2]
-        current.append(row[:2])
-        if np.allclose(row[2:], start):
-            rings.append(np.array(current))
-            current, start = [], None
-    polys = [shapely.Polygon(r) for r in rings]
-    out = shapely.Polygon()
-    for p in polys:
-        out = out.symmetric_difference(p)
-    return out
+    assert_sandwiched(region, Sandwich(region).level(eps), eps, 10)
 
 
 def _convex_cost(poly, s, cost):

@@ -32,7 +32,7 @@ from boustro.plan.order_kernel import improve_order
 from boustro.plan.region import plan_region
 from boustro.plan.routing import Router
 
-from .conftest import shapely_region
+from .conftest import assert_sandwiched, shapely_region
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 
@@ -186,21 +186,6 @@ def test_plan_of_a_traced_field_covers_it_with_no_blocked_move():
 
 
 # -- simplified sandwiches ---------------------------------------------------------------------
-def _polygon_of(es):
-    rings, current, start = [], [], None
-    for row in es.xy:
-        if start is None:
-            start = row[:2]
-        current.append(row[:2])
-        if np.allclose(row[2:], start):
-            rings.append(np.array(current))
-            current, start = [], None
-    out = shapely.Polygon()
-    for ring in rings:
-        out = out.symmetric_difference(shapely.Polygon(ring))
-    return out
-
-
 @pytest.mark.parametrize("eps", [0.3, 1.5, 6.0])
 def test_simplified_sandwich_holds_every_small_rigid_motion(eps):
     region = traced_field(600, 3)
@@ -209,20 +194,7 @@ def test_simplified_sandwich_holds_every_small_rigid_motion(eps):
     exact = Sandwich(region).level(eps)
     if eps >= 1.0:  # coarse levels: far fewer edges (round joins cost a few at fine ones)
         assert len(lv.outer.xy) < len(exact.outer.xy) and len(lv.inner.xy) < len(exact.inner.xy)
-    inner, outer = _polygon_of(lv.inner), _polygon_of(lv.outer)
-    base = shapely_region(region)
-    radius = np.linalg.norm(region.shell.vertices - region.centre, axis=1).max()
-    rng = np.random.default_rng(0)
-    for _ in range(8):
-        phi = rng.uniform(-1, 1) * 0.5 * eps / radius
-        shift = rng.normal(size=2)
-        shift *= rng.uniform(0, 0.5 * eps) / np.linalg.norm(shift)
-        moved = shapely.affinity.translate(
-            shapely.affinity.rotate(base, phi, origin=tuple(region.centre), use_radians=True),
-            *shift,
-        )
-        assert moved.buffer(1e-9 * region.diameter).contains(inner)
-        assert outer.buffer(1e-9 * region.diameter).contains(moved)
+    assert_sandwiched(region, lv, eps, 8)
 
 
 def test_simplified_box_bounds_never_exceed_a_plan_in_the_box():

@@ -18,7 +18,7 @@ from ..plan.types import Layout
 from .project import Frame
 from .steps import Planned, _path_options
 
-__all__ = ["cover_cost", "plan_cover"]
+__all__ = ["cover_cost", "flown_cost", "plan_cover"]
 
 
 def cover_cost(
@@ -94,6 +94,15 @@ def _area(frame: Frame, keep_inside: bool) -> Polygon | Region:
     return Region(frame.surveyed) if keep_inside else frame.poly
 
 
+def flown_cost(
+    cost: CoverCost, plan: Plan, frame: Frame, finish: Callable[[Plan], Plan] | None = None
+) -> float:
+    """``cost`` of what is flown: ``finish(plan)`` (headland passes, the vehicle's turns) where
+    given; its statistics are in ground units, the cost in the plan frame's."""
+    st = (plan if finish is None else finish(plan)).stats
+    return cost.of(st.path_length * frame.proj.scale, st.n_turns)
+
+
 def _first_end(plan: Plan) -> int:
     kinds = list(plan.kinds)
     return kinds.index("end") if "end" in kinds else len(kinds) - 1
@@ -128,24 +137,22 @@ def plan_cover(
     finished."""
     options = _path_options(frame, turnaround, speed, turn_time)
     planner = _planner(frame, layout, options, keep_inside)
-    scale = frame.proj.scale
 
     def evaluate(a: float, d: float) -> float:
-        plan = planner(a, d)
-        st = (plan if finish is None else finish(plan)).stats
-        return cost.of(st.path_length * scale, st.n_turns)
+        return flown_cost(cost, planner(a, d), frame, finish)
 
     s_plan = frame.sensor.spacing * frame.proj.scale_min
     target = _area(frame, keep_inside)
+    bound_cost = cost  # what the lower bounds count: the headland passes as a fixed length
     if finish is not None:
-        passes = finish(planner(0.0, 0.0)).stats.headland_length * scale
-        cost = dataclasses.replace(cost, fixed=cost.fixed + cost.per_length * passes)
+        passes = finish(planner(0.0, 0.0)).stats.headland_length * frame.proj.scale
+        bound_cost = dataclasses.replace(cost, fixed=cost.fixed + cost.per_length * passes)
     if boustrophedon is None:
         boustrophedon = frame.region is None
     optimum = cover_optimum(
         target,
         s_plan,
-        cost,
+        bound_cost,
         evaluate,
         reach=frame.sensor.reach * frame.proj.scale_min,
         angle=angle,

@@ -30,7 +30,7 @@ from ..plan import (
 from ..sensors import SensorSpacing
 from ..vehicle import Vehicle
 from .camera import camera_trigger, with_camera
-from .cover import cover_cost, plan_cover
+from .cover import cover_cost, flown_cost, plan_cover
 from .defaults import DEFAULT_HULL_TOLERANCE
 from .estimate import SAY_SECONDS, WorkEstimate, check_work, frame_estimate
 from .map_back import angle_for_bearing, map_back
@@ -247,8 +247,7 @@ def _plan_for_cost(
     if decompose:
         return cells
     one = plan_cover(frame, cost, **extra, **{k: settings[k] for k in keys})
-    flown = cells.plan if finish is None else finish(cells.plan)
-    value = cost.of(flown.stats.path_length * frame.proj.scale, flown.stats.n_turns)
+    value = flown_cost(cost, cells.plan, frame, finish)
     if value < one.optimum.fitness:
         info = {**cells.optimum.info, "objective": cost.name, "one_grid": one.optimum.fitness}
         return cells._replace(optimum=dataclasses.replace(cells.optimum, info=info))

@@ -5,7 +5,7 @@ from .bands import BandStats, EdgeSet, band_stats, edge_set
 from .bounds import lower_bounds
 from .cost import COVER_OBJECTIVES, CoverCost
 from .sandwich import Sandwich
-from .search import cover_optimum
+from .search import centred_offsets, cover_optimum
 
 __all__ = [
     "COVER_OBJECTIVES",
@@ -14,6 +14,7 @@ __all__ = [
     "EdgeSet",
     "Sandwich",
     "band_stats",
+    "centred_offsets",
     "cover_optimum",
     "edge_set",
     "lower_bounds",

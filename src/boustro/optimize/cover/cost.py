@@ -29,9 +29,6 @@ class CoverCost:
     (0.2, 10.0, 'time')
     """
 
-    #: minimised (for code that reads an objective's sense)
-    sense = "min"
-
     per_length: float
     per_turn: float
     turnaround: float = 0.0

@@ -21,7 +21,7 @@ from .bounds import lower_bounds
 from .cost import CoverCost
 from .sandwich import Sandwich
 
-__all__ = ["CoverSearch", "cover_optimum"]
+__all__ = ["CoverSearch", "centred_offsets", "cover_optimum"]
 
 #: Regions with more edges than this are searched with simplified sandwiches
 #: (:class:`Sandwich` with a tolerance of :data:`SIMPLIFY_SPACING` spacings).
@@ -191,10 +191,7 @@ class CoverSearch:
         # the first lane half a spacing inside the area's extreme: the layout a person, or a
         # brute force over degrees, would fly
         angles = np.radians(bins[pick].astype(np.float64))
-        verts = self.region.shell.vertices - self.origin
-        normal = np.stack([-np.sin(angles), np.cos(angles)], axis=1)
-        low = (normal @ verts.T).min(axis=1)
-        centred = np.mod(low + self.reach, self.s)
+        centred = centred_offsets(self.region, angles, self.s, self.reach)
         boxes = _Boxes(angles, np.zeros(len(pick)), centred, np.zeros(len(pick)))
         self.try_plans(boxes, self.point_values(boxes), limit=len(pick))
 
@@ -241,6 +238,17 @@ class CoverSearch:
             tried += 1
             if value < self.best[0]:
                 self.best = (value, theta, d)
+
+
+def centred_offsets(
+    region: Region, angles: NDArray[Any], spacing: float, reach: float
+) -> NDArray[np.float64]:
+    """The offsets (from the shell's vertex mean, in ``[0, spacing)``) that put the first line
+    ``reach`` inside the area's lowest extreme across the lines at each of ``angles``: lanes
+    laid from the edge, as a person (or a brute force over angles) would."""
+    verts = region.shell.vertices - region.centre
+    normal = np.stack([-np.sin(angles), np.cos(angles)], axis=1)
+    return np.mod((normal @ verts.T).min(axis=1) + reach, spacing)
 
 
 def _edge_angles(region: Region, count: int) -> list[float]:
