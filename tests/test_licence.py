@@ -18,7 +18,7 @@ def test_licence_notice_and_metadata_agree():
         assert name in notice
     assert "Wageningen University" in notice and "BSD 3-Clause" in notice
     pyproject = (ROOT / "pyproject.toml").read_text()
-    assert re.search(r'^license = \{ text = "BSD-3-Clause" \}$', pyproject, flags=re.M)
+    assert re.search(r'^license = "BSD-3-Clause"$', pyproject, flags=re.M)
     files = re.search(r"^license-files = \[(.*)\]$", pyproject, flags=re.M)
     assert files is not None
     named = re.findall(r'"([^"]+)"', files.group(1))
