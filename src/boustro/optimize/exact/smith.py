@@ -20,7 +20,8 @@ from ...scoring import as_polygon
 from ..problem import evaluate_grid
 from ..result import OptimizeResult, canonical
 from .bounds import _evaluate_smith, _smith_pieces
-from .search import _branch_and_bound, _check_count, _check_tol, _Search
+from .kernel import evaluate_smith_compiled
+from .search import _BATCH, _branch_and_bound, _check_count, _check_tol, _Search
 from .structure import Array, _check_work, _structure
 
 __all__ = ["best_offset", "global_optimum"]
@@ -177,7 +178,8 @@ def global_optimum(
     s_n = spacing / frame.scale
 
     def evaluate(lo: Array, hi: Array, threshold: float) -> tuple[Array, Array, Array, Array]:
-        return _evaluate_smith(v, s_n, lo, hi, a, b, threshold)
+        fast = evaluate_smith_compiled(v, s_n, lo, hi, a, b, threshold, _BATCH)
+        return _evaluate_smith(v, s_n, lo, hi, a, b, threshold) if fast is None else fast
 
     cap = _check_count("max_evaluations", max_evaluations)
     with np.errstate(all="ignore"):  # infinities are meant: they mark missing bounds
