@@ -13,12 +13,14 @@ from __future__ import annotations
 
 import os
 from functools import cache
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from . import kernel_bounds, kernel_pieces
+from ...models import grid_size
+from . import kernel_bounds, kernel_exact, kernel_pieces
 from .kernel_bounds import _kink_one, _runs_one, _second_one
+from .kernel_exact import _exact_pairs
 from .kernel_pieces import (
     _LAM,
     _NMO,
@@ -34,7 +36,7 @@ from .kernel_pieces import (
 )
 from .structure import BOUND_SLACK, Array
 
-__all__ = ["compiled", "evaluate_smith_compiled"]
+__all__ = ["Compiled", "compiled", "evaluate_smith_compiled", "exact_smith_compiled"]
 
 
 def _evaluate(
@@ -104,6 +106,7 @@ def _evaluate(
 _HELPERS = {
     kernel_pieces: "_nmax _nmin _clip01 _sign _argmax _sum_sq_row _weighted_row _angular_growth",
     kernel_bounds: "_mu_ratio _parallel_one",
+    kernel_exact: "_pair_value",
 }
 _STAGES = {
     kernel_pieces: "_structure_one _pieces_one _quick_one",
@@ -111,11 +114,18 @@ _STAGES = {
 }
 
 
+class Compiled(NamedTuple):
+    """The compiled kernels (numba dispatchers of the functions named)."""
+
+    evaluate: Any  # _evaluate
+    exact_pairs: Any  # .kernel_exact._exact_pairs
+
+
 @cache
-def compiled() -> Any:
-    """The compiled :func:`_evaluate`, or ``None`` where numba is missing or
-    ``BOUSTRO_COMPILED=0``. The first call in a process loads it from numba's on-disk cache
-    (or compiles it, some seconds, once per machine where the cache is writable)."""
+def compiled() -> Compiled | None:
+    """The compiled kernels, or ``None`` where numba is missing or ``BOUSTRO_COMPILED=0``.
+    The first call of each in a process loads it from numba's on-disk cache (or compiles it,
+    some seconds, once per machine where the cache is writable)."""
     if os.environ.get("BOUSTRO_COMPILED", "1").strip() in ("0", "false", "no", "off"):
         return None
     try:
@@ -139,12 +149,12 @@ def compiled() -> Any:
             for name in names.split():
                 fn = jit(getattr(module, name))
                 setattr(module, name, fn)
-                for other in (kernel_pieces, kernel_bounds):
+                for other in (kernel_pieces, kernel_bounds, kernel_exact):
                     if name in vars(other):
                         setattr(other, name, fn)
                 if name in here:
                     here[name] = fn
-    return jit(_evaluate)
+    return Compiled(jit(_evaluate), jit(_exact_pairs))
 
 
 def evaluate_smith_compiled(
@@ -152,12 +162,12 @@ def evaluate_smith_compiled(
 ) -> tuple[Array, Array, Array, Array] | None:
     """``(value, offset, upper_bound, order)`` of every interval, as
     :func:`.bounds._evaluate_smith`; ``None`` without the compiled kernel."""
-    kernel = compiled()
-    if kernel is None:
+    kernels = compiled()
+    if kernels is None:
         return None
     m = len(lo)
     g, d, ub, order = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
-    kernel(
+    kernels.evaluate(
         np.ascontiguousarray(v, dtype=np.float64),
         float(s),
         np.ascontiguousarray(lo, dtype=np.float64),
@@ -172,3 +182,38 @@ def evaluate_smith_compiled(
         order,
     )
     return g, d, ub, order
+
+
+def exact_smith_compiled(
+    halfplanes: tuple[Array, Array, float],
+    s: float,
+    thetas: Array,
+    offsets: Array,
+    a: float,
+    b: float,
+) -> Array | None:
+    """Eq. 1 by the exact model of every pair ``(thetas[i], offsets[i])`` (``-inf`` where no
+    transect counts), as :func:`boustro.optimize.evaluate_grid` scores it; ``halfplanes`` is
+    ``(normals, offsets, radius)`` in the frame of ``s``. ``None`` without the compiled kernel.
+    """
+    kernels = compiled()
+    if kernels is None:
+        return None
+    normals, boffs, radius = halfplanes
+    k_count, m = grid_size(s, radius)
+    thetas = np.ascontiguousarray(thetas, dtype=np.float64)
+    out = np.empty(len(thetas))
+    kernels.exact_pairs(
+        np.ascontiguousarray(normals, dtype=np.float64),
+        np.ascontiguousarray(boffs, dtype=np.float64),
+        float(radius),
+        float(s),
+        k_count,
+        m,
+        thetas,
+        np.ascontiguousarray(offsets, dtype=np.float64),
+        float(a),
+        float(b),
+        out,
+    )
+    return out

@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike
 
 from ...errors import InvalidParameterError, NoTransectError
 from ...geometry import Polygon, halfplanes
+from ...geometry.polygon import edge_halfplanes
 from ...models import (
     check_spacing,
 )
@@ -20,7 +21,7 @@ from ...scoring import as_polygon
 from ..problem import evaluate_grid
 from ..result import OptimizeResult, canonical
 from .bounds import _evaluate_smith, _smith_pieces
-from .kernel import evaluate_smith_compiled
+from .kernel import evaluate_smith_compiled, exact_smith_compiled
 from .search import _BATCH, _branch_and_bound, _check_count, _check_tol, _Search
 from .structure import Array, _check_work, _structure
 
@@ -40,8 +41,42 @@ def _weights(a: float, b: float, fitness: SmithFitness | None) -> tuple[float, f
     return float(a), float(b)
 
 
+class _Scorer:
+    """Eq. 1 by the exact model on an angles x offsets grid of one polygon, normalised frame:
+    compiled (:func:`.kernel.exact_smith_compiled`), else :func:`evaluate_grid` (the same
+    numbers to rounding)."""
+
+    def __init__(self, poly: Polygon, v: Array, s: float, a: float, b: float) -> None:
+        self.poly, self.v, self.s, self.a, self.b = poly, v, s, a, b
+
+    def grid(self, angles: ArrayLike, offsets: ArrayLike) -> Array:
+        """Values ``(A, O)``, ``-inf`` where no transect counts."""
+        angles = np.asarray(angles, dtype=np.float64)
+        offsets = np.asarray(offsets, dtype=np.float64)
+        normals, boffs = edge_halfplanes(self.v)
+        radius = float(np.max(np.linalg.norm(self.v, axis=1)))
+        fast = exact_smith_compiled(
+            (normals, boffs, radius),
+            self.s,
+            np.repeat(angles, len(offsets)),
+            np.tile(offsets, len(angles)),
+            self.a,
+            self.b,
+        )
+        if fast is not None:
+            return fast.reshape(len(angles), len(offsets))
+        hp = halfplanes(self.poly)
+        return evaluate_grid(
+            hp,
+            torch.as_tensor(angles, dtype=hp.normals.dtype),
+            torch.as_tensor(offsets, dtype=hp.normals.dtype),
+            self.s,
+            fitness=SmithFitness(a=self.a, b=self.b),
+        ).numpy()
+
+
 def _attained(
-    poly: Polygon, v: Array, s_n: float, thetas: Array, a: float, b: float
+    score: _Scorer, v: Array, s_n: float, thetas: Array, a: float, b: float
 ) -> tuple[float, float, float]:
     """The best layout near the closed-form optimum, scored by the exact model.
 
@@ -57,8 +92,6 @@ def _attained(
     st = _structure(v, s_n, thetas)
     mo = _smith_pieces(st, a, b)
     best = (-math.inf, float(thetas[0]), 0.0)
-    hp = halfplanes(poly)
-    fit = SmithFitness(a=a, b=b)
     for row, theta in enumerate(thetas):
         order = np.argsort(-mo.value[row])[: min(3, mo.value.shape[1])]
         cands = []
@@ -70,11 +103,9 @@ def _attained(
                 cands.append(st.beta[row, p] + lam_p * st.width[row, p])
         if not cands:
             continue
-        offsets = torch.tensor(cands, dtype=torch.float64)
-        values = evaluate_grid(
-            hp, torch.tensor([float(theta)], dtype=torch.float64), offsets, s_n, fitness=fit
-        )[0]
-        k = int(torch.argmax(values))
+        offsets = np.array(cands, dtype=np.float64)
+        values = score.grid(np.array([float(theta)]), offsets)[0]
+        k = int(np.argmax(values))
         if float(values[k]) > best[0]:
             best = (float(values[k]), float(theta), float(offsets[k]))
     return best
@@ -115,7 +146,7 @@ def best_offset(
     v = frame.to_normalised(poly.vertices)
     s_n = spacing / frame.scale
     with np.errstate(all="ignore"):
-        value, _, d = _attained(poly, v, s_n, np.array([angle]), a, b)
+        value, _, d = _attained(_Scorer(poly, v, s_n, a, b), v, s_n, np.array([angle]), a, b)
     if not math.isfinite(value):
         raise NoTransectError(f"no transect crosses the polygon at spacing {spacing:g}")
     offset = float(np.mod(d * frame.scale, spacing))  # for ``angle`` as given, not mod pi
@@ -185,11 +216,12 @@ def global_optimum(
     with np.errstate(all="ignore"):  # infinities are meant: they mark missing bounds
         search = _branch_and_bound(v, s_n, evaluate, tol, cap)
         angles = np.array([search.theta, search.lo, search.hi])
-        value, theta, d = _attained(poly, v, s_n, angles, a, b)
+        score = _Scorer(poly, v, s_n, a, b)
+        value, theta, d = _attained(score, v, s_n, angles, a, b)
     upper = search.upper_bound
     if not search.converged and not math.isfinite(upper):
         upper = a + b  # every length is at most the diameter (1) and std >= 0
-    answer = _reconcile(poly, v, s_n, a, b, search, tol, upper, (value, theta, d))
+    answer = _reconcile(score, v, s_n, a, b, search, tol, upper, (value, theta, d))
     value, theta, d, upper, notes = answer
     converged = search.converged and not notes
     angle, offset = canonical(theta, d * frame.scale, spacing)
@@ -228,7 +260,7 @@ class _Answer(NamedTuple):
 
 
 def _reconcile(
-    poly: Polygon,
+    score: _Scorer,
     v: Array,
     s_n: float,
     a: float,
@@ -246,11 +278,11 @@ def _reconcile(
     event; the check then finds a better layout, and the result says it is not certified.
     """
     value, theta, d = attained
-    check_theta, check_d, check_value = _spot_check(poly, v, s_n, a, b)
+    check_theta, check_d, check_value = _spot_check(score, v, s_n)
     notes = []
     if check_value > value + 1e-12:
         with np.errstate(all="ignore"):
-            better, theta_b, d_b = _attained(poly, v, s_n, np.array([check_theta]), a, b)
+            better, theta_b, d_b = _attained(score, v, s_n, np.array([check_theta]), a, b)
         if better >= check_value:
             value, theta, d = better, theta_b, d_b
         else:
@@ -270,10 +302,8 @@ def _reconcile(
     return _Answer(value, theta, d, upper, notes)
 
 
-def _spot_check(
-    poly: Polygon, v: Array, s: float, a: float, b: float
-) -> tuple[float, float, float]:
-    """``(angle, offset, fitness)``, normalised frame (``v``: ``poly``'s vertices in it): the
+def _spot_check(score: _Scorer, v: Array, s: float) -> tuple[float, float, float]:
+    """``(angle, offset, fitness)``, normalised frame (``v``: the polygon's vertices in it): the
     best of the exact fitness over 90 angles, every edge's direction and its normal, and 9
     offsets (0 included)."""
     edges = np.roll(v, -1, axis=0) - v
@@ -282,13 +312,6 @@ def _spot_check(
         [np.arange(90) * (math.pi / 90), edge_angles, np.mod(edge_angles + math.pi / 2, math.pi)]
     )
     offsets = np.arange(9) * (s / 9)
-    hp = halfplanes(poly)  # normalised frame, as v
-    values = evaluate_grid(
-        hp,
-        torch.as_tensor(angles, dtype=hp.normals.dtype),
-        torch.as_tensor(offsets, dtype=hp.normals.dtype),
-        s,
-        fitness=SmithFitness(a=a, b=b),
-    ).numpy()
+    values = score.grid(angles, offsets)
     i, j = np.unravel_index(int(np.argmax(values)), values.shape)
     return float(angles[i]), float(offsets[j]), float(values[i, j])
