@@ -18,107 +18,41 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ...models import grid_size
-from . import kernel_bounds, kernel_exact, kernel_pieces
-from .kernel_bounds import _kink_one, _runs_one, _second_one
+from . import kernel_bounds, kernel_exact, kernel_pieces, kernel_search
 from .kernel_exact import _exact_pairs
-from .kernel_pieces import (
-    _LAM,
-    _NMO,
-    _TOTAL,
-    _VALUE,
-    _argmax,
-    _nmax,
-    _nmin,
-    _pieces_one,
-    _quick_one,
-    _structure_one,
-    _weighted_row,
-)
-from .structure import BOUND_SLACK, Array
+from .kernel_search import _pieces_at, _search
+from .structure import Array
 
-__all__ = ["Compiled", "compiled", "evaluate_smith_compiled", "exact_smith_compiled"]
-
-
-def _evaluate(
-    v: np.ndarray,
-    s: float,
-    lo: np.ndarray,
-    hi: np.ndarray,
-    a: float,
-    b: float,
-    threshold: float,
-    batch: int,
-    g: np.ndarray,
-    d: np.ndarray,
-    ub: np.ndarray,
-    order: np.ndarray,
-) -> None:
-    """:func:`.bounds._evaluate_smith` as loops; writes ``g, d, ub, order``."""
-    n = v.shape[0]
-    n_j = n - 1
-    h, t, x, tu, td = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    pc = np.empty((n, 5))
-    fam = np.empty((n, 2), dtype=np.int64)
-    rn = np.empty((n, n_j, 8))
-    mo = np.empty((n, _NMO))
-    cc = np.empty((n, n_j, 4))
-    drift, curv = np.empty((n, n_j)), np.empty((n, n_j))
-    d0, d1 = np.empty((2, n, n_j)), np.empty(n_j)
-    pb, f1s, f2s = np.empty(n), np.empty(n), np.empty(n)
-    bound = np.empty(len(lo))
-    for start in range(0, len(lo), batch):
-        stop = min(start + batch, len(lo))
-        gmax = -np.inf
-        for m in range(start, stop):
-            mid = 0.5 * (lo[m] + hi[m])
-            half = 0.5 * (hi[m] - lo[m])
-            _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn)
-            _pieces_one(rn, a, b, mo, cc)
-            ip = _argmax(mo[:, _VALUE])
-            g[m] = mo[ip, _VALUE]
-            d[m] = pc[ip, 0] + mo[ip, _LAM] * pc[ip, 1]
-            gmax = g[m] if m == start else _nmax(gmax, g[m])
-            bound[m] = _quick_one(x, tu, td, rn, mo, half, a, b)
-            order[m] = 1.0
-        thr = gmax if gmax > threshold else threshold  # Python's max(threshold, gmax)
-        for m in range(start, stop):
-            if bound[m] + BOUND_SLACK > thr:
-                mid = 0.5 * (lo[m] + hi[m])
-                half = 0.5 * (hi[m] - lo[m])
-                _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn)
-                _pieces_one(rn, a, b, mo, cc)
-                _runs_one(v, s, mid, half, h, x, tu, td, pc, fam, rn, drift, curv, d0, d1)
-                for p in range(n):
-                    total = mo[p, _TOTAL]
-                    f1 = _weighted_row(rn[p, :, 0], drift[p], total, a, b)
-                    second = _second_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
-                    kink = _kink_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
-                    f2 = _nmin(second, kink)
-                    excess = _nmax(_nmin(f1, f2), 0.0)
-                    pb[p] = mo[p, _VALUE] + excess if total > 0 else -np.inf
-                    f1s[p], f2s[p] = f1, f2
-                top = _argmax(pb)
-                bound[m] = pb[top]
-                order[m] = 2.0 if f2s[top] < f1s[top] else 1.0
-            ub[m] = bound[m] + BOUND_SLACK
+__all__ = [
+    "Compiled",
+    "compiled",
+    "evaluate_smith_compiled",
+    "exact_smith_compiled",
+    "pieces_compiled",
+    "search_smith_compiled",
+]
 
 
 _HELPERS = {
     kernel_pieces: "_nmax _nmin _clip01 _sign _argmax _sum_sq_row _weighted_row _angular_growth",
     kernel_bounds: "_mu_ratio _parallel_one",
     kernel_exact: "_pair_value",
+    kernel_search: "_max_into",
 }
 _STAGES = {
     kernel_pieces: "_structure_one _pieces_one _quick_one",
     kernel_bounds: "_runs_one _linearised_one _second_one _kink_one",
+    kernel_search: "_evaluate",
 }
 
 
 class Compiled(NamedTuple):
     """The compiled kernels (numba dispatchers of the functions named)."""
 
-    evaluate: Any  # _evaluate
+    evaluate: Any  # .kernel_search._evaluate
     exact_pairs: Any  # .kernel_exact._exact_pairs
+    search: Any  # .kernel_search._search
+    pieces_at: Any  # .kernel_search._pieces_at
 
 
 @cache
@@ -149,12 +83,12 @@ def compiled() -> Compiled | None:
             for name in names.split():
                 fn = jit(getattr(module, name))
                 setattr(module, name, fn)
-                for other in (kernel_pieces, kernel_bounds, kernel_exact):
+                for other in (kernel_pieces, kernel_bounds, kernel_exact, kernel_search):
                     if name in vars(other):
                         setattr(other, name, fn)
                 if name in here:
                     here[name] = fn
-    return Compiled(jit(_evaluate), jit(_exact_pairs))
+    return Compiled(kernel_search._evaluate, jit(_exact_pairs), jit(_search), jit(_pieces_at))
 
 
 def evaluate_smith_compiled(
@@ -216,4 +150,51 @@ def exact_smith_compiled(
         float(b),
         out,
     )
+    return out
+
+
+def search_smith_compiled(
+    v: Array,
+    s: float,
+    edges: Array,
+    a: float,
+    b: float,
+    tol: float,
+    max_evaluations: int,
+    batch: int,
+    min_width: float,
+    max_children: int,
+) -> Array | None:
+    """The whole branch and bound (:func:`.search._branch_and_bound` of
+    :func:`.bounds._evaluate_smith`) in one compiled call: ``(theta, lo, hi, offset, value,
+    upper_bound, evaluations, rounds, converged)``; ``None`` without the compiled kernel."""
+    kernels = compiled()
+    if kernels is None:
+        return None
+    out = np.empty(9)
+    kernels.search(
+        np.ascontiguousarray(v, dtype=np.float64),
+        float(s),
+        np.ascontiguousarray(edges, dtype=np.float64),
+        float(a),
+        float(b),
+        float(tol),
+        int(max_evaluations),
+        int(batch),
+        float(min_width),
+        int(max_children),
+        out,
+    )
+    return out
+
+
+def pieces_compiled(v: Array, s: float, thetas: Array, a: float, b: float) -> Array | None:
+    """Every piece's ``(beta, width, value, lam)`` at each angle ``(M, P, 4)``, as
+    ``_structure`` and ``_smith_pieces`` give them; ``None`` without the compiled kernel."""
+    kernels = compiled()
+    if kernels is None:
+        return None
+    thetas = np.ascontiguousarray(thetas, dtype=np.float64)
+    out = np.empty((len(thetas), len(v), 4))
+    kernels.pieces_at(np.ascontiguousarray(v, dtype=np.float64), float(s), thetas, a, b, out)
     return out

@@ -21,9 +21,17 @@ from ...scoring import as_polygon
 from ..problem import evaluate_grid
 from ..result import OptimizeResult, canonical
 from .bounds import _evaluate_smith, _smith_pieces
-from .kernel import evaluate_smith_compiled, exact_smith_compiled
-from .search import _BATCH, _branch_and_bound, _check_count, _check_tol, _Search
-from .structure import Array, _check_work, _structure
+from .kernel import exact_smith_compiled, pieces_compiled, search_smith_compiled
+from .search import (
+    _BATCH,
+    _MAX_CHILDREN,
+    _MIN_WIDTH,
+    _branch_and_bound,
+    _check_count,
+    _check_tol,
+    _Search,
+)
+from .structure import Array, _check_work, _structure, event_angles
 
 __all__ = ["best_offset", "global_optimum"]
 
@@ -89,18 +97,23 @@ def _attained(
         ``(fitness, angle, offset)`` in the normalised frame.
     """
     thetas = np.asarray(thetas, dtype=np.float64)
-    st = _structure(v, s_n, thetas)
-    mo = _smith_pieces(st, a, b)
+    pieces = pieces_compiled(v, s_n, thetas, a, b)
+    if pieces is None:
+        st = _structure(v, s_n, thetas)
+        mo = _smith_pieces(st, a, b)
+        beta, width, value, lam = st.beta, st.width, mo.value, mo.lam
+    else:
+        beta, width, value, lam = (pieces[..., i] for i in range(4))
     best = (-math.inf, float(thetas[0]), 0.0)
     for row, theta in enumerate(thetas):
-        order = np.argsort(-mo.value[row])[: min(3, mo.value.shape[1])]
+        order = np.argsort(-value[row])[: min(3, value.shape[1])]
         cands = []
         for p in order:
-            if not np.isfinite(mo.value[row, p]):
+            if not np.isfinite(value[row, p]):
                 continue
             for eta in (0.0, 1e-9, 1e-6, 1e-3):
-                lam_p = min(max(mo.lam[row, p], eta), 1.0 - eta)
-                cands.append(st.beta[row, p] + lam_p * st.width[row, p])
+                lam_p = min(max(lam[row, p], eta), 1.0 - eta)
+                cands.append(beta[row, p] + lam_p * width[row, p])
         if not cands:
             continue
         offsets = np.array(cands, dtype=np.float64)
@@ -208,13 +221,9 @@ def global_optimum(
     v = frame.to_normalised(poly.vertices)
     s_n = spacing / frame.scale
 
-    def evaluate(lo: Array, hi: Array, threshold: float) -> tuple[Array, Array, Array, Array]:
-        fast = evaluate_smith_compiled(v, s_n, lo, hi, a, b, threshold, _BATCH)
-        return _evaluate_smith(v, s_n, lo, hi, a, b, threshold) if fast is None else fast
-
     cap = _check_count("max_evaluations", max_evaluations)
     with np.errstate(all="ignore"):  # infinities are meant: they mark missing bounds
-        search = _branch_and_bound(v, s_n, evaluate, tol, cap)
+        search = _search_smith(v, s_n, a, b, tol, cap)
         angles = np.array([search.theta, search.lo, search.hi])
         score = _Scorer(poly, v, s_n, a, b)
         value, theta, d = _attained(score, v, s_n, angles, a, b)
@@ -246,6 +255,24 @@ def global_optimum(
         seconds=time.perf_counter() - t0,
         upper_bound=max(upper, value),
         info=info,
+    )
+
+
+def _search_smith(v: Array, s: float, a: float, b: float, tol: float, cap: int) -> _Search:
+    """The branch and bound over the angle: one compiled call (:mod:`.kernel_search`), else
+    the numpy evaluation of the intervals in :func:`_branch_and_bound` (the same search)."""
+    edges = event_angles(v, s)
+    out = search_smith_compiled(v, s, edges, a, b, tol, cap, _BATCH, _MIN_WIDTH, _MAX_CHILDREN)
+    if out is None:
+
+        def evaluate(lo: Array, hi: Array, threshold: float) -> tuple[Array, Array, Array, Array]:
+            return _evaluate_smith(v, s, lo, hi, a, b, threshold)
+
+        return _branch_and_bound(v, s, evaluate, tol, cap)
+    theta, lo, hi, offset, value, upper = (float(x) for x in out[:6])
+    evaluations, rounds, converged = int(out[6]), int(out[7]), bool(out[8])
+    return _Search(
+        theta, lo, hi, offset, value, upper, evaluations, rounds, len(edges) - 1, converged
     )
 
 
