@@ -34,7 +34,7 @@ __all__ = [
 
 
 _HELPERS = {
-    kernel_pieces: "_nmax _nmin _clip01 _sign _argmax _sum_sq_row _weighted_row _angular_growth",
+    kernel_pieces: "_nmax _nmin _clip01 _sign _argmax _argsort_into _weighted_row _angular_growth",
     kernel_bounds: "_mu_ratio _parallel_one",
     kernel_exact: "_pair_value",
     kernel_search: "_max_into",

@@ -67,6 +67,24 @@ def _argmax(values: np.ndarray) -> int:
     return best
 
 
+def _argsort_into(keys: np.ndarray, out: np.ndarray) -> None:
+    """``out[:] = np.argsort(keys, kind="stable")``: insertion sort for small arrays."""
+    n = len(keys)
+    if n > 32:
+        out[:] = np.argsort(keys, kind="mergesort")
+        return
+    for i in range(n):
+        out[i] = i
+    for i in range(1, n):
+        k = out[i]
+        key = keys[k]
+        j = i - 1
+        while j >= 0 and keys[out[j]] > key:
+            out[j + 1] = out[j]
+            j -= 1
+        out[j + 1] = k
+
+
 def _structure_one(
     v: np.ndarray,
     s: float,
@@ -79,8 +97,11 @@ def _structure_one(
     pc: np.ndarray,
     fam: np.ndarray,
     rn: np.ndarray,
+    work: np.ndarray,
+    iwork: np.ndarray,
 ) -> None:
-    """The structure at one angle, written into the scratch arrays.
+    """The structure at one angle, written into the scratch arrays (``work (4, n)`` and
+    ``iwork (2, n)`` are scratch).
 
     ``h, t, x, tu, td (n,)``; ``pc (P, 5)``: beta, width, tfam_lo, tfam_hi, h_lo; ``fam (P, 2)``:
     lower and upper family vertex; ``rn (P, J, 8)``: count, first, step, slope, rel_lo, rel_hi,
@@ -91,8 +112,8 @@ def _structure_one(
     for i in range(n):
         h[i] = v[i, 1] * cos - v[i, 0] * sin
         t[i] = v[i, 0] * cos + v[i, 1] * sin
-    tu_v = np.empty(n)
-    td_v = np.empty(n)
+    tu_v, td_v, mult, bp = work[0], work[1], work[2], work[3]
+    order, fam_lo = iwork[0], iwork[1]
     for i in range(n):
         hv = h[i]
         up, dn = -np.inf, np.inf
@@ -111,12 +132,13 @@ def _structure_one(
             up = _nmax(up, t_hi)
             dn = _nmin(dn, t_lo)
         tu_v[i], td_v[i] = up, dn
-    order = np.argsort(h, kind="mergesort")
+    _argsort_into(h, order)
     for k in range(n):
         x[k], tu[k], td[k] = h[order[k]], tu_v[order[k]], td_v[order[k]]
-    mult = np.floor(h / s)
-    bp = h - mult * s
-    fam_lo = np.argsort(bp, kind="mergesort")
+    for i in range(n):
+        mult[i] = np.floor(h[i] / s)
+        bp[i] = h[i] - mult[i] * s
+    _argsort_into(bp, fam_lo)
     for p in range(n):
         lo_f, hi_f = fam_lo[p], fam_lo[(p + 1) % n]
         fam[p, 0], fam[p, 1] = lo_f, hi_f
@@ -151,57 +173,61 @@ def _structure_one(
             r[7] = k_hi_fam
 
 
-def _sum_sq_row(
-    c: np.ndarray, step: np.ndarray, cnt: np.ndarray, i1: np.ndarray, i2: np.ndarray
-) -> float:
-    """``sum_j sum_{i < cnt_j} (c_j + step_j i)^2`` (as .structure._sum_sq)."""
-    out = 0.0
-    for j in range(len(c)):
-        out += cnt[j] * c[j] * c[j] + 2.0 * c[j] * step[j] * i1[j] + step[j] * step[j] * i2[j]
-    return out
-
-
 def _pieces_one(rn: np.ndarray, a: float, b: float, mo: np.ndarray, cc: np.ndarray) -> None:
     """The exact maximum of Eq. 1 on every piece (as .bounds._smith_pieces).
 
-    Writes ``mo (P, _NMO)`` and ``cc (P, J, 4)``: i1, i2, ca, cb.
+    Writes ``mo (P, _NMO)`` and ``cc (P, J, 4)``: i1, i2, ca, cb. Segments without transects
+    add exact zeros to the sums and are skipped.
     """
     n_p, n_j = rn.shape[0], rn.shape[1]
-    tmp = np.empty(n_j)
     for p in range(n_p):
-        cnt, first, step, slope = rn[p, :, 0], rn[p, :, 1], rn[p, :, 2], rn[p, :, 3]
-        i1, i2, ca, cb = cc[p, :, 0], cc[p, :, 1], cc[p, :, 2], cc[p, :, 3]
         total = 0.0
         sa = 0.0
         sb = 0.0
         for j in range(n_j):
-            c = cnt[j]
-            i1[j] = c * (c - 1.0) * 0.5
-            i2[j] = (c - 1.0) * c * (2.0 * c - 1.0) / 6.0
-            total += c
-            sa += c * first[j] + step[j] * i1[j]
-            sb += c * slope[j]
+            c = rn[p, j, 0]
+            i1 = c * (c - 1.0) * 0.5
+            cc[p, j, 0] = i1
+            cc[p, j, 1] = (c - 1.0) * c * (2.0 * c - 1.0) / 6.0
+            if c > 0:
+                total += c
+                sa += c * rn[p, j, 1] + rn[p, j, 2] * i1
+                sb += c * rn[p, j, 3]
         ok = total > 0
         tsafe = total if ok else 1.0
         mean_a, mean_b = sa / tsafe, sb / tsafe
         vbb = 0.0
         vab = 0.0
+        vaa = 0.0
+        v11 = 0.0
         for j in range(n_j):
-            ca[j] = first[j] - mean_a
-            cb[j] = slope[j] - mean_b if cnt[j] > 0 else 0.0
-            vbb += cnt[j] * cb[j] * cb[j]
-            vab += cb[j] * (cnt[j] * ca[j] + step[j] * i1[j])
-            tmp[j] = ca[j] + cb[j]
-        v_aa = _sum_sq_row(ca, step, cnt, i1, i2) / tsafe
-        v_11 = _sum_sq_row(tmp, step, cnt, i1, i2) / tsafe
+            c = rn[p, j, 0]
+            ca = rn[p, j, 1] - mean_a
+            cc[p, j, 2] = ca
+            cc[p, j, 3] = 0.0
+            if c > 0:
+                step, i1, i2 = rn[p, j, 2], cc[p, j, 0], cc[p, j, 1]
+                cb = rn[p, j, 3] - mean_b
+                cc[p, j, 3] = cb
+                vbb += c * cb * cb
+                vab += cb * (c * ca + step * i1)
+                vaa += c * ca * ca + 2.0 * ca * step * i1 + step * step * i2
+                c1 = ca + cb
+                v11 += c * c1 * c1 + 2.0 * c1 * step * i1 + step * step * i2
+        v_aa, v_11 = vaa / tsafe, v11 / tsafe
         v_bb, v_ab = vbb / tsafe, vab / tsafe
         pos = v_bb > 1e-300
         vbs = v_bb if pos else 1.0
         x0 = -v_ab / vbs if pos else 0.0
         if pos:
+            rs = 0.0
             for j in range(n_j):
-                tmp[j] = ca[j] + x0 * cb[j]
-            resid = _sum_sq_row(tmp, step, cnt, i1, i2) / tsafe
+                c = rn[p, j, 0]
+                if c > 0:
+                    step, i1, i2 = rn[p, j, 2], cc[p, j, 0], cc[p, j, 1]
+                    cr = cc[p, j, 2] + x0 * cc[p, j, 3]
+                    rs += c * cr * cr + 2.0 * cr * step * i1 + step * step * i2
+            resid = rs / tsafe
         else:
             resid = v_aa
         disc = b * b * v_bb - a * a * mean_b * mean_b
@@ -236,8 +262,9 @@ def _weighted_row(cnt: np.ndarray, w: np.ndarray, total: float, a: float, b: flo
     s1 = 0.0
     s2 = 0.0
     for j in range(len(cnt)):
-        s1 += cnt[j] * w[j]
-        s2 += cnt[j] * w[j] * w[j]
+        if cnt[j] > 0:  # where there is no transect, w is 0 (never inf)
+            s1 += cnt[j] * w[j]
+            s2 += cnt[j] * w[j] * w[j]
     rms = math.sqrt(s2 / tsafe) if total > 1 else 0.0
     out = a * s1 / tsafe + b * rms
     return np.inf if out != out else out
@@ -273,6 +300,7 @@ def _quick_one(
     dl: float,
     a: float,
     b: float,
+    work: np.ndarray,
 ) -> float:
     """The cheap first-order bound of the angle (as .bounds._quick_excess): the largest
     ``value + excess`` over the pieces (``-inf`` without transects, NaN wins)."""
@@ -280,7 +308,7 @@ def _quick_one(
     n_j = n - 1
     extent = tu.max() - td.min()
     width = x[n - 1] - x[0]
-    drift = np.empty(n_j)
+    drift, w = work[0], work[1]
     for j in range(n_j):
         wx = x[j + 1] - x[j]
         acc = 0.0
@@ -290,7 +318,6 @@ def _quick_one(
             acc += extent * grow + width * drift_k
         drift[j] = np.inf if acc >= _HUGE else acc
     best = -np.inf
-    w = np.empty(n_j)
     for p in range(rn.shape[0]):
         for j in range(n_j):
             w[j] = drift[j] if rn[p, j, 0] > 0 else 0.0

@@ -55,6 +55,7 @@ def _evaluate(
     rn = np.empty((n, n_j, 8))
     mo = np.empty((n, _NMO))
     cc = np.empty((n, n_j, 4))
+    work, iwork = np.empty((4, n)), np.empty((2, n), dtype=np.int64)
     drift, curv = np.empty((n, n_j)), np.empty((n, n_j))
     d0, d1 = np.empty((2, n, n_j)), np.empty(n_j)
     pb, f1s, f2s = np.empty(n), np.empty(n), np.empty(n)
@@ -65,20 +66,20 @@ def _evaluate(
         for m in range(start, stop):
             mid = 0.5 * (lo[m] + hi[m])
             half = 0.5 * (hi[m] - lo[m])
-            _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn)
+            _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
             _pieces_one(rn, a, b, mo, cc)
             ip = _argmax(mo[:, _VALUE])
             g[m] = mo[ip, _VALUE]
             d[m] = pc[ip, 0] + mo[ip, _LAM] * pc[ip, 1]
             gmax = g[m] if m == start else _nmax(gmax, g[m])
-            bound[m] = _quick_one(x, tu, td, rn, mo, half, a, b)
+            bound[m] = _quick_one(x, tu, td, rn, mo, half, a, b, work)
             order[m] = 1.0
         thr = gmax if gmax > threshold else threshold  # Python's max(threshold, gmax)
         for m in range(start, stop):
             if bound[m] + BOUND_SLACK > thr:
                 mid = 0.5 * (lo[m] + hi[m])
                 half = 0.5 * (hi[m] - lo[m])
-                _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn)
+                _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
                 _pieces_one(rn, a, b, mo, cc)
                 _runs_one(v, s, mid, half, h, x, tu, td, pc, fam, rn, drift, curv, d0, d1)
                 for p in range(n):
@@ -203,8 +204,9 @@ def _pieces_at(
     rn = np.empty((n, n_j, 8))
     mo = np.empty((n, _NMO))
     cc = np.empty((n, n_j, 4))
+    work, iwork = np.empty((4, n)), np.empty((2, n), dtype=np.int64)
     for i in range(len(thetas)):
-        _structure_one(v, s, thetas[i], h, t, x, tu, td, pc, fam, rn)
+        _structure_one(v, s, thetas[i], h, t, x, tu, td, pc, fam, rn, work, iwork)
         _pieces_one(rn, a, b, mo, cc)
         for p in range(n):
             out[i, p, 0], out[i, p, 1] = pc[p, 0], pc[p, 1]
