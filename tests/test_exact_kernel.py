@@ -106,6 +106,7 @@ def test_compiled_exact_scores_equal_evaluate_grid():
             hp, torch.tensor(angles), torch.tensor(shifts), s, fitness=fit
         ).numpy()
         got = exact_smith_compiled(
+            v,
             (normals, offsets, float(np.max(np.linalg.norm(v, axis=1)))),
             s,
             np.repeat(angles, len(shifts)),

@@ -119,6 +119,7 @@ def evaluate_smith_compiled(
 
 
 def exact_smith_compiled(
+    v: Array,
     halfplanes: tuple[Array, Array, float],
     s: float,
     thetas: Array,
@@ -127,8 +128,9 @@ def exact_smith_compiled(
     b: float,
 ) -> Array | None:
     """Eq. 1 by the exact model of every pair ``(thetas[i], offsets[i])`` (``-inf`` where no
-    transect counts), as :func:`boustro.optimize.evaluate_grid` scores it; ``halfplanes`` is
-    ``(normals, offsets, radius)`` in the frame of ``s``. ``None`` without the compiled kernel.
+    transect counts), as :func:`boustro.optimize.evaluate_grid` scores it, for the convex
+    polygon of vertices ``v`` whose half-planes are ``(normals, offsets, radius)``, all in the
+    frame of ``s``. ``None`` without the compiled kernel.
     """
     kernels = compiled()
     if kernels is None:
@@ -140,6 +142,7 @@ def exact_smith_compiled(
     kernels.exact_pairs(
         np.ascontiguousarray(normals, dtype=np.float64),
         np.ascontiguousarray(boffs, dtype=np.float64),
+        np.ascontiguousarray(v, dtype=np.float64),
         float(radius),
         float(s),
         k_count,

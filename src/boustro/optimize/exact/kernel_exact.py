@@ -24,6 +24,7 @@ __all__: list[str] = []
 def _pair_value(
     normals: np.ndarray,
     boffs: np.ndarray,
+    v: np.ndarray,
     radius: float,
     s: float,
     k_count: int,
@@ -32,11 +33,24 @@ def _pair_value(
     offset: float,
     a: float,
     b: float,
-    lengths: np.ndarray,
+    work: np.ndarray,
 ) -> float:
-    """Eq. 1 of the layout ``(theta, offset)`` by the exact model (``-inf``: nothing counts)."""
+    """Eq. 1 of the layout ``(theta, offset)`` by the exact model (``-inf``: nothing counts).
+
+    Lines more than 1e-9 outside the vertices' extent across the transects have no chord
+    (the exact model gives them length 0 too: far beyond rounding) and are skipped.
+    """
     n_e = normals.shape[0]
     cos, sin = math.cos(theta), math.sin(theta)
+    across, along, lengths = work[0], work[1], work[2]
+    for e in range(n_e):
+        nx, ny = normals[e, 0], normals[e, 1]
+        across[e] = -nx * sin + ny * cos
+        along[e] = nx * cos + ny * sin
+    h_lo, h_hi = np.inf, -np.inf
+    for i in range(v.shape[0]):
+        h = v[i, 1] * cos - v[i, 0] * sin
+        h_lo, h_hi = min(h_lo, h), max(h_hi, h)
     d = np.fmod(offset, s)  # torch.remainder
     if d != 0 and ((s < 0) != (d < 0)):
         d += s
@@ -45,24 +59,24 @@ def _pair_value(
     first = 0.0
     for k in range(k_count):
         c = d + float(k - m) * s
+        lengths[k] = 0.0
+        if c < h_lo - 1e-9 or c > h_hi + 1e-9:
+            continue
         lower, upper = -np.inf, np.inf
         blocked = False
         for e in range(n_e):
-            nx, ny = normals[e, 0], normals[e, 1]
-            across = -nx * sin + ny * cos
-            along = nx * cos + ny * sin
-            lhs = across * c + boffs[e]
-            if along > 0:
-                lower = max(lower, -lhs / along)
-            elif along < 0:
-                upper = min(upper, -lhs / along)
+            lhs = across[e] * c + boffs[e]
+            if along[e] > 0:
+                lower = max(lower, -lhs / along[e])
+            elif along[e] < 0:
+                upper = min(upper, -lhs / along[e])
             elif lhs < 0:
                 blocked = True
         length = 0.0 if blocked else max(upper - lower, 0.0)
-        w = 1.0 if length > tiny else 0.0
-        lengths[k] = length if w > 0 else 0.0
-        total += w
-        first += w * length
+        if length > tiny:
+            lengths[k] = length
+            total += 1.0
+            first += length
     if not total > 0:
         return -np.inf
     mean = first / total
@@ -85,6 +99,7 @@ def _pair_value(
 def _exact_pairs(
     normals: np.ndarray,
     boffs: np.ndarray,
+    v: np.ndarray,
     radius: float,
     s: float,
     k_count: int,
@@ -95,9 +110,10 @@ def _exact_pairs(
     b: float,
     out: np.ndarray,
 ) -> None:
-    """Eq. 1 of every pair ``(thetas[i], offsets[i])`` into ``out[i]``."""
-    lengths = np.empty(k_count)
+    """Eq. 1 of every pair ``(thetas[i], offsets[i])`` into ``out[i]`` (``v``: the vertices,
+    in the frame of the half-planes ``normals``, ``boffs``)."""
+    work = np.empty((3, max(k_count, normals.shape[0])))
     for i in range(len(thetas)):
         out[i] = _pair_value(
-            normals, boffs, radius, s, k_count, m, thetas[i], offsets[i], a, b, lengths
+            normals, boffs, v, radius, s, k_count, m, thetas[i], offsets[i], a, b, work
         )

@@ -56,21 +56,20 @@ class _Scorer:
 
     def __init__(self, poly: Polygon, v: Array, s: float, a: float, b: float) -> None:
         self.poly, self.v, self.s, self.a, self.b = poly, v, s, a, b
+        normals, boffs = edge_halfplanes(v)
+        self.halfplanes = (normals, boffs, float(np.max(np.linalg.norm(v, axis=1))))
+
+    def pairs(self, angles: Array, offsets: Array) -> Array | None:
+        """Values of the pairs ``(angles[i], offsets[i])`` by the compiled kernel, or None."""
+        return exact_smith_compiled(
+            self.v, self.halfplanes, self.s, angles, offsets, self.a, self.b
+        )
 
     def grid(self, angles: ArrayLike, offsets: ArrayLike) -> Array:
         """Values ``(A, O)``, ``-inf`` where no transect counts."""
         angles = np.asarray(angles, dtype=np.float64)
         offsets = np.asarray(offsets, dtype=np.float64)
-        normals, boffs = edge_halfplanes(self.v)
-        radius = float(np.max(np.linalg.norm(self.v, axis=1)))
-        fast = exact_smith_compiled(
-            (normals, boffs, radius),
-            self.s,
-            np.repeat(angles, len(offsets)),
-            np.tile(offsets, len(angles)),
-            self.a,
-            self.b,
-        )
+        fast = self.pairs(np.repeat(angles, len(offsets)), np.tile(offsets, len(angles)))
         if fast is not None:
             return fast.reshape(len(angles), len(offsets))
         hp = halfplanes(self.poly)
@@ -104,7 +103,7 @@ def _attained(
         beta, width, value, lam = st.beta, st.width, mo.value, mo.lam
     else:
         beta, width, value, lam = (pieces[..., i] for i in range(4))
-    best = (-math.inf, float(thetas[0]), 0.0)
+    rows = []
     for row, theta in enumerate(thetas):
         order = np.argsort(-value[row])[: min(3, value.shape[1])]
         cands = []
@@ -114,10 +113,21 @@ def _attained(
             for eta in (0.0, 1e-9, 1e-6, 1e-3):
                 lam_p = min(max(lam[row, p], eta), 1.0 - eta)
                 cands.append(beta[row, p] + lam_p * width[row, p])
-        if not cands:
-            continue
-        offsets = np.array(cands, dtype=np.float64)
-        values = score.grid(np.array([float(theta)]), offsets)[0]
+        if cands:
+            rows.append((float(theta), np.array(cands, dtype=np.float64)))
+    best = (-math.inf, float(thetas[0]), 0.0)
+    if not rows:
+        return best
+    flat = score.pairs(
+        np.concatenate([np.full(len(c), t) for t, c in rows]), np.concatenate([c for _, c in rows])
+    )
+    start = 0
+    for theta, offsets in rows:
+        if flat is None:
+            values = score.grid(np.array([theta]), offsets)[0]
+        else:
+            values = flat[start : start + len(offsets)]
+            start += len(offsets)
         k = int(np.argmax(values))
         if float(values[k]) > best[0]:
             best = (float(values[k]), float(theta), float(offsets[k]))
