@@ -119,24 +119,22 @@ def _runs_one(
     curv: np.ndarray,
     d0: np.ndarray,
     d1: np.ndarray,
+    scratch: np.ndarray,
 ) -> None:
     """Derivative data of every run (as .structure._runs with ``second=True``): ``drift,
-    curv (P, J)``, ``d0 (2, P, J)``, ``d1 (J,)``."""
+    curv (P, J)``, ``d0 (2, P, J)``, ``d1 (J,)``; ``scratch (16, 4)``."""
     n_p, n_j = rn.shape[0], rn.shape[1]
-    r = np.empty(2)
-    zc = np.empty(2)
-    grow = np.empty(2)
-    drift_k = np.empty(2)
-    big = np.zeros(2, dtype=np.bool_)
-    reach = np.empty(2)
-    rate = np.empty(2)
-    c0 = np.empty(2)
-    c1 = np.empty(2)
-    ed = np.empty((2, 4))
-    tau = np.empty((2, 4))
-    kap = np.empty(4)
-    rel = np.empty(4)
-    tfam = np.empty(4)
+    r, zc, grow, drift_k, reach = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4]
+    rate, c0, c1, kap, rel, tfam = (
+        scratch[5],
+        scratch[6],
+        scratch[7],
+        scratch[8],
+        scratch[9],
+        scratch[10],
+    )
+    big = scratch[11]  # 1.0 or 0.0
+    ed, tau = scratch[12:14], scratch[14:16]
     for j in range(n_j):
         wx = x[j + 1] - x[j]
         wxs = wx if wx > 0 else 1.0
@@ -144,9 +142,10 @@ def _runs_one(
         dsum = 0.0
         for c in range(2):
             dc = c1[c] - c0[c]
-            r[c], zc[c], grow[c], drift_k[c], big[c] = _angular_growth(dc, wx, dl)
+            r[c], zc[c], grow[c], drift_k[c], big_c = _angular_growth(dc, wx, dl)
+            big[c] = 1.0 if big_c else 0.0
             rs = r[c] if zc[c] > 0 else 1.0
-            reach[c] = _HUGE if big[c] else (grow[c] / rs if zc[c] > 0 else dl)
+            reach[c] = _HUGE if big_c else (grow[c] / rs if zc[c] > 0 else dl)
             rate[c] = -dc / wxs
             sign = -1.0 if c == 0 else 1.0
             dsum += sign * (-s) * rate[c] * rate[c]
@@ -154,6 +153,12 @@ def _runs_one(
         for p in range(n_p):
             cnt = rn[p, j, 0]
             has = cnt > 0
+            if not has:  # no transect: the numpy code's np.where(has, ..., 0)
+                drift[p, j] = 0.0
+                curv[p, j] = 0.0
+                d0[0, p, j] = 0.0
+                d0[1, p, j] = 0.0
+                continue
             last = max(cnt - 1.0, 0.0)
             rel[0], rel[1] = rn[p, j, 4], rn[p, j, 4] + last * s
             rel[2], rel[3] = rn[p, j, 5], rn[p, j, 5] + last * s
@@ -167,7 +172,7 @@ def _runs_one(
                     tq = (1.0 - phi) * c0[c] + phi * c1[c] - tfam[q]
                     tau[c, q] = tq
                     e = abs(tq) * grow[c] + kap[q] * drift_k[c]
-                    if e >= 1e-3 and big[c] and has:
+                    if e >= 1e-3 and big[c] > 0:
                         kraw = kraw0 if q < 2 else kraw1
                         if q % 2 == 1:
                             kraw += last
@@ -190,16 +195,10 @@ def _runs_one(
                     term = kap[q] * r[c] + tmax * (1.0 + 2.0 * r[c] ** 2)
                     cq = term if c == 0 else cq + term
                 cv = _nmax(cv, cq)
-            if has:
-                drift[p, j] = np.inf if dr >= _HUGE else dr
-                curv[p, j] = np.inf if cv >= _HUGE else cv
-                for e_ in range(2):
-                    d0[e_, p, j] = (-1.0 * tau[0, 2 * e_]) * rate[0] + (tau[1, 2 * e_]) * rate[1]
-            else:
-                drift[p, j] = 0.0
-                curv[p, j] = 0.0
-                d0[0, p, j] = 0.0
-                d0[1, p, j] = 0.0
+            drift[p, j] = np.inf if dr >= _HUGE else dr
+            curv[p, j] = np.inf if cv >= _HUGE else cv
+            for e_ in range(2):
+                d0[e_, p, j] = (-1.0 * tau[0, 2 * e_]) * rate[0] + (tau[1, 2 * e_]) * rate[1]
 
 
 def _linearised_one(
@@ -226,27 +225,30 @@ def _linearised_one(
     inv = 1.0 / sd if pos else 0.0
     value = a * (mo[p, _MEAN_A] + mo[p, _MEAN_B] * lam) + b * (1.0 - sd)
     slope = a * mo[p, _MEAN_B] - b * (mo[p, _V_AB] + v_bb * lam) * inv
-    grads = np.empty(2)
-    for e in range(2):
-        sm = 0.0
-        sc = 0.0
-        for j in range(n_j):
-            cnt, step, i1, i2 = rn[p, j, 0], rn[p, j, 2], cc[p, j, 0], cc[p, j, 1]
-            cl = cc[p, j, 2] + cc[p, j, 3] * lam
-            dd = d0[e, p, j]
-            sm += cnt * dd + d1[j] * i1
-            sc += cnt * cl * dd + (cl * d1[j] + step * dd) * i1 + step * d1[j] * i2
-        grads[e] = a * (sm / tsafe) - b * sc / tsafe * inv
+    sm0 = 0.0
+    sc0 = 0.0
+    sm1 = 0.0
+    sc1 = 0.0
     s1 = 0.0
     s2 = 0.0
     s3 = 0.0
     for j in range(n_j):
-        cnt, step, cv = rn[p, j, 0], rn[p, j, 2], curv[p, j]
+        cnt = rn[p, j, 0]
+        if cnt == 0:  # exact zeros in every sum (d0 and curv are 0 there)
+            continue
+        step, i1, i2, cv = rn[p, j, 2], cc[p, j, 0], cc[p, j, 1], curv[p, j]
         cl = cc[p, j, 2] + cc[p, j, 3] * lam
+        e0, e1, dj = d0[0, p, j], d0[1, p, j], d1[j]
+        sm0 += cnt * e0 + dj * i1
+        sc0 += cnt * cl * e0 + (cl * dj + step * e0) * i1 + step * dj * i2
+        sm1 += cnt * e1 + dj * i1
+        sc1 += cnt * cl * e1 + (cl * dj + step * e1) * i1 + step * dj * i2
         last = cl + step * max(cnt - 1.0, 0.0)
         s1 += cnt * cv
         s2 += cnt * cv * cv
         s3 += cnt * cv * max(abs(cl), abs(last))
+    g0 = a * (sm0 / tsafe) - b * sc0 / tsafe * inv
+    g1 = a * (sm1 / tsafe) - b * sc1 / tsafe * inv
     mean_c = s1 / tsafe
     rms_c = math.sqrt(s2 / tsafe)
     zsum = s3 / tsafe * inv
@@ -254,7 +256,7 @@ def _linearised_one(
     remfac = a * mean_c + b * zfac
     if remfac != remfac:
         remfac = np.inf
-    return value, slope, grads[0], grads[1], remfac
+    return value, slope, g0, g1, remfac
 
 
 def _second_one(

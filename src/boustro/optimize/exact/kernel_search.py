@@ -59,6 +59,7 @@ def _evaluate(
     drift, curv = np.empty((n, n_j)), np.empty((n, n_j))
     d0, d1 = np.empty((2, n, n_j)), np.empty(n_j)
     pb, f1s, f2s = np.empty(n), np.empty(n), np.empty(n)
+    scratch = np.empty((16, 4))
     bound = np.empty(len(lo))
     for start in range(0, len(lo), batch):
         stop = min(start + batch, len(lo))
@@ -81,7 +82,7 @@ def _evaluate(
                 half = 0.5 * (hi[m] - lo[m])
                 _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
                 _pieces_one(rn, a, b, mo, cc)
-                _runs_one(v, s, mid, half, h, x, tu, td, pc, fam, rn, drift, curv, d0, d1)
+                _runs_one(v, s, mid, half, h, x, tu, td, pc, fam, rn, drift, curv, d0, d1, scratch)
                 for p in range(n):
                     total = mo[p, _TOTAL]
                     f1 = _weighted_row(rn[p, :, 0], drift[p], total, a, b)
