@@ -10,6 +10,9 @@ the compiled optimiser's certificate holds against a dense independent search.
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -125,8 +128,9 @@ def test_global_optimum_compiled_equals_numpy_path(seed, monkeypatch):
     """The whole optimiser with and without the compiled kernels: the same layouts, values
     and certificates (the reference path is the one BOUSTRO_COMPILED=0 runs)."""
     problems = list(cases(100 + seed, 12, 16))
+    monkeypatch.setenv("BOUSTRO_COMPILED", "1")
     fast = [global_optimum(p, s) for p, s in problems]
-    monkeypatch.setattr(kernel_module, "compiled", lambda: None)
+    monkeypatch.setenv("BOUSTRO_COMPILED", "0")
     slow = [global_optimum(p, s) for p, s in problems]
     for (_, spacing), x, y in zip(problems, fast, slow, strict=True):
         assert x.info["converged"] and y.info["converged"]
@@ -164,3 +168,42 @@ def test_compiled_certificate_against_a_dense_search():
             fitness=fit,
         )
         assert float(again[0, 0]) == pytest.approx(r.fitness, abs=1e-9)
+
+
+def test_when_the_kernels_are_used(monkeypatch):
+    """Unset: after SWITCH_SECONDS of numpy work in the process, or for one problem that
+    would take as long; ``BOUSTRO_COMPILED=1`` always, ``0`` never."""
+    monkeypatch.delenv("BOUSTRO_COMPILED", raising=False)
+    monkeypatch.setattr(kernel_module, "_numpy_seconds", [0.0])
+    small = 100.0
+    big = 2 * kernel_module.SWITCH_SECONDS / kernel_module.SECONDS_PER_WORK
+    assert kernel_module.use_compiled(big)
+    assert kernel_module.use_compiled(small)  # once loaded, always
+    kernel_module.compiled.cache_clear()
+    try:
+        assert not kernel_module.use_compiled(small)
+        kernel_module.record_numpy_seconds(kernel_module.SWITCH_SECONDS)
+        assert kernel_module.use_compiled(small)
+        monkeypatch.setenv("BOUSTRO_COMPILED", "0")
+        assert not kernel_module.use_compiled(big)
+        monkeypatch.setenv("BOUSTRO_COMPILED", "1")
+        assert kernel_module.use_compiled(small)
+    finally:
+        monkeypatch.delenv("BOUSTRO_COMPILED", raising=False)
+        kernel_module.compiled()
+
+
+def test_a_plan_of_one_small_field_does_not_import_numba():
+    """The default policy: a single certified optimum of a small polygon stays on the numpy
+    path (importing numba and loading the kernels costs about a second)."""
+    code = (
+        "import sys; from boustro.optimize.exact import global_optimum;"
+        "r = global_optimum([(0, 0), (4, 0), (5, 3), (1, 2)], 0.5);"
+        "assert r.info['converged'], r.info;"
+        "print('numba' in sys.modules)"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "BOUSTRO_COMPILED"}
+    env["PYTHONPATH"] = os.pathsep.join(sys.path)
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "False"

@@ -21,7 +21,13 @@ from ...scoring import as_polygon
 from ..problem import evaluate_grid
 from ..result import OptimizeResult, canonical
 from .bounds import _evaluate_smith, _smith_pieces
-from .kernel import exact_smith_compiled, pieces_compiled, search_smith_compiled
+from .kernel import (
+    exact_smith_compiled,
+    pieces_compiled,
+    record_numpy_seconds,
+    search_smith_compiled,
+    use_compiled,
+)
 from .search import (
     _BATCH,
     _MAX_CHILDREN,
@@ -54,13 +60,16 @@ class _Scorer:
     compiled (:func:`.kernel.exact_smith_compiled`), else :func:`evaluate_grid` (the same
     numbers to rounding)."""
 
-    def __init__(self, poly: Polygon, v: Array, s: float, a: float, b: float) -> None:
-        self.poly, self.v, self.s, self.a, self.b = poly, v, s, a, b
+    def __init__(self, poly: Polygon, v: Array, s: float, a: float, b: float, fast: bool) -> None:
+        self.poly, self.v, self.s, self.a, self.b, self.fast = poly, v, s, a, b, fast
         normals, boffs = edge_halfplanes(v)
         self.halfplanes = (normals, boffs, float(np.max(np.linalg.norm(v, axis=1))))
 
     def pairs(self, angles: Array, offsets: Array) -> Array | None:
-        """Values of the pairs ``(angles[i], offsets[i])`` by the compiled kernel, or None."""
+        """Values of the pairs ``(angles[i], offsets[i])`` by the compiled kernel (if
+        ``fast``), or None."""
+        if not self.fast:
+            return None
         return exact_smith_compiled(
             self.v, self.halfplanes, self.s, angles, offsets, self.a, self.b
         )
@@ -96,7 +105,7 @@ def _attained(
         ``(fitness, angle, offset)`` in the normalised frame.
     """
     thetas = np.asarray(thetas, dtype=np.float64)
-    pieces = pieces_compiled(v, s_n, thetas, a, b)
+    pieces = pieces_compiled(v, s_n, thetas, a, b) if score.fast else None
     if pieces is None:
         st = _structure(v, s_n, thetas)
         mo = _smith_pieces(st, a, b)
@@ -169,7 +178,8 @@ def best_offset(
     v = frame.to_normalised(poly.vertices)
     s_n = spacing / frame.scale
     with np.errstate(all="ignore"):
-        value, _, d = _attained(_Scorer(poly, v, s_n, a, b), v, s_n, np.array([angle]), a, b)
+        score = _Scorer(poly, v, s_n, a, b, use_compiled())
+        value, _, d = _attained(score, v, s_n, np.array([angle]), a, b)
     if not math.isfinite(value):
         raise NoTransectError(f"no transect crosses the polygon at spacing {spacing:g}")
     offset = float(np.mod(d * frame.scale, spacing))  # for ``angle`` as given, not mod pi
@@ -224,7 +234,9 @@ def global_optimum(
     del progress
     poly = as_polygon(polygon).require_convex("the global optimiser")
     spacing = check_spacing(spacing, extent=poly.diameter)
-    _check_work(poly, spacing, "the global optimiser")
+    work = _check_work(poly, spacing, "the global optimiser")
+    fast = use_compiled(work)
+    cpu = time.process_time()
     a, b = _weights(a, b, fitness)
     tol = _check_tol(tol)
     frame = poly.frame
@@ -233,15 +245,17 @@ def global_optimum(
 
     cap = _check_count("max_evaluations", max_evaluations)
     with np.errstate(all="ignore"):  # infinities are meant: they mark missing bounds
-        search = _search_smith(v, s_n, a, b, tol, cap)
+        search = _search_smith(v, s_n, a, b, tol, cap, fast)
         angles = np.array([search.theta, search.lo, search.hi])
-        score = _Scorer(poly, v, s_n, a, b)
+        score = _Scorer(poly, v, s_n, a, b, fast)
         value, theta, d = _attained(score, v, s_n, angles, a, b)
     upper = search.upper_bound
     if not search.converged and not math.isfinite(upper):
         upper = a + b  # every length is at most the diameter (1) and std >= 0
     answer = _reconcile(score, v, s_n, a, b, search, tol, upper, (value, theta, d))
     value, theta, d, upper, notes = answer
+    if not fast:
+        record_numpy_seconds(time.process_time() - cpu)
     converged = search.converged and not notes
     angle, offset = canonical(theta, d * frame.scale, spacing)
     info: dict[str, Any] = {
@@ -268,11 +282,16 @@ def global_optimum(
     )
 
 
-def _search_smith(v: Array, s: float, a: float, b: float, tol: float, cap: int) -> _Search:
-    """The branch and bound over the angle: one compiled call (:mod:`.kernel_search`), else
-    the numpy evaluation of the intervals in :func:`_branch_and_bound` (the same search)."""
+def _search_smith(
+    v: Array, s: float, a: float, b: float, tol: float, cap: int, fast: bool
+) -> _Search:
+    """The branch and bound over the angle: one compiled call (:mod:`.kernel_search`) if
+    ``fast``, else the numpy evaluation of the intervals in :func:`_branch_and_bound` (the same
+    search)."""
     edges = event_angles(v, s)
-    out = search_smith_compiled(v, s, edges, a, b, tol, cap, _BATCH, _MIN_WIDTH, _MAX_CHILDREN)
+    out = None
+    if fast:
+        out = search_smith_compiled(v, s, edges, a, b, tol, cap, _BATCH, _MIN_WIDTH, _MAX_CHILDREN)
     if out is None:
 
         def evaluate(lo: Array, hi: Array, threshold: float) -> tuple[Array, Array, Array, Array]:

@@ -77,7 +77,8 @@ def global_work(vertices: ArrayLike, spacing: float) -> float:
     return events * len(v) ** 2
 
 
-def _check_work(poly: Polygon, spacing: float, what: str) -> None:
+def _check_work(poly: Polygon, spacing: float, what: str) -> float:
+    """The :func:`global_work` of the problem, refused beyond :data:`WORK_LIMIT`."""
     work = global_work(poly.vertices, spacing)
     if work > WORK_LIMIT:
         raise ProblemTooLargeError(
@@ -85,6 +86,7 @@ def _check_work(poly: Polygon, spacing: float, what: str) -> None:
             f"{spacing:.6g}; limit {WORK_LIMIT:.0e}, minutes and gigabytes beyond it): use "
             "method='hybrid' (or --method hybrid), a larger spacing, or fewer vertices"
         )
+    return work
 
 
 @dataclass
