@@ -19,7 +19,7 @@ import numpy as np
 
 from ...models import grid_size
 from . import kernel_bounds, kernel_exact, kernel_pieces, kernel_search
-from .kernel_exact import _exact_pairs
+from .kernel_exact import _exact_grid
 from .kernel_search import _pieces_at, _search
 from .structure import Array
 
@@ -40,7 +40,7 @@ __all__ = [
 _HELPERS = {
     kernel_pieces: "_nmax _nmin _clip01 _sign _argmax _argsort_into _weighted_row _angular_growth",
     kernel_bounds: "_mu_ratio _parallel_one",
-    kernel_exact: "_pair_value",
+    kernel_exact: "_angle_setup _layout_value",
     kernel_search: "_max_into",
 }
 _STAGES = {
@@ -54,7 +54,7 @@ class Compiled(NamedTuple):
     """The compiled kernels (numba dispatchers of the functions named)."""
 
     evaluate: Any  # .kernel_search._evaluate
-    exact_pairs: Any  # .kernel_exact._exact_pairs
+    exact_grid: Any  # .kernel_exact._exact_grid
     search: Any  # .kernel_search._search
     pieces_at: Any  # .kernel_search._pieces_at
     cached: bool  # numba's on-disk cache holds them (else they compile in every process)
@@ -142,7 +142,7 @@ def compiled() -> Compiled | None:
                         setattr(other, name, fn)
                 if name in here:
                     here[name] = fn
-    found = (kernel_search._evaluate, jit(_exact_pairs), jit(_search), jit(_pieces_at))
+    found = (kernel_search._evaluate, jit(_exact_grid), jit(_search), jit(_pieces_at))
     return Compiled(*found, cached[0])
 
 
@@ -181,11 +181,13 @@ def exact_smith_compiled(
     offsets: Array,
     a: float,
     b: float,
+    pairs: bool = True,
 ) -> Array | None:
-    """Eq. 1 by the exact model of every pair ``(thetas[i], offsets[i])`` (``-inf`` where no
-    transect counts), as :func:`boustro.optimize.evaluate_grid` scores it, for the convex
-    polygon of vertices ``v`` whose half-planes are ``(normals, offsets, radius)``, all in the
-    frame of ``s``. ``None`` without the compiled kernel.
+    """Eq. 1 by the exact model (``-inf`` where no transect counts), as
+    :func:`boustro.optimize.evaluate_grid` scores it, of every pair ``(thetas[i], offsets[i])``
+    (``pairs``) or of the grid ``thetas x offsets`` ``(A, O)``, for the convex polygon of
+    vertices ``v`` whose half-planes are ``(normals, offsets, radius)``, all in the frame of
+    ``s``. ``None`` without the compiled kernel.
     """
     kernels = compiled()
     if kernels is None:
@@ -193,8 +195,9 @@ def exact_smith_compiled(
     normals, boffs, radius = halfplanes
     k_count, m = grid_size(s, radius)
     thetas = np.ascontiguousarray(thetas, dtype=np.float64)
-    out = np.empty(len(thetas))
-    kernels.exact_pairs(
+    offsets = np.ascontiguousarray(offsets, dtype=np.float64)
+    out = np.empty(len(thetas) if pairs else (len(thetas), len(offsets)))
+    kernels.exact_grid(
         np.ascontiguousarray(normals, dtype=np.float64),
         np.ascontiguousarray(boffs, dtype=np.float64),
         np.ascontiguousarray(v, dtype=np.float64),
@@ -203,10 +206,11 @@ def exact_smith_compiled(
         k_count,
         m,
         thetas,
-        np.ascontiguousarray(offsets, dtype=np.float64),
+        offsets,
+        bool(pairs),
         float(a),
         float(b),
-        out,
+        out.reshape(-1),
     )
     return out
 

@@ -21,29 +21,14 @@ import numpy as np
 __all__: list[str] = []
 
 
-def _pair_value(
-    normals: np.ndarray,
-    boffs: np.ndarray,
-    v: np.ndarray,
-    radius: float,
-    s: float,
-    k_count: int,
-    m: int,
-    theta: float,
-    offset: float,
-    a: float,
-    b: float,
-    work: np.ndarray,
-) -> float:
-    """Eq. 1 of the layout ``(theta, offset)`` by the exact model (``-inf``: nothing counts).
-
-    Lines more than 1e-9 outside the vertices' extent across the transects have no chord
-    (the exact model gives them length 0 too: far beyond rounding) and are skipped.
-    """
-    n_e = normals.shape[0]
+def _angle_setup(
+    normals: np.ndarray, v: np.ndarray, theta: float, across: np.ndarray, along: np.ndarray
+) -> tuple[float, float]:
+    """The edges' components at ``theta`` (``n_j . n`` and ``n_j . u``, as
+    :func:`boustro.models.base._components`) into ``across``, ``along``; returns the vertices'
+    extent ``(min, max)`` across the transects."""
     cos, sin = math.cos(theta), math.sin(theta)
-    across, along, lengths = work[0], work[1], work[2]
-    for e in range(n_e):
+    for e in range(normals.shape[0]):
         nx, ny = normals[e, 0], normals[e, 1]
         across[e] = -nx * sin + ny * cos
         along[e] = nx * cos + ny * sin
@@ -51,6 +36,31 @@ def _pair_value(
     for i in range(v.shape[0]):
         h = v[i, 1] * cos - v[i, 0] * sin
         h_lo, h_hi = min(h_lo, h), max(h_hi, h)
+    return h_lo, h_hi
+
+
+def _layout_value(
+    across: np.ndarray,
+    along: np.ndarray,
+    boffs: np.ndarray,
+    h_lo: float,
+    h_hi: float,
+    radius: float,
+    s: float,
+    k_count: int,
+    m: int,
+    offset: float,
+    a: float,
+    b: float,
+    lengths: np.ndarray,
+) -> float:
+    """Eq. 1 of the layout at ``offset`` by the exact model (``-inf``: nothing counts), the
+    angle's components set by :func:`_angle_setup`.
+
+    Lines more than 1e-9 outside the vertices' extent across the transects have no chord
+    (the exact model gives them length 0 too: far beyond rounding) and are skipped.
+    """
+    n_e = len(boffs)
     d = np.fmod(offset, s)  # torch.remainder
     if d != 0 and ((s < 0) != (d < 0)):
         d += s
@@ -96,7 +106,7 @@ def _pair_value(
     return -np.inf if value != value else value
 
 
-def _exact_pairs(
+def _exact_grid(
     normals: np.ndarray,
     boffs: np.ndarray,
     v: np.ndarray,
@@ -106,14 +116,21 @@ def _exact_pairs(
     m: int,
     thetas: np.ndarray,
     offsets: np.ndarray,
+    pairs: bool,
     a: float,
     b: float,
     out: np.ndarray,
 ) -> None:
-    """Eq. 1 of every pair ``(thetas[i], offsets[i])`` into ``out[i]`` (``v``: the vertices,
-    in the frame of the half-planes ``normals``, ``boffs``)."""
+    """Eq. 1 of every layout into ``out``: of the pairs ``(thetas[i], offsets[i])`` if
+    ``pairs``, else of the grid ``thetas x offsets`` (row-major); ``v`` the vertices, in the
+    frame of the half-planes ``normals``, ``boffs``."""
     work = np.empty((3, max(k_count, normals.shape[0])))
+    across, along, lengths = work[0], work[1], work[2]
+    n_o = 1 if pairs else len(offsets)
     for i in range(len(thetas)):
-        out[i] = _pair_value(
-            normals, boffs, v, radius, s, k_count, m, thetas[i], offsets[i], a, b, work
-        )
+        h_lo, h_hi = _angle_setup(normals, v, thetas[i], across, along)
+        for j in range(n_o):
+            offset = offsets[i] if pairs else offsets[j]
+            out[i * n_o + j] = _layout_value(
+                across, along, boffs, h_lo, h_hi, radius, s, k_count, m, offset, a, b, lengths
+            )

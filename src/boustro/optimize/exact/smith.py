@@ -78,9 +78,11 @@ class _Scorer:
         """Values ``(A, O)``, ``-inf`` where no transect counts."""
         angles = np.asarray(angles, dtype=np.float64)
         offsets = np.asarray(offsets, dtype=np.float64)
-        fast = self.pairs(np.repeat(angles, len(offsets)), np.tile(offsets, len(angles)))
-        if fast is not None:
-            return fast.reshape(len(angles), len(offsets))
+        if self.fast:
+            v, planes = self.v, self.halfplanes
+            fast = exact_smith_compiled(v, planes, self.s, angles, offsets, self.a, self.b, False)
+            if fast is not None:
+                return fast
         hp = halfplanes(self.poly)
         return evaluate_grid(
             hp,

@@ -78,7 +78,13 @@ def global_work(vertices: ArrayLike, spacing: float) -> float:
 
 
 def _check_work(poly: Polygon, spacing: float, what: str) -> float:
-    """The :func:`global_work` of the problem, refused beyond :data:`WORK_LIMIT`."""
+    """The :func:`global_work` of the problem, refused beyond :data:`WORK_LIMIT`; below
+    ``WORK_LIMIT / 10`` possibly an upper bound of it instead (every pair of vertices is at
+    most the diameter apart), which small polygons settle without the ``O(n^2)`` sum."""
+    n = len(poly)
+    bound = n * (n - 1) * (2.0 * math.floor(poly.diameter / spacing) + 1.0) * n**2
+    if bound <= WORK_LIMIT / 10:
+        return bound
     work = global_work(poly.vertices, spacing)
     if work > WORK_LIMIT:
         raise ProblemTooLargeError(
