@@ -4,8 +4,10 @@ Three ways to optimise each problem, interleaved problem by problem (rotating th
 change of the machine's load hits all alike), CPU time of this process per call
 (``time.process_time``):
 
-* ``grid-200``: the paper's 14 x 14 grid (``optimize(..., method="grid", **GRID_200)``);
-* ``certified``: ``global_optimum`` with its compiled kernels (``BOUSTRO_COMPILED=1``);
+* ``grid-200``: the paper's 14 x 14 grid (``optimize(..., method="grid", **GRID_200)``), and
+  ``grid_search``: the same called directly (as ``benchmarks/learned.py`` does);
+* ``certified``: ``optimize(..., method="global")`` (the certified optimum, as ``plan_area``
+  calls it) with the compiled kernels (``BOUSTRO_COMPILED=1``);
 * ``certified (numpy)``: the same optimiser on its numpy path (``BOUSTRO_COMPILED=0``), the code
   path of the certified optimum before the kernels (7ccb731).
 
@@ -35,7 +37,6 @@ import torch
 from boustro import optimize as opt
 from boustro.geometry import Polygon, random_convex_polygon
 from boustro.mission import plan_area
-from boustro.optimize.exact import global_optimum
 
 
 def problems(count: int, seed: int) -> list[tuple[Polygon, float]]:
@@ -140,10 +141,15 @@ def main(argv: list[str] | None = None) -> int:
     print(f"# {time.strftime('%Y-%m-%d %H:%M')} load average {os.getloadavg()}", flush=True)
     print(f"# {cold_start()}", flush=True)
     cases = problems(n_poly, args.seed)
+
+    def certified(case: tuple[Polygon, float]) -> Any:
+        return opt.optimize(case[0], case[1], method="global")
+
     runners: dict[str, Callable[[Any], Any]] = {
         "grid-200": lambda c: opt.optimize(c[0], c[1], method="grid", **opt.GRID_200),
-        "certified": lambda c: with_env("1", lambda: global_optimum(c[0], c[1]))(),
-        "certified (numpy)": lambda c: with_env("0", lambda: global_optimum(c[0], c[1]))(),
+        "grid_search": lambda c: opt.grid_search(c[0], c[1], **opt.GRID_200),
+        "certified": lambda c: with_env("1", lambda: certified(c))(),
+        "certified (numpy)": lambda c: with_env("0", lambda: certified(c))(),
     }
     warm = problems(1, args.seed + 1)[0]
     for run in runners.values():  # compile / load everything first
