@@ -24,14 +24,11 @@ from .kernel_search import _pieces_at, _search
 from .structure import Array
 
 __all__ = [
-    "SECONDS_PER_WORK",
-    "SWITCH_SECONDS",
     "Compiled",
     "compiled",
     "evaluate_smith_compiled",
     "exact_smith_compiled",
     "pieces_compiled",
-    "record_numpy_seconds",
     "search_smith_compiled",
     "use_compiled",
 ]
@@ -60,20 +57,6 @@ class Compiled(NamedTuple):
     cached: bool  # numba's on-disk cache holds them (else they compile in every process)
 
 
-#: CPU seconds the numpy path of the exact optimiser may spend in a process before the compiled
-#: kernels are loaded (``BOUSTRO_COMPILED`` unset): about what loading them costs (importing
-#: numba and reading its on-disk cache, 1 s). A single small problem (``boustro plan`` on a
-#: field) then never imports numba, and a batch pays the load once, after at most as much.
-SWITCH_SECONDS = 1.0
-
-#: Numpy-path CPU seconds per unit of :func:`.structure.global_work`, to load the kernels at
-#: once for a problem that would take longer than :data:`SWITCH_SECONDS` (measured: 1e-7 to
-#: 3e-7 on small polygons).
-SECONDS_PER_WORK = 1e-7
-
-_numpy_seconds = [0.0]
-
-
 def _mode() -> str:
     """``BOUSTRO_COMPILED``: ``"off"`` (0, false, no, off), ``"on"`` (1, true, yes, on) or
     ``"auto"`` (unset or anything else)."""
@@ -83,27 +66,20 @@ def _mode() -> str:
     return "on" if value in ("1", "true", "yes", "on") else "auto"
 
 
-def use_compiled(work: float = 0.0) -> bool:
-    """Whether the exact optimiser runs its compiled kernels on a problem of ``work``
-    (:func:`.structure.global_work`): always with ``BOUSTRO_COMPILED=1``, never with
-    ``BOUSTRO_COMPILED=0`` or without numba; by default (unset) once loaded, or once the numpy
-    path has spent :data:`SWITCH_SECONDS` in this process (:func:`record_numpy_seconds`) or
-    would on this problem, and only where numba's on-disk cache works (else every process would
-    compile them again, 10-20 s)."""
+def use_compiled() -> bool:
+    """Whether the exact optimiser runs its compiled kernels: never with
+    ``BOUSTRO_COMPILED=0`` or without numba; by default where numba's on-disk cache works (else
+    every process would compile them again, 10-25 s); with ``BOUSTRO_COMPILED=1`` even there.
+
+    The choice depends on the installation only, never on what the process did before: the two
+    paths agree to rounding, not bit for bit, and a batch's outputs must not depend on which
+    worker planned a field.
+    """
     mode = _mode()
     if mode == "off":
         return False
-    if mode == "auto" and compiled.cache_info().currsize == 0:
-        expected = _numpy_seconds[0] + work * SECONDS_PER_WORK
-        if expected < SWITCH_SECONDS:
-            return False
     kernels = compiled()
     return kernels is not None and (kernels.cached or mode == "on")
-
-
-def record_numpy_seconds(seconds: float) -> None:
-    """Add CPU seconds spent on the numpy path (see :func:`use_compiled`)."""
-    _numpy_seconds[0] += seconds
 
 
 @cache

@@ -24,7 +24,6 @@ from .bounds import _evaluate_smith, _smith_pieces
 from .kernel import (
     exact_smith_compiled,
     pieces_compiled,
-    record_numpy_seconds,
     search_smith_compiled,
     use_compiled,
 )
@@ -236,9 +235,8 @@ def global_optimum(
     del progress
     poly = as_polygon(polygon).require_convex("the global optimiser")
     spacing = check_spacing(spacing, extent=poly.diameter)
-    work = _check_work(poly, spacing, "the global optimiser")
-    fast = use_compiled(work)
-    cpu = time.process_time()
+    _check_work(poly, spacing, "the global optimiser")
+    fast = use_compiled()
     a, b = _weights(a, b, fitness)
     tol = _check_tol(tol)
     frame = poly.frame
@@ -256,8 +254,6 @@ def global_optimum(
         upper = a + b  # every length is at most the diameter (1) and std >= 0
     answer = _reconcile(score, v, s_n, a, b, search, tol, upper, (value, theta, d))
     value, theta, d, upper, notes = answer
-    if not fast:
-        record_numpy_seconds(time.process_time() - cpu)
     converged = search.converged and not notes
     angle, offset = canonical(theta, d * frame.scale, spacing)
     info: dict[str, Any] = {
