@@ -103,6 +103,67 @@ def _parallel_one(
     return dl * dist + qn * (span + mu0 * dl)
 
 
+def _ends_one(
+    v: np.ndarray,
+    h: np.ndarray,
+    x: np.ndarray,
+    s: float,
+    theta: float,
+    dl: float,
+    j: int,
+    p: int,
+    pc: np.ndarray,
+    fam: np.ndarray,
+    rn: np.ndarray,
+    scratch: np.ndarray,
+) -> tuple[float, float]:
+    """Drift and curvature bound of the run of piece ``p`` in segment ``j`` (its ends ``q``:
+    first and last transect at either piece end, on both chains ``c``), the segment's chain
+    terms already in ``scratch``; leaves the ends' offsets ``tau`` in ``scratch[14:16]``."""
+    r, grow, drift_k, reach = scratch[0], scratch[2], scratch[3], scratch[4]
+    c0, c1, kap, rel, tfam, big = (
+        scratch[6],
+        scratch[7],
+        scratch[8],
+        scratch[9],
+        scratch[10],
+        scratch[11],
+    )
+    ed, tau = scratch[12:14], scratch[14:16]
+    wx = x[j + 1] - x[j]
+    wxs = wx if wx > 0 else 1.0
+    last = max(rn[p, j, 0] - 1.0, 0.0)
+    rel[0], rel[1] = rn[p, j, 4], rn[p, j, 4] + last * s
+    rel[2], rel[3] = rn[p, j, 5], rn[p, j, 5] + last * s
+    tfam[0], tfam[1], tfam[2], tfam[3] = pc[p, 2], pc[p, 2], pc[p, 3], pc[p, 3]
+    kraw0, kraw1 = rn[p, j, 6], rn[p, j, 7]
+    kap[0], kap[1] = abs(kraw0) * s, abs(kraw0 + last) * s
+    kap[2], kap[3] = abs(kraw1) * s, abs(kraw1 + last) * s
+    for c in range(2):
+        for q in range(4):
+            phi = rel[q] / wxs
+            tq = (1.0 - phi) * c0[c] + phi * c1[c] - tfam[q]
+            tau[c, q] = tq
+            e = abs(tq) * grow[c] + kap[q] * drift_k[c]
+            if e >= 1e-3 and big[c] > 0:  # an edge near parallel: bound it on the edge
+                kraw = (kraw0 if q < 2 else kraw1) + (last if q % 2 == 1 else 0.0)
+                fam_v = fam[p, 0] if q < 2 else fam[p, 1]
+                e = _nmin(e, _parallel_one(v, h, x, s, theta, dl, c, fam_v, kraw, j))
+            ed[c, q] = e
+    dr = 0.0
+    cv = 0.0
+    for q in range(4):  # the sums over the chains, the largest over the ends (NaN wins)
+        cq = 0.0
+        for c in range(2):
+            tmax = abs(tau[c, q]) * (1.0 + grow[c]) + kap[q] * reach[c]
+            term = kap[q] * r[c] + tmax * (1.0 + 2.0 * r[c] ** 2)
+            cq = term if c == 0 else cq + term
+        dq = ed[0, q] + ed[1, q]
+        dr = dq if q == 0 else _nmax(dr, dq)
+        cv = cq if q == 0 else _nmax(cv, cq)
+    return dr, cv
+
+
 def _runs_one(
     v: np.ndarray,
     s: float,
@@ -125,22 +186,13 @@ def _runs_one(
     curv (P, J)``, ``d0 (2, P, J)``, ``d1 (J,)``; ``scratch (16, 4)``."""
     n_p, n_j = rn.shape[0], rn.shape[1]
     r, zc, grow, drift_k, reach = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4]
-    rate, c0, c1, kap, rel, tfam = (
-        scratch[5],
-        scratch[6],
-        scratch[7],
-        scratch[8],
-        scratch[9],
-        scratch[10],
-    )
-    big = scratch[11]  # 1.0 or 0.0
-    ed, tau = scratch[12:14], scratch[14:16]
+    rate, c0, c1, big, tau = scratch[5], scratch[6], scratch[7], scratch[11], scratch[14:16]
     for j in range(n_j):
         wx = x[j + 1] - x[j]
         wxs = wx if wx > 0 else 1.0
         c0[0], c1[0], c0[1], c1[1] = tu[j], tu[j + 1], td[j], td[j + 1]
         dsum = 0.0
-        for c in range(2):
+        for c in range(2):  # the segment's edges on the upper and lower chain
             dc = c1[c] - c0[c]
             r[c], zc[c], grow[c], drift_k[c], big_c = _angular_growth(dc, wx, dl)
             big[c] = 1.0 if big_c else 0.0
@@ -151,50 +203,13 @@ def _runs_one(
             dsum += sign * (-s) * rate[c] * rate[c]
         d1[j] = dsum
         for p in range(n_p):
-            cnt = rn[p, j, 0]
-            has = cnt > 0
-            if not has:  # no transect: the numpy code's np.where(has, ..., 0)
+            if not rn[p, j, 0] > 0:  # no transect: the numpy code's np.where(has, ..., 0)
                 drift[p, j] = 0.0
                 curv[p, j] = 0.0
                 d0[0, p, j] = 0.0
                 d0[1, p, j] = 0.0
                 continue
-            last = max(cnt - 1.0, 0.0)
-            rel[0], rel[1] = rn[p, j, 4], rn[p, j, 4] + last * s
-            rel[2], rel[3] = rn[p, j, 5], rn[p, j, 5] + last * s
-            tfam[0], tfam[1], tfam[2], tfam[3] = pc[p, 2], pc[p, 2], pc[p, 3], pc[p, 3]
-            kraw0, kraw1 = rn[p, j, 6], rn[p, j, 7]
-            kap[0], kap[1] = abs(kraw0) * s, abs(kraw0 + last) * s
-            kap[2], kap[3] = abs(kraw1) * s, abs(kraw1 + last) * s
-            for c in range(2):
-                for q in range(4):
-                    phi = rel[q] / wxs
-                    tq = (1.0 - phi) * c0[c] + phi * c1[c] - tfam[q]
-                    tau[c, q] = tq
-                    e = abs(tq) * grow[c] + kap[q] * drift_k[c]
-                    if e >= 1e-3 and big[c] > 0:
-                        kraw = kraw0 if q < 2 else kraw1
-                        if q % 2 == 1:
-                            kraw += last
-                        fam_v = fam[p, 0] if q < 2 else fam[p, 1]
-                        e = _nmin(e, _parallel_one(v, h, x, s, theta, dl, c, fam_v, kraw, j))
-                    ed[c, q] = e
-            dr = ed[0, 0] + ed[1, 0]
-            cv = kap[0] * r[0] + (abs(tau[0, 0]) * (1.0 + grow[0]) + kap[0] * reach[0]) * (
-                1.0 + 2.0 * r[0] ** 2
-            )
-            cv = cv + (
-                kap[0] * r[1]
-                + (abs(tau[1, 0]) * (1.0 + grow[1]) + kap[0] * reach[1]) * (1.0 + 2.0 * r[1] ** 2)
-            )
-            for q in range(1, 4):
-                dr = _nmax(dr, ed[0, q] + ed[1, q])
-                cq = 0.0
-                for c in range(2):
-                    tmax = abs(tau[c, q]) * (1.0 + grow[c]) + kap[q] * reach[c]
-                    term = kap[q] * r[c] + tmax * (1.0 + 2.0 * r[c] ** 2)
-                    cq = term if c == 0 else cq + term
-                cv = _nmax(cv, cq)
+            dr, cv = _ends_one(v, h, x, s, theta, dl, j, p, pc, fam, rn, scratch)
             drift[p, j] = np.inf if dr >= _HUGE else dr
             curv[p, j] = np.inf if cv >= _HUGE else cv
             for e_ in range(2):

@@ -85,6 +85,32 @@ def _argsort_into(keys: np.ndarray, out: np.ndarray) -> None:
         out[j + 1] = k
 
 
+def _chords_through_vertices(
+    h: np.ndarray, t: np.ndarray, tu_v: np.ndarray, td_v: np.ndarray
+) -> None:
+    """The ends ``(tu_v, td_v)`` of the chord through every vertex: the boundary points of
+    every edge at its height (as the first lines of .structure._structure)."""
+    n = len(h)
+    for i in range(n):
+        hv = h[i]
+        up, dn = -np.inf, np.inf
+        for e in range(n):
+            ha, hb = h[e], h[(e + 1) % n]
+            ta, tb = t[e], t[(e + 1) % n]
+            if not (min(ha, hb) <= hv and hv <= max(ha, hb)):
+                continue
+            dh = hb - ha
+            if dh == 0:
+                t_hi, t_lo = max(ta, tb), min(ta, tb)
+            else:
+                frac = _clip01((hv - ha) / dh)
+                tt = tb if frac == 1.0 else ta + frac * (tb - ta)
+                t_hi, t_lo = tt, tt
+            up = _nmax(up, t_hi)
+            dn = _nmin(dn, t_lo)
+        tu_v[i], td_v[i] = up, dn
+
+
 def _structure_one(
     v: np.ndarray,
     s: float,
@@ -114,24 +140,7 @@ def _structure_one(
         t[i] = v[i, 0] * cos + v[i, 1] * sin
     tu_v, td_v, mult, bp = work[0], work[1], work[2], work[3]
     order, fam_lo = iwork[0], iwork[1]
-    for i in range(n):
-        hv = h[i]
-        up, dn = -np.inf, np.inf
-        for e in range(n):
-            ha, hb = h[e], h[(e + 1) % n]
-            ta, tb = t[e], t[(e + 1) % n]
-            if not (min(ha, hb) <= hv and hv <= max(ha, hb)):
-                continue
-            dh = hb - ha
-            if dh == 0:
-                t_hi, t_lo = max(ta, tb), min(ta, tb)
-            else:
-                frac = _clip01((hv - ha) / dh)
-                tt = tb if frac == 1.0 else ta + frac * (tb - ta)
-                t_hi, t_lo = tt, tt
-            up = _nmax(up, t_hi)
-            dn = _nmin(dn, t_lo)
-        tu_v[i], td_v[i] = up, dn
+    _chords_through_vertices(h, t, tu_v, td_v)
     _argsort_into(h, order)
     for k in range(n):
         x[k], tu[k], td[k] = h[order[k]], tu_v[order[k]], td_v[order[k]]
@@ -171,6 +180,41 @@ def _structure_one(
             r[3] = dy * (width / wx_safe) if has else 0.0
             r[4], r[5], r[6] = rel_lo, rel_hi, k_lo
             r[7] = k_hi_fam
+
+
+def _piece_max(
+    mean_a: float,
+    mean_b: float,
+    v_aa: float,
+    v_11: float,
+    v_bb: float,
+    x0: float,
+    resid: float,
+    a: float,
+    b: float,
+) -> tuple[float, float]:
+    """The maximum of ``a mean(lam) + b (1 - sqrt(var(lam)))`` over ``lam`` in ``[0, 1]`` and
+    its argument: the stationary point in closed form, or an end (as .bounds._smith_pieces)."""
+    pos = v_bb > 1e-300
+    vbs = v_bb if pos else 1.0
+    disc = b * b * v_bb - a * a * mean_b * mean_b
+    if pos and disc > 0:
+        xs = _sign(mean_b) * a * abs(mean_b) * math.sqrt(resid)
+        lam_s = x0 + xs / math.sqrt(vbs * disc)
+    else:
+        lam_s = 1.0 if mean_b > 0 else 0.0
+    lam_s = _clip01(lam_s)
+    q_s = v_bb * (lam_s - x0) ** 2 + resid if pos else v_aa
+    f0 = a * mean_a + b * (1.0 - math.sqrt(_nmax(v_aa, 0.0)))
+    f1 = a * (mean_a + mean_b) + b * (1.0 - math.sqrt(_nmax(v_11, 0.0)))
+    fs = a * (mean_a + mean_b * lam_s) + b * (1.0 - math.sqrt(_nmax(q_s, 0.0)))
+    pick, value = 0, f0  # np.argmax of (f0, fs, f1): the first maximum, or the first NaN
+    if not (f0 != f0):
+        if fs != fs or fs > value:
+            pick, value = 1, fs
+        if not (value != value) and (f1 != f1 or f1 > value):
+            pick, value = 2, f1
+    return value, (0.0 if pick == 0 else (1.0 if pick == 2 else lam_s))
 
 
 def _pieces_one(rn: np.ndarray, a: float, b: float, mo: np.ndarray, cc: np.ndarray) -> None:
@@ -230,25 +274,7 @@ def _pieces_one(rn: np.ndarray, a: float, b: float, mo: np.ndarray, cc: np.ndarr
             resid = rs / tsafe
         else:
             resid = v_aa
-        disc = b * b * v_bb - a * a * mean_b * mean_b
-        has_stat = pos and disc > 0
-        if has_stat:
-            xs = _sign(mean_b) * a * abs(mean_b) * math.sqrt(resid)
-            lam_s = x0 + xs / math.sqrt(vbs * disc)
-        else:
-            lam_s = 1.0 if mean_b > 0 else 0.0
-        lam_s = _clip01(lam_s)
-        q_s = v_bb * (lam_s - x0) ** 2 + resid if pos else v_aa
-        f0 = a * mean_a + b * (1.0 - math.sqrt(_nmax(v_aa, 0.0)))
-        f1 = a * (mean_a + mean_b) + b * (1.0 - math.sqrt(_nmax(v_11, 0.0)))
-        fs = a * (mean_a + mean_b * lam_s) + b * (1.0 - math.sqrt(_nmax(q_s, 0.0)))
-        pick, value = 0, f0
-        if not (f0 != f0):
-            if fs != fs or fs > value:
-                pick, value = 1, fs
-            if not (value != value) and (f1 != f1 or f1 > value):
-                pick, value = 2, f1
-        lam = 0.0 if pick == 0 else (1.0 if pick == 2 else lam_s)
+        value, lam = _piece_max(mean_a, mean_b, v_aa, v_11, v_bb, x0, resid, a, b)
         m = mo[p]
         m[_TOTAL], m[_MEAN_A], m[_MEAN_B] = total, mean_a, mean_b
         m[_V_AA], m[_V_AB], m[_V_BB], m[_X0], m[_RESID] = v_aa, v_ab, v_bb, x0, resid
