@@ -24,6 +24,7 @@ __all__ = [
     "Frame",
     "Polygon",
     "as_polygon",
+    "edge_halfplanes",
     "rotation_matrix",
 ]
 
@@ -298,17 +299,23 @@ class Polygon:
         For a convex polygon the intersection of these half-planes IS the polygon; for a concave
         one it is not (use the polygon's edges directly).
         """
-        p1 = self._vertices
-        p2 = np.roll(p1, -1, axis=0)
-        normal = np.stack([p1[:, 1] - p2[:, 1], p2[:, 0] - p1[:, 0]], axis=1)
-        offset = p1[:, 0] * p2[:, 1] - p2[:, 0] * p1[:, 1]
-        norm = np.linalg.norm(normal, axis=1)
-        return normal / norm[:, None], offset / norm
+        return edge_halfplanes(self._vertices)
 
     @property
     def radius(self) -> float:
         """Largest distance of a vertex from the centre (<= diameter, >= diameter / 2)."""
         return float(np.max(np.linalg.norm(self._vertices - self.centre, axis=1)))
+
+
+def edge_halfplanes(vertices: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:meth:`Polygon.halfplanes` of CCW ``vertices`` ``(N, 2)`` taken as they are (no
+    validation): unit inward normals ``(N, 2)`` and offsets ``(N,)`` of the edges."""
+    p1 = np.asarray(vertices, dtype=np.float64)
+    p2 = np.roll(p1, -1, axis=0)
+    normal = np.stack([p1[:, 1] - p2[:, 1], p2[:, 0] - p1[:, 0]], axis=1)
+    offset = p1[:, 0] * p2[:, 1] - p2[:, 0] * p1[:, 1]
+    norm = np.linalg.norm(normal, axis=1)
+    return normal / norm[:, None], offset / norm
 
 
 def as_polygon(polygon: Polygon | ArrayLike) -> Polygon:

@@ -14,7 +14,7 @@ from ..objectives import SmithFitness
 from .exact import exact_solver
 from .hybrid import hybrid
 from .methods import _check_options, register_method
-from .problem import _problem
+from .problem import _checked
 from .result import OptimizeResult
 
 __all__: list[str] = []
@@ -30,7 +30,8 @@ def _global(
     (:data:`boustro.optimize.exact.EXACT`: Eq. 1 certified by branch and bound, fewest
     transects, shortest path); without one, the hybrid search, with a warning logged on the
     ``"boustro"`` logger and ``info["note"]`` saying so."""
-    _problem(polygon, spacing, fitness, "the global optimiser")  # the rule of every method
+    # the rule of every method (its checks; the exact solvers build no half-plane tensors)
+    _checked(polygon, spacing, fitness, "the global optimiser")
     solver = exact_solver(SmithFitness() if fitness is None else fitness)
     if solver is None:
         note = (

@@ -42,9 +42,11 @@ class _Problem(NamedTuple):
     sign: float  # +1 to maximise, -1 to minimise
 
 
-def _problem(
+def _checked(
     polygon: Polygon | ArrayLike, spacing: float, fitness: Objective | None, what: str
-) -> _Problem:
+) -> tuple[Polygon, float, Objective, float]:
+    """The checks of :func:`_problem` without building its half-planes: ``(polygon, spacing,
+    objective, sign)``."""
     poly = as_polygon(polygon).require_convex(what)
     spacing = check_spacing(spacing, extent=poly.diameter)
     if spacing >= poly.diameter:
@@ -54,7 +56,13 @@ def _problem(
             "no boustrophedon layout to optimise"
         )
     objective: Objective = SmithFitness() if fitness is None else fitness
-    sign = objective_sign(objective)
+    return poly, spacing, objective, objective_sign(objective)
+
+
+def _problem(
+    polygon: Polygon | ArrayLike, spacing: float, fitness: Objective | None, what: str
+) -> _Problem:
+    poly, spacing, objective, sign = _checked(polygon, spacing, fitness, what)
     frame = poly.frame
     return _Problem(
         poly, spacing, spacing / frame.scale, frame.scale, halfplanes(poly), objective, sign

@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike
 
 from ...errors import InvalidParameterError, NoTransectError
 from ...geometry import Polygon, halfplanes
+from ...geometry.polygon import edge_halfplanes
 from ...models import (
     check_spacing,
 )
@@ -20,8 +21,22 @@ from ...scoring import as_polygon
 from ..problem import evaluate_grid
 from ..result import OptimizeResult, canonical
 from .bounds import _evaluate_smith, _smith_pieces
-from .search import _branch_and_bound, _check_count, _check_tol, _Search
-from .structure import Array, _check_work, _structure
+from .kernel import (
+    exact_smith_compiled,
+    pieces_compiled,
+    search_smith_compiled,
+    use_compiled,
+)
+from .search import (
+    _BATCH,
+    _MAX_CHILDREN,
+    _MIN_WIDTH,
+    _branch_and_bound,
+    _check_count,
+    _check_tol,
+    _Search,
+)
+from .structure import Array, _check_work, _structure, event_angles
 
 __all__ = ["best_offset", "global_optimum"]
 
@@ -39,8 +54,46 @@ def _weights(a: float, b: float, fitness: SmithFitness | None) -> tuple[float, f
     return float(a), float(b)
 
 
+class _Scorer:
+    """Eq. 1 by the exact model on an angles x offsets grid of one polygon, normalised frame:
+    compiled (:func:`.kernel.exact_smith_compiled`), else :func:`evaluate_grid` (the same
+    numbers to rounding)."""
+
+    def __init__(self, poly: Polygon, v: Array, s: float, a: float, b: float, fast: bool) -> None:
+        self.poly, self.v, self.s, self.a, self.b, self.fast = poly, v, s, a, b, fast
+        normals, boffs = edge_halfplanes(v)
+        self.halfplanes = (normals, boffs, float(np.max(np.linalg.norm(v, axis=1))))
+
+    def pairs(self, angles: Array, offsets: Array) -> Array | None:
+        """Values of the pairs ``(angles[i], offsets[i])`` by the compiled kernel (if
+        ``fast``), or None."""
+        if not self.fast:
+            return None
+        return exact_smith_compiled(
+            self.v, self.halfplanes, self.s, angles, offsets, self.a, self.b
+        )
+
+    def grid(self, angles: ArrayLike, offsets: ArrayLike) -> Array:
+        """Values ``(A, O)``, ``-inf`` where no transect counts."""
+        angles = np.asarray(angles, dtype=np.float64)
+        offsets = np.asarray(offsets, dtype=np.float64)
+        if self.fast:
+            v, planes = self.v, self.halfplanes
+            fast = exact_smith_compiled(v, planes, self.s, angles, offsets, self.a, self.b, False)
+            if fast is not None:
+                return fast
+        hp = halfplanes(self.poly)
+        return evaluate_grid(
+            hp,
+            torch.as_tensor(angles, dtype=hp.normals.dtype),
+            torch.as_tensor(offsets, dtype=hp.normals.dtype),
+            self.s,
+            fitness=SmithFitness(a=self.a, b=self.b),
+        ).numpy()
+
+
 def _attained(
-    poly: Polygon, v: Array, s_n: float, thetas: Array, a: float, b: float
+    score: _Scorer, v: Array, s_n: float, thetas: Array, a: float, b: float
 ) -> tuple[float, float, float]:
     """The best layout near the closed-form optimum, scored by the exact model.
 
@@ -53,27 +106,39 @@ def _attained(
         ``(fitness, angle, offset)`` in the normalised frame.
     """
     thetas = np.asarray(thetas, dtype=np.float64)
-    st = _structure(v, s_n, thetas)
-    mo = _smith_pieces(st, a, b)
-    best = (-math.inf, float(thetas[0]), 0.0)
-    hp = halfplanes(poly)
-    fit = SmithFitness(a=a, b=b)
+    pieces = pieces_compiled(v, s_n, thetas, a, b) if score.fast else None
+    if pieces is None:
+        st = _structure(v, s_n, thetas)
+        mo = _smith_pieces(st, a, b)
+        beta, width, value, lam = st.beta, st.width, mo.value, mo.lam
+    else:
+        beta, width, value, lam = (pieces[..., i] for i in range(4))
+    rows = []
     for row, theta in enumerate(thetas):
-        order = np.argsort(-mo.value[row])[: min(3, mo.value.shape[1])]
+        order = np.argsort(-value[row])[: min(3, value.shape[1])]
         cands = []
         for p in order:
-            if not np.isfinite(mo.value[row, p]):
+            if not np.isfinite(value[row, p]):
                 continue
             for eta in (0.0, 1e-9, 1e-6, 1e-3):
-                lam_p = min(max(mo.lam[row, p], eta), 1.0 - eta)
-                cands.append(st.beta[row, p] + lam_p * st.width[row, p])
-        if not cands:
-            continue
-        offsets = torch.tensor(cands, dtype=torch.float64)
-        values = evaluate_grid(
-            hp, torch.tensor([float(theta)], dtype=torch.float64), offsets, s_n, fitness=fit
-        )[0]
-        k = int(torch.argmax(values))
+                lam_p = min(max(lam[row, p], eta), 1.0 - eta)
+                cands.append(beta[row, p] + lam_p * width[row, p])
+        if cands:
+            rows.append((float(theta), np.array(cands, dtype=np.float64)))
+    best = (-math.inf, float(thetas[0]), 0.0)
+    if not rows:
+        return best
+    flat = score.pairs(
+        np.concatenate([np.full(len(c), t) for t, c in rows]), np.concatenate([c for _, c in rows])
+    )
+    start = 0
+    for theta, offsets in rows:
+        if flat is None:
+            values = score.grid(np.array([theta]), offsets)[0]
+        else:
+            values = flat[start : start + len(offsets)]
+            start += len(offsets)
+        k = int(np.argmax(values))
         if float(values[k]) > best[0]:
             best = (float(values[k]), float(theta), float(offsets[k]))
     return best
@@ -114,7 +179,8 @@ def best_offset(
     v = frame.to_normalised(poly.vertices)
     s_n = spacing / frame.scale
     with np.errstate(all="ignore"):
-        value, _, d = _attained(poly, v, s_n, np.array([angle]), a, b)
+        score = _Scorer(poly, v, s_n, a, b, use_compiled())
+        value, _, d = _attained(score, v, s_n, np.array([angle]), a, b)
     if not math.isfinite(value):
         raise NoTransectError(f"no transect crosses the polygon at spacing {spacing:g}")
     offset = float(np.mod(d * frame.scale, spacing))  # for ``angle`` as given, not mod pi
@@ -170,24 +236,23 @@ def global_optimum(
     poly = as_polygon(polygon).require_convex("the global optimiser")
     spacing = check_spacing(spacing, extent=poly.diameter)
     _check_work(poly, spacing, "the global optimiser")
+    fast = use_compiled()
     a, b = _weights(a, b, fitness)
     tol = _check_tol(tol)
     frame = poly.frame
     v = frame.to_normalised(poly.vertices)
     s_n = spacing / frame.scale
 
-    def evaluate(lo: Array, hi: Array, threshold: float) -> tuple[Array, Array, Array, Array]:
-        return _evaluate_smith(v, s_n, lo, hi, a, b, threshold)
-
     cap = _check_count("max_evaluations", max_evaluations)
     with np.errstate(all="ignore"):  # infinities are meant: they mark missing bounds
-        search = _branch_and_bound(v, s_n, evaluate, tol, cap)
+        search = _search_smith(v, s_n, a, b, tol, cap, fast)
         angles = np.array([search.theta, search.lo, search.hi])
-        value, theta, d = _attained(poly, v, s_n, angles, a, b)
+        score = _Scorer(poly, v, s_n, a, b, fast)
+        value, theta, d = _attained(score, v, s_n, angles, a, b)
     upper = search.upper_bound
     if not search.converged and not math.isfinite(upper):
         upper = a + b  # every length is at most the diameter (1) and std >= 0
-    answer = _reconcile(poly, v, s_n, a, b, search, tol, upper, (value, theta, d))
+    answer = _reconcile(score, v, s_n, a, b, search, tol, upper, (value, theta, d))
     value, theta, d, upper, notes = answer
     converged = search.converged and not notes
     angle, offset = canonical(theta, d * frame.scale, spacing)
@@ -215,6 +280,29 @@ def global_optimum(
     )
 
 
+def _search_smith(
+    v: Array, s: float, a: float, b: float, tol: float, cap: int, fast: bool
+) -> _Search:
+    """The branch and bound over the angle: one compiled call (:mod:`.kernel_search`) if
+    ``fast``, else the numpy evaluation of the intervals in :func:`_branch_and_bound` (the same
+    search)."""
+    edges = event_angles(v, s)
+    out = None
+    if fast:
+        out = search_smith_compiled(v, s, edges, a, b, tol, cap, _BATCH, _MIN_WIDTH, _MAX_CHILDREN)
+    if out is None:
+
+        def evaluate(lo: Array, hi: Array, threshold: float) -> tuple[Array, Array, Array, Array]:
+            return _evaluate_smith(v, s, lo, hi, a, b, threshold)
+
+        return _branch_and_bound(v, s, evaluate, tol, cap)
+    theta, lo, hi, offset, value, upper = (float(x) for x in out[:6])
+    evaluations, rounds, converged = int(out[6]), int(out[7]), bool(out[8])
+    return _Search(
+        theta, lo, hi, offset, value, upper, evaluations, rounds, len(edges) - 1, converged
+    )
+
+
 class _Answer(NamedTuple):
     """The layout a global search returns, its bound, and what keeps it from being certified."""
 
@@ -226,7 +314,7 @@ class _Answer(NamedTuple):
 
 
 def _reconcile(
-    poly: Polygon,
+    score: _Scorer,
     v: Array,
     s_n: float,
     a: float,
@@ -244,11 +332,11 @@ def _reconcile(
     event; the check then finds a better layout, and the result says it is not certified.
     """
     value, theta, d = attained
-    check_theta, check_d, check_value = _spot_check(poly, v, s_n, a, b)
+    check_theta, check_d, check_value = _spot_check(score, v, s_n)
     notes = []
     if check_value > value + 1e-12:
         with np.errstate(all="ignore"):
-            better, theta_b, d_b = _attained(poly, v, s_n, np.array([check_theta]), a, b)
+            better, theta_b, d_b = _attained(score, v, s_n, np.array([check_theta]), a, b)
         if better >= check_value:
             value, theta, d = better, theta_b, d_b
         else:
@@ -268,10 +356,8 @@ def _reconcile(
     return _Answer(value, theta, d, upper, notes)
 
 
-def _spot_check(
-    poly: Polygon, v: Array, s: float, a: float, b: float
-) -> tuple[float, float, float]:
-    """``(angle, offset, fitness)``, normalised frame (``v``: ``poly``'s vertices in it): the
+def _spot_check(score: _Scorer, v: Array, s: float) -> tuple[float, float, float]:
+    """``(angle, offset, fitness)``, normalised frame (``v``: the polygon's vertices in it): the
     best of the exact fitness over 90 angles, every edge's direction and its normal, and 9
     offsets (0 included)."""
     edges = np.roll(v, -1, axis=0) - v
@@ -280,13 +366,6 @@ def _spot_check(
         [np.arange(90) * (math.pi / 90), edge_angles, np.mod(edge_angles + math.pi / 2, math.pi)]
     )
     offsets = np.arange(9) * (s / 9)
-    hp = halfplanes(poly)  # normalised frame, as v
-    values = evaluate_grid(
-        hp,
-        torch.as_tensor(angles, dtype=hp.normals.dtype),
-        torch.as_tensor(offsets, dtype=hp.normals.dtype),
-        s,
-        fitness=SmithFitness(a=a, b=b),
-    ).numpy()
+    values = score.grid(angles, offsets)
     i, j = np.unravel_index(int(np.argmax(values)), values.shape)
     return float(angles[i]), float(offsets[j]), float(values[i, j])

@@ -77,7 +77,14 @@ def global_work(vertices: ArrayLike, spacing: float) -> float:
     return events * len(v) ** 2
 
 
-def _check_work(poly: Polygon, spacing: float, what: str) -> None:
+def _check_work(poly: Polygon, spacing: float, what: str) -> float:
+    """The :func:`global_work` of the problem, refused beyond :data:`WORK_LIMIT`; below
+    ``WORK_LIMIT / 10`` possibly an upper bound of it instead (every pair of vertices is at
+    most the diameter apart), which small polygons settle without the ``O(n^2)`` sum."""
+    n = len(poly)
+    bound = n * (n - 1) * (2.0 * math.floor(poly.diameter / spacing) + 1.0) * n**2
+    if bound <= WORK_LIMIT / 10:
+        return bound
     work = global_work(poly.vertices, spacing)
     if work > WORK_LIMIT:
         raise ProblemTooLargeError(
@@ -85,6 +92,7 @@ def _check_work(poly: Polygon, spacing: float, what: str) -> None:
             f"{spacing:.6g}; limit {WORK_LIMIT:.0e}, minutes and gigabytes beyond it): use "
             "method='hybrid' (or --method hybrid), a larger spacing, or fewer vertices"
         )
+    return work
 
 
 @dataclass

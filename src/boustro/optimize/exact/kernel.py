@@ -1,0 +1,241 @@
+"""The compiled evaluation of angle intervals for the certified optimum of Eq. 1 (numba).
+
+:func:`evaluate_smith_compiled` computes what :func:`.bounds._evaluate_smith` computes (the
+exact best value and offset at every interval's centre, an upper bound over the interval, the
+order of the bound) in one call into compiled code per branch-and-bound round: the per-angle
+loops of :mod:`.kernel_pieces` and :mod:`.kernel_bounds`, no numpy temporaries. Why both stay:
+the numpy code is the readable reference of the formulas and the path without numba
+(``BOUSTRO_COMPILED=0``); tests/test_exact_kernel.py checks that they agree on seeded random
+polygons. numba is imported on first use (``import boustro`` does not load it).
+"""
+
+from __future__ import annotations
+
+import os
+from functools import cache
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ...models import grid_size
+from . import kernel_bounds, kernel_exact, kernel_pieces, kernel_search
+from .kernel_exact import _exact_grid
+from .kernel_search import _pieces_at, _search
+from .structure import Array
+
+__all__ = [
+    "Compiled",
+    "compiled",
+    "evaluate_smith_compiled",
+    "exact_smith_compiled",
+    "pieces_compiled",
+    "search_smith_compiled",
+    "use_compiled",
+]
+
+
+_HELPERS = {
+    kernel_pieces: (
+        "_nmax _nmin _clip01 _sign _argmax _argsort_into _weighted_row _angular_growth "
+        "_chords_through_vertices _piece_max"
+    ),
+    kernel_bounds: "_mu_ratio _parallel_one _ends_one",
+    kernel_exact: "_angle_setup _layout_value",
+    kernel_search: "_max_into",
+}
+_STAGES = {
+    kernel_pieces: "_structure_one _pieces_one _quick_one",
+    kernel_bounds: "_runs_one _linearised_one _second_one _kink_one",
+    kernel_search: "_evaluate",
+}
+
+
+class Compiled(NamedTuple):
+    """The compiled kernels (numba dispatchers of the functions named)."""
+
+    evaluate: Any  # .kernel_search._evaluate
+    exact_grid: Any  # .kernel_exact._exact_grid
+    search: Any  # .kernel_search._search
+    pieces_at: Any  # .kernel_search._pieces_at
+    cached: bool  # numba's on-disk cache holds them (else they compile in every process)
+
+
+def _mode() -> str:
+    """``BOUSTRO_COMPILED``: ``"off"`` (0, false, no, off), ``"on"`` (1, true, yes, on) or
+    ``"auto"`` (unset or anything else)."""
+    value = os.environ.get("BOUSTRO_COMPILED", "").strip().lower()
+    if value in ("0", "false", "no", "off"):
+        return "off"
+    return "on" if value in ("1", "true", "yes", "on") else "auto"
+
+
+def use_compiled() -> bool:
+    """Whether the exact optimiser runs its compiled kernels: never with
+    ``BOUSTRO_COMPILED=0`` or without numba; by default where numba's on-disk cache works (else
+    every process would compile them again, 10-25 s); with ``BOUSTRO_COMPILED=1`` even there.
+
+    The choice depends on the installation only, never on what the process did before: the two
+    paths agree to rounding, not bit for bit, and a batch's outputs must not depend on which
+    worker planned a field.
+    """
+    mode = _mode()
+    if mode == "off":
+        return False
+    kernels = compiled()
+    return kernels is not None and (kernels.cached or mode == "on")
+
+
+@cache
+def compiled() -> Compiled | None:
+    """The compiled kernels, or ``None`` where numba is missing or ``BOUSTRO_COMPILED=0``.
+    The first call of each in a process loads it from numba's on-disk cache (or compiles it,
+    some seconds, once per machine where the cache is writable)."""
+    if _mode() == "off":
+        return None
+    try:
+        import numba
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return None
+
+    cached = [True]
+
+    def jit(function: Any) -> Any:
+        function = getattr(function, "py_func", function)  # idempotent
+        options: dict[str, Any] = {"nogil": True, "error_model": "numpy"}
+        try:
+            return numba.njit(cache=True, **options)(function)
+        except RuntimeError:  # no writable cache location: compile per process
+            cached[0] = False
+            return numba.njit(**options)(function)
+
+    # Helpers first: the functions call them by their module-level names, which from here on
+    # are compiled functions (numba resolves those names when it compiles a caller).
+    here = globals()
+    for table in (_HELPERS, _STAGES):
+        for module, names in table.items():
+            for name in names.split():
+                fn = jit(getattr(module, name))
+                setattr(module, name, fn)
+                for other in (kernel_pieces, kernel_bounds, kernel_exact, kernel_search):
+                    if name in vars(other):
+                        setattr(other, name, fn)
+                if name in here:
+                    here[name] = fn
+    found = (kernel_search._evaluate, jit(_exact_grid), jit(_search), jit(_pieces_at))
+    return Compiled(*found, cached[0])
+
+
+def evaluate_smith_compiled(
+    v: Array, s: float, lo: Array, hi: Array, a: float, b: float, threshold: float, batch: int
+) -> tuple[Array, Array, Array, Array] | None:
+    """``(value, offset, upper_bound, order)`` of every interval, as
+    :func:`.bounds._evaluate_smith`; ``None`` without the compiled kernel."""
+    kernels = compiled()
+    if kernels is None:
+        return None
+    m = len(lo)
+    g, d, ub, order = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    kernels.evaluate(
+        np.ascontiguousarray(v, dtype=np.float64),
+        float(s),
+        np.ascontiguousarray(lo, dtype=np.float64),
+        np.ascontiguousarray(hi, dtype=np.float64),
+        float(a),
+        float(b),
+        float(threshold),
+        int(batch),
+        g,
+        d,
+        ub,
+        order,
+    )
+    return g, d, ub, order
+
+
+def exact_smith_compiled(
+    v: Array,
+    halfplanes: tuple[Array, Array, float],
+    s: float,
+    thetas: Array,
+    offsets: Array,
+    a: float,
+    b: float,
+    pairs: bool = True,
+) -> Array | None:
+    """Eq. 1 by the exact model (``-inf`` where no transect counts), as
+    :func:`boustro.optimize.evaluate_grid` scores it, of every pair ``(thetas[i], offsets[i])``
+    (``pairs``) or of the grid ``thetas x offsets`` ``(A, O)``, for the convex polygon of
+    vertices ``v`` whose half-planes are ``(normals, offsets, radius)``, all in the frame of
+    ``s``. ``None`` without the compiled kernel.
+    """
+    kernels = compiled()
+    if kernels is None:
+        return None
+    normals, boffs, radius = halfplanes
+    k_count, m = grid_size(s, radius)
+    thetas = np.ascontiguousarray(thetas, dtype=np.float64)
+    offsets = np.ascontiguousarray(offsets, dtype=np.float64)
+    out = np.empty(len(thetas) if pairs else (len(thetas), len(offsets)))
+    kernels.exact_grid(
+        np.ascontiguousarray(normals, dtype=np.float64),
+        np.ascontiguousarray(boffs, dtype=np.float64),
+        np.ascontiguousarray(v, dtype=np.float64),
+        float(radius),
+        float(s),
+        k_count,
+        m,
+        thetas,
+        offsets,
+        bool(pairs),
+        float(a),
+        float(b),
+        out.reshape(-1),
+    )
+    return out
+
+
+def search_smith_compiled(
+    v: Array,
+    s: float,
+    edges: Array,
+    a: float,
+    b: float,
+    tol: float,
+    max_evaluations: int,
+    batch: int,
+    min_width: float,
+    max_children: int,
+) -> Array | None:
+    """The whole branch and bound (:func:`.search._branch_and_bound` of
+    :func:`.bounds._evaluate_smith`) in one compiled call: ``(theta, lo, hi, offset, value,
+    upper_bound, evaluations, rounds, converged)``; ``None`` without the compiled kernel."""
+    kernels = compiled()
+    if kernels is None:
+        return None
+    out = np.empty(9)
+    kernels.search(
+        np.ascontiguousarray(v, dtype=np.float64),
+        float(s),
+        np.ascontiguousarray(edges, dtype=np.float64),
+        float(a),
+        float(b),
+        float(tol),
+        int(max_evaluations),
+        int(batch),
+        float(min_width),
+        int(max_children),
+        out,
+    )
+    return out
+
+
+def pieces_compiled(v: Array, s: float, thetas: Array, a: float, b: float) -> Array | None:
+    """Every piece's ``(beta, width, value, lam)`` at each angle ``(M, P, 4)``, as
+    ``_structure`` and ``_smith_pieces`` give them; ``None`` without the compiled kernel."""
+    kernels = compiled()
+    if kernels is None:
+        return None
+    thetas = np.ascontiguousarray(thetas, dtype=np.float64)
+    out = np.empty((len(thetas), len(v), 4))
+    kernels.pieces_at(np.ascontiguousarray(v, dtype=np.float64), float(s), thetas, a, b, out)
+    return out

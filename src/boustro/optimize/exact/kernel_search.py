@@ -1,0 +1,214 @@
+"""The compiled branch and bound of the certified Eq. 1 optimum (numba): one call a polygon.
+
+:func:`_evaluate` is :func:`.bounds._evaluate_smith` (the exact best value and offset at every
+interval's centre, an upper bound over the interval, the bound's order) as loops over the
+angles of :mod:`.kernel_pieces` and :mod:`.kernel_bounds`; :func:`_search` is
+:func:`.search._branch_and_bound` around it, step for step (the same intervals, children,
+discarded bounds and stopping rules), so that a whole search is one call into compiled code.
+:func:`_pieces_at` gives the pieces' maxima at given angles for the candidate layouts. Plain
+Python until :func:`.kernel.compiled` compiles them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .kernel_bounds import _kink_one, _runs_one, _second_one
+from .kernel_pieces import (
+    _LAM,
+    _NMO,
+    _TOTAL,
+    _VALUE,
+    _argmax,
+    _nmax,
+    _nmin,
+    _pieces_one,
+    _quick_one,
+    _structure_one,
+    _weighted_row,
+)
+from .structure import BOUND_SLACK
+
+__all__: list[str] = []
+
+
+def _evaluate(
+    v: np.ndarray,
+    s: float,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    a: float,
+    b: float,
+    threshold: float,
+    batch: int,
+    g: np.ndarray,
+    d: np.ndarray,
+    ub: np.ndarray,
+    order: np.ndarray,
+) -> None:
+    """:func:`.bounds._evaluate_smith` as loops; writes ``g, d, ub, order``."""
+    n = v.shape[0]
+    n_j = n - 1
+    h, t, x, tu, td = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    pc = np.empty((n, 5))
+    fam = np.empty((n, 2), dtype=np.int64)
+    rn = np.empty((n, n_j, 8))
+    mo = np.empty((n, _NMO))
+    cc = np.empty((n, n_j, 4))
+    work, iwork = np.empty((4, n)), np.empty((2, n), dtype=np.int64)
+    drift, curv = np.empty((n, n_j)), np.empty((n, n_j))
+    d0, d1 = np.empty((2, n, n_j)), np.empty(n_j)
+    pb, f1s, f2s = np.empty(n), np.empty(n), np.empty(n)
+    scratch = np.empty((16, 4))
+    bound = np.empty(len(lo))
+    for start in range(0, len(lo), batch):
+        stop = min(start + batch, len(lo))
+        gmax = -np.inf
+        for m in range(start, stop):
+            mid = 0.5 * (lo[m] + hi[m])
+            half = 0.5 * (hi[m] - lo[m])
+            _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
+            _pieces_one(rn, a, b, mo, cc)
+            ip = _argmax(mo[:, _VALUE])
+            g[m] = mo[ip, _VALUE]
+            d[m] = pc[ip, 0] + mo[ip, _LAM] * pc[ip, 1]
+            gmax = g[m] if m == start else _nmax(gmax, g[m])
+            bound[m] = _quick_one(x, tu, td, rn, mo, half, a, b, work)
+            order[m] = 1.0
+        thr = gmax if gmax > threshold else threshold  # Python's max(threshold, gmax)
+        for m in range(start, stop):
+            if bound[m] + BOUND_SLACK > thr:
+                mid = 0.5 * (lo[m] + hi[m])
+                half = 0.5 * (hi[m] - lo[m])
+                _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
+                _pieces_one(rn, a, b, mo, cc)
+                _runs_one(v, s, mid, half, h, x, tu, td, pc, fam, rn, drift, curv, d0, d1, scratch)
+                for p in range(n):
+                    total = mo[p, _TOTAL]
+                    f1 = _weighted_row(rn[p, :, 0], drift[p], total, a, b)
+                    second = _second_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
+                    kink = _kink_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
+                    f2 = _nmin(second, kink)
+                    excess = _nmax(_nmin(f1, f2), 0.0)
+                    pb[p] = mo[p, _VALUE] + excess if total > 0 else -np.inf
+                    f1s[p], f2s[p] = f1, f2
+                top = _argmax(pb)
+                bound[m] = pb[top]
+                order[m] = 2.0 if f2s[top] < f1s[top] else 1.0
+            ub[m] = bound[m] + BOUND_SLACK
+
+
+def _max_into(current: float, values: np.ndarray, mask: np.ndarray) -> float:
+    """Python's ``max(current, float(values[mask].max()))`` (the numpy max propagates NaN, and
+    Python's max keeps ``current`` against NaN)."""
+    top = np.nan
+    first = True
+    for i in range(len(values)):
+        if mask[i]:
+            top = values[i] if first else _nmax(top, values[i])
+            first = False
+    return top if top > current else current
+
+
+def _search(
+    v: np.ndarray,
+    s: float,
+    edges: np.ndarray,
+    a: float,
+    b: float,
+    tol: float,
+    max_evaluations: int,
+    batch: int,
+    min_width: float,
+    max_children: int,
+    out: np.ndarray,
+) -> None:
+    """:func:`.search._branch_and_bound` with :func:`_evaluate`, step for step. Writes ``out``:
+    theta, lo, hi, offset, value, upper bound, evaluations, rounds, converged (1.0 or 0.0)."""
+    lo, hi = edges[:-1].copy(), edges[1:].copy()
+    m = len(lo)
+    g, d, ub, order = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    _evaluate(v, s, lo, hi, a, b, -np.inf, batch, g, d, ub, order)
+    evaluations = m
+    k = _argmax(g)
+    best, best_theta, best_d = g[k], 0.5 * (lo[k] + hi[k]), d[k]
+    best_lo, best_hi = lo[k], hi[k]
+    closed = -np.inf
+    rounds = 0
+    converged = True
+    while True:
+        keep = ub > best + tol
+        if not np.all(keep):
+            closed = _max_into(closed, ub, ~keep)
+        lo, hi, g, ub, order = lo[keep], hi[keep], g[keep], ub[keep], order[keep]
+        if len(lo) == 0:
+            break
+        width = hi - lo
+        stuck = width < min_width
+        if np.any(stuck):
+            closed = _max_into(closed, ub, stuck)
+            keep = ~stuck
+            lo, hi, g, ub, order, width = (
+                lo[keep],
+                hi[keep],
+                g[keep],
+                ub[keep],
+                order[keep],
+                width[keep],
+            )
+            converged = False
+            if len(lo) == 0:
+                break
+        if evaluations >= max_evaluations:
+            closed = _max_into(closed, ub, np.ones(len(ub), dtype=np.bool_))
+            converged = False
+            break
+        rounds += 1
+        parts = np.empty(len(lo), dtype=np.int64)
+        for i in range(len(lo)):
+            err = ub[i] - g[i]
+            q = np.ceil((err / tol) ** (1.0 / order[i])) if np.isfinite(err) else max_children
+            parts[i] = int(min(max(q, 2.0), float(max_children)))
+        total = int(parts.sum())
+        clo, chi = np.empty(total), np.empty(total)
+        c = 0
+        for i in range(len(lo)):
+            kk = parts[i]
+            for j in range(kk):
+                clo[c] = lo[i] + width[i] * (j / kk)
+                chi[c] = hi[i] if j + 1 == kk else lo[i] + width[i] * ((j + 1) / kk)
+                c += 1
+        lo, hi = clo, chi
+        g, d, ub, order = np.empty(total), np.empty(total), np.empty(total), np.empty(total)
+        _evaluate(v, s, lo, hi, a, b, best + tol, batch, g, d, ub, order)
+        evaluations += total
+        k = _argmax(g)
+        if g[k] > best:
+            best, best_theta, best_d = g[k], 0.5 * (lo[k] + hi[k]), d[k]
+            best_lo, best_hi = lo[k], hi[k]
+    upper = closed if closed > best else best
+    out[0], out[1], out[2], out[3], out[4] = best_theta, best_lo, best_hi, best_d, best
+    out[5], out[6], out[7] = upper, evaluations, rounds
+    out[8] = 1.0 if converged else 0.0
+
+
+def _pieces_at(
+    v: np.ndarray, s: float, thetas: np.ndarray, a: float, b: float, out: np.ndarray
+) -> None:
+    """Every piece's exact maximum at each angle: ``out (M, P, 4)`` = lower breakpoint, width,
+    value, ``lam`` (as ``_structure`` and ``_smith_pieces`` give them)."""
+    n = v.shape[0]
+    n_j = n - 1
+    h, t, x, tu, td = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    pc = np.empty((n, 5))
+    fam = np.empty((n, 2), dtype=np.int64)
+    rn = np.empty((n, n_j, 8))
+    mo = np.empty((n, _NMO))
+    cc = np.empty((n, n_j, 4))
+    work, iwork = np.empty((4, n)), np.empty((2, n), dtype=np.int64)
+    for i in range(len(thetas)):
+        _structure_one(v, s, thetas[i], h, t, x, tu, td, pc, fam, rn, work, iwork)
+        _pieces_one(rn, a, b, mo, cc)
+        for p in range(n):
+            out[i, p, 0], out[i, p, 1] = pc[p, 0], pc[p, 1]
+            out[i, p, 2], out[i, p, 3] = mo[p, _VALUE], mo[p, _LAM]
