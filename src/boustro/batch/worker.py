@@ -174,6 +174,15 @@ def plan_feature(feature: Feature, job: Job) -> FieldResult:
     return _result(feature, job, geometry, planned, seconds)
 
 
+def _share(missions: list[Mission], covered: list[float], area: float) -> float | None:
+    """The covered share of all parts: one part's own (exactly), else weighted by area."""
+    if len(covered) != len(missions) or area <= 0:
+        return None
+    if len(missions) == 1:
+        return missions[0].coverage.covered_share  # type: ignore[union-attr]
+    return sum(covered) / area
+
+
 def _result(
     feature: Feature,
     job: Job,
@@ -211,7 +220,7 @@ def _result(
         sum(s.n_transects for s in stats), len(lanes), sum(s.n_turns for s in stats),
         sum(s.transect_length for s in stats), sum(s.path_length for s in stats),
         None if None in durations else sum(d for d in durations if d is not None),
-        sum(covered) / area if len(covered) == len(missions) and area > 0 else None,
+        _share(missions, covered, area),
         certified, None if None in gaps else max(g for g in gaps if g is not None),
         first.optimum.method, math.degrees(first.plan.angle), first.bearing, first.spacing,
         area, *seconds, ",".join(n for n, _ in files) or None, notes,
