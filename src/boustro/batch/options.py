@@ -7,11 +7,9 @@ run must use the same). ``columns`` maps an option to an attribute column of the
 field then takes that option from its own row (``--spacing-column sp``). :meth:`for_field`
 gives one field's options, :meth:`plan_kwargs` the arguments of
 :func:`boustro.mission.plan_area`.
-
-:func:`sensor_of` and :func:`vehicle_of` build the spacing (a number, a camera, a swath) and the
-vehicle from any object with the attributes of ``boustro plan``'s options (its argparse
-namespace, or a :class:`PlanOptions`): ``boustro plan`` and ``boustro batch`` share them, so the
-two commands check and build these options one way.
+The spacing (a number, a camera, a swath) and the vehicle are built by
+:func:`boustro.mission.options.sensor_of` and :func:`~boustro.mission.options.vehicle_of`, as
+``boustro plan`` builds them from its arguments.
 """
 
 from __future__ import annotations
@@ -22,11 +20,11 @@ from typing import Any
 
 from ..errors import InvalidParameterError
 from ..mission.defaults import DEFAULT_HULL_TOLERANCE
+from ..mission.options import sensor_of, vehicle_of
 from ..objectives import get_objective
-from ..sensors import Camera, Swath
 from ..vehicle import Vehicle
 
-__all__ = ["COLUMN_OPTIONS", "PlanOptions", "sensor_of", "vehicle_of"]
+__all__ = ["COLUMN_OPTIONS", "PlanOptions"]
 
 #: The options a field can take from an attribute column, and the range each must lie in:
 #: ``">0"`` positive, ``">=0"`` non-negative, ``"%"`` a percentage in [0, 100), ``"n"`` a
@@ -48,73 +46,6 @@ COLUMN_OPTIONS = {
     "turn_radius": ">=0",
     "headland": "n",
 }
-
-
-def sensor_of(o: Any, default: float | None = None) -> Any:
-    """The spacing ``o`` gives (``o.spacing``, ``o.camera``, ``o.swath`` with ``o.gsd``,
-    ``o.altitude``, ``o.overlap``, ``o.front_overlap``, ``o.images_in_turns``,
-    ``o.nadir_gap``): metres, a :class:`Camera` or a :class:`Swath`; ``default`` metres when
-    none is given.
-
-    Raises:
-        InvalidParameterError: no spacing, or options that do not go together.
-    """
-    if o.gsd is not None and o.camera is None:
-        raise InvalidParameterError("--gsd needs --camera")
-    if o.nadir_gap and o.swath is None:
-        raise InvalidParameterError("--nadir-gap needs --swath")
-    if o.camera is not None or o.front_overlap is not None or o.images_in_turns:
-        return _camera(o)
-    if o.swath is not None:
-        overlap = 0.0 if o.overlap is None else o.overlap
-        return Swath(o.swath, overlap / 100, o.nadir_gap)
-    if o.overlap is not None:
-        raise InvalidParameterError("--overlap needs --camera or --swath")
-    if o.spacing is not None:
-        return o.spacing
-    if default is not None:
-        return default
-    raise InvalidParameterError("give the spacing: --spacing METRES, --camera ... or --swath ...")
-
-
-def _camera(o: Any) -> Camera:
-    """The :class:`Camera` of ``o.camera`` (3 or 4 numbers) with its altitude or GSD and the
-    overlaps."""
-    if o.camera is None:
-        raise InvalidParameterError("--front-overlap and --images-in-turns need --camera")
-    if o.images_in_turns and o.front_overlap is None:
-        raise InvalidParameterError("--images-in-turns needs --front-overlap")
-    if o.gsd is not None and o.altitude is not None:
-        raise InvalidParameterError(
-            "give the camera's --altitude or its --gsd, not both (one follows from the other)"
-        )
-    sw, f, px, *rest = o.camera
-    height = rest[0] if rest else None
-    overlap = 70.0 if o.overlap is None else o.overlap
-    return Camera(
-        sw,
-        f,
-        px,
-        altitude=o.altitude,
-        gsd=o.gsd,
-        side_overlap=overlap / 100,
-        image_height=None if height is None else round(height),
-        front_overlap=None if o.front_overlap is None else o.front_overlap / 100,
-        images_in_turns=o.images_in_turns,
-    )
-
-
-def vehicle_of(o: Any) -> Vehicle | None:
-    """The :class:`Vehicle` of ``o.turn_radius`` and ``o.reverse`` (``None`` without a radius).
-
-    Raises:
-        InvalidParameterError: ``reverse`` without a turn radius, or a bad radius.
-    """
-    if o.turn_radius is None:
-        if o.reverse:
-            raise InvalidParameterError("--reverse needs --turn-radius")
-        return None
-    return Vehicle(turn_radius=o.turn_radius, reverse=o.reverse)
 
 
 @dataclass(frozen=True)

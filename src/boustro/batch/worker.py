@@ -13,6 +13,7 @@ This module is imported once per worker process (its imports are the start-up co
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import threading
@@ -119,17 +120,38 @@ def _area(poly: Any, feature: Feature, crs: str | None, part: int, parts: int) -
     return Area(ring, crs, name, where, holes)
 
 
+@functools.lru_cache(maxsize=16)
+def _plans_in_place(crs: str | None) -> bool:
+    """Whether an area in ``crs`` is planned in its own coordinates (planar, or a projected
+    CRS; a geographic one is planned in a UTM zone)."""
+    import pyproj
+
+    return crs is None or not pyproj.CRS.from_user_input(crs).is_geographic
+
+
 def _plan_part(area: Area, options: PlanOptions) -> tuple[Mission, list[str]]:
+    """One polygon planned as ``boustro plan`` plans it: checked by :func:`check_area` (or
+    repaired), then :func:`plan_area`. An area planned in its own coordinates is checked by
+    ``plan_area`` with the same rules on the same numbers, so :func:`check_area` runs only if
+    planning fails, for its message (GEOS's reason, the hint to ``--repair``), which is then
+    the field's error as it would have been had it run first."""
     notes: list[str] = []
+    deferred = False
     if options.repair:
         area, note = repair_area(area)
         if note is not None:
             notes.append(note)
+    elif _plans_in_place(area.crs):
+        deferred = True
     else:
         check_area(area)
     _captured.notes = notes
     try:
         mission = plan_area(area, options.spacing_arg(), **options.plan_kwargs())
+    except Exception:
+        if deferred:
+            check_area(area)  # its error first, as when it runs before planning
+        raise
     finally:
         _captured.notes = None
     return mission, notes

@@ -1,5 +1,5 @@
 """``boustro plan``'s camera: ``--camera`` numbers or a preset, and distance triggering (the
-:class:`~boustro.sensors.Camera` is built by :func:`boustro.batch.options.sensor_of`)."""
+:class:`~boustro.sensors.Camera` is built by :func:`boustro.mission.options.sensor_of`)."""
 
 from __future__ import annotations
 

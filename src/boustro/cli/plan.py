@@ -10,13 +10,13 @@ import sys
 from typing import Any
 
 from .. import objectives
-from ..batch.options import sensor_of, vehicle_of
 from ..errors import InvalidParameterError
 from ..io import Area, embedded_field, read_areas
 from ..io.formats import FORMATS, atomic_write, format_for
 from ..io.repair import check_area, repair_area
 from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission
 from ..mission.camera import camera_presets
+from ..mission.options import sensor_of, vehicle_of
 from ..plot.plan import plot_plan
 from ..vehicle import Vehicle
 from ._camera import add_trigger_options, camera_arg
