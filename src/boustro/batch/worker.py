@@ -164,6 +164,24 @@ def _line(points: np.ndarray, srs_id: int) -> bytes | None:
     return gpkg_geometry(shapely.to_wkb(line), line.bounds, srs_id)
 
 
+def _lanes(transects: np.ndarray, srs_id: int) -> list[tuple[bytes | None, float]]:
+    """``(geometry blob, length)`` of each lane ``(a, b)``, made in one call (as
+    :func:`_line` makes each)."""
+    import shapely
+
+    t = np.asarray(transects, dtype=np.float64).reshape(-1, 2, 2)
+    blobs = shapely.to_wkb(shapely.linestrings(t))
+    lo, hi = t.min(axis=1), t.max(axis=1)
+    d = t[:, 1] - t[:, 0]
+    lengths = np.hypot(d[:, 0], d[:, 1]).tolist()
+    return [
+        (gpkg_geometry(blob, (x0, y0, x1, y1), srs_id), length)
+        for blob, (x0, y0), (x1, y1), length in zip(
+            blobs, lo.tolist(), hi.tolist(), lengths, strict=True
+        )
+    ]
+
+
 def _one_line(exc: BaseException) -> str:
     text = " ".join(str(exc).split())
     return text if isinstance(exc, BoustroError) else f"{type(exc).__name__}: {text}"
@@ -215,10 +233,8 @@ def _result(
     lanes, paths, files = [], [], []
     missions = [m for m, _ in planned]
     for part, mission in enumerate(missions, start=1):
-        for k, (a, b) in enumerate(mission.transects, start=1):
-            length = float(np.hypot(*(b - a)))
-            lanes.append((_line(np.stack([a, b]), job.srs_id), feature.field_id,
-                          feature.name, part, k, length))  # fmt: skip
+        for k, (blob, length) in enumerate(_lanes(mission.transects, job.srs_id), start=1):
+            lanes.append((blob, feature.field_id, feature.name, part, k, length))
         paths.append((_line(mission.waypoints, job.srs_id), feature.field_id, feature.name,
                       part, mission.stats.path_length))  # fmt: skip
         if job.mission_format is not None:
