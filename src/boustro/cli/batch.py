@@ -20,6 +20,13 @@ input:
   not taken as longitude/latitude: give --crs (EPSG:4326, or 'planar' for plain x/y), else
   each field is reported with an error. A MultiPolygon feature is planned part by part.
 
+options:
+  those of 'boustro plan' (the same definitions): spacing or sensor (--camera with
+  --front-overlap, --images-in-turns; --swath), optimisation, path, the vehicle
+  (--turn-radius, --reverse), --headland N, --keep-inside; not --start nor plan's flight
+  options (one mission's). --OPTION-column COLUMN takes an option per field from an attribute
+  column (listed below); a missing or out-of-range value is that field's error row.
+
 output:
   PLANS.gpkg holds the layers 'lanes' (one line per lane, driving order), 'paths' (the path
   through the waypoints) and 'fields' (one row per input feature: field_id = its position in
