@@ -590,3 +590,30 @@ def test_camera_with_image_height_and_front_overlap(tmp_path, capsys):
         rows = _layer(out, "fields")
         assert rows["spacing_m"][0] == single.spacing
         assert rows["lanes"][0] == single.stats.n_transects
+
+
+@pytest.mark.parametrize("crs", [CRS, "EPSG:4326"])
+def test_invalid_field_error_is_that_of_check_area(tmp_path, crs):
+    """An invalid field's row says what ``check_area`` says (``boustro plan``'s refusal, with
+    GEOS's reason and the hint to --repair), whether the worker checks it before planning
+    (longitude/latitude) or only when planning fails (a projected CRS)."""
+    from boustro.batch.source import Feature
+    from boustro.batch.worker import _area
+    from boustro.io.repair import check_area
+
+    x, y = (150_000, 450_000) if crs == CRS else (5.0, 52.0)
+    k = 100.0 if crs == CRS else 0.001
+    bow = shapely.Polygon([(x, y), (x + k, y + k), (x + k, y), (x, y + k)])
+    spike = shapely.Polygon([(x, y), (x + k, y), (x + k, y + k), (x + k, y + k / 2),
+                             (x + 2 * k, y + k / 2), (x + k, y + k / 2), (x, y + k)])  # fmt: skip
+    path = tmp_path / "bad.gpkg"
+    _write(path, [bow, spike], ["bow", "spike"], [10.0, 10.0], crs=crs)
+    boustro.batch(path, tmp_path / "out.gpkg", spacing=10.0, workers=1)
+    rows = _layer(tmp_path / "out.gpkg", "fields")
+    for i, (geom, name) in enumerate(((bow, "bow"), (spike, "spike")), start=1):
+        error = rows["error"][list(rows["field_id"]).index(i)]
+        area = _area(geom, Feature(i, name, shapely.to_wkb(geom)), crs, 1, 1)
+        with pytest.raises(boustro.InvalidPolygonError) as refused:
+            check_area(area)
+        assert error == str(refused.value)
+        assert "try --repair" in error

@@ -7,6 +7,7 @@ run must use the same). ``columns`` maps an option to an attribute column of the
 field then takes that option from its own row (``--spacing-column sp``). :meth:`for_field`
 gives one field's options, :meth:`plan_kwargs` the arguments of
 :func:`boustro.mission.plan_area`.
+
 The spacing (a number, a camera, a swath) and the vehicle are built by
 :func:`boustro.mission.options.sensor_of` and :func:`~boustro.mission.options.vehicle_of`, as
 ``boustro plan`` builds them from its arguments.
@@ -15,6 +16,7 @@ The spacing (a number, a camera, a swath) and the vehicle are built by
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
@@ -101,8 +103,9 @@ class PlanOptions:
                     f"{self.camera!r}"
                 )
             object.__setattr__(self, "camera", camera)
-        if isinstance(self.headland, bool) or not isinstance(self.headland, int):
+        if isinstance(self.headland, bool) or not isinstance(self.headland, numbers.Integral):
             raise InvalidParameterError(f"headland: expected a whole number, got {self.headland!r}")
+        object.__setattr__(self, "headland", int(self.headland))
         if self.headland < 0:
             raise InvalidParameterError(f"headland must be >= 0, got {self.headland}")
 
