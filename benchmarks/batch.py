@@ -23,9 +23,10 @@ each session an equal share, whatever its number of processes); the CPU ratio do
     python benchmarks/batch.py --quick    # 200 and 20 (about 2 minutes on a loaded machine)
 
 ``--baseline SRC`` (another checkout's ``src``, e.g. ``git archive 7ccb731 src | tar -x -C
-/tmp/base``) adds a before/after of the worker's own cost: the CPU per convex field of
-``plan_chunk`` in one process (one torch thread, the first fields excluded), this tree and
-SRC alternately in fresh subprocesses, ``--repeats`` times each, and their ratio.
+/tmp/base``) measures instead the before/after of the worker's own cost: the CPU per convex
+field of ``plan_chunk`` in one process (one torch thread, the first 5 fields excluded), this
+tree and SRC alternately in fresh subprocesses, ``--repeats`` times each, and their ratio (the
+CPU of a process does not depend on the machine's load as much as its wall time does).
 """
 
 from __future__ import annotations
@@ -189,6 +190,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as folder:
         if args.baseline is not None:
             worker_cpu(convex[:300], folder, args.baseline, args.repeats)
+            return
         half = args.commands // 2
         cmd = command_seconds(convex[:half], folder)
         t0 = time.perf_counter()
