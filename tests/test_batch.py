@@ -617,3 +617,15 @@ def test_invalid_field_error_is_that_of_check_area(tmp_path, crs):
             check_area(area)
         assert error == str(refused.value)
         assert "try --repair" in error
+
+
+def test_settings_of_an_earlier_output_still_resume():
+    """The options added with the vehicle ones are stored only when given, so an output of the
+    earlier version (the same settings) is resumed, and one of other options is refused."""
+    plain = PlanOptions(spacing=10.0).settings()
+    added = {"front_overlap", "images_in_turns", "turn_radius", "reverse", "headland",
+             "keep_inside"}  # fmt: skip
+    assert not added & set(plain) and {"spacing", "camera", "columns"} <= set(plain)
+    assert PlanOptions(spacing=10.0, headland=1).settings()["headland"] == 1
+    assert PlanOptions(spacing=10.0, turn_radius=0.0).settings()["turn_radius"] == 0.0
+    assert PlanOptions(camera=(1.0, 2.0, 3.0, None)).settings()["camera"] == [1.0, 2.0, 3.0]

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
 from ..errors import InvalidParameterError
@@ -48,6 +48,10 @@ COLUMN_OPTIONS = {
     "turn_radius": ">=0",
     "headland": "n",
 }
+
+
+#: Options added after outputs were first written (see :meth:`PlanOptions.settings`).
+_ADDED = ("front_overlap", "images_in_turns", "turn_radius", "reverse", "headland", "keep_inside")
 
 
 @dataclass(frozen=True)
@@ -118,9 +122,14 @@ class PlanOptions:
         one.vehicle()
 
     def settings(self) -> dict[str, Any]:
-        """Plain JSON of the options (stored with the output)."""
+        """Plain JSON of the options (stored with the output). The options added since the
+        first version are left out at their defaults, so that an output of that version is
+        resumed by this one (the same settings)."""
         out = asdict(self)
         out["camera"] = None if self.camera is None else list(self.camera)
+        for name in _ADDED:
+            if out[name] == _DEFAULTS[name]:
+                del out[name]
         return out
 
     def for_field(self, values: dict[str, Any]) -> PlanOptions:
@@ -187,3 +196,6 @@ def _column_value(option: str, column: str, value: Any) -> float | int:
         what = wanted if rule == "n" else f"a number {wanted}"
         raise InvalidParameterError(f"{where}: expected {what}, got {value!r}")
     return int(number) if rule == "n" else number
+
+
+_DEFAULTS = {f.name: f.default for f in fields(PlanOptions)}
