@@ -21,6 +21,12 @@ each session an equal share, whatever its number of processes); the CPU ratio do
 
     python benchmarks/batch.py            # 10 000 convex and 1 000 concave fields
     python benchmarks/batch.py --quick    # 200 and 20 (about 2 minutes on a loaded machine)
+
+``--baseline SRC`` (another checkout's ``src``, e.g. ``git archive 7ccb731 src | tar -x -C
+/tmp/base``) measures instead the before/after of the worker's own cost: the CPU per convex
+field of ``plan_chunk`` in one process (one torch thread, the first 5 fields excluded), this
+tree and SRC alternately in fresh subprocesses, ``--repeats`` times each, and their ratio (the
+CPU of a process does not depend on the machine's load as much as its wall time does).
 """
 
 from __future__ import annotations
@@ -101,6 +107,42 @@ def command_seconds(geoms: list, folder: str) -> list[tuple[float, float]]:
     return times
 
 
+_WORKER_CPU = """
+import sys, time
+import torch
+from boustro.batch.options import PlanOptions
+from boustro.batch.source import read_source
+from boustro.batch.worker import Job, plan_chunk
+torch.set_num_threads(1)
+source = read_source(sys.argv[1])
+job = Job(PlanOptions(spacing=float(sys.argv[2])), source.crs, False, 28992, None)
+plan_chunk(source.features[:5], job)
+c0 = time.process_time()
+plan_chunk(source.features[5:], job)
+print(1000 * (time.process_time() - c0) / (len(source.features) - 5))
+"""
+
+
+def worker_cpu(geoms: list, folder: str, baseline: str, repeats: int) -> None:
+    """CPU ms per field of ``plan_chunk`` in one process: this tree and ``baseline``, interleaved
+    (each in a fresh subprocess, so both see the same load)."""
+    fields = os.path.join(folder, "worker-cpu.gpkg")
+    write_fields(fields, geoms)
+    here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src")
+    found: dict[str, list[float]] = {"this tree": [], "baseline": []}
+    for _ in range(repeats):
+        for label, src in (("baseline", baseline), ("this tree", here)):
+            env = {**os.environ, "PYTHONPATH": os.path.abspath(src)}
+            done = subprocess.run([sys.executable, "-c", _WORKER_CPU, fields, str(SPACING)],
+                                  env=env, capture_output=True, text=True, check=True)  # fmt: skip
+            found[label].append(float(done.stdout.split()[-1]))
+    this, base = (float(np.median(found[k])) for k in ("this tree", "baseline"))
+    print(f"  worker CPU per convex field ({len(geoms) - 5} fields, median of {repeats}): this "
+          f"tree {this:.2f} ms {[round(x, 2) for x in found['this tree']]}, baseline "
+          f"{base:.2f} ms {[round(x, 2) for x in found['baseline']]}: {base / this:.3f}x "
+          f"(load {os.getloadavg()[0]:.1f})", flush=True)  # fmt: skip
+
+
 def run_set(name: str, geoms: list, folder: str, client) -> dict[str, tuple[float, float]]:
     """``{run: (fields/s wall, CPU seconds per field)}``; the CPU is this process's plus each
     field's planning on its worker (the ``cpu_seconds`` column: worker start-up and transfer
@@ -135,6 +177,8 @@ def main() -> None:
     parser.add_argument("--concave", type=int, default=None)
     parser.add_argument("--commands", type=int, default=20, help="boustro plan commands timed")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--baseline", metavar="SRC", help="another checkout's src: worker CPU")
+    parser.add_argument("--repeats", type=int, default=3, help="of the --baseline comparison")
     args = parser.parse_args()
     n_convex = args.convex or (200 if args.quick else 10_000)
     n_concave = args.concave or (20 if args.quick else 1_000)
@@ -144,6 +188,9 @@ def main() -> None:
 
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average at start: {os.getloadavg()}")
     with tempfile.TemporaryDirectory() as folder:
+        if args.baseline is not None:
+            worker_cpu(convex[:300], folder, args.baseline, args.repeats)
+            return
         half = args.commands // 2
         cmd = command_seconds(convex[:half], folder)
         t0 = time.perf_counter()

@@ -29,6 +29,8 @@ from boustro.cli import main
 from boustro.errors import InvalidParameterError, PolygonFileError
 from boustro.io import Area
 from boustro.mission import plan_area
+from boustro.sensors import Camera
+from boustro.vehicle import Vehicle
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 CRS = "EPSG:28992"  # Amersfoort / RD New, metres
@@ -492,3 +494,138 @@ def test_multipolygon_feature_is_planned_part_by_part_with_a_progress_bar(tmp_pa
     assert rows["parts"].tolist() == [2] and paths["part"].tolist() == [1, 2]
     assert rows["lanes"].tolist() == [sum(m.stats.n_transects for m in parts)]
     assert rows["path_length_m"][0] == pytest.approx(sum(m.stats.path_length for m in parts))
+
+
+def test_vehicle_headland_and_keep_inside_equal_single_plan_area_calls(
+    tmp_path, capsys, one_thread
+):
+    """``--turn-radius`` (per field from a column), ``--reverse``, ``--headland`` and
+    ``--keep-inside``: each field's plan is that of one ``plan_area`` call with the same options,
+    its coverage reported; a bad column value is that field's error row."""
+    rng = np.random.default_rng(11)
+    geoms = [_convex(rng) for _ in range(3)]
+    geoms.append(shapely.affinity.translate(
+        shapely.Polygon([(0, 0), (300, 0), (300, 100), (100, 100), (100, 300), (0, 300)]),
+        170_000, 460_000))  # fmt: skip
+    geoms.append(_convex(rng))
+    radius = [4.0, 6.0, 9.0, 5.0, -1.0]
+    path = tmp_path / "vehicle.gpkg"
+    _write(path, geoms, [f"f{i}" for i in range(5)], radius)  # the column "sp" is the radius
+    out = tmp_path / "out.gpkg"
+    argv = ["-q", "batch", str(path), "--out", str(out), "--spacing", "10", "--reverse",
+            "--turn-radius-column", "sp", "--headland", "1", "--keep-inside", "--workers", "2",
+            "--json"]  # fmt: skip
+    assert main(argv) == 0
+    assert json.loads(capsys.readouterr().out)["failed"] == 1
+    rows, lanes, paths = _consistent(out), _layer(out, "lanes"), _layer(out, "paths")
+    order = np.argsort(rows["field_id"])  # rows in the order the fields finished
+    rows = {k: v[order] for k, v in rows.items()}
+    assert rows["error"][4] == "column 'sp' (turn_radius): expected a number >= 0, got -1.0"
+    for i, geom in enumerate(geoms[:4]):
+        area = Area(np.asarray(geom.exterior.coords)[:-1], CRS, f"f{i}", "test")
+        mission = plan_area(area, 10.0, vehicle=Vehicle(turn_radius=radius[i],
+                            reverse=True), headland=1, keep_inside=True)  # fmt: skip
+        mine = [
+            np.asarray(shapely.from_wkb(w).coords)
+            for w, f in zip(lanes["geometry"], lanes["field_id"], strict=True)
+            if f == i + 1
+        ]
+        np.testing.assert_array_equal(np.array(mine), mission.transects)
+        line = [shapely.from_wkb(w) for w, f in zip(paths["geometry"], paths["field_id"],
+                                                     strict=True) if f == i + 1]  # fmt: skip
+        np.testing.assert_array_equal(np.asarray(line[0].coords), mission.waypoints)
+        assert rows["path_length_m"][i] == mission.stats.path_length
+        assert rows["turns"][i] == mission.stats.n_turns
+        assert rows["covered_share"][i] == mission.coverage.covered_share > 0.999
+        assert mission.stats.n_transects > 0
+    plain = plan_area(Area(np.asarray(geoms[0].exterior.coords)[:-1], CRS, "f0", "t"), 10.0)
+    assert rows["path_length_m"][0] != plain.stats.path_length  # the options did something
+
+
+def test_vehicle_options_bad_values(tmp_path, capsys):
+    """A bad per-field headland is an error row; options that cannot go together are one
+    line on the command line (exit status 2) and one error of the API, before any work."""
+    path = tmp_path / "h.gpkg"
+    rng = np.random.default_rng(12)
+    _write(path, [_convex(rng) for _ in range(3)], ["a", "b", "c"], [1.0, 1.5, 2.0])
+    out = tmp_path / "h-out.gpkg"
+    result = boustro.batch(path, out, spacing=10.0, columns={"headland": "sp"}, turn_radius=5.0,
+                           workers=1)  # fmt: skip
+    rows = _layer(out, "fields")
+    assert (result.planned, result.failed) == (2, 1)
+    assert rows["error"][1] == "column 'sp' (headland): expected a whole number >= 0, got 1.5"
+    two = plan_area(Area(np.asarray(shapely.from_wkb(_layer(path, "h")["geometry"][2]).exterior
+                                    .coords)[:-1], CRS, "c", "t"), 10.0, headland=2,
+                    vehicle=Vehicle(turn_radius=5.0))  # fmt: skip
+    assert rows["path_length_m"][2] == two.stats.path_length
+    argv = ["batch", str(path), "--out", str(tmp_path / "x.gpkg"), "--spacing", "10"]
+    assert main([*argv, "--reverse"]) == 2
+    assert capsys.readouterr().err == "boustro: error: --reverse needs --turn-radius\n"
+    assert main([*argv, "--images-in-turns"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "need --camera" in err
+    assert not (tmp_path / "x.gpkg").exists()
+    with pytest.raises(InvalidParameterError, match="--reverse needs --turn-radius"):
+        boustro.batch(path, tmp_path / "y.gpkg", spacing=10.0, reverse=True)
+    with pytest.raises(InvalidParameterError, match="headland must be >= 0"):
+        PlanOptions(spacing=10.0, headland=-1)
+    assert not (tmp_path / "y.gpkg").exists()
+
+
+def test_camera_with_image_height_and_front_overlap(tmp_path, capsys):
+    """``--camera`` with 3 or 4 numbers (or a preset) and ``--front-overlap``, as in plan."""
+    path = tmp_path / "cam.gpkg"
+    _write(path, [shapely.box(150_000, 450_000, 150_200, 450_120)], ["a"], [1.0])
+    for extra in (["--camera", "13.2,8.8,5472"], ["--camera", "13.2,8.8,5472,3648",
+                                                   "--front-overlap", "80"]):  # fmt: skip
+        out = tmp_path / f"cam{len(extra)}.gpkg"
+        argv = ["-q", "batch", str(path), "--out", str(out), "--altitude", "60", "--workers", "1",
+                *extra]  # fmt: skip
+        assert main(argv) == 0, capsys.readouterr().err
+        cam = Camera(13.2, 8.8, 5472, altitude=60.0, side_overlap=0.7,
+                             image_height=3648 if len(extra) > 2 else None,
+                             front_overlap=0.8 if len(extra) > 2 else None)  # fmt: skip
+        single = plan_area(shapely.box(150_000, 450_000, 150_200, 450_120), cam, crs=CRS,
+                           altitude=60.0)  # fmt: skip
+        rows = _layer(out, "fields")
+        assert rows["spacing_m"][0] == single.spacing
+        assert rows["lanes"][0] == single.stats.n_transects
+
+
+@pytest.mark.parametrize("crs", [CRS, "EPSG:4326"])
+def test_invalid_field_error_is_that_of_check_area(tmp_path, crs):
+    """An invalid field's row says what ``check_area`` says (``boustro plan``'s refusal, with
+    GEOS's reason and the hint to --repair), whether the worker checks it before planning
+    (longitude/latitude) or only when planning fails (a projected CRS)."""
+    from boustro.batch.source import Feature
+    from boustro.batch.worker import _area
+    from boustro.io.repair import check_area
+
+    x, y = (150_000, 450_000) if crs == CRS else (5.0, 52.0)
+    k = 100.0 if crs == CRS else 0.001
+    bow = shapely.Polygon([(x, y), (x + k, y + k), (x + k, y), (x, y + k)])
+    spike = shapely.Polygon([(x, y), (x + k, y), (x + k, y + k), (x + k, y + k / 2),
+                             (x + 2 * k, y + k / 2), (x + k, y + k / 2), (x, y + k)])  # fmt: skip
+    path = tmp_path / "bad.gpkg"
+    _write(path, [bow, spike], ["bow", "spike"], [10.0, 10.0], crs=crs)
+    boustro.batch(path, tmp_path / "out.gpkg", spacing=10.0, workers=1)
+    rows = _layer(tmp_path / "out.gpkg", "fields")
+    for i, (geom, name) in enumerate(((bow, "bow"), (spike, "spike")), start=1):
+        error = rows["error"][list(rows["field_id"]).index(i)]
+        area = _area(geom, Feature(i, name, shapely.to_wkb(geom)), crs, 1, 1)
+        with pytest.raises(boustro.InvalidPolygonError) as refused:
+            check_area(area)
+        assert error == str(refused.value)
+        assert "try --repair" in error
+
+
+def test_settings_of_an_earlier_output_still_resume():
+    """The options added with the vehicle ones are stored only when given, so an output of the
+    earlier version (the same settings) is resumed, and one of other options is refused."""
+    plain = PlanOptions(spacing=10.0).settings()
+    added = {"front_overlap", "images_in_turns", "turn_radius", "reverse", "headland",
+             "keep_inside"}  # fmt: skip
+    assert not added & set(plain) and {"spacing", "camera", "columns"} <= set(plain)
+    assert PlanOptions(spacing=10.0, headland=1).settings()["headland"] == 1
+    assert PlanOptions(spacing=10.0, turn_radius=0.0).settings()["turn_radius"] == 0.0
+    assert PlanOptions(camera=(1.0, 2.0, 3.0, None)).settings()["camera"] == [1.0, 2.0, 3.0]

@@ -170,8 +170,7 @@ def batch(
         options = PlanOptions(**plan_options)
     elif plan_options:
         raise InvalidParameterError("give options= or option keywords, not both")
-    # No spacing at all: one error, not one per field (columns checked with a placeholder).
-    options.for_field({c: 1.0 for c in options.columns.values()}).spacing_arg()
+    options.check()  # e.g. no spacing at all: one error, not one per field
     fmt = _check_missions(None if missions is None else os.fspath(missions), mission_format)
     out = os.fspath(out)
     source = _source(fields, layer, crs, options)

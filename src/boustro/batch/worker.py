@@ -13,6 +13,7 @@ This module is imported once per worker process (its imports are the start-up co
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import threading
@@ -119,17 +120,38 @@ def _area(poly: Any, feature: Feature, crs: str | None, part: int, parts: int) -
     return Area(ring, crs, name, where, holes)
 
 
+@functools.lru_cache(maxsize=16)
+def _plans_in_place(crs: str | None) -> bool:
+    """Whether an area in ``crs`` is planned in its own coordinates (planar, or a projected
+    CRS; a geographic one is planned in a UTM zone)."""
+    import pyproj
+
+    return crs is None or not pyproj.CRS.from_user_input(crs).is_geographic
+
+
 def _plan_part(area: Area, options: PlanOptions) -> tuple[Mission, list[str]]:
+    """One polygon planned as ``boustro plan`` plans it: checked by :func:`check_area` (or
+    repaired), then :func:`plan_area`. An area planned in its own coordinates is checked by
+    ``plan_area`` with the same rules on the same numbers, so :func:`check_area` runs only if
+    planning fails, for its message (GEOS's reason, the hint to ``--repair``), which is then
+    the field's error as it would have been had it run first."""
     notes: list[str] = []
+    deferred = False
     if options.repair:
         area, note = repair_area(area)
         if note is not None:
             notes.append(note)
+    elif _plans_in_place(area.crs):
+        deferred = True
     else:
         check_area(area)
     _captured.notes = notes
     try:
         mission = plan_area(area, options.spacing_arg(), **options.plan_kwargs())
+    except Exception:
+        if deferred:
+            check_area(area)  # its error first, as when it runs before planning
+        raise
     finally:
         _captured.notes = None
     return mission, notes
@@ -140,6 +162,24 @@ def _line(points: np.ndarray, srs_id: int) -> bytes | None:
 
     line = shapely.LineString(points)
     return gpkg_geometry(shapely.to_wkb(line), line.bounds, srs_id)
+
+
+def _lanes(transects: np.ndarray, srs_id: int) -> list[tuple[bytes | None, float]]:
+    """``(geometry blob, length)`` of each lane ``(a, b)``, made in one call (as
+    :func:`_line` makes each)."""
+    import shapely
+
+    t = np.asarray(transects, dtype=np.float64).reshape(-1, 2, 2)
+    blobs = shapely.to_wkb(shapely.linestrings(t))
+    lo, hi = t.min(axis=1), t.max(axis=1)
+    d = t[:, 1] - t[:, 0]
+    lengths = np.hypot(d[:, 0], d[:, 1]).tolist()
+    return [
+        (gpkg_geometry(blob, (x0, y0, x1, y1), srs_id), length)
+        for blob, (x0, y0), (x1, y1), length in zip(
+            blobs, lo.tolist(), hi.tolist(), lengths, strict=True
+        )
+    ]
 
 
 def _one_line(exc: BaseException) -> str:
@@ -174,6 +214,15 @@ def plan_feature(feature: Feature, job: Job) -> FieldResult:
     return _result(feature, job, geometry, planned, seconds)
 
 
+def _share(missions: list[Mission], covered: list[float], area: float) -> float | None:
+    """The covered share of all parts: one part's own (exactly), else weighted by area."""
+    if len(covered) != len(missions) or area <= 0:
+        return None
+    if len(missions) == 1:
+        return missions[0].coverage.covered_share  # type: ignore[union-attr]
+    return sum(covered) / area
+
+
 def _result(
     feature: Feature,
     job: Job,
@@ -184,10 +233,8 @@ def _result(
     lanes, paths, files = [], [], []
     missions = [m for m, _ in planned]
     for part, mission in enumerate(missions, start=1):
-        for k, (a, b) in enumerate(mission.transects, start=1):
-            length = float(np.hypot(*(b - a)))
-            lanes.append((_line(np.stack([a, b]), job.srs_id), feature.field_id,
-                          feature.name, part, k, length))  # fmt: skip
+        for k, (blob, length) in enumerate(_lanes(mission.transects, job.srs_id), start=1):
+            lanes.append((blob, feature.field_id, feature.name, part, k, length))
         paths.append((_line(mission.waypoints, job.srs_id), feature.field_id, feature.name,
                       part, mission.stats.path_length))  # fmt: skip
         if job.mission_format is not None:
@@ -211,7 +258,7 @@ def _result(
         sum(s.n_transects for s in stats), len(lanes), sum(s.n_turns for s in stats),
         sum(s.transect_length for s in stats), sum(s.path_length for s in stats),
         None if None in durations else sum(d for d in durations if d is not None),
-        sum(covered) / area if len(covered) == len(missions) and area > 0 else None,
+        _share(missions, covered, area),
         certified, None if None in gaps else max(g for g in gaps if g is not None),
         first.optimum.method, math.degrees(first.plan.angle), first.bearing, first.spacing,
         area, *seconds, ",".join(n for n, _ in files) or None, notes,

@@ -1,4 +1,5 @@
-"""``boustro plan``'s camera: ``--camera`` numbers or a preset, and distance triggering."""
+"""``boustro plan``'s camera: ``--camera`` numbers or a preset, and distance triggering (the
+:class:`~boustro.sensors.Camera` is built by :func:`boustro.mission.options.sensor_of`)."""
 
 from __future__ import annotations
 
@@ -7,9 +8,8 @@ from collections.abc import Callable
 
 from ..errors import InvalidParameterError
 from ..mission.camera import camera_preset
-from ..sensors import Camera
 
-__all__ = ["add_trigger_options", "camera_arg", "camera_from_args"]
+__all__ = ["add_trigger_options", "camera_arg"]
 
 
 def add_trigger_options(group: argparse._ArgumentGroup, percent: Callable[[str], float]) -> None:
@@ -53,28 +53,3 @@ def camera_arg(text: str) -> tuple[float, float, float, float | None]:
     if not all(0 < v < float("inf") for v in values):
         raise argparse.ArgumentTypeError(f"camera values must be finite and > 0, got {text!r}")
     return values[0], values[1], values[2], values[3] if len(values) == 4 else None
-
-
-def camera_from_args(args: argparse.Namespace) -> Camera:
-    """The :class:`Camera` of ``--camera`` with ``--altitude``/``--gsd``, the overlaps."""
-    if args.camera is None:
-        raise InvalidParameterError("--front-overlap and --images-in-turns need --camera")
-    if args.images_in_turns and args.front_overlap is None:
-        raise InvalidParameterError("--images-in-turns needs --front-overlap")
-    if args.gsd is not None and args.altitude is not None:
-        raise InvalidParameterError(
-            "give the camera's --altitude or its --gsd, not both (one follows from the other)"
-        )
-    sw, f, px, height = args.camera
-    overlap = 70.0 if args.overlap is None else args.overlap
-    return Camera(
-        sw,
-        f,
-        px,
-        altitude=args.altitude,
-        gsd=args.gsd,
-        side_overlap=overlap / 100,
-        image_height=None if height is None else round(height),
-        front_overlap=None if args.front_overlap is None else args.front_overlap / 100,
-        images_in_turns=args.images_in_turns,
-    )

@@ -20,6 +20,13 @@ input:
   not taken as longitude/latitude: give --crs (EPSG:4326, or 'planar' for plain x/y), else
   each field is reported with an error. A MultiPolygon feature is planned part by part.
 
+options:
+  those of 'boustro plan' (the same definitions): spacing or sensor (--camera with
+  --front-overlap, --images-in-turns; --swath), optimisation, path, the vehicle
+  (--turn-radius, --reverse), --headland N, --keep-inside; not --start nor plan's flight
+  options (one mission's). --OPTION-column COLUMN takes an option per field from an attribute
+  column (listed below); a missing or out-of-range value is that field's error row.
+
 output:
   PLANS.gpkg holds the layers 'lanes' (one line per lane, driving order), 'paths' (the path
   through the waypoints) and 'fields' (one row per input feature: field_id = its position in
@@ -116,6 +123,8 @@ def _options(args: argparse.Namespace) -> PlanOptions:
         swath=args.swath,
         gsd=args.gsd,
         overlap=args.overlap,
+        front_overlap=args.front_overlap,
+        images_in_turns=args.images_in_turns,
         nadir_gap=args.nadir_gap,
         method=args.method,
         objective=args.objective,
@@ -125,6 +134,10 @@ def _options(args: argparse.Namespace) -> PlanOptions:
         altitude=args.altitude,
         speed=args.speed,
         turn_time=args.turn_time,
+        turn_radius=args.turn_radius,
+        reverse=args.reverse,
+        headland=args.headland,
+        keep_inside=args.keep_inside,
         layout=args.layout,
         hull_tolerance=args.hull_tolerance,
         decompose=args.decompose,

@@ -16,10 +16,10 @@ from ..io.formats import FORMATS, atomic_write, format_for
 from ..io.repair import check_area, repair_area
 from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission
 from ..mission.camera import camera_presets
+from ..mission.options import sensor_of, vehicle_of
 from ..plot.plan import plot_plan
-from ..sensors import Swath
 from ..vehicle import Vehicle
-from ._camera import add_trigger_options, camera_arg, camera_from_args
+from ._camera import add_trigger_options, camera_arg
 from ._common import (
     check_output_path,
     check_plot_target,
@@ -414,22 +414,8 @@ def _non_negative(text: str) -> float:
 
 # -- the command ---------------------------------------------------------------------------
 def _spacing(args: argparse.Namespace, embedded: bool) -> Any:
-    if args.gsd is not None and args.camera is None:
-        raise InvalidParameterError("--gsd needs --camera")
-    if args.nadir_gap and args.swath is None:
-        raise InvalidParameterError("--nadir-gap needs --swath")
-    if args.camera is not None or args.front_overlap is not None or args.images_in_turns:
-        return camera_from_args(args)
-    if args.swath is not None:
-        overlap = 0.0 if args.overlap is None else args.overlap
-        return Swath(args.swath, overlap / 100, args.nadir_gap)
-    if args.overlap is not None:
-        raise InvalidParameterError("--overlap needs --camera or --swath")
-    if args.spacing is not None:
-        return args.spacing
-    if embedded:
-        return EMBEDDED_SPACING
-    raise InvalidParameterError("give the spacing: --spacing METRES, --camera ... or --swath ...")
+    """The spacing, camera or swath (as ``boustro batch``: one definition)."""
+    return sensor_of(args, default=EMBEDDED_SPACING if embedded else None)
 
 
 def _load(args: argparse.Namespace) -> list[Area]:
@@ -480,11 +466,8 @@ def _plot_bytes(mission: Mission, path: str) -> bytes:
 
 
 def _vehicle(args: argparse.Namespace) -> Vehicle | None:
-    if args.turn_radius is None:
-        if args.reverse:
-            raise InvalidParameterError("--reverse needs --turn-radius")
-        return None
-    return Vehicle(turn_radius=args.turn_radius, reverse=args.reverse)
+    """``--turn-radius`` and ``--reverse`` (as ``boustro batch``: one definition)."""
+    return vehicle_of(args)
 
 
 def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:

@@ -159,7 +159,7 @@ class Polygon:
         (2.0, True)
     """
 
-    __slots__ = ("_diameter", "_is_convex", "_vertices")
+    __slots__ = ("_diameter", "_is_convex", "_normalised", "_vertices")
 
     def __init__(self, vertices: ArrayLike) -> None:
         v = _as_vertex_array(vertices)
@@ -277,8 +277,15 @@ class Polygon:
 
     # -- transformations --------------------------------------------------------------------
     def normalised(self) -> Polygon:
-        """This polygon in the normalised frame (centred on the vertex mean, diameter 1)."""
-        return Polygon(self.frame.to_normalised(self._vertices))
+        """This polygon in the normalised frame (centred on the vertex mean, diameter 1).
+
+        Made (and validated) once per polygon: a polygon is immutable, and the optimisers and
+        the lane layout of one plan each ask for it."""
+        try:
+            return self._normalised
+        except AttributeError:
+            self._normalised: Polygon = Polygon(self.frame.to_normalised(self._vertices))
+            return self._normalised
 
     def rotated(self, angle: float, origin: ArrayLike | None = None) -> Polygon:
         """Rotate counter-clockwise by ``angle`` radians about ``origin`` (default: the centre)."""

@@ -83,7 +83,8 @@ def plan_convex(
         start=frame.start,
         **_path_options(frame, turnaround, speed, turn_time),
     )
-    plan = _with_outside(plan, frame.surveyed)
+    if frame.poly is not frame.surveyed:  # the hull was planned: measured on the area itself
+        plan = _with_outside(plan, frame.surveyed)
     cov = coverage(plan, frame.surveyed) if check_coverage else None
     return Planned(plan, optimum, cov)
 
