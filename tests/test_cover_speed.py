@@ -1,0 +1,64 @@
+"""The cover search's faster paths (issue 17's planning-time target) give the same answers as
+the ones they replace: batched straight moves, the shared router, the driver's deferred moves."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from boustro.geometry.region import random_region
+from boustro.geometry.traced import traced_field
+from boustro.plan.region import plan_region
+from boustro.plan.routing import Router, router_for
+
+
+def _moves(region, rng, n=150):
+    lo, hi = region.shell.vertices.min(0), region.shell.vertices.max(0)
+    p = rng.uniform(lo, hi, (n, 2))
+    q = p + rng.normal(0, 0.1 * region.diameter, (n, 2))
+    v = region.shell.vertices
+    q[:10] = v[rng.integers(0, len(v), 10)]  # ending on vertices
+    p[10:20] = v[rng.integers(0, len(v), 10)]
+    q[20:25] = p[20:25]  # zero length
+    if region.holes:
+        q[25:30] = region.holes[0].vertices.mean(axis=0)  # into a hole
+    return p, q
+
+
+def test_straight_moves_at_once_equal_one_at_a_time_bit_for_bit():
+    rng = np.random.default_rng(3)
+    regions = [traced_field(150, 2, seed=1), *(random_region(rng, 12, 2) for _ in range(8))]
+    for region in regions:
+        for reach in (0.0, 0.02 * region.diameter):
+            router = Router(region, reach=reach)
+            p, q = _moves(region, rng)
+            ok, outside = router._straight_many(p, q)
+            single = [router._straight(a, b) for a, b in zip(p, q, strict=True)]
+            assert ok.tolist() == [s[0] for s in single]
+            assert outside.tolist() == [s[1] for s in single]  # inf where through a hole
+            assert (~ok).any() and ok.any()
+            paths = router.paths(p, q)
+            for a, b, route in zip(p, q, paths, strict=True):
+                one = router.path(a, b)
+                assert route.length == one.length and route.outside == one.outside
+                assert np.array_equal(route.points, one.points) and route.found == one.found
+
+
+def test_router_is_built_once_per_region_and_reach():
+    region = random_region(np.random.default_rng(5), 10, 1)
+    assert router_for(region, 1.0) is router_for(region, 1.0)
+    assert router_for(region, 2.0) is not router_for(region, 1.0)
+    assert router_for(region, 1.0).reach == 1.0
+
+
+def test_plan_with_the_shared_router_equals_a_fresh_one():
+    region = random_region(np.random.default_rng(7), 14, 2)
+    s = region.diameter / 25
+    kw = dict(decompose_area=False, angle=0.7, offset=0.3, reach=s / 2)
+    first = plan_region(region, s, **kw)
+    router_for.cache_clear()
+    fresh = plan_region(region, s, **kw)
+    again = plan_region(region, s, **kw)  # the cached router
+    for other in (fresh, again):
+        assert np.array_equal(first.waypoints, other.waypoints)
+        assert first.kinds == other.kinds
+        assert first.stats == other.stats
