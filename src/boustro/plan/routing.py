@@ -217,10 +217,10 @@ class Router:
         step = self.reach / 16
         pts, owner = [], []
         for k in np.flatnonzero(out_piece & ~in_hole[p_seg]):
-            i = int(p_seg[k])
-            n = max(2, math.ceil((hi[k] - lo[k]) * length[i] / step) + 1)
-            pts.append(p[i] + np.linspace(lo[k], hi[k], n)[:, None] * r[i])
-            owner.append(np.full(n, i))
+            j = int(p_seg[k])
+            n = max(2, math.ceil((hi[k] - lo[k]) * length[j] / step) + 1)
+            pts.append(p[j] + np.linspace(lo[k], hi[k], n)[:, None] * r[j])
+            owner.append(np.full(n, j))
         if pts:
             near = self._index.within(
                 np.concatenate(pts), self.reach * (1 + 1e-9), len(self._shell_edges)
