@@ -7,6 +7,7 @@ import numpy as np
 
 from boustro.geometry.region import random_region
 from boustro.geometry.traced import traced_field
+from boustro.optimize.cover import bands
 from boustro.plan.region import plan_region
 from boustro.plan.routing import Router, router_for
 
@@ -62,3 +63,27 @@ def test_plan_with_the_shared_router_equals_a_fresh_one():
         assert np.array_equal(first.waypoints, other.waypoints)
         assert first.kinds == other.kinds
         assert first.stats == other.stats
+
+
+def test_band_sorts_sort_in_place_with_their_partners():
+    bands._compiled()  # the numba dispatchers in the module's globals
+    rng = np.random.default_rng(11)
+    for sort_pairs, sort_keys in (
+        (bands._sort_pairs, bands._sort_keys),
+        (bands._sort_pairs.py_func, bands._sort_keys.py_func),
+    ):
+        for n in (0, 1, 2, 7, 40):
+            key = rng.integers(0, 5, n).astype(np.float64)  # ties
+            other = rng.normal(size=n)
+            ids = np.arange(n, dtype=np.int64)
+            k1, o1, k2, i2, k3 = key.copy(), other.copy(), key.copy(), ids.copy(), key.copy()
+            lo, hi = (1, n - 1) if n > 2 else (0, n)
+            sort_pairs(k1, o1, lo, hi)
+            sort_pairs(k2, i2, lo, hi)
+            sort_keys(k3, lo, hi)
+            expect = np.argsort(key[lo:hi], kind="stable") + lo  # insertion sort is stable
+            assert np.array_equal(k1[lo:hi], key[expect]) and np.array_equal(
+                o1[lo:hi], other[expect]
+            )
+            assert np.array_equal(i2[lo:hi], ids[expect]) and np.array_equal(k3, k1)
+            assert np.array_equal(k1[:lo], key[:lo]) and np.array_equal(k1[hi:], key[hi:])

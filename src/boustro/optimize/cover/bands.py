@@ -161,30 +161,54 @@ def _band_intervals(h1, h2, t1, t2, d, s, reach, k0, nb):
     for b in range(nb):
         for side in range(2):
             j = 2 * b + side
-            seg = np.sort(xt[xstart[j] : xstart[j + 1]])
-            for q in range(0, seg.shape[0] - 1, 2):
-                ilo[fill[b]] = seg[q]
-                ihi[fill[b]] = seg[q + 1]
+            _sort_keys(xt, xstart[j], xstart[j + 1])
+            for q in range(xstart[j], xstart[j + 1] - 1, 2):
+                ilo[fill[b]] = xt[q]
+                ihi[fill[b]] = xt[q + 1]
                 fill[b] += 1
-    # sort and merge per band, in place; mstart/mcount index the merged intervals
+    # sort and merge per band, in place; mstart/mcount index the merged intervals (the union
+    # does not depend on the order of intervals with equal starts)
     mcount = np.zeros(nb, dtype=np.int64)
     for b in range(nb):
         p0, p1 = start[b], fill[b]
         if p1 <= p0:
             continue
-        order = np.argsort(ilo[p0:p1])
-        slo = ilo[p0:p1][order]
-        shi = ihi[p0:p1][order]
+        _sort_pairs(ilo, ihi, p0, p1)
         m = 0
-        for q in range(p1 - p0):
-            if m > 0 and slo[q] <= ihi[p0 + m - 1]:
-                ihi[p0 + m - 1] = max(ihi[p0 + m - 1], shi[q])
+        for q in range(p0, p1):
+            if m > 0 and ilo[q] <= ihi[p0 + m - 1]:
+                ihi[p0 + m - 1] = max(ihi[p0 + m - 1], ihi[q])
             else:
-                ilo[p0 + m] = slo[q]
-                ihi[p0 + m] = shi[q]
+                ilo[p0 + m] = ilo[q]
+                ihi[p0 + m] = ihi[q]
                 m += 1
         mcount[b] = m
     return start, mcount, ilo, ihi
+
+
+def _sort_pairs(key, other, p0, p1):
+    """Sort ``key[p0:p1]`` in place, ``other[p0:p1]`` along with it (insertion sort: a band
+    holds few intervals, and no array is allocated)."""
+    for q in range(p0 + 1, p1):
+        k, o = key[q], other[q]
+        j = q - 1
+        while j >= p0 and key[j] > k:
+            key[j + 1] = key[j]
+            other[j + 1] = other[j]
+            j -= 1
+        key[j + 1] = k
+        other[j + 1] = o
+
+
+def _sort_keys(key, p0, p1):
+    """Sort ``key[p0:p1]`` in place (insertion sort)."""
+    for q in range(p0 + 1, p1):
+        k = key[q]
+        j = q - 1
+        while j >= p0 and key[j] > k:
+            key[j + 1] = key[j]
+            j -= 1
+        key[j + 1] = k
 
 
 def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):
@@ -221,10 +245,7 @@ def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):
                 xh[fill[b]] = hole[i]
                 fill[b] += 1
     for b in range(nb):
-        p0, p1 = xstart[b], xstart[b + 1]
-        order = np.argsort(xt[p0:p1])
-        xt[p0:p1] = xt[p0:p1][order]
-        xh[p0:p1] = xh[p0:p1][order]
+        _sort_pairs(xt, xh, xstart[b], xstart[b + 1])
     return xstart, xt, xh
 
 
@@ -422,7 +443,8 @@ def _compiled() -> Any:
         return _all
     jit = numba.njit(cache=True)
     g = globals()
-    for name in ("_project", "_band_intervals", "_hole_chords", "_minus", "_rigid_cuts", "_leaf"):
+    for name in ("_project", "_sort_pairs", "_sort_keys", "_band_intervals", "_hole_chords",
+                 "_minus", "_rigid_cuts", "_leaf"):  # fmt: skip
         g[name] = jit(g[name])
     return jit(_all)
 
