@@ -10,6 +10,7 @@ from boustro.geometry.traced import traced_field
 from boustro.optimize.cover import bands
 from boustro.plan.region import plan_region
 from boustro.plan.routing import Router, router_for
+from boustro.vehicle import Vehicle, turn_between, turns_between
 
 
 def _moves(region, rng, n=150):
@@ -87,3 +88,26 @@ def test_band_sorts_sort_in_place_with_their_partners():
             )
             assert np.array_equal(i2[lo:hi], ids[expect]) and np.array_equal(k3, k1)
             assert np.array_equal(k1[:lo], key[:lo]) and np.array_equal(k1[hi:], key[hi:])
+
+
+def test_turns_at_once_equal_one_at_a_time():
+    rng = np.random.default_rng(2)
+    m = 300
+    starts = np.c_[rng.normal(0, 20, (m, 2)), rng.uniform(-4, 4, m)]
+    goals = np.c_[rng.normal(0, 20, (m, 2)), rng.uniform(-4, 4, m)]
+    # lane ends: U-turns between parallel lanes (ties between mirror words), and no move
+    goals[:50] = (
+        starts[:50] + np.c_[np.zeros(50), rng.choice([6.0, 10.0, 12.0], 50), np.full(50, np.pi)]
+    )
+    starts[:50, 2] = 0.0
+    goals[:50, 2] = np.pi
+    goals[50:55] = starts[50:55]
+    for vehicle in (Vehicle(turn_radius=6.0), Vehicle(turn_radius=6.0, reverse=True)):
+        batch = turns_between(vehicle, starts, goals, 0.05)
+        for a, b, turn in zip(starts, goals, batch, strict=True):
+            one = turn_between(vehicle, a, b, 0.05)
+            assert turn.word == one.word and turn.length == one.length
+            assert np.array_equal(turn.points, one.points)
+            assert np.array_equal(turn.headings, one.headings)
+            assert np.array_equal(turn.gear, one.gear)
+    assert turns_between(Vehicle(turn_radius=6.0), np.zeros((0, 3)), np.zeros((0, 3))) == []

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
 from ..geometry.region import Region
-from ..vehicle import Turn, Vehicle, lane_order, turn_between
+from ..vehicle import Turn, Vehicle, lane_order, turns_between
 from .types import Plan
 
 __all__ = ["drive_vehicle", "order_lanes"]
@@ -182,10 +182,9 @@ def _turn_moves(
     turns: dict[int, tuple[int, Turn]] = {}
     kept = 0
     allowed = None if field is None else _Allowed(field, holes_only)
-    for i, j in moves:
-        a = _heading(w, i, -1, float(angles[plan.lane[i]]))
-        b = _heading(w, j, +1, float(angles[plan.lane[j]]))
-        turn = turn_between(v, (*w[i], a), (*w[j], b), tol)
+    starts = [(*w[i], _heading(w, i, -1, float(angles[plan.lane[i]]))) for i, _ in moves]
+    goals = [(*w[j], _heading(w, j, +1, float(angles[plan.lane[j]]))) for _, j in moves]
+    for (i, j), turn in zip(moves, turns_between(v, starts, goals, tol), strict=True):
         if allowed is not None and allowed.leaves(turn.points):
             kept += 1
             continue
