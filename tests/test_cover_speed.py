@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from boustro.geometry.region import random_region
+from boustro.geometry.region import Region, random_region
 from boustro.geometry.traced import traced_field
 from boustro.optimize.cover import bands
+from boustro.plan import build_plan, drive_vehicle, vehicle_stats
 from boustro.plan.region import plan_region
 from boustro.plan.routing import Router, router_for
 from boustro.vehicle import Vehicle, turn_between, turns_between
@@ -111,3 +112,26 @@ def test_turns_at_once_equal_one_at_a_time():
             assert np.array_equal(turn.headings, one.headings)
             assert np.array_equal(turn.gear, one.gear)
     assert turns_between(Vehicle(turn_radius=6.0), np.zeros((0, 3)), np.zeros((0, 3))) == []
+
+
+def _scaled(region, size):
+    k = size / region.diameter
+    return Region(region.shell.vertices * k, [h.vertices * k for h in region.holes])
+
+
+def test_vehicle_stats_are_the_driven_plans_stats():
+    square = [(0, 0), (120, 0), (120, 90), (0, 90)]
+    rng = np.random.default_rng(4)
+    plain, holed = (_scaled(random_region(rng, 12, h), 300.0) for h in (0, 2))
+    plans = [
+        build_plan(square, 10.0, 0.3, speed=2.0, turn_time=5.0),
+        build_plan(square, 10.0, 0.3, turnaround=4.0),
+        plan_region(plain, 10.0, decompose_area=False, angle=0.4, offset=0.1),
+        plan_region(holed, 10.0, decompose_area=False, angle=1.1, offset=0.2),
+    ]
+    for plan in plans:
+        for vehicle in (Vehicle(turn_radius=6.0), Vehicle(turn_radius=4.0, reverse=True)):
+            for field in (None, holed if plan.region is holed else None):
+                driven = drive_vehicle(plan, vehicle, field=field).stats
+                assert vehicle_stats(plan, vehicle, field=field) == driven
+                assert driven.turn_length > 0 or field is not None  # all refused: outside
