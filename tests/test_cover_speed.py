@@ -8,9 +8,10 @@ import numpy as np
 from boustro.geometry.region import Region, random_region
 from boustro.geometry.traced import traced_field
 from boustro.optimize.cover import bands
-from boustro.plan import build_plan, drive_vehicle, vehicle_stats
+from boustro.plan import build_plan, drive_vehicle, routing, vehicle_stats
 from boustro.plan.region import plan_region
 from boustro.plan.routing import Router, router_for
+from boustro.plan.visibility_kernel import segment_crossings
 from boustro.vehicle import Vehicle, turn_between, turns_between
 
 
@@ -135,3 +136,27 @@ def test_vehicle_stats_are_the_driven_plans_stats():
                 driven = drive_vehicle(plan, vehicle, field=field).stats
                 assert vehicle_stats(plan, vehicle, field=field) == driven
                 assert driven.turn_length > 0 or field is not None  # all refused: outside
+
+
+def test_compiled_visibility_equals_the_trees(monkeypatch):
+    rng = np.random.default_rng(8)
+    regions = [traced_field(120, 2, seed=3), *(random_region(rng, 14, 2) for _ in range(6))]
+    for region in regions:
+        router = Router(region, reach=0.0)
+        v = np.concatenate([region.shell.vertices] + [h.vertices for h in region.holes])
+        p = rng.uniform(v.min(0), v.max(0), (300, 2))
+        q = rng.uniform(v.min(0), v.max(0), (300, 2))
+        i = rng.integers(0, len(v), (150, 2))
+        p[:150], q[:150] = v[i[:, 0]], v[i[:, 1]]  # vertex to vertex
+        j = rng.integers(0, len(v) - 1, 50)  # along an edge, through its vertices
+        p[150:200], q[150:200] = 2 * v[j] - v[j + 1], 3 * v[j + 1] - 2 * v[j]
+        monkeypatch.setattr(routing, "DENSE_EDGES", 10**9)
+        dense = router._visible_many(p, q)
+        monkeypatch.setattr(routing, "DENSE_EDGES", 0)
+        tree = router._visible_many(p, q)
+        assert np.array_equal(dense, tree) and dense.any() and (~dense).any()
+    proper, touched = segment_crossings(
+        np.array([[0.0, 0.0], [0.0, 0.0]]), np.array([[2.0, 2.0], [2.0, 0.0]]),
+        np.array([[0.0, 2.0], [1.0, 0.0]]), np.array([[2.0, 0.0], [1.0, -1.0]]), 1e-12,
+    )  # fmt: skip
+    assert proper.tolist() == [True, False] and touched.tolist() == [False, True]

@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..geometry.region import Region, as_region
 from .edge_index import CHUNK, EdgeIndex
 from .route_domain import MAX_NODES, inner_domains, nearest_in
+from .visibility_kernel import DENSE_EDGES, segment_crossings
 
 __all__ = ["Route", "Router", "router_for"]
 
@@ -243,6 +244,9 @@ class Router:
             )
         e1, e2 = self._e1, self._e2
         tol = self.tol
+        if len(e1) <= DENSE_EDGES:  # compiled, every pair: the same tests as below
+            hit, touched = segment_crossings(a, b, e1, e2, tol)
+            return self._decide(a, b, ~hit, touched)
         mi, ei = self._index.box_pairs(np.minimum(a, b) - tol, np.maximum(a, b) + tol)
         pa, pb = a[mi], b[mi]
         q1, q2 = e1[ei], e2[ei]
@@ -267,6 +271,18 @@ class Router:
         )
         ok = np.bincount(mi[proper], minlength=m) == 0
         touched = np.bincount(mi[on], minlength=m) > 0
+        return self._decide(a, b, ok, touched)
+
+    def _decide(
+        self,
+        a: NDArray[np.float64],
+        b: NDArray[np.float64],
+        ok: NDArray[np.bool_],
+        touched: NDArray[np.bool_],
+    ) -> NDArray[np.bool_]:
+        """Visibility of segments that cross no edge (``ok``): by the midpoint's class, or
+        piece by piece where they touch a vertex."""
+        m = len(a)
         simple = ok & ~touched
         res = np.zeros(m, dtype=bool)
         if simple.any():
