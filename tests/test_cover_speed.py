@@ -1,5 +1,6 @@
 """The cover search's faster paths (issue 17's planning-time target) give the same answers as
-the ones they replace: batched straight moves, the shared router, the driver's deferred moves."""
+the ones they replace: batched straight moves, the shared router, the driver's deferred moves,
+the band kernel's sorts, turns found at once, compiled visibility and nearness."""
 
 from __future__ import annotations
 
@@ -8,7 +9,8 @@ import numpy as np
 from boustro.geometry.region import Region, random_region
 from boustro.geometry.traced import traced_field
 from boustro.optimize.cover import bands
-from boustro.plan import build_plan, drive_vehicle, routing, vehicle_stats
+from boustro.plan import build_plan, drive_vehicle, edge_index, routing, vehicle_stats
+from boustro.plan.edge_index import EdgeIndex
 from boustro.plan.region import plan_region
 from boustro.plan.routing import Router, router_for
 from boustro.plan.visibility_kernel import segment_crossings
@@ -160,3 +162,22 @@ def test_compiled_visibility_equals_the_trees(monkeypatch):
         np.array([[0.0, 2.0], [1.0, 0.0]]), np.array([[2.0, 0.0], [1.0, -1.0]]), 1e-12,
     )  # fmt: skip
     assert proper.tolist() == [True, False] and touched.tolist() == [False, True]
+
+
+def test_compiled_nearness_equals_the_trees(monkeypatch):
+    rng = np.random.default_rng(9)
+    for region in (traced_field(120, 2, seed=5), *(random_region(rng, 14, 2) for _ in range(5))):
+        index = EdgeIndex(region, 1e-9 * region.diameter)
+        v = np.concatenate([region.shell.vertices] + [h.vertices for h in region.holes])
+        p = rng.uniform(v.min(0), v.max(0), (2000, 2))
+        p[:200] = v[rng.integers(0, len(v), 200)] + rng.normal(0, 1e-9 * region.diameter, (200, 2))
+        answers = []
+        for dense in (10**9, 0):
+            monkeypatch.setattr(edge_index, "DENSE_EDGES", dense)
+            r = 0.02 * region.diameter
+            answers.append(
+                (index.within(p, r, len(region.shell)), index.near(p), index.classify(p))
+            )
+        for a, b in zip(*answers, strict=True):
+            assert np.array_equal(a, b)
+        assert answers[0][1].any() and not answers[0][1].all() and answers[0][0].any()
