@@ -249,10 +249,9 @@ def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):
     return xstart, xt, xh
 
 
-def _minus(lo, hi, n, glo, ghi, tol):
-    """Sorted disjoint intervals minus sorted disjoint gaps (pieces longer than ``tol``)."""
-    out_lo = np.empty(n + glo.shape[0] + 1)
-    out_hi = np.empty(n + glo.shape[0] + 1)
+def _minus(lo, hi, n, glo, ghi, tol, out_lo, out_hi):
+    """Sorted disjoint intervals minus sorted disjoint gaps (pieces longer than ``tol``),
+    written to ``out_lo, out_hi`` (room for ``n + len(glo) + 1``); returns their number."""
     m = 0
     g = 0
     ng = glo.shape[0]
@@ -273,7 +272,7 @@ def _minus(lo, hi, n, glo, ghi, tol):
             out_lo[m] = cur
             out_hi[m] = b
             m += 1
-    return out_lo[:m], out_hi[:m]
+    return m
 
 
 def _leaf(
@@ -332,6 +331,13 @@ def _leaf(
         )
     gi_start, gi_t, _gi_h = _hole_chords(ih1, ih2, it1, it2, inner_hole, d, s, k0, nb)
     go_start, go_t, go_h = _hole_chords(oh1, oh2, ot1, ot2, outer_hole, d, s, k0, nb)
+    # scratch for the pieces of one band (no arrays allocated per band)
+    room = 1
+    for b in range(nb):
+        room = max(room, i_m[b] + gi_start[b + 1] - gi_start[b] + 1)
+        room = max(room, o_m[b] + go_start[b + 1] - go_start[b] + 1)
+    plo, phi = np.empty(room), np.empty(room)
+    qlo, qhi = np.empty(room), np.empty(room)
     for b in range(nb):
         p0, m = i_start[b], i_m[b]
         q0, mo = o_start[b], o_m[b]
@@ -344,21 +350,21 @@ def _leaf(
         if m == 0:
             continue
         g = gi_t[gi_start[b] : gi_start[b + 1]]
-        plo, phi = _minus(i_lo[p0 : p0 + m], i_hi[p0 : p0 + m], m, g[0::2], g[1::2], tol)
+        n_p = _minus(i_lo[p0 : p0 + m], i_hi[p0 : p0 + m], m, g[0::2], g[1::2], tol, plo, phi)
         total = 0.0
-        for q in range(plo.shape[0]):
+        for q in range(n_p):
             total += phi[q] - plo[q]
         length[b] = total
         go = go_t[go_start[b] : go_start[b + 1]]
         gh = go_h[go_start[b] : go_start[b + 1]]
-        qlo, qhi = _minus(o_lo[q0 : q0 + mo], o_hi[q0 : q0 + mo], mo, go[0::2], go[1::2], 0.0)
+        n_q = _minus(o_lo[q0 : q0 + mo], o_hi[q0 : q0 + mo], mo, go[0::2], go[1::2], 0.0, qlo, qhi)
         # outer pieces holding inner length
         c = 0
         j = 0
-        for q in range(qlo.shape[0]):
-            while j < plo.shape[0] and phi[j] <= qlo[q] + tol:
+        for q in range(n_q):
+            while j < n_p and phi[j] <= qlo[q] + tol:
                 j += 1
-            if j < plo.shape[0] and plo[j] < qhi[q] - tol:
+            if j < n_p and plo[j] < qhi[q] - tol:
                 c += 1
         count[b] = c
         # holes whose outer chord overlaps the inner projection
