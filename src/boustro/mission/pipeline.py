@@ -26,6 +26,7 @@ from ..plan import (
     drive_vehicle,
     inner_field,
     order_lanes,
+    vehicle_stats,
 )
 from ..sensors import SensorSpacing
 from ..vehicle import Vehicle
@@ -204,6 +205,8 @@ def plan_area(
         if field is not None or vehicle is not None:  # the costs of what is flown
 
             def finish(plan: Plan) -> Plan:
+                if field is None and vehicle is not None:  # its statistics, no waypoints
+                    return dataclasses.replace(plan, stats=vehicle_stats(plan, vehicle))
                 return _drive(frame, Planned(plan, None, None), field, passes, vehicle, False).plan  # type: ignore[arg-type]
 
         skips = vehicle is not None and vehicle.turn_radius > 0  # every other lane possible

@@ -12,7 +12,7 @@ from .region import PlanOptions, plan_region
 from .region_opt import SWEEP_SEARCH, choose_sweep, optimize_region
 from .routing import Route, Router
 from .types import KINDS, Layout, Plan, PlanCell, PlanStats
-from .vehicle_path import drive_vehicle, order_lanes
+from .vehicle_path import drive_vehicle, order_lanes, vehicle_stats
 
 __all__ = [
     "KINDS",
@@ -50,4 +50,5 @@ __all__ = [
     "swath_polygons",
     "trace_region",
     "trapezoids",
+    "vehicle_stats",
 ]

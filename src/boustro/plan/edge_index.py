@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..geometry.region import Region, _point_segment_distance
+from .visibility_kernel import DENSE_EDGES, points_near
 
 __all__ = ["CHUNK", "EdgeIndex"]
 
@@ -65,6 +66,8 @@ class EdgeIndex:
 
     def near(self, p: NDArray[np.float64]) -> NDArray[np.bool_]:
         """``(P,)``: whether each point is within ``tol`` of an edge."""
+        if len(self.e1) <= DENSE_EDGES:  # compiled, every pair: the same decisions
+            return points_near(p, self.e1, self.e2, self.tol)
         pad = 2 * self.tol
         i, e = self.box_pairs(p - pad, p + pad)
         out = np.zeros(len(p), dtype=bool)
@@ -76,6 +79,8 @@ class EdgeIndex:
     def within(self, p: NDArray[np.float64], r: float, n_edges: int) -> NDArray[np.bool_]:
         """``(P,)``: whether each point is within ``r`` of one of the first ``n_edges`` edges
         (the shell's)."""
+        if len(self.e1) <= DENSE_EDGES:
+            return points_near(p, self.e1[:n_edges], self.e2[:n_edges], r)
         pad = r * (1 + 1e-6) + self.tol
         i, e = self.box_pairs(p - pad, p + pad)
         keep = e < n_edges

@@ -22,7 +22,7 @@ from .cells import _TOL, _check_float
 from .inside import inside_layout, outside_length
 from .lanes import Lanes, region_lanes
 from .region_opt import _cells_for_sweep, _estimate, choose_sweep, optimize_region
-from .routing import Router
+from .routing import Router, router_for
 from .tour import (
     _boundary_pass,
     _chain_pass,
@@ -378,7 +378,7 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
             f"{len(cut)} hole(s) cut lanes and hole passes are off: the area along their edges "
             "is not fully covered"
         )
-    router = Router(r, reach=0.0 if opts.keep_inside else max(opts.reach, opts.turnaround))
+    router = router_for(r, 0.0 if opts.keep_inside else float(max(opts.reach, opts.turnaround)))
     start = opts.start
     if start is None:
         start_pt = r.shell.vertices[0]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
@@ -11,8 +12,10 @@ from numpy.typing import ArrayLike, NDArray
 from ..geometry.region import Region, as_region
 from .edge_index import CHUNK, EdgeIndex
 from .route_domain import MAX_NODES, inner_domains, nearest_in
+from .straight_moves import straight_moves
+from .visibility_kernel import DENSE_EDGES, segment_crossings
 
-__all__ = ["Route", "Router"]
+__all__ = ["Route", "Router", "router_for"]
 
 #: Domain vertices tried at a time from a point whose nearest domain point is hidden.
 _NEAREST = 16
@@ -151,6 +154,13 @@ class Router:
                 return False, outside
         return True, outside
 
+    def _straight_many(
+        self, p: NDArray[np.float64], q: NDArray[np.float64]
+    ) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
+        """:meth:`_straight` of the moves ``p[i] -> q[i]`` at once
+        (:func:`~boustro.plan.straight_moves.straight_moves`)."""
+        return straight_moves(self, p, q)
+
     def _visible_many(self, a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.bool_]:
         """Whether each segment ``a[i] -> b[i]`` stays in the closed area, ``(M,)``.
 
@@ -164,6 +174,9 @@ class Router:
             )
         e1, e2 = self._e1, self._e2
         tol = self.tol
+        if len(e1) <= DENSE_EDGES:  # compiled, every pair: the same tests as below
+            hit, touched = segment_crossings(a, b, e1, e2, tol)
+            return self._decide(a, b, ~hit, touched)
         mi, ei = self._index.box_pairs(np.minimum(a, b) - tol, np.maximum(a, b) + tol)
         pa, pb = a[mi], b[mi]
         q1, q2 = e1[ei], e2[ei]
@@ -188,6 +201,18 @@ class Router:
         )
         ok = np.bincount(mi[proper], minlength=m) == 0
         touched = np.bincount(mi[on], minlength=m) > 0
+        return self._decide(a, b, ok, touched)
+
+    def _decide(
+        self,
+        a: NDArray[np.float64],
+        b: NDArray[np.float64],
+        ok: NDArray[np.bool_],
+        touched: NDArray[np.bool_],
+    ) -> NDArray[np.bool_]:
+        """Visibility of segments that cross no edge (``ok``): by the midpoint's class, or
+        piece by piece where they touch a vertex."""
+        m = len(a)
         simple = ok & ~touched
         res = np.zeros(m, dtype=bool)
         if simple.any():
@@ -242,6 +267,22 @@ class Router:
         ok, outside = self._straight(p, q)
         if ok:
             return Route(np.stack([p, q]), float(np.linalg.norm(q - p)), outside, True)
+        return self._detour(p, q)
+
+    def paths(self, p: ArrayLike, q: ArrayLike) -> list[Route]:
+        """``[path(p[i], q[i]) ...]``, the straight moves tested all at once."""
+        p = np.asarray(p, dtype=np.float64).reshape(-1, 2)
+        q = np.asarray(q, dtype=np.float64).reshape(-1, 2)
+        ok, outside = self._straight_many(p, q)
+        return [
+            Route(np.stack([a, b]), float(np.linalg.norm(b - a)), float(o), True)
+            if good
+            else self._detour(a, b)
+            for a, b, good, o in zip(p, q, ok, outside, strict=True)
+        ]
+
+    def _detour(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> Route:
+        """The move from ``p`` to ``q`` where the straight one is not allowed."""
         pa, qa = self.anchor(np.stack([p, q]))
         legs = float(np.linalg.norm(pa - p) + np.linalg.norm(qa - q))
         if self._visible_many(pa[None], qa[None])[0]:
@@ -388,3 +429,10 @@ class Router:
                 d = sub.distances(pd[idx]) + leg[idx, None] + leg[None, idx]
                 out[np.ix_(idx, idx)] = d
         return out
+
+
+@lru_cache(maxsize=8)
+def router_for(region: Region, reach: float) -> Router:
+    """The :class:`Router` of ``region`` (by identity) and ``reach``, built once: a search
+    plans many layouts of one area, and the graph depends on the area only."""
+    return Router(region, reach=reach)

@@ -253,6 +253,8 @@ class _Driver:
         self.hole_length = 0.0
         self.boundary_length = 0.0
         self.blocked: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
+        # connecting moves, routed together at the end: (waypoint index, target, transect)
+        self.moves: list[tuple[int, NDArray[np.float64], int]] = []
 
     def point(self, p: NDArray[np.float64], kind: str, transect: int) -> None:
         self.points.append(p)
@@ -275,15 +277,34 @@ class _Driver:
         self.positions.append(position)
 
     def move_to(self, target: NDArray[np.float64], next_transect: int) -> None:
-        """The connecting move from the last waypoint (its corners become ``via`` points)."""
+        """The connecting move from the last waypoint (its corners become ``via`` points,
+        inserted by :meth:`_route_moves`: a move starts at a waypoint, never at a corner)."""
         if not self.points:
             return
-        route = self.router.path(self.points[-1], target)
-        self.outside += route.outside
-        if not route.found:
-            self.blocked.append((self.points[-1], target))
-        for p in route.points[1:-1]:
-            self.point(p, "via", next_transect)
+        self.moves.append((len(self.points), target, next_transect))
+
+    def _route_moves(self) -> None:
+        """Route every recorded move at once (:meth:`Router.paths`) and insert its corners."""
+        if not self.moves:
+            return
+        starts = np.array([self.points[i - 1] for i, _, _ in self.moves])
+        targets = np.array([t for _, t, _ in self.moves])
+        routes = self.router.paths(starts, targets)
+        points, kinds, lane_of = self.points, self.kinds, self.lane_of
+        self.points, self.kinds, self.lane_of = [], [], []
+        at = 0
+        for (i, target, ti), route in zip(self.moves, routes, strict=True):
+            for j in range(at, i):
+                self.point(points[j], kinds[j], lane_of[j])
+            at = i
+            self.outside += route.outside
+            if not route.found:
+                self.blocked.append((points[i - 1], target))
+            for p in route.points[1:-1]:
+                self.point(p, "via", ti)
+        for j in range(at, len(points)):
+            self.point(points[j], kinds[j], lane_of[j])
+        self.moves = []
 
     def chain(
         self, pts: NDArray[np.float64], angle: float, cell: int, origin: NDArray[np.float64]
@@ -344,6 +365,7 @@ class _Driver:
         return total
 
     def result(self) -> _Path:
+        self._route_moves()
         assert set(self.kinds) <= set(KINDS)
         return _Path(
             waypoints=np.asarray(self.points),

@@ -22,10 +22,10 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
 from ..geometry.region import Region
-from ..vehicle import Turn, Vehicle, lane_order, turn_between
-from .types import Plan
+from ..vehicle import Turn, Vehicle, dubins_paths, lane_order, reeds_shepp_paths, turns_between
+from .types import Plan, PlanStats
 
-__all__ = ["drive_vehicle", "order_lanes"]
+__all__ = ["drive_vehicle", "order_lanes", "vehicle_stats"]
 
 _EXITS = ("end", "run_out")
 _ENTRIES = ("start", "run_in")
@@ -58,17 +58,55 @@ def drive_vehicle(
         >>> turned.stats.n_turns, round(turned.stats.turn_length, 2)  # every other lane
         (10, 270.36)
     """
+    plan, v, tol = _prepare(plan, vehicle, tolerance)
+    holes_only = field is None
+    return _turn_moves(plan, v, vehicle, tol, plan.region if field is None else field, holes_only)
+
+
+def vehicle_stats(
+    plan: Plan, vehicle: Vehicle, *, tolerance: float = 0.05, field: Region | None = None
+) -> PlanStats:
+    """``drive_vehicle(plan, vehicle, tolerance=tolerance, field=field).stats`` without
+    building its waypoints where no turn has to be tested against the field or holes (the
+    turns' lengths from their words): what a search needs of each layout's plan."""
+    region = plan.region if field is None else field
+    allowed = None if region is None else _Allowed(region, field is None)
+    if vehicle.turn_radius == 0 or (allowed is not None and allowed.tests):
+        return drive_vehicle(plan, vehicle, tolerance=tolerance, field=field).stats
+    plan, v, _ = _prepare(plan, vehicle, tolerance)
+    w = plan.waypoints
+    moves = _moves(plan)
+    starts, goals = _poses(plan, moves)
+    paths = reeds_shepp_paths if v.reverse else dubins_paths
+    words = paths(starts, goals, v.turn_radius) if moves else []
+    replaced = curves = 0.0
+    for (i, j), word in zip(moves, words, strict=True):  # in the order drive_vehicle sums
+        replaced += float(np.linalg.norm(np.diff(w[i : j + 1], axis=0), axis=1).sum())
+        curves += word.length
+    return _stats(plan, replaced, curves)
+
+
+def _prepare(plan: Plan, vehicle: Vehicle, tolerance: float) -> tuple[Plan, Vehicle, float]:
+    """The arguments checked; the plan reordered (a convex one), the vehicle and tolerance in
+    the plan's units."""
     if not isinstance(vehicle, Vehicle):
         raise InvalidParameterError(f"vehicle must be a boustro.vehicle.Vehicle, got {vehicle!r}")
     if not (math.isfinite(tolerance) and tolerance > 0):
         raise InvalidParameterError(f"tolerance must be a finite number > 0, got {tolerance!r}")
     scale = plan.ground_scale
     v = dataclasses.replace(vehicle, turn_radius=vehicle.turn_radius * scale)
-    tol = tolerance * scale
     if plan.region is None and plan.headland == 0:
         plan = _reorder(plan, v)
-    holes_only = field is None
-    return _turn_moves(plan, v, vehicle, tol, plan.region if field is None else field, holes_only)
+    return plan, v, tolerance * scale
+
+
+def _poses(plan: Plan, moves: list[tuple[int, int]]) -> tuple[list[tuple], list[tuple]]:
+    """The exit and entry poses ``(x, y, heading)`` of the moves."""
+    w = plan.waypoints
+    angles = plan.transect_angle()
+    starts = [(*w[i], _heading(w, i, -1, float(angles[plan.lane[i]]))) for i, _ in moves]
+    goals = [(*w[j], _heading(w, j, +1, float(angles[plan.lane[j]]))) for _, j in moves]
+    return starts, goals
 
 
 class _Allowed:
@@ -83,6 +121,8 @@ class _Allowed:
         if holes_only:
             holes = [shapely.Polygon(h.vertices).buffer(-tol) for h in region.holes]
             self.forbidden = shapely.union_all([h for h in holes if not h.is_empty])
+            if self.forbidden.is_empty:  # no hole: nothing to test
+                self.forbidden = None
             self.field = None
         else:
             rings = [h.vertices for h in region.holes]
@@ -91,6 +131,11 @@ class _Allowed:
         for geom in (self.forbidden, self.field):
             if geom is not None:
                 shapely.prepare(geom)
+
+    @property
+    def tests(self) -> bool:
+        """Whether a turn can be refused at all (there is a field, or a hole)."""
+        return self.field is not None or self.forbidden is not None
 
     def leaves(self, points: NDArray[np.float64]) -> bool:
         line = self.shapely.LineString(points)
@@ -177,15 +222,12 @@ def _turn_moves(
 ) -> Plan:
     """Every connecting move replaced by the vehicle's turn (where it is allowed)."""
     w = plan.waypoints
-    angles = plan.transect_angle()
     moves = _moves(plan)
     turns: dict[int, tuple[int, Turn]] = {}
     kept = 0
     allowed = None if field is None else _Allowed(field, holes_only)
-    for i, j in moves:
-        a = _heading(w, i, -1, float(angles[plan.lane[i]]))
-        b = _heading(w, j, +1, float(angles[plan.lane[j]]))
-        turn = turn_between(v, (*w[i], a), (*w[j], b), tol)
+    starts, goals = _poses(plan, moves)
+    for (i, j), turn in zip(moves, turns_between(v, starts, goals, tol), strict=True):
         if allowed is not None and allowed.leaves(turn.points):
             kept += 1
             continue
@@ -215,22 +257,27 @@ def _turn_moves(
             f"{kept} of {len(moves)} moves between passes are straight or routed: the turn of "
             f"radius {ground.turn_radius:g} m would {what}"
         )
-    s = plan.stats
-    scale = plan.ground_scale
-    polyline = float(np.linalg.norm(np.diff(w, axis=0), axis=1).sum())
-    path_length = (polyline - replaced + curves) / scale
-    duration = None
-    if s.speed is not None:
-        duration = path_length / s.speed + s.n_turns * s.turn_time
-    stats = dataclasses.replace(
-        s, path_length=path_length, duration=duration, turn_length=curves / scale
-    )
     return dataclasses.replace(
         plan,
         waypoints=np.asarray(points),
         kinds=tuple(kinds),
         lane=np.asarray(lane, dtype=np.int64),
-        stats=stats,
+        stats=_stats(plan, replaced, curves),
         notes=tuple(notes),
         vehicle=ground,
+    )
+
+
+def _stats(plan: Plan, replaced: float, curves: float) -> PlanStats:
+    """The plan's statistics with the moves of length ``replaced`` driven as turns of length
+    ``curves`` (plan units)."""
+    s = plan.stats
+    scale = plan.ground_scale
+    polyline = float(np.linalg.norm(np.diff(plan.waypoints, axis=0), axis=1).sum())
+    path_length = (polyline - replaced + curves) / scale
+    duration = None
+    if s.speed is not None:
+        duration = path_length / s.speed + s.n_turns * s.turn_time
+    return dataclasses.replace(
+        s, path_length=path_length, duration=duration, turn_length=curves / scale
     )

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InvalidParameterError
 from .curves import Word, mod2pi, to_local
 
-__all__ = ["DUBINS_WORDS", "dubins_length", "dubins_path", "dubins_words"]
+__all__ = ["DUBINS_WORDS", "dubins_length", "dubins_path", "dubins_paths", "dubins_words"]
 
 #: The six words, in the order of :func:`dubins_words`.
 DUBINS_WORDS = ("LSL", "RSR", "LSR", "RSL", "RLR", "LRL")
@@ -119,3 +119,30 @@ def dubins_path(start: ArrayLike, goal: ArrayLike, radius: float) -> Word:
     best = min((float(np.sum(w)), name) for name, w in words.items() if np.all(np.isfinite(w)))
     lengths = tuple(float(v) for v in words[best[1]])
     return Word(best[1], lengths, r * best[0])
+
+
+#: Rank of each word of :data:`DUBINS_WORDS` by name: :func:`dubins_path` breaks ties of
+#: length by the name.
+_RANK = np.argsort(np.argsort(np.array(DUBINS_WORDS)))
+
+
+def dubins_paths(starts: ArrayLike, goals: ArrayLike, radius: float) -> list[Word]:
+    """:func:`dubins_path` of each pair of poses ``(M, 3)``, the closed forms evaluated for all
+    pairs at once (the same word and lengths as one pair at a time)."""
+    r = _check_radius(radius)
+    s = np.asarray(starts, dtype=np.float64).reshape(-1, 3)
+    g = np.asarray(goals, dtype=np.float64).reshape(-1, 3)
+    words = dubins_words(*_local(s, g, r))
+    lengths = np.stack([words[name] for name in DUBINS_WORDS], axis=1)  # (M, 6, 3)
+    exists = np.all(np.isfinite(lengths), axis=-1)
+    total = np.where(exists, np.sum(lengths, axis=-1), np.inf)
+    low = total.min(axis=1, initial=np.inf)
+    pick = np.argmin(np.where(total == low[:, None], _RANK[None], len(_RANK)), axis=1)
+    out = []
+    for i, k in enumerate(pick):
+        if not exists[i, k]:  # no word (never for finite poses): dubins_path's error
+            out.append(dubins_path(s[i], g[i], r))
+            continue
+        row = lengths[i, k]
+        out.append(Word(DUBINS_WORDS[k], tuple(float(v) for v in row), r * float(total[i, k])))
+    return out

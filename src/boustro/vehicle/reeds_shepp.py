@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from .curves import Word, to_local
 from .dubins import _check_radius, _local
 
-__all__ = ["reeds_shepp_length", "reeds_shepp_path", "reeds_shepp_words"]
+__all__ = ["reeds_shepp_length", "reeds_shepp_path", "reeds_shepp_paths", "reeds_shepp_words"]
 
 _ZERO = 10 * np.finfo(np.float64).eps
 _PI = math.pi
@@ -191,6 +191,26 @@ def reeds_shepp_path(start: ArrayLike, goal: ArrayLike, radius: float) -> Word:
     )
     letters, w = words[best[1]]
     return Word(letters, tuple(float(v) for v in w), r * best[0])
+
+
+def reeds_shepp_paths(starts: ArrayLike, goals: ArrayLike, radius: float) -> list[Word]:
+    """:func:`reeds_shepp_path` of each pair of poses ``(M, 3)``, the candidates evaluated for
+    all pairs at once (the same word and lengths as one pair at a time)."""
+    r = _check_radius(radius)
+    s = np.asarray(starts, dtype=np.float64).reshape(-1, 3)
+    g = np.asarray(goals, dtype=np.float64).reshape(-1, 3)
+    words = reeds_shepp_words(*_local(s, g, r))
+    exists = np.stack([np.all(np.isfinite(w), axis=-1) for _, w in words], axis=1)
+    total = np.stack([np.sum(np.abs(w), axis=-1) for _, w in words], axis=1)
+    pick = np.argmin(np.where(exists, total, np.inf), axis=1)  # ties: the first candidate
+    out = []
+    for i, k in enumerate(pick):
+        if not exists[i, k]:  # no word: reeds_shepp_path's error
+            out.append(reeds_shepp_path(s[i], g[i], r))
+            continue
+        letters, w = words[k]
+        out.append(Word(letters, tuple(float(v) for v in w[i]), r * float(total[i, k])))
+    return out
 
 
 _ = to_local  # re-used by callers through .curves

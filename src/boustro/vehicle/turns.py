@@ -18,11 +18,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .curves import Word, sample_word
-from .dubins import dubins_length, dubins_path
+from .dubins import dubins_length, dubins_path, dubins_paths
 from .model import Vehicle
-from .reeds_shepp import reeds_shepp_length, reeds_shepp_path
+from .reeds_shepp import reeds_shepp_length, reeds_shepp_path, reeds_shepp_paths
 
-__all__ = ["Turn", "lane_order", "pose_length", "skip_order", "turn_between", "turn_length"]
+__all__ = [
+    "Turn",
+    "lane_order",
+    "pose_length",
+    "skip_order",
+    "turn_between",
+    "turn_length",
+    "turns_between",
+]
 
 
 def pose_length(vehicle: Vehicle, start: ArrayLike, goal: ArrayLike) -> NDArray[np.float64]:
@@ -92,6 +100,24 @@ def turn_between(
     poses, gear = sample_word(s, word, vehicle.turn_radius, tolerance)
     poses[-1] = g  # exact at the goal (the sampled end differs by rounding only)
     return Turn(poses[:, :2], poses[:, 2], gear, word.length, word.letters)
+
+
+def turns_between(
+    vehicle: Vehicle, starts: ArrayLike, goals: ArrayLike, tolerance: float = 0.05
+) -> list[Turn]:
+    """:func:`turn_between` of each pair of poses ``(M, 3)``, the words found for all pairs at
+    once (:func:`~boustro.vehicle.dubins.dubins_paths`; the same turns)."""
+    s = np.asarray(starts, dtype=np.float64).reshape(-1, 3)
+    g = np.asarray(goals, dtype=np.float64).reshape(-1, 3)
+    if vehicle.turn_radius == 0 or len(s) == 0:
+        return [turn_between(vehicle, a, b, tolerance) for a, b in zip(s, g, strict=True)]
+    paths = reeds_shepp_paths if vehicle.reverse else dubins_paths
+    out = []
+    for a, b, word in zip(s, g, paths(s, g, vehicle.turn_radius), strict=True):
+        poses, gear = sample_word(a, word, vehicle.turn_radius, tolerance)
+        poses[-1] = b
+        out.append(Turn(poses[:, :2], poses[:, 2], gear, word.length, word.letters))
+    return out
 
 
 def skip_order(n: int) -> list[int]:

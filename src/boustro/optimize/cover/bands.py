@@ -161,30 +161,54 @@ def _band_intervals(h1, h2, t1, t2, d, s, reach, k0, nb):
     for b in range(nb):
         for side in range(2):
             j = 2 * b + side
-            seg = np.sort(xt[xstart[j] : xstart[j + 1]])
-            for q in range(0, seg.shape[0] - 1, 2):
-                ilo[fill[b]] = seg[q]
-                ihi[fill[b]] = seg[q + 1]
+            _sort_keys(xt, xstart[j], xstart[j + 1])
+            for q in range(xstart[j], xstart[j + 1] - 1, 2):
+                ilo[fill[b]] = xt[q]
+                ihi[fill[b]] = xt[q + 1]
                 fill[b] += 1
-    # sort and merge per band, in place; mstart/mcount index the merged intervals
+    # sort and merge per band, in place; mstart/mcount index the merged intervals (the union
+    # does not depend on the order of intervals with equal starts)
     mcount = np.zeros(nb, dtype=np.int64)
     for b in range(nb):
         p0, p1 = start[b], fill[b]
         if p1 <= p0:
             continue
-        order = np.argsort(ilo[p0:p1])
-        slo = ilo[p0:p1][order]
-        shi = ihi[p0:p1][order]
+        _sort_pairs(ilo, ihi, p0, p1)
         m = 0
-        for q in range(p1 - p0):
-            if m > 0 and slo[q] <= ihi[p0 + m - 1]:
-                ihi[p0 + m - 1] = max(ihi[p0 + m - 1], shi[q])
+        for q in range(p0, p1):
+            if m > 0 and ilo[q] <= ihi[p0 + m - 1]:
+                ihi[p0 + m - 1] = max(ihi[p0 + m - 1], ihi[q])
             else:
-                ilo[p0 + m] = slo[q]
-                ihi[p0 + m] = shi[q]
+                ilo[p0 + m] = ilo[q]
+                ihi[p0 + m] = ihi[q]
                 m += 1
         mcount[b] = m
     return start, mcount, ilo, ihi
+
+
+def _sort_pairs(key, other, p0, p1):
+    """Sort ``key[p0:p1]`` in place, ``other[p0:p1]`` along with it (insertion sort: a band
+    holds few intervals, and no array is allocated)."""
+    for q in range(p0 + 1, p1):
+        k, o = key[q], other[q]
+        j = q - 1
+        while j >= p0 and key[j] > k:
+            key[j + 1] = key[j]
+            other[j + 1] = other[j]
+            j -= 1
+        key[j + 1] = k
+        other[j + 1] = o
+
+
+def _sort_keys(key, p0, p1):
+    """Sort ``key[p0:p1]`` in place (insertion sort)."""
+    for q in range(p0 + 1, p1):
+        k = key[q]
+        j = q - 1
+        while j >= p0 and key[j] > k:
+            key[j + 1] = key[j]
+            j -= 1
+        key[j + 1] = k
 
 
 def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):
@@ -221,17 +245,13 @@ def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):
                 xh[fill[b]] = hole[i]
                 fill[b] += 1
     for b in range(nb):
-        p0, p1 = xstart[b], xstart[b + 1]
-        order = np.argsort(xt[p0:p1])
-        xt[p0:p1] = xt[p0:p1][order]
-        xh[p0:p1] = xh[p0:p1][order]
+        _sort_pairs(xt, xh, xstart[b], xstart[b + 1])
     return xstart, xt, xh
 
 
-def _minus(lo, hi, n, glo, ghi, tol):
-    """Sorted disjoint intervals minus sorted disjoint gaps (pieces longer than ``tol``)."""
-    out_lo = np.empty(n + glo.shape[0] + 1)
-    out_hi = np.empty(n + glo.shape[0] + 1)
+def _minus(lo, hi, n, glo, ghi, tol, out_lo, out_hi):
+    """Sorted disjoint intervals minus sorted disjoint gaps (pieces longer than ``tol``),
+    written to ``out_lo, out_hi`` (room for ``n + len(glo) + 1``); returns their number."""
     m = 0
     g = 0
     ng = glo.shape[0]
@@ -252,7 +272,7 @@ def _minus(lo, hi, n, glo, ghi, tol):
             out_lo[m] = cur
             out_hi[m] = b
             m += 1
-    return out_lo[:m], out_hi[:m]
+    return m
 
 
 def _leaf(
@@ -311,6 +331,13 @@ def _leaf(
         )
     gi_start, gi_t, _gi_h = _hole_chords(ih1, ih2, it1, it2, inner_hole, d, s, k0, nb)
     go_start, go_t, go_h = _hole_chords(oh1, oh2, ot1, ot2, outer_hole, d, s, k0, nb)
+    # scratch for the pieces of one band (no arrays allocated per band)
+    room = 1
+    for b in range(nb):
+        room = max(room, i_m[b] + gi_start[b + 1] - gi_start[b] + 1)
+        room = max(room, o_m[b] + go_start[b + 1] - go_start[b] + 1)
+    plo, phi = np.empty(room), np.empty(room)
+    qlo, qhi = np.empty(room), np.empty(room)
     for b in range(nb):
         p0, m = i_start[b], i_m[b]
         q0, mo = o_start[b], o_m[b]
@@ -323,21 +350,21 @@ def _leaf(
         if m == 0:
             continue
         g = gi_t[gi_start[b] : gi_start[b + 1]]
-        plo, phi = _minus(i_lo[p0 : p0 + m], i_hi[p0 : p0 + m], m, g[0::2], g[1::2], tol)
+        n_p = _minus(i_lo[p0 : p0 + m], i_hi[p0 : p0 + m], m, g[0::2], g[1::2], tol, plo, phi)
         total = 0.0
-        for q in range(plo.shape[0]):
+        for q in range(n_p):
             total += phi[q] - plo[q]
         length[b] = total
         go = go_t[go_start[b] : go_start[b + 1]]
         gh = go_h[go_start[b] : go_start[b + 1]]
-        qlo, qhi = _minus(o_lo[q0 : q0 + mo], o_hi[q0 : q0 + mo], mo, go[0::2], go[1::2], 0.0)
+        n_q = _minus(o_lo[q0 : q0 + mo], o_hi[q0 : q0 + mo], mo, go[0::2], go[1::2], 0.0, qlo, qhi)
         # outer pieces holding inner length
         c = 0
         j = 0
-        for q in range(qlo.shape[0]):
-            while j < plo.shape[0] and phi[j] <= qlo[q] + tol:
+        for q in range(n_q):
+            while j < n_p and phi[j] <= qlo[q] + tol:
                 j += 1
-            if j < plo.shape[0] and plo[j] < qhi[q] - tol:
+            if j < n_p and plo[j] < qhi[q] - tol:
                 c += 1
         count[b] = c
         # holes whose outer chord overlaps the inner projection
@@ -422,7 +449,8 @@ def _compiled() -> Any:
         return _all
     jit = numba.njit(cache=True)
     g = globals()
-    for name in ("_project", "_band_intervals", "_hole_chords", "_minus", "_rigid_cuts", "_leaf"):
+    for name in ("_project", "_sort_pairs", "_sort_keys", "_band_intervals", "_hole_chords",
+                 "_minus", "_rigid_cuts", "_leaf"):  # fmt: skip
         g[name] = jit(g[name])
     return jit(_all)
 
