@@ -381,6 +381,26 @@ def test_serve_binds_to_this_machine_by_default(monkeypatch, capsys):
     assert "http://127.0.0.1:8123/" in err
     code, _, err = run_cli(capsys, "serve", "--port", "70000")
     assert code == 2 and "--port" in err
+    code, _, err = run_cli(capsys, "serve", "--threads", "0")
+    assert code == 2 and "--threads" in err
+
+
+def test_serve_plans_on_one_torch_thread_and_restores_them(monkeypatch, capsys):
+    uvicorn = pytest.importorskip("uvicorn")
+    torch = pytest.importorskip("torch")
+    during = []
+    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: during.append(torch.get_num_threads()))
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        assert run_cli(capsys, "serve")[0] == 0 and during == [1]
+        assert torch.get_num_threads() == 2
+        assert run_cli(capsys, "serve", "--threads", "3")[0] == 0 and during == [1, 3]
+        assert torch.get_num_threads() == 2
+    finally:
+        torch.set_num_threads(before)
+    code, _, err = run_cli(capsys, "serve", "--port", "70000")
+    assert code == 2 and "--port" in err
     code, _, err = run_cli(capsys, "serve", "--tiles", "file:///etc/passwd")
     assert code == 2 and "--tiles must be an http(s) URL" in err
 
