@@ -21,8 +21,10 @@ from boustro.io import embedded_field
 from boustro.io.formats import FORMATS
 from boustro.mission import plan_area
 from boustro.web import MAX_BODY_BYTES, MAX_VERTICES, create_app
+from boustro.web import api as web_api
 from boustro.web import app as web_app
 from boustro.web import server as web_server
+from boustro.web.recent import RecentPlans
 
 from .conftest import run_cli
 from .test_formats import assert_qgc_plan
@@ -197,6 +199,36 @@ def test_every_format_is_exported_and_read_back(client, embedded, mission, tmp_p
     assert_qgc_plan(json.loads(got["plan"].read_text()), mission, speed=3.0)
     loader = mavwp.MAVWPLoader()
     assert loader.load(str(got["wpl"])) == len(lonlat) + 2  # home, speed, the waypoints
+
+
+def test_a_download_of_the_plan_just_answered_is_not_planned_again(embedded, monkeypatch):
+    calls = []
+    real = web_api.plan_area
+    monkeypatch.setattr(web_api, "plan_area", lambda *a, **k: calls.append(1) or real(*a, **k))
+    body = {"area": embedded, "options": {"spacing": 10, "altitude": 40}}
+    with testclient.TestClient(create_app(), base_url="http://127.0.0.1") as c:
+        planned = c.post("/api/plan", json=body)
+        steps = [part.split(";")[0] for part in planned.headers["server-timing"].split(", ")]
+        assert planned.status_code == 200 and steps == ["parse", "plan", "answer", "encode"]
+        assert len(calls) == 1
+        # the same area and options (in another order), plus a format: the plan answered
+        same = {"format": "plan", "options": {"altitude": 40, "spacing": 10}, "area": embedded}
+        kept = c.post("/api/export", json=same)
+        assert kept.status_code == 200 and len(calls) == 1
+        other = {**body, "options": {"spacing": 12, "altitude": 40}, "format": "plan"}
+        assert c.post("/api/export", json=other).status_code == 200 and len(calls) == 2
+    assert kept.content == web_api.export_request({**body, "format": "plan"})[0]  # planned anew
+    assert len(calls) == 3
+
+
+def test_recent_plans_keep_the_last_few():
+    recent = RecentPlans(size=2)
+    bodies = [{"area": {"type": "Polygon", "n": k}, "options": {"spacing": 10}} for k in range(3)]
+    for k, body in enumerate(bodies):
+        recent.put(body, [k])  # type: ignore[list-item]
+    assert recent.get(bodies[0]) is None and recent.get(bodies[2]) == [2] and len(recent) == 2
+    assert recent.get({**bodies[1], "format": "kml"}) == [1]
+    assert recent.get({"area": float("nan")}) is None and recent.get([]) is None
 
 
 def test_a_mission_format_without_an_altitude_says_so(client, embedded):
