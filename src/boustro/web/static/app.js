@@ -18,7 +18,10 @@ const state = {
   planSeq: 0,           // plans drawn
   errorSeq: 0,          // errors shown
   timings: [],          // ms from the last edit to the drawn plan, per plan
-  serverTimings: [],    // ms of planning in the server (its Server-Timing header), per plan
+  serverTimings: [],    // ms of planning in the server (its Server-Timing "plan"), per plan
+  phases: [],           // per plan: where its ms went (see replan), from edit to frame
+  sentBody: null,       // the request last sent to /api/plan (an edit that changes nothing
+                        // is not planned again)
   lastPlan: null,
 };
 window.boustro = state;
@@ -203,11 +206,29 @@ function request(extra) {
 }
 
 // -- planning as the user edits ----------------------------------------------------------------
+// A committed edit (a closed drawing, a dragged vertex dropped, a file, a choice, a field left
+// or Enter) is planned at once; typing in a field waits TYPING_MS after the last key, so that
+// "12" is not planned as "1" first. An edit that leaves the request as it was plans nothing.
+const TYPING_MS = 60;
+// The estimate before planning is asked only of a plan still running after ESTIMATE_AFTER_MS
+// (a quick plan needs no bar), and the bar itself shows from then on.
+const ESTIMATE_AFTER_MS = 150;
 let timer = null;
-function edited() {
-  state.lastEdit = performance.now();
+function typing(e) {
+  return !!e && e.type === "input" && e.target instanceof HTMLInputElement
+    && e.target.type !== "checkbox";
+}
+
+function edited(e) {
   clearTimeout(timer);
-  timer = setTimeout(replan, 60);
+  if (typing(e)) {
+    state.lastEdit = performance.now();
+    timer = setTimeout(replan, TYPING_MS);
+    return;
+  }
+  if (state.outer.length >= 3 && JSON.stringify(request()) === state.sentBody) return;
+  state.lastEdit = performance.now();
+  replan();
 }
 
 async function postJSON(url, body) {
@@ -220,6 +241,7 @@ async function errorOf(r) {
 }
 
 function progress(on, seconds, text) {
+  clearTimeout(progress.timer);
   $("progress").hidden = !on;
   const bar = $("bar");
   bar.style.transition = "none";
@@ -235,26 +257,48 @@ function progress(on, seconds, text) {
   }
 }
 
+function serverTiming(r) {
+  // {parse, plan, answer, encode} in ms, from the answer's Server-Timing header
+  const out = {};
+  for (const m of (r.headers.get("Server-Timing") || "").matchAll(/(\w+);dur=([0-9.]+)/g)) {
+    out[m[1]] = Number(m[2]);
+  }
+  return out;
+}
+
+function askEstimate(text, plan) {
+  // a plan still running: the bar, filled over the estimate when that says more than 0.5 s
+  if (!state.inFlight || state.planNo !== plan) return;
+  progress(true, 0, "planning…");
+  postJSON("/api/estimate", JSON.parse(text)).then(async (r) => {
+    if (!r.ok || !state.inFlight || state.planNo !== plan) return;
+    const f = (await r.json()).fields[0];
+    if (f && f.seconds > 0.5 && state.inFlight && state.planNo === plan) {
+      progress(true, f.seconds, f.text);
+    }
+  }).catch(() => {});
+}
+
 async function replan() {
   if (state.outer.length < 3) return;
-  if (state.inFlight) { state.pending = true; return; }
+  const text = JSON.stringify(request());
+  if (state.inFlight) { state.pending = text !== state.sentBody; return; }
   state.inFlight = true;
   state.pending = false;
-  const body = request();
-  progress(true, 0, "planning…");
-  postJSON("/api/estimate", body).then(async (r) => {
-    if (!r.ok || !state.inFlight) return;
-    const est = await r.json();
-    const f = est.fields[0];
-    if (f && f.seconds > 0.5) progress(true, f.seconds, f.text);
-  }).catch(() => {});
+  state.sentBody = text;
+  const plan = state.planNo = (state.planNo || 0) + 1;
+  const t = { edit: state.lastEdit, sent: performance.now() };
+  progress.timer = setTimeout(() => askEstimate(text, plan), ESTIMATE_AFTER_MS);
   try {
-    const r = await postJSON("/api/plan", body);
+    const r = await fetch("/api/plan", { method: "POST",
+      headers: { "Content-Type": "application/json" }, body: text });
+    t.answered = performance.now();
     if (!r.ok) { showError(await errorOf(r)); clearPlan(); }
     else if (!state.pending) {
-      const timing = (r.headers.get("Server-Timing") || "").match(/plan;dur=([0-9.]+)/);
-      state.serverMs = timing ? Number(timing[1]) : null;
-      drawPlan(await r.json());
+      t.server = serverTiming(r);
+      const answer = await r.json();
+      t.parsed = performance.now();
+      drawPlan(answer, t);
     }
   } catch (e) {
     showError("the server did not answer: " + e);
@@ -295,7 +339,7 @@ function arrowMarkers(coords) {
   return out;
 }
 
-function drawPlan(answer) {
+function drawPlan(answer, t) {
   const plan = Array.isArray(answer) ? answer[0] : answer;
   planLayer.clearLayers();
   $("error").hidden = true;
@@ -323,9 +367,17 @@ function drawPlan(answer) {
   summary(plan, Array.isArray(answer) ? answer.length : 1);
   downloads();
   state.lastPlan = plan;
+  const drawn = performance.now();
   requestAnimationFrame(() => {
-    state.timings.push(performance.now() - state.lastEdit);
-    state.serverTimings.push(state.serverMs);
+    const now = performance.now();
+    const server = Object.values(t.server).reduce((a, b) => a + b, 0);
+    state.timings.push(now - t.edit);
+    state.serverTimings.push(t.server.plan === undefined ? null : t.server.plan);
+    state.phases.push({  // ms: the edit's wait, HTTP beside the server's work, the server's
+      // steps, reading the answer, drawing it, and the frame that shows it
+      wait: t.sent - t.edit, http: t.answered - t.sent - server, server: t.server,
+      read: t.parsed - t.answered, draw: drawn - t.parsed, frame: now - drawn, total: now - t.edit,
+    });
     state.planSeq += 1;
   });
 }
@@ -430,6 +482,7 @@ mapEl.addEventListener("drop", (e) => {
 $("draw").addEventListener("click", () => startDrawing("outer"));
 $("hole").addEventListener("click", () => startDrawing("hole"));
 $("clear").addEventListener("click", () => {
+  state.sentBody = null;
   state.outer = []; state.holes = []; state.name = ""; $("field-row").hidden = true; stopDrawing(); drawArea(); clearPlan(); $("error").hidden = true;
 });
 $("example").addEventListener("click", async () => {
