@@ -104,10 +104,16 @@ def open_page(chromium, port: int):
 def measure(pages: dict, repeats: int, commit: bool) -> dict[str, list[dict]]:
     """Edits (spacing 12, 10, 12, ...), interleaved over the pages: each page's results."""
     got: dict[str, list[dict]] = {name: [] for name in pages}
+    if commit:  # the field's value committed once, so that Enter after a new value changes it
+        for page in pages.values():
+            page.press("#spacing", "Enter")
+    order = list(pages)
     for _ in range(repeats):
-        for name, page in pages.items():
+        for name in order:
+            page = pages[name]
             spacing = 10.0 if page.input_value("#spacing") == "12" else 12.0  # a change
             got[name].append(edit(page, spacing, commit))
+        order.reverse()  # each tree first in turn
     return got
 
 
