@@ -66,13 +66,18 @@ def test_the_page_and_its_files_are_served_from_the_package(client):
     assert page.status_code == 200 and "text/html" in page.headers["content-type"]
     assert "default-src 'self'" in page.headers["content-security-policy"]
     scripts = [s for s in page.text.split('src="')[1:]]
-    assert [s.split('"')[0] for s in scripts] == ["/static/leaflet/leaflet.js", "/static/app.js"]
+    assert [s.split('"')[0] for s in scripts] == [
+        "/static/leaflet/leaflet.js",
+        "/static/planning.js",
+        "/static/app.js",
+    ]
     assert "http" not in page.text  # nothing fetched from elsewhere (no CDN)
     leaflet = client.get("/static/leaflet/leaflet.js")
     assert leaflet.status_code == 200 and "Leaflet 1.9.4" in leaflet.text[:200]
     assert "BSD 2-Clause" in client.get("/static/leaflet/LICENSE").text
-    app_js = client.get("/static/app.js").text
-    assert "fetch(" in app_js and "https://" not in app_js and "http://" not in app_js
+    for name in ("app.js", "planning.js"):
+        js = client.get(f"/static/{name}").text
+        assert "fetch(" in js and "https://" not in js and "http://" not in js
 
 
 def test_config_lists_every_format_objective_and_limit(client):
