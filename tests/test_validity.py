@@ -16,6 +16,7 @@ import shapely
 
 from boustro.errors import InvalidPolygonError
 from boustro.geometry import Polygon, Region
+from boustro.geometry import polygon as polygon_module
 from boustro.geometry.validity import geos_reason
 from boustro.io import Area
 from boustro.io.repair import area_problem, repair_area
@@ -214,6 +215,23 @@ def test_diameter_of_a_large_ring_is_its_largest_vertex_distance():
         diffs = v[:, None, :] - v[None, :, :]
         expected = float(np.sqrt(np.max(np.einsum("ijk,ijk->ij", diffs, diffs))))
         assert Polygon(v).diameter == expected
+
+
+@pytest.mark.parametrize("n", [300, 1000])
+@pytest.mark.parametrize("a, b", [(150.0, 105.0), (1.0, 1.0), (1e6, 1e6 * (1 + 1e-12)), (3, 0.1)])
+def test_diameter_among_the_far_candidates_is_the_all_pairs_maximum(n, a, b):
+    """The vertices that cannot end the farthest pair are left out (an ellipse keeps its ends,
+    a circle all): the same float, bit for bit, for ellipses, circles and near-circles with
+    noise, far from the origin."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    noise = np.random.default_rng(n).normal(0, 1e-9 * a, (n, 2))
+    poly = Polygon(np.column_stack([a * np.cos(t), b * np.sin(t)]) + noise + 5e5)
+    v = poly.vertices
+    diffs = v[:, None, :] - v[None, :, :]
+    expected = float(np.sqrt(np.max(np.einsum("ijk,ijk->ij", diffs, diffs))))
+    assert poly.diameter == expected
+    kept = len(polygon_module._far_candidates(v))
+    assert (kept < n // 10) if b < 0.8 * a else (kept > 0)
 
 
 def test_coordinates_near_the_float_limit_give_one_line_and_no_warning(tmp_path):

@@ -21,8 +21,10 @@ from boustro.io import embedded_field
 from boustro.io.formats import FORMATS
 from boustro.mission import plan_area
 from boustro.web import MAX_BODY_BYTES, MAX_VERTICES, create_app
+from boustro.web import api as web_api
 from boustro.web import app as web_app
 from boustro.web import server as web_server
+from boustro.web.recent import RecentPlans
 
 from .conftest import run_cli
 from .test_formats import assert_qgc_plan
@@ -64,13 +66,18 @@ def test_the_page_and_its_files_are_served_from_the_package(client):
     assert page.status_code == 200 and "text/html" in page.headers["content-type"]
     assert "default-src 'self'" in page.headers["content-security-policy"]
     scripts = [s for s in page.text.split('src="')[1:]]
-    assert [s.split('"')[0] for s in scripts] == ["/static/leaflet/leaflet.js", "/static/app.js"]
+    assert [s.split('"')[0] for s in scripts] == [
+        "/static/leaflet/leaflet.js",
+        "/static/planning.js",
+        "/static/app.js",
+    ]
     assert "http" not in page.text  # nothing fetched from elsewhere (no CDN)
     leaflet = client.get("/static/leaflet/leaflet.js")
     assert leaflet.status_code == 200 and "Leaflet 1.9.4" in leaflet.text[:200]
     assert "BSD 2-Clause" in client.get("/static/leaflet/LICENSE").text
-    app_js = client.get("/static/app.js").text
-    assert "fetch(" in app_js and "https://" not in app_js and "http://" not in app_js
+    for name in ("app.js", "planning.js"):
+        js = client.get(f"/static/{name}").text
+        assert "fetch(" in js and "https://" not in js and "http://" not in js
 
 
 def test_config_lists_every_format_objective_and_limit(client):
@@ -197,6 +204,36 @@ def test_every_format_is_exported_and_read_back(client, embedded, mission, tmp_p
     assert_qgc_plan(json.loads(got["plan"].read_text()), mission, speed=3.0)
     loader = mavwp.MAVWPLoader()
     assert loader.load(str(got["wpl"])) == len(lonlat) + 2  # home, speed, the waypoints
+
+
+def test_a_download_of_the_plan_just_answered_is_not_planned_again(embedded, monkeypatch):
+    calls = []
+    real = web_api.plan_area
+    monkeypatch.setattr(web_api, "plan_area", lambda *a, **k: calls.append(1) or real(*a, **k))
+    body = {"area": embedded, "options": {"spacing": 10, "altitude": 40}}
+    with testclient.TestClient(create_app(), base_url="http://127.0.0.1") as c:
+        planned = c.post("/api/plan", json=body)
+        steps = [part.split(";")[0] for part in planned.headers["server-timing"].split(", ")]
+        assert planned.status_code == 200 and steps == ["parse", "plan", "answer", "encode"]
+        assert len(calls) == 1
+        # the same area and options (in another order), plus a format: the plan answered
+        same = {"format": "plan", "options": {"altitude": 40, "spacing": 10}, "area": embedded}
+        kept = c.post("/api/export", json=same)
+        assert kept.status_code == 200 and len(calls) == 1
+        other = {**body, "options": {"spacing": 12, "altitude": 40}, "format": "plan"}
+        assert c.post("/api/export", json=other).status_code == 200 and len(calls) == 2
+    assert kept.content == web_api.export_request({**body, "format": "plan"})[0]  # planned anew
+    assert len(calls) == 3
+
+
+def test_recent_plans_keep_the_last_few():
+    recent = RecentPlans(size=2)
+    bodies = [{"area": {"type": "Polygon", "n": k}, "options": {"spacing": 10}} for k in range(3)]
+    for k, body in enumerate(bodies):
+        recent.put(body, [k])  # type: ignore[list-item]
+    assert recent.get(bodies[0]) is None and recent.get(bodies[2]) == [2] and len(recent) == 2
+    assert recent.get({**bodies[1], "format": "kml"}) == [1]
+    assert recent.get({"area": float("nan")}) is None and recent.get([]) is None
 
 
 def test_a_mission_format_without_an_altitude_says_so(client, embedded):
@@ -379,6 +416,26 @@ def test_serve_binds_to_this_machine_by_default(monkeypatch, capsys):
     code, _, err = run_cli(capsys, "serve", "--port", "8123")
     assert code == 0 and calls == [{"host": "127.0.0.1", "port": 8123, "log_level": "info"}]
     assert "http://127.0.0.1:8123/" in err
+    code, _, err = run_cli(capsys, "serve", "--port", "70000")
+    assert code == 2 and "--port" in err
+    code, _, err = run_cli(capsys, "serve", "--threads", "0")
+    assert code == 2 and "--threads" in err
+
+
+def test_serve_plans_on_one_torch_thread_and_restores_them(monkeypatch, capsys):
+    uvicorn = pytest.importorskip("uvicorn")
+    torch = pytest.importorskip("torch")
+    during = []
+    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: during.append(torch.get_num_threads()))
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        assert run_cli(capsys, "serve")[0] == 0 and during == [1]
+        assert torch.get_num_threads() == 2
+        assert run_cli(capsys, "serve", "--threads", "3")[0] == 0 and during == [1, 3]
+        assert torch.get_num_threads() == 2
+    finally:
+        torch.set_num_threads(before)
     code, _, err = run_cli(capsys, "serve", "--port", "70000")
     assert code == 2 and "--port" in err
     code, _, err = run_cli(capsys, "serve", "--tiles", "file:///etc/passwd")

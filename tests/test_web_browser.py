@@ -203,6 +203,31 @@ def test_a_hole_is_drawn_and_avoided(page):
     assert "lanes" in page.inner_text("#summary") and page.locator("#error").is_hidden()
 
 
+def test_a_committed_edit_is_planned_at_once_and_one_that_changes_nothing_not_at_all(page):
+    plans: list[str] = []
+    page.on("request", lambda r: plans.append(r.url) if r.url.endswith("/api/plan") else None)
+    page.click("#example")
+    _wait_plan(page, 0)
+    seq = _set(page, "#spacing", "12")  # typed: planned after a pause for more keys
+    _wait_plan(page, seq)
+    typed = page.evaluate("window.boustro.phases.at(-1)")
+    assert typed["wait"] >= 59 and typed["server"]["plan"] > 0
+    seq = _set(page, "#spacing", "14")
+    page.press("#spacing", "Enter")  # committed: planned at once
+    _wait_plan(page, seq)
+    committed = page.evaluate("window.boustro.phases.at(-1)")
+    assert committed["wait"] < 59 and len(plans) == 3
+    assert set(committed["server"]) == {"parse", "plan", "answer", "encode"}
+    seq = page.evaluate("window.boustro.planSeq")
+    page.press("#spacing", "Enter")  # nothing changed: nothing planned
+    page.dispatch_event("#layout", "change")
+    time.sleep(0.3)
+    assert page.evaluate("window.boustro.planSeq") == seq and len(plans) == 3
+    page.select_option("#layout", "chords")  # a choice: planned at once
+    _wait_plan(page, seq)
+    assert page.evaluate("window.boustro.phases.at(-1).wait") < 59 and len(plans) == 4
+
+
 def _field_geojson(n: int) -> str:
     """A 1000-vertex field: a smooth convex boundary (as a GPS trace), 300 x 210 m."""
     t = np.linspace(0, 2 * math.pi, n, endpoint=False)

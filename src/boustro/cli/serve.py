@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..web import serve
+from ..web.server import PLAN_THREADS
 
 __all__ = ["register", "run"]
 
@@ -48,9 +49,23 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="tile-server URL template for the map background, {z}/{x}/{y} (default: none, a "
         "plain background with a graticule: no network needed)",
     )
+    p.add_argument(
+        "--threads",
+        type=int,
+        default=PLAN_THREADS,
+        help=f"torch threads of a plan (default {PLAN_THREADS}: one plan runs at a time and its "
+        "tensors are small; more threads only pay on large fields with cores to spare)",
+    )
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    serve(args.host, args.port, open_browser=args.open, tiles=args.tiles, quiet=args.quiet)
+    serve(
+        args.host,
+        args.port,
+        open_browser=args.open,
+        tiles=args.tiles,
+        quiet=args.quiet,
+        threads=args.threads,
+    )
     return 0

@@ -28,6 +28,7 @@ from ..io.repair import check_area, repair_area
 from ..mission import Mission, estimate_work, plan_area
 from .limits import MAX_FIELDS, MAX_SECONDS, RequestTooLargeError, check_epsg, count_vertices
 from .options import PlanOptions, parse_options
+from .recent import RecentPlans
 
 __all__ = [
     "MEDIA_TYPES",
@@ -174,14 +175,17 @@ def plan_response(missions: Sequence[Mission]) -> Any:
     return answers[0] if len(answers) == 1 else answers
 
 
-def export_request(body: Any) -> tuple[bytes, str, str]:
+def export_request(body: Any, recent: RecentPlans | None = None) -> tuple[bytes, str, str]:
     """Plan a request and render it in ``body["format"]``: ``(bytes, file name, media type)``.
-    Several fields go into one file where the format holds them, else are refused."""
+    Several fields go into one file where the format holds them, else are refused. A request
+    whose area and options ``recent`` holds (the plan the page shows) is not planned again."""
     fmt = body.get("format") if isinstance(body, dict) else None
     if not isinstance(fmt, str) or fmt not in FORMATS:
         raise InvalidParameterError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r:.40}")
     fmt = format_for("", fmt)
-    missions = plan_request(body)
+    missions = None if recent is None else recent.get(body)
+    if missions is None:
+        missions = plan_request(body)
     if len(missions) == 1:
         data = render(missions[0], fmt)
         name = missions[0].name or "mission"

@@ -18,7 +18,10 @@ const state = {
   planSeq: 0,           // plans drawn
   errorSeq: 0,          // errors shown
   timings: [],          // ms from the last edit to the drawn plan, per plan
-  serverTimings: [],    // ms of planning in the server (its Server-Timing header), per plan
+  serverTimings: [],    // ms of planning in the server (its Server-Timing "plan"), per plan
+  phases: [],           // per plan: where its ms went (see replan), from edit to frame
+  sentBody: null,       // the request last sent to /api/plan (an edit that changes nothing
+                        // is not planned again)
   lastPlan: null,
 };
 window.boustro = state;
@@ -202,68 +205,7 @@ function request(extra) {
   return Object.assign({ area: areaGeoJSON(), options: options() }, extra || {});
 }
 
-// -- planning as the user edits ----------------------------------------------------------------
-let timer = null;
-function edited() {
-  state.lastEdit = performance.now();
-  clearTimeout(timer);
-  timer = setTimeout(replan, 60);
-}
-
-async function postJSON(url, body) {
-  const r = await fetch(url, { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
-  return r;
-}
-
-async function errorOf(r) {
-  try { return (await r.json()).error || `HTTP ${r.status}`; } catch (_) { return `HTTP ${r.status}`; }
-}
-
-function progress(on, seconds, text) {
-  $("progress").hidden = !on;
-  const bar = $("bar");
-  bar.style.transition = "none";
-  bar.style.width = "";
-  bar.className = "indeterminate";
-  $("progress-text").textContent = text || "planning…";
-  if (on && seconds > 0.5) {
-    bar.className = "";
-    bar.style.width = "0";
-    void bar.offsetWidth;
-    bar.style.transition = `width ${seconds}s linear`;
-    bar.style.width = "95%";
-  }
-}
-
-async function replan() {
-  if (state.outer.length < 3) return;
-  if (state.inFlight) { state.pending = true; return; }
-  state.inFlight = true;
-  state.pending = false;
-  const body = request();
-  progress(true, 0, "planning…");
-  postJSON("/api/estimate", body).then(async (r) => {
-    if (!r.ok || !state.inFlight) return;
-    const est = await r.json();
-    const f = est.fields[0];
-    if (f && f.seconds > 0.5) progress(true, f.seconds, f.text);
-  }).catch(() => {});
-  try {
-    const r = await postJSON("/api/plan", body);
-    if (!r.ok) { showError(await errorOf(r)); clearPlan(); }
-    else if (!state.pending) {
-      const timing = (r.headers.get("Server-Timing") || "").match(/plan;dur=([0-9.]+)/);
-      state.serverMs = timing ? Number(timing[1]) : null;
-      drawPlan(await r.json());
-    }
-  } catch (e) {
-    showError("the server did not answer: " + e);
-  } finally {
-    state.inFlight = false;
-    progress(false);
-    if (state.pending) replan();
-  }
-}
+// -- planning as the user edits: planning.js ------------------------------------------------
 
 function showError(text) {
   const box = $("error");
@@ -295,7 +237,7 @@ function arrowMarkers(coords) {
   return out;
 }
 
-function drawPlan(answer) {
+function drawPlan(answer, t) {
   const plan = Array.isArray(answer) ? answer[0] : answer;
   planLayer.clearLayers();
   $("error").hidden = true;
@@ -323,9 +265,17 @@ function drawPlan(answer) {
   summary(plan, Array.isArray(answer) ? answer.length : 1);
   downloads();
   state.lastPlan = plan;
+  const drawn = performance.now();
   requestAnimationFrame(() => {
-    state.timings.push(performance.now() - state.lastEdit);
-    state.serverTimings.push(state.serverMs);
+    const now = performance.now();
+    const server = Object.values(t.server).reduce((a, b) => a + b, 0);
+    state.timings.push(now - t.edit);
+    state.serverTimings.push(t.server.plan === undefined ? null : t.server.plan);
+    state.phases.push({  // ms: the edit's wait, HTTP beside the server's work, the server's
+      // steps, reading the answer, drawing it, and the frame that shows it
+      wait: t.sent - t.edit, http: t.answered - t.sent - server, server: t.server,
+      read: t.parsed - t.answered, draw: drawn - t.parsed, frame: now - drawn, total: now - t.edit,
+    });
     state.planSeq += 1;
   });
 }
@@ -430,6 +380,7 @@ mapEl.addEventListener("drop", (e) => {
 $("draw").addEventListener("click", () => startDrawing("outer"));
 $("hole").addEventListener("click", () => startDrawing("hole"));
 $("clear").addEventListener("click", () => {
+  state.sentBody = null;
   state.outer = []; state.holes = []; state.name = ""; $("field-row").hidden = true; stopDrawing(); drawArea(); clearPlan(); $("error").hidden = true;
 });
 $("example").addEventListener("click", async () => {
