@@ -1,0 +1,326 @@
+"""The certified maximum of Eq. 1 over (angle, offset) at scale: a branch and bound over boxes
+of layouts whose cost per box is ``O(n + lines)`` (``method="certified-bb"``).
+
+For a box ``theta +- delta``, ``d +- eta`` every layout's lines are the box centre's lines over
+a rigid image ``S`` of the polygon whose points moved by at most ``eps = delta R + eta``, so
+``erosion(eps) ⊆ S ⊆ dilation(eps)`` (the cover search's :class:`Sandwich` and boxes). Each
+line's chord lies between the inner and the outer set's chord and the counted lines between
+theirs, which bounds Eq. 1 over the box (:mod:`.kernel`). Exact values at the box centres, each
+polished over the offset within its piece (where Eq. 1 is concave), are the incumbents; a box
+whose bound is within ``tol`` of the best is discarded, the others are halved. docs:
+``docs/global_optimum.md``, "Certified at scale".
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+import torch
+from numpy.typing import ArrayLike, NDArray
+
+from ...errors import InvalidParameterError, NoTransectError
+from ...geometry import Polygon, halfplanes
+from ...geometry.region import Region
+from ...models import check_spacing
+from ...objectives import SmithFitness
+from ...scoring import as_polygon
+from ..cover.boxes import Boxes, box_radius, initial_boxes, level_radius, split_boxes
+from ..cover.sandwich import Sandwich
+from ..cover.search import SIMPLIFY_EDGES, SIMPLIFY_SPACING
+from ..exact import best_offset
+from ..methods import register_method
+from ..problem import _progress_bar, evaluate_grid
+from ..result import OptimizeResult, canonical
+from .kernel import box_bounds, eq1_values
+
+__all__ = ["DEFAULT_TOL", "MAX_WORK", "smith_bb"]
+
+#: Default certified gap (absolute, on Eq. 1, which lies in ``[b/2, a + b]``).
+DEFAULT_TOL = 1e-4
+#: Work budget: boxes bounded times the polygon's edges (a count, not a time, so that results do
+#: not depend on the machine's load); about 1 s per 1e8 on the project's machine.
+MAX_WORK = 3e9
+#: Boxes smaller than this (normalised frame) are not split (float64 cannot resolve them).
+MIN_EPS = 1e-12
+#: Box centres polished over the offset per round (the best new ones).
+POLISH_PER_ROUND = 3
+#: Zooms of a polish; each evaluates :data:`ZOOM_POINTS` offsets over two steps of the last.
+POLISH_ZOOMS = 8
+ZOOM_POINTS = 33
+#: Layouts kept as candidates for the final exact scoring (the library's model).
+CANDIDATES = 8
+#: The exact per-angle closed form (``best_offset``, O(n^2)) is tried at the best angles of
+#: polygons up to this many vertices.
+CLOSED_FORM_VERTICES = 300
+
+
+class _Search:
+    """The state of one search, in the normalised frame."""
+
+    def __init__(self, v: NDArray[np.float64], s: float, a: float, b: float) -> None:
+        self.v, self.s, self.a, self.b = v, s, a, b
+        self.xy = np.concatenate([v, np.roll(v, -1, axis=0)], axis=1)
+        self.radius = float(np.hypot(v[:, 0], v[:, 1]).max())
+        region = Region(Polygon(v))
+        simplify = len(v) > SIMPLIFY_EDGES
+        self.sandwich = Sandwich(region, SIMPLIFY_SPACING * s if simplify else 0.0)
+        self.top_eps = 0.0
+        self.best = -math.inf
+        self.candidates: list[tuple[float, float, float]] = []
+        self.polished: set[tuple[float, float]] = set()
+        self.bounded = 0
+        self.evaluations = 0
+
+    def bounds(self, boxes: Boxes) -> NDArray[np.float64]:
+        """An upper bound of Eq. 1 over each box (the sandwich of the smallest level radius
+        that holds the box's ``eps``)."""
+        radius = level_radius(box_radius(boxes, self.radius), self.top_eps)
+        out = np.empty(len(radius))
+        for r in np.unique(radius):
+            sel = radius == r
+            level = self.sandwich.level(float(r))
+            out[sel] = box_bounds(
+                level.inner.xy, level.outer.xy, boxes.theta[sel], boxes.d[sel], self.s,
+                self.a, self.b,
+            )  # fmt: skip
+        self.bounded += len(radius)
+        return out
+
+    def values(self, theta: NDArray[np.float64], d: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Eq. 1 at the layouts (exact chords of the polygon)."""
+        self.evaluations += len(theta)
+        return eq1_values(self.xy, theta, d, self.s, self.a, self.b)
+
+    def offer(self, value: float, theta: float, d: float) -> None:
+        """A layout and its value: the incumbent, and a candidate for the final scoring."""
+        self.best = max(self.best, value)
+        if any(abs(t - theta) < 1e-15 and abs(e - d) < 1e-15 for _, t, e in self.candidates):
+            return
+        self.candidates.append((value, theta, d))
+        self.candidates.sort(reverse=True)
+        del self.candidates[CANDIDATES:]
+
+    def piece(self, theta: float, d: float) -> tuple[float, float]:
+        """The piece of the offset circle holding ``d`` at ``theta``: between the two nearest
+        offsets at which a line passes a vertex (Eq. 1 is concave in the offset on it)."""
+        h = self.v[:, 1] * math.cos(theta) - self.v[:, 0] * math.sin(theta)
+        r = np.sort(np.mod(h, self.s))
+        dm = d % self.s
+        j = int(np.searchsorted(r, dm, side="right")) - 1
+        lo = float(r[j]) if j >= 0 else float(r[-1]) - self.s
+        hi = float(r[j + 1]) if j + 1 < len(r) else float(r[0]) + self.s
+        shift = d - dm
+        return lo + shift, hi + shift
+
+    def polish(self, theta: float, d: float) -> None:
+        """The best offset at ``theta`` within ``d``'s piece: a scan and zooms (Eq. 1 is concave
+        there), and the piece's two ends nudged inside (a line grazing a vertex)."""
+        lo, hi = self.piece(theta, d)
+        width = hi - lo
+        if not width > 0:
+            return
+        nudge = max(1e-9 * width, 1e-13)
+        ends = np.array([lo + nudge, hi - nudge])
+        offsets = lo + (np.arange(ZOOM_POINTS) + 0.5) * (width / ZOOM_POINTS)
+        step = width / ZOOM_POINTS
+        best_v, best_d = -math.inf, d
+        thetas = np.full(ZOOM_POINTS, theta)
+        for _ in range(POLISH_ZOOMS):
+            vals = self.values(thetas, offsets)
+            k = int(np.argmax(vals))
+            if vals[k] > best_v:
+                best_v, best_d = float(vals[k]), float(offsets[k])
+            offsets = np.clip(best_d + np.linspace(-step, step, ZOOM_POINTS), ends[0], ends[1])
+            step *= 2.0 / (ZOOM_POINTS - 1)
+        end_vals = self.values(np.full(2, theta), ends)
+        for value, off in ((best_v, best_d), *zip(end_vals.tolist(), ends.tolist(), strict=True)):
+            if math.isfinite(value):
+                self.offer(value, theta, off)
+
+    def polish_best(self, boxes: Boxes, values: NDArray[np.float64]) -> None:
+        """Polish the best box centres not polished yet (:data:`POLISH_PER_ROUND`)."""
+        done = 0
+        for i in np.argsort(-values):
+            if done >= POLISH_PER_ROUND or not math.isfinite(values[i]):
+                break
+            theta, d = float(boxes.theta[i]), float(boxes.d[i])
+            key = (round(theta, 9), round(d / self.s, 9))
+            if key in self.polished:
+                continue
+            self.polished.add(key)
+            self.polish(theta, d)
+            done += 1
+
+
+def _weights(a: float, b: float, fitness: Any) -> tuple[float, float]:
+    if fitness is not None:
+        if type(fitness) is not SmithFitness:
+            raise InvalidParameterError(
+                "the certified-bb optimiser maximises Eq. 1 (a SmithFitness), got "
+                f"{type(fitness).__name__}"
+            )
+        return float(fitness.a), float(fitness.b)
+    SmithFitness(a=a, b=b)  # validates a, b >= 0 and finite
+    return float(a), float(b)
+
+
+def _check(name: str, value: Any, low: float) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a number, got {value!r}") from None
+    if not (x >= low and math.isfinite(x)):
+        raise InvalidParameterError(f"{name} must be a finite number >= {low:g}, got {value!r}")
+    return x
+
+
+def _run(
+    search: _Search, boxes: Boxes, tol: float, max_work: float, bar: Any
+) -> tuple[float, int, str]:
+    """Bound, evaluate, discard and halve until no box is left or a limit is reached:
+    ``(the largest bound of a box taken out, rounds, why it stopped early or "")``."""
+    closed, rounds, stopped, shown = -math.inf, 0, "", 0
+    edges = len(search.xy)
+    while len(boxes.theta):
+        rounds += 1
+        bounds = search.bounds(boxes)
+        values = search.values(boxes.theta, boxes.d)
+        k = int(np.argmax(values))
+        if math.isfinite(values[k]):
+            search.offer(float(values[k]), float(boxes.theta[k]), float(boxes.d[k]))
+        search.polish_best(boxes, values)
+        keep = bounds > search.best + tol
+        if (~keep).any():
+            closed = max(closed, float(bounds[~keep].max()))
+        boxes, bounds = boxes.take(keep), bounds[keep]
+        if bar is not None and math.isfinite(search.best):
+            top = max(closed, float(bounds.max()) if len(bounds) else -math.inf)
+            done = int(100 * min(1.0, tol / max(top - search.best, tol)))
+            bar.update(max(0, done - shown))
+            shown = max(shown, done)
+        if not len(boxes.theta):
+            break
+        fine = box_radius(boxes, search.radius) <= MIN_EPS
+        if fine.any():
+            closed = max(closed, float(bounds[fine].max()))
+            stopped = "the boxes reached the smallest radius float64 resolves"
+            boxes, bounds = boxes.take(~fine), bounds[~fine]
+            if not len(boxes.theta):
+                break
+        if (search.bounded + 4 * len(boxes.theta)) * edges > max_work:
+            closed = max(closed, float(bounds.max()))
+            stopped = f"the work budget ({max_work:.0e} box edges) was spent"
+            break
+        boxes = split_boxes(boxes, search.radius)
+    return closed, rounds, stopped
+
+
+def _final(poly: Polygon, search: _Search) -> tuple[float, float, float]:
+    """``(fitness, theta, d)``: the candidates scored by the library's exact model (which also
+    counts a line lying along an edge), with the closed-form best offset at the best angles of
+    a small polygon; the best wins."""
+    cands = list(search.candidates)
+    if len(poly) <= CLOSED_FORM_VERTICES:
+        fit = SmithFitness(a=search.a, b=search.b)
+        for theta in {c[1] for c in cands[:2]}:
+            d, _ = best_offset(Polygon(search.v), search.s, theta, fitness=fit)
+            cands.append((-math.inf, theta, d))
+    hp = halfplanes(poly)  # the normalised frame, as search.v
+    fit = SmithFitness(a=search.a, b=search.b)
+    best = (-math.inf, 0.0, 0.0)
+    for _, theta, d in cands:
+        value = float(
+            evaluate_grid(
+                hp, torch.tensor([theta], dtype=torch.float64),
+                torch.tensor([d], dtype=torch.float64), search.s, fitness=fit,
+            )[0, 0]
+        )  # fmt: skip
+        if value > best[0]:
+            best = (value, theta, d)
+    return best
+
+
+@register_method("certified-bb")
+def smith_bb(
+    polygon: Polygon | ArrayLike,
+    spacing: float,
+    *,
+    fitness: SmithFitness | None = None,
+    a: float = 0.5,
+    b: float = 0.5,
+    tol: float = DEFAULT_TOL,
+    n_angles: int = 90,
+    max_work: float = MAX_WORK,
+    progress: bool | None = False,
+) -> OptimizeResult:
+    """The maximum of Eq. 1 over every angle and offset with a certified upper bound, at a
+    cost per box of ``O(n + lines)`` (no event enumeration): for polygons with many vertices.
+
+    Args:
+        polygon: convex polygon, user units.
+        spacing: transect spacing, user units, > 0.
+        fitness: a :class:`~boustro.objectives.SmithFitness` (default ``a = b = 0.5``).
+        a, b: weights of Eq. 1 when ``fitness`` is not given.
+        tol: the gap to certify (absolute, on Eq. 1); at least ``1e-9``.
+        n_angles: angles of the first boxes over ``[0, pi)``.
+        max_work: budget of boxes bounded times edges; when spent the bound is still valid,
+            the gap may exceed ``tol`` (``info["converged"]`` False).
+        progress: a bar on stderr (``None``: when stderr is a terminal).
+
+    Returns:
+        :class:`OptimizeResult` with ``method="certified-bb"``, ``fitness`` the exact value of
+        the returned layout, ``upper_bound`` >= Eq. 1 at every layout, and ``info``: ``gap``,
+        ``converged`` (``gap <= tol``), ``tol``, ``boxes`` (bounded), ``rounds``, ``stopped``.
+
+    >>> r = smith_bb([(0, 0), (2, 0), (2, 1), (0, 1)], 0.25, tol=1e-4)
+    >>> round(r.fitness, 4), r.gap <= 1e-4
+    (0.9505, True)
+    """
+    t0 = time.perf_counter()
+    poly = as_polygon(polygon).require_convex("the certified-bb optimiser")
+    spacing = check_spacing(spacing, extent=poly.diameter)
+    a, b = _weights(a, b, fitness)
+    tol = _check("tol", tol, 1e-9)
+    max_work = _check("max_work", max_work, 0.0)
+    if int(n_angles) != n_angles or n_angles < 1:
+        raise InvalidParameterError(f"n_angles must be an integer >= 1, got {n_angles!r}")
+    frame = poly.frame
+    search = _Search(frame.to_normalised(poly.vertices), spacing / frame.scale, a, b)
+    boxes = initial_boxes(search.s, search.radius, int(n_angles))
+    search.top_eps = float(box_radius(boxes, search.radius).max())
+    bar = _progress_bar(100, progress, "certified-bb", unit="%")
+    try:
+        with np.errstate(all="ignore"):
+            closed, rounds, stopped = _run(search, boxes, tol, max_work, bar)
+    finally:
+        if bar is not None:
+            bar.close()
+    value, theta, d = _final(poly, search)
+    if not math.isfinite(value):
+        raise NoTransectError(f"no transect crosses the polygon at spacing {spacing:g}")
+    upper = max(closed, search.best, value)
+    gap = upper - value
+    angle, offset = canonical(theta, d * frame.scale, spacing)
+    return OptimizeResult(
+        angle=angle,
+        offset=offset,
+        fitness=value,
+        spacing=spacing,
+        method="certified-bb",
+        evaluations=search.evaluations,
+        seconds=time.perf_counter() - t0,
+        upper_bound=upper,
+        info={
+            "gap": gap,
+            "converged": gap <= tol * (1 + 1e-9),
+            "tol": tol,
+            "a": a,
+            "b": b,
+            "boxes": search.bounded,
+            "rounds": rounds,
+            **({"stopped": stopped} if stopped else {}),
+        },
+    )
