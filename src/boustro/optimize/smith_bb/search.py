@@ -46,10 +46,15 @@ MAX_WORK = 3e9
 #: Boxes smaller than this (normalised frame) are not split (float64 cannot resolve them).
 MIN_EPS = 1e-12
 #: Box centres polished over the offset per round (the best new ones).
-POLISH_PER_ROUND = 3
+POLISH_PER_ROUND = 2
 #: Zooms of a polish; each evaluates :data:`ZOOM_POINTS` offsets over two steps of the last.
-POLISH_ZOOMS = 8
-ZOOM_POINTS = 33
+POLISH_ZOOMS = 7
+ZOOM_POINTS = 17
+#: Angles of the first incumbents (:meth:`_Search.seed`), per first box angle.
+SEED_ANGLES = 4
+#: Boxes halved per round at least (those of the highest bounds), or this share of the pool.
+BATCH = 256
+BATCH_SHARE = 0.25
 #: Layouts kept as candidates for the final exact scoring (the library's model).
 CANDIDATES = 8
 #: The exact per-angle closed form (``best_offset``, O(n^2)) is tried at the best angles of
@@ -103,22 +108,33 @@ class _Search:
         self.candidates.sort(reverse=True)
         del self.candidates[CANDIDATES:]
 
-    def piece(self, theta: float, d: float) -> tuple[float, float]:
-        """The piece of the offset circle holding ``d`` at ``theta``: between the two nearest
-        offsets at which a line passes a vertex (Eq. 1 is concave in the offset on it)."""
+    def pieces(self, theta: float, d: float, extremes: bool) -> list[tuple[float, float]]:
+        """Pieces of the offset circle at ``theta`` (between consecutive offsets at which a line
+        passes a vertex; Eq. 1 is concave in the offset on each): the one holding ``d`` and its
+        neighbours, or with ``extremes`` those next to the offsets at which the extreme lines
+        graze the extreme vertices (narrow pieces there hold peaks: both extreme lines just
+        missing the polygon)."""
         h = self.v[:, 1] * math.cos(theta) - self.v[:, 0] * math.sin(theta)
         r = np.sort(np.mod(h, self.s))
-        dm = d % self.s
-        j = int(np.searchsorted(r, dm, side="right")) - 1
-        lo = float(r[j]) if j >= 0 else float(r[-1]) - self.s
-        hi = float(r[j + 1]) if j + 1 < len(r) else float(r[0]) + self.s
-        shift = d - dm
-        return lo + shift, hi + shift
+        r = np.concatenate([r[-2:] - self.s, r, r[:2] + self.s])
+        at = np.mod([h.max(), h.min()] if extremes else [d], self.s)
+        js = set()
+        for j in np.searchsorted(r, at, side="right") - 1:
+            js.update((int(j) - 1, int(j), int(j) + 1))
+        shift = d - d % self.s
+        return [(float(r[i]) + shift, float(r[i + 1]) + shift) for i in sorted(js)]
 
-    def polish(self, theta: float, d: float) -> None:
-        """The best offset at ``theta`` within ``d``'s piece: a scan and zooms (Eq. 1 is concave
-        there), and the piece's two ends nudged inside (a line grazing a vertex)."""
-        lo, hi = self.piece(theta, d)
+    def polish(self, theta: float, d: float, extremes: bool = False) -> None:
+        """The best offset at ``theta`` within the :meth:`pieces` of ``d``: a scan and zooms
+        (Eq. 1 is concave on a piece), and each piece's ends nudged inside (a line grazing a
+        vertex)."""
+        for lo, hi in self.pieces(theta, d, extremes):
+            key = (round(theta, 12), round(lo / self.s, 9))
+            if key not in self.polished:
+                self.polished.add(key)
+                self._polish_piece(theta, lo, hi)
+
+    def _polish_piece(self, theta: float, lo: float, hi: float) -> None:
         width = hi - lo
         if not width > 0:
             return
@@ -126,7 +142,7 @@ class _Search:
         ends = np.array([lo + nudge, hi - nudge])
         offsets = lo + (np.arange(ZOOM_POINTS) + 0.5) * (width / ZOOM_POINTS)
         step = width / ZOOM_POINTS
-        best_v, best_d = -math.inf, d
+        best_v, best_d = -math.inf, 0.5 * (lo + hi)
         thetas = np.full(ZOOM_POINTS, theta)
         for _ in range(POLISH_ZOOMS):
             vals = self.values(thetas, offsets)
@@ -140,19 +156,25 @@ class _Search:
             if math.isfinite(value):
                 self.offer(value, theta, off)
 
-    def polish_best(self, boxes: Boxes, values: NDArray[np.float64]) -> None:
-        """Polish the best box centres not polished yet (:data:`POLISH_PER_ROUND`)."""
-        done = 0
-        for i in np.argsort(-values):
-            if done >= POLISH_PER_ROUND or not math.isfinite(values[i]):
-                break
-            theta, d = float(boxes.theta[i]), float(boxes.d[i])
-            key = (round(theta, 9), round(d / self.s, 9))
-            if key in self.polished:
-                continue
-            self.polished.add(key)
-            self.polish(theta, d)
-            done += 1
+    def seed(self, n_angles: int) -> None:
+        """First incumbents: at ``n_angles`` angles over ``[0, pi)``, the offsets at which the
+        extreme lines just graze the polygon's extreme vertices (counted or not, where Eq. 1
+        often peaks), then the best of them polished."""
+        theta = np.arange(n_angles) * (math.pi / n_angles)
+        h = np.outer(np.cos(theta), self.v[:, 1]) - np.outer(np.sin(theta), self.v[:, 0])
+        nudge = 1e-9 * self.s
+        ends = [h.max(axis=1) - nudge, h.max(axis=1) + nudge]
+        ends += [h.min(axis=1) + nudge, h.min(axis=1) - nudge]
+        d = np.mod(np.concatenate(ends), self.s)
+        thetas = np.tile(theta, 4)
+        self.polish_best(Boxes(thetas, thetas * 0, d, d * 0), self.values(thetas, d), False)
+
+    def polish_best(self, boxes: Boxes, score: NDArray[np.float64], extremes: bool) -> None:
+        """Polish the :data:`POLISH_PER_ROUND` boxes of the highest ``score`` whose bound
+        (``score`` or not) could still beat the best layout."""
+        for i in np.argsort(-score)[:POLISH_PER_ROUND]:
+            if math.isfinite(score[i]):
+                self.polish(float(boxes.theta[i]), float(boxes.d[i]), extremes)
 
 
 def _weights(a: float, b: float, fitness: Any) -> tuple[float, float]:
@@ -177,21 +199,30 @@ def _check(name: str, value: Any, low: float) -> float:
     return x
 
 
+def _evaluate(search: _Search, boxes: Boxes) -> NDArray[np.float64]:
+    """The boxes' bounds; their centres' values offered, the best centres and the most
+    promising boxes polished (a peak can be narrower than a box)."""
+    bounds = search.bounds(boxes)
+    values = search.values(boxes.theta, boxes.d)
+    k = int(np.argmax(values))
+    if math.isfinite(values[k]):
+        search.offer(float(values[k]), float(boxes.theta[k]), float(boxes.d[k]))
+    search.polish_best(boxes, values, extremes=False)
+    search.polish_best(boxes, np.where(bounds > search.best, bounds, -np.inf), extremes=True)
+    return bounds
+
+
 def _run(
     search: _Search, boxes: Boxes, tol: float, max_work: float, bar: Any
 ) -> tuple[float, int, str]:
-    """Bound, evaluate, discard and halve until no box is left or a limit is reached:
-    ``(the largest bound of a box taken out, rounds, why it stopped early or "")``."""
+    """Best first, in batches: halve the boxes of the highest bounds (:data:`BATCH`, or a
+    :data:`BATCH_SHARE` of the pool if more), discard those within ``tol`` of the best layout,
+    until no box is left or a limit is reached: ``(the largest bound of a box taken out,
+    rounds, why it stopped early or "")``."""
     closed, rounds, stopped, shown = -math.inf, 0, "", 0
     edges = len(search.xy)
-    while len(boxes.theta):
-        rounds += 1
-        bounds = search.bounds(boxes)
-        values = search.values(boxes.theta, boxes.d)
-        k = int(np.argmax(values))
-        if math.isfinite(values[k]):
-            search.offer(float(values[k]), float(boxes.theta[k]), float(boxes.d[k]))
-        search.polish_best(boxes, values)
+    bounds = _evaluate(search, boxes)
+    while True:
         keep = bounds > search.best + tol
         if (~keep).any():
             closed = max(closed, float(bounds[~keep].max()))
@@ -201,20 +232,27 @@ def _run(
             done = int(100 * min(1.0, tol / max(top - search.best, tol)))
             bar.update(max(0, done - shown))
             shown = max(shown, done)
-        if not len(boxes.theta):
+        if not len(bounds):
             break
         fine = box_radius(boxes, search.radius) <= MIN_EPS
         if fine.any():
             closed = max(closed, float(bounds[fine].max()))
             stopped = "the boxes reached the smallest radius float64 resolves"
             boxes, bounds = boxes.take(~fine), bounds[~fine]
-            if not len(boxes.theta):
+            if not len(bounds):
                 break
-        if (search.bounded + 4 * len(boxes.theta)) * edges > max_work:
+        if (search.bounded + 4 * BATCH) * edges > max_work:
             closed = max(closed, float(bounds.max()))
             stopped = f"the work budget ({max_work:.0e} box edges) was spent"
             break
-        boxes = split_boxes(boxes, search.radius)
+        rounds += 1
+        size = max(BATCH, int(BATCH_SHARE * len(bounds)))
+        order = np.argsort(-bounds)
+        top, rest = order[:size], order[size:]
+        children = split_boxes(boxes.take(top), search.radius)
+        child_bounds = _evaluate(search, children)
+        boxes = Boxes(*(np.concatenate(p) for p in zip(boxes.take(rest), children, strict=True)))
+        bounds = np.concatenate([bounds[rest], child_bounds])
     return closed, rounds, stopped
 
 
@@ -290,6 +328,7 @@ def smith_bb(
     frame = poly.frame
     search = _Search(frame.to_normalised(poly.vertices), spacing / frame.scale, a, b)
     boxes = initial_boxes(search.s, search.radius, int(n_angles))
+    search.seed(SEED_ANGLES * int(n_angles))
     search.top_eps = float(box_radius(boxes, search.radius).max())
     bar = _progress_bar(100, progress, "certified-bb", unit="%")
     try:
