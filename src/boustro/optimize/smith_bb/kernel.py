@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["box_bounds", "eq1_values", "lines_range"]
+__all__ = ["box_bounds", "eq1_at_angle", "eq1_values", "lines_range"]
 
 #: Most inclusion choices of the uncertain end lines enumerated per box; a box with more
 #: (a large box) gets the cruder bound ``a max(hi) + b``.
@@ -84,62 +84,80 @@ def _eq1(ch, a, b):
     return a * m + b * (1.0 - math.sqrt(var / n))
 
 
-def _min_var(lo, hi, j0, j1):
-    """The least population variance of a vector with ``lo_k <= L_k <= hi_k``, ``k = j0..j1``:
-    ``min_c mean_k dist(c, [lo_k, hi_k])^2`` (the variance is ``min_c mean (L - c)^2``; the
-    inner minimum over the box is the distance), a convex piecewise quadratic in ``c`` solved
-    exactly by a sweep over the sorted interval ends."""
+def _g(a, b, n, ref, sx, qx, f, c, err_share):
+    """Eq. 1 of ``n`` lengths: ``n - f`` fixed (sum ``sx``, sum of squares ``qx``, centred on
+    ``ref``) and ``f`` equal to ``ref + c``; the std taken from below by the rounding of the
+    running sums (``err_share``: their relative error), so the value is never too low."""
+    mean = (sx + f * c) / n
+    second = (qx + f * c * c) / n
+    var = second - mean * mean - err_share * second
+    return a * (mean + ref) + b * (1.0 - math.sqrt(max(var, 0.0)))
+
+
+def _sup(lo, hi, j0, j1, a, b, pos):
+    """The maximum of Eq. 1 over every vector with ``lo_k <= L_k <= hi_k``, ``k = j0..j1``.
+
+    Eq. 1 is concave in the lengths; by KKT its maximiser is ``clip(c, lo, hi)`` for one
+    ``c = mean + (a / b) std``, so the maximum is that of ``G(c) = Eq1(clip(c, lo, hi))``.
+    Between consecutive interval ends the free lengths (``lo < c < hi``) equal ``c`` and the
+    others are fixed, so ``G`` is concave there: its maximum is at an end or where
+    ``a n std = b ((n - f) c - S)`` (``f`` free, ``S`` the fixed sum, centred), a quadratic
+    solved in closed form. A sweep over the ``2 n`` sorted ends keeps the running sums."""
     n = j1 - j0 + 1
-    ls = np.sort(lo[j0 : j1 + 1])
-    hs = np.sort(hi[j0 : j1 + 1])
-    if ls[n - 1] <= hs[0]:
-        return 0.0  # every interval holds one point: equal lengths
-    # g'(c) / 2 = (A + B) c - (SA + SB): A, SA the count and sum of ends hi < c; B, SB of lo > c
-    na, sa = 0, 0.0
-    nl, sl = n, 0.0
-    for k in range(n):
-        sl += ls[k]
-    ia, il = 0, 0
-    prev = -np.inf
-    c = 0.0
-    while True:
-        if ia < n and (il >= n or hs[ia] <= ls[il]):
-            nxt, kind = hs[ia], 0
-        elif il < n:
-            nxt, kind = ls[il], 1
-        else:
-            nxt, kind = np.inf, 2
-        den = na + nl
-        num = sa + sl
-        if kind == 2 or den * nxt - num >= 0.0:
-            c = num / den if den > 0 else prev
-            c = min(max(c, prev), nxt)
-            break
-        if kind == 0:
-            na += 1
-            sa += hs[ia]
-            ia += 1
-        else:
-            nl -= 1
-            sl -= ls[il]
-            il += 1
-        prev = nxt
-    var = 0.0
+    ref = 0.0
     for k in range(j0, j1 + 1):
-        if hi[k] < c:
-            var += (c - hi[k]) ** 2
-        elif lo[k] > c:
-            var += (lo[k] - c) ** 2
-    return var / n
+        ref += lo[k] + hi[k]
+    ref /= 2 * n
+    for q in range(n):
+        pos[2 * q] = lo[j0 + q] - ref
+        pos[2 * q + 1] = hi[j0 + q] - ref
+    order = np.argsort(pos[: 2 * n])
+    sx, qx, f = 0.0, 0.0, 0
+    for q in range(n):
+        x = pos[2 * q]
+        sx += x
+        qx += x * x
+    err_share = (8.0 * n + 16.0) * 2.3e-16
+    best = _g(a, b, n, ref, sx, qx, 0, 0.0, err_share)  # every length at its lower end
+    prev = pos[order[0]]
+    for e in range(2 * n):
+        i = order[e]
+        ce = pos[i]
+        if f > 0 and ce > prev:
+            best = max(best, _g(a, b, n, ref, sx, qx, f, ce, err_share))
+            p = n - f
+            a2 = p * (a * a * f - b * b * p)
+            a1 = 2.0 * sx * (b * b * p - a * a * f)
+            a0 = a * a * (n * qx - sx * sx) - b * b * sx * sx
+            if p > 0 and a2 != 0.0:
+                # the roots, and the parabola's vertex: a double root (a = 0: the least std)
+                # that rounding may push to a negative discriminant; any c is a valid point
+                disc = a1 * a1 - 4.0 * a2 * a0
+                root = math.sqrt(max(disc, 0.0))
+                qq = -0.5 * (a1 + root if a1 >= 0.0 else a1 - root)
+                for r in (qq / a2, a0 / qq if qq != 0.0 else prev, -0.5 * a1 / a2):
+                    if prev < r < ce:
+                        best = max(best, _g(a, b, n, ref, sx, qx, f, r, err_share))
+        x = pos[i]
+        if i % 2 == 0:  # a lower end: the length becomes free
+            sx -= x
+            qx -= x * x
+            f += 1
+        else:  # an upper end: fixed there
+            sx += x
+            qx += x * x
+            f -= 1
+        prev = ce
+    return best
 
 
-def _upper(lo, hi, a, b, max_choices, prefix):
+def _upper(lo, hi, a, b, max_choices, pos):
     """An upper bound of Eq. 1 over every ``S`` whose chords satisfy ``lo <= L <= hi``.
 
     Lines with ``hi = 0`` are never counted, lines with ``lo > 0`` always; a convex ``S``
     counts a contiguous range of lines, so the uncertain ones are at the two ends: every range
-    ``[k0, k1]`` with ``o0 <= k0 <= i0``, ``i1 <= k1 <= o1`` is tried, bounding the mean by
-    that of ``hi`` and the std from below by :func:`_min_var` (uncertain lines: ``[0, hi]``)."""
+    ``[k0, k1]`` with ``o0 <= k0 <= i0``, ``i1 <= k1 <= o1`` is tried, each with the exact
+    maximum over its lengths (:func:`_sup`; uncertain lines: ``[0, hi]``)."""
     nb = lo.shape[0]
     o0, o1, i0, i1 = -1, -1, -1, -1
     top = 0.0
@@ -157,16 +175,10 @@ def _upper(lo, hi, a, b, max_choices, prefix):
         return -np.inf  # no line meets the outer set: no layout of the box has a transect
     if i0 < 0 or (i0 - o0 + 1) * (o1 - i1 + 1) > max_choices:
         return a * top + b
-    prefix[0] = 0.0
-    for k in range(nb):
-        prefix[k + 1] = prefix[k] + hi[k]
     best = -np.inf
     for k0 in range(o0, i0 + 1):
         for k1 in range(i1, o1 + 1):
-            n = k1 - k0 + 1
-            mean = (prefix[k1 + 1] - prefix[k0]) / n
-            std = math.sqrt(_min_var(lo, hi, k0, k1))
-            best = max(best, a * mean + b * (1.0 - std))
+            best = max(best, _sup(lo, hi, k0, k1, a, b, pos))
     return best
 
 
@@ -177,7 +189,7 @@ def _bounds(in_xy, out_xy, cs, sn, d, s, k0, nb, a, b, max_choices, slack):
     hi_t = np.empty(nb)
     lo = np.empty(nb)
     hi = np.empty(nb)
-    prefix = np.empty(nb + 1)
+    pos = np.empty(2 * nb)
     for i in range(m):
         _spans(in_xy, cs[i], sn[i], d[i], s, k0, nb, lo_t, hi_t, lo)
         _spans(out_xy, cs[i], sn[i], d[i], s, k0, nb, lo_t, hi_t, hi)
@@ -185,7 +197,7 @@ def _bounds(in_xy, out_xy, cs, sn, d, s, k0, nb, a, b, max_choices, slack):
             x, y = lo[k], hi[k]
             lo[k] = min(x, y)
             hi[k] = max(x, y)
-        out[i] = _upper(lo, hi, a, b, max_choices, prefix) + slack
+        out[i] = _upper(lo, hi, a, b, max_choices, pos) + slack
     return out
 
 
@@ -210,7 +222,7 @@ def _compiled() -> tuple[Any, Any]:
         return _bounds, _values
     jit = numba.njit(cache=True)
     g = globals()
-    for name in ("_spans", "_eq1", "_min_var", "_upper"):
+    for name in ("_spans", "_eq1", "_g", "_sup", "_upper"):
         g[name] = jit(g[name])
     return jit(_bounds), jit(_values)
 
@@ -262,3 +274,37 @@ def eq1_values(
     cs, sn, dd = _args(theta, d)
     fn = _compiled()[1]
     return fn(np.ascontiguousarray(xy), cs, sn, dd, float(spacing), k0, nb, float(a), float(b))
+
+
+def eq1_at_angle(
+    v: NDArray[np.float64],
+    theta: float,
+    offsets: NDArray[np.float64],
+    spacing: float,
+    a: float,
+    b: float,
+) -> NDArray[np.float64]:
+    """``(m,)`` Eq. 1 at one angle and many offsets over the strictly convex polygon of CCW
+    vertices ``v``, in ``O(n + m lines log n)``: its boundary splits at the extreme vertices
+    across the lines into two chains monotone across them, whose along-coordinates at each line
+    are interpolated (lines through an extreme vertex have length 0, as in :func:`eq1_values`)."""
+    h = v[:, 1] * math.cos(theta) - v[:, 0] * math.sin(theta)
+    t = v[:, 0] * math.cos(theta) + v[:, 1] * math.sin(theta)
+    lo, hi = int(np.argmin(h)), int(np.argmax(h))
+    n = len(v)
+    first = np.arange(lo, lo + ((hi - lo) % n) + 1) % n  # lo -> hi, counter-clockwise
+    second = np.arange(hi, hi + ((lo - hi) % n) + 1)[::-1] % n  # lo -> hi, clockwise
+    offsets = np.asarray(offsets, dtype=np.float64)
+    k0 = math.floor((h[lo] - offsets.max()) / spacing)
+    k = np.arange(k0, math.ceil((h[hi] - offsets.min()) / spacing) + 1)
+    c = offsets[:, None] + k[None, :] * spacing
+    inside = (c > h[lo]) & (c < h[hi])
+    length = np.abs(np.interp(c, h[first], t[first]) - np.interp(c, h[second], t[second]))
+    length = np.where(inside, length, 0.0)
+    counted = length > 0.0
+    count = counted.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = length.sum(axis=1) / count
+        var = np.where(counted, (length - mean[:, None]) ** 2, 0.0).sum(axis=1) / count
+        value = a * mean + b * (1.0 - np.sqrt(var))
+    return np.where(count > 0, value, -np.inf)

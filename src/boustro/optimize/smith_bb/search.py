@@ -22,7 +22,7 @@ import torch
 from numpy.typing import ArrayLike, NDArray
 
 from ...errors import InvalidParameterError, NoTransectError
-from ...geometry import Polygon, halfplanes
+from ...geometry import HalfPlanes, Polygon, halfplanes
 from ...geometry.region import Region
 from ...models import check_spacing
 from ...objectives import SmithFitness
@@ -34,7 +34,7 @@ from ..exact import best_offset
 from ..methods import register_method
 from ..problem import _progress_bar, evaluate_grid
 from ..result import OptimizeResult, canonical
-from .kernel import box_bounds, eq1_values
+from .kernel import box_bounds, eq1_at_angle, eq1_values
 
 __all__ = ["DEFAULT_TOL", "MAX_WORK", "smith_bb"]
 
@@ -63,21 +63,34 @@ CLOSED_FORM_VERTICES = 300
 
 
 class _Search:
-    """The state of one search, in the normalised frame."""
+    """The state of one search, in the normalised frame of ``poly``."""
 
-    def __init__(self, v: NDArray[np.float64], s: float, a: float, b: float) -> None:
-        self.v, self.s, self.a, self.b = v, s, a, b
-        self.xy = np.concatenate([v, np.roll(v, -1, axis=0)], axis=1)
-        self.radius = float(np.hypot(v[:, 0], v[:, 1]).max())
-        region = Region(Polygon(v))
-        simplify = len(v) > SIMPLIFY_EDGES
-        self.sandwich = Sandwich(region, SIMPLIFY_SPACING * s if simplify else 0.0)
+    def __init__(self, poly: Polygon, spacing: float, a: float, b: float) -> None:
+        self.poly, self.frame = poly, poly.frame
+        self.v = self.frame.to_normalised(poly.vertices)
+        self.s, self.a, self.b = spacing / self.frame.scale, a, b
+        self.xy = np.concatenate([self.v, np.roll(self.v, -1, axis=0)], axis=1)
+        self.radius = float(np.hypot(self.v[:, 0], self.v[:, 1]).max())
+        simplify = len(poly) > SIMPLIFY_EDGES
+        # built in the polygon's units (no second validation of its vertices), read normalised
+        self.sandwich = Sandwich(Region(poly), SIMPLIFY_SPACING * spacing if simplify else 0.0)
+        self.levels: dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
         self.top_eps = 0.0
         self.best = -math.inf
         self.candidates: list[tuple[float, float, float]] = []
         self.polished: set[tuple[float, float]] = set()
         self.bounded = 0
         self.evaluations = 0
+
+    def level(self, eps: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The inner and outer edges (normalised) of the sandwich of radius ``eps``."""
+        if eps not in self.levels:
+            lv = self.sandwich.level(eps * self.frame.scale)
+            c = np.tile(self.frame.centre, 2)
+            self.levels[eps] = tuple(  # type: ignore[assignment]
+                (es.xy - c) / self.frame.scale for es in (lv.inner, lv.outer)
+            )
+        return self.levels[eps]
 
     def bounds(self, boxes: Boxes) -> NDArray[np.float64]:
         """An upper bound of Eq. 1 over each box (the sandwich of the smallest level radius
@@ -86,11 +99,10 @@ class _Search:
         out = np.empty(len(radius))
         for r in np.unique(radius):
             sel = radius == r
-            level = self.sandwich.level(float(r))
+            inner, outer = self.level(float(r))
             out[sel] = box_bounds(
-                level.inner.xy, level.outer.xy, boxes.theta[sel], boxes.d[sel], self.s,
-                self.a, self.b,
-            )  # fmt: skip
+                inner, outer, boxes.theta[sel], boxes.d[sel], self.s, self.a, self.b
+            )
         self.bounded += len(radius)
         return out
 
@@ -98,6 +110,11 @@ class _Search:
         """Eq. 1 at the layouts (exact chords of the polygon)."""
         self.evaluations += len(theta)
         return eq1_values(self.xy, theta, d, self.s, self.a, self.b)
+
+    def at_angle(self, theta: float, offsets: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Eq. 1 at one angle and many offsets (the polygon's two chains interpolated)."""
+        self.evaluations += len(offsets)
+        return eq1_at_angle(self.v, theta, offsets, self.s, self.a, self.b)
 
     def offer(self, value: float, theta: float, d: float) -> None:
         """A layout and its value: the incumbent, and a candidate for the final scoring."""
@@ -143,15 +160,14 @@ class _Search:
         offsets = lo + (np.arange(ZOOM_POINTS) + 0.5) * (width / ZOOM_POINTS)
         step = width / ZOOM_POINTS
         best_v, best_d = -math.inf, 0.5 * (lo + hi)
-        thetas = np.full(ZOOM_POINTS, theta)
         for _ in range(POLISH_ZOOMS):
-            vals = self.values(thetas, offsets)
+            vals = self.at_angle(theta, offsets)
             k = int(np.argmax(vals))
             if vals[k] > best_v:
                 best_v, best_d = float(vals[k]), float(offsets[k])
             offsets = np.clip(best_d + np.linspace(-step, step, ZOOM_POINTS), ends[0], ends[1])
             step *= 2.0 / (ZOOM_POINTS - 1)
-        end_vals = self.values(np.full(2, theta), ends)
+        end_vals = self.at_angle(theta, ends)
         for value, off in ((best_v, best_d), *zip(end_vals.tolist(), ends.tolist(), strict=True)):
             if math.isfinite(value):
                 self.offer(value, theta, off)
@@ -256,18 +272,26 @@ def _run(
     return closed, rounds, stopped
 
 
-def _final(poly: Polygon, search: _Search) -> tuple[float, float, float]:
+def _halfplanes(poly: Polygon) -> HalfPlanes:
+    """The polygon's half-planes in its normalised frame, from its own (no second polygon)."""
+    hp = halfplanes(poly, normalise=False)
+    frame = poly.frame
+    centre = torch.as_tensor(frame.centre, dtype=hp.normals.dtype)
+    radius = float(np.hypot(*(poly.vertices - frame.centre).T).max()) / frame.scale
+    return HalfPlanes(hp.normals, (hp.offsets + hp.normals @ centre) / frame.scale, radius)
+
+
+def _final(search: _Search) -> tuple[float, float, float]:
     """``(fitness, theta, d)``: the candidates scored by the library's exact model (which also
     counts a line lying along an edge), with the closed-form best offset at the best angles of
     a small polygon; the best wins."""
     cands = list(search.candidates)
-    if len(poly) <= CLOSED_FORM_VERTICES:
-        fit = SmithFitness(a=search.a, b=search.b)
-        for theta in {c[1] for c in cands[:2]}:
-            d, _ = best_offset(Polygon(search.v), search.s, theta, fitness=fit)
-            cands.append((-math.inf, theta, d))
-    hp = halfplanes(poly)  # the normalised frame, as search.v
     fit = SmithFitness(a=search.a, b=search.b)
+    if len(search.v) <= CLOSED_FORM_VERTICES:
+        for theta in {c[1] for c in cands[:2]}:
+            d, _ = best_offset(search.v, search.s, theta, fitness=fit)
+            cands.append((-math.inf, theta, d))
+    hp = _halfplanes(search.poly)
     best = (-math.inf, 0.0, 0.0)
     for _, theta, d in cands:
         value = float(
@@ -326,7 +350,7 @@ def smith_bb(
     if int(n_angles) != n_angles or n_angles < 1:
         raise InvalidParameterError(f"n_angles must be an integer >= 1, got {n_angles!r}")
     frame = poly.frame
-    search = _Search(frame.to_normalised(poly.vertices), spacing / frame.scale, a, b)
+    search = _Search(poly, spacing, a, b)
     boxes = initial_boxes(search.s, search.radius, int(n_angles))
     search.seed(SEED_ANGLES * int(n_angles))
     search.top_eps = float(box_radius(boxes, search.radius).max())
@@ -337,7 +361,7 @@ def smith_bb(
     finally:
         if bar is not None:
             bar.close()
-    value, theta, d = _final(poly, search)
+    value, theta, d = _final(search)
     if not math.isfinite(value):
         raise NoTransectError(f"no transect crosses the polygon at spacing {spacing:g}")
     upper = max(closed, search.best, value)
