@@ -32,7 +32,7 @@ from ..cover.sandwich import Sandwich
 from ..cover.search import SIMPLIFY_EDGES, SIMPLIFY_SPACING
 from ..exact import best_offset
 from ..methods import register_method
-from ..problem import _progress_bar, evaluate_grid
+from ..problem import _progress_bar, evaluate_pairs
 from ..result import OptimizeResult, canonical
 from .kernel import box_bounds, eq1_at_angle, eq1_values
 
@@ -291,18 +291,15 @@ def _final(search: _Search) -> tuple[float, float, float]:
         for theta in {c[1] for c in cands[:2]}:
             d, _ = best_offset(search.v, search.s, theta, fitness=fit)
             cands.append((-math.inf, theta, d))
-    hp = _halfplanes(search.poly)
-    best = (-math.inf, 0.0, 0.0)
-    for _, theta, d in cands:
-        value = float(
-            evaluate_grid(
-                hp, torch.tensor([theta], dtype=torch.float64),
-                torch.tensor([d], dtype=torch.float64), search.s, fitness=fit,
-            )[0, 0]
-        )  # fmt: skip
-        if value > best[0]:
-            best = (value, theta, d)
-    return best
+    values = evaluate_pairs(
+        _halfplanes(search.poly),
+        torch.tensor([c[1] for c in cands], dtype=torch.float64),
+        torch.tensor([c[2] for c in cands], dtype=torch.float64),
+        search.s,
+        fitness=fit,
+    )
+    k = int(torch.argmax(values))
+    return float(values[k]), cands[k][1], cands[k][2]
 
 
 @register_method("certified-bb")
