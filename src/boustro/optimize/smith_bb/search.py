@@ -135,7 +135,7 @@ class _Search:
         r = np.sort(np.mod(h, self.s))
         r = np.concatenate([r[-2:] - self.s, r, r[:2] + self.s])
         at = np.mod([h.max(), h.min()] if extremes else [d], self.s)
-        js = set()
+        js: set[int] = set()
         for j in np.searchsorted(r, at, side="right") - 1:
             js.update((int(j) - 1, int(j), int(j) + 1))
         shift = d - d % self.s
@@ -157,7 +157,7 @@ class _Search:
             return
         nudge = max(1e-9 * width, 1e-13)
         ends = np.array([lo + nudge, hi - nudge])
-        offsets = lo + (np.arange(ZOOM_POINTS) + 0.5) * (width / ZOOM_POINTS)
+        offsets = lo + (np.arange(ZOOM_POINTS, dtype=np.float64) + 0.5) * (width / ZOOM_POINTS)
         step = width / ZOOM_POINTS
         best_v, best_d = -math.inf, 0.5 * (lo + hi)
         for _ in range(POLISH_ZOOMS):
@@ -165,7 +165,8 @@ class _Search:
             k = int(np.argmax(vals))
             if vals[k] > best_v:
                 best_v, best_d = float(vals[k]), float(offsets[k])
-            offsets = np.clip(best_d + np.linspace(-step, step, ZOOM_POINTS), ends[0], ends[1])
+            near = best_d + np.linspace(-step, step, ZOOM_POINTS, dtype=np.float64)
+            offsets = np.clip(near, ends[0], ends[1]).astype(np.float64)
             step *= 2.0 / (ZOOM_POINTS - 1)
         end_vals = self.at_angle(theta, ends)
         for value, off in ((best_v, best_d), *zip(end_vals.tolist(), ends.tolist(), strict=True)):
@@ -264,8 +265,8 @@ def _run(
         rounds += 1
         size = max(BATCH, int(BATCH_SHARE * len(bounds)))
         order = np.argsort(-bounds)
-        top, rest = order[:size], order[size:]
-        children = split_boxes(boxes.take(top), search.radius)
+        chosen, rest = order[:size], order[size:]
+        children = split_boxes(boxes.take(chosen), search.radius)
         child_bounds = _evaluate(search, children)
         boxes = Boxes(*(np.concatenate(p) for p in zip(boxes.take(rest), children, strict=True)))
         bounds = np.concatenate([bounds[rest], child_bounds])
