@@ -24,7 +24,6 @@ from numpy.typing import ArrayLike, NDArray
 from ...errors import InvalidParameterError, NoTransectError
 from ...geometry import HalfPlanes, Polygon, halfplanes
 from ...geometry.region import Region
-from ...models import check_spacing
 from ...objectives import SmithFitness
 from ...scoring import as_polygon
 from ..cover.boxes import Boxes, box_radius, initial_boxes, level_radius, split_boxes
@@ -32,7 +31,7 @@ from ..cover.sandwich import Sandwich
 from ..cover.search import SIMPLIFY_EDGES, SIMPLIFY_SPACING
 from ..exact import best_offset
 from ..methods import register_method
-from ..problem import _progress_bar, evaluate_pairs
+from ..problem import _check_narrower, _progress_bar, evaluate_pairs
 from ..result import OptimizeResult, canonical
 from .kernel import box_bounds, eq1_at_angle, eq1_values
 
@@ -341,7 +340,7 @@ def smith_bb(
     """
     t0 = time.perf_counter()
     poly = as_polygon(polygon).require_convex("the certified-bb optimiser")
-    spacing = check_spacing(spacing, extent=poly.diameter)
+    spacing = _check_narrower(poly, spacing)
     a, b = _weights(a, b, fitness)
     tol = _check("tol", tol, 1e-9)
     max_work = _check("max_work", max_work, 0.0)
