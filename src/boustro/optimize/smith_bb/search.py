@@ -286,6 +286,8 @@ def _final(search: _Search) -> tuple[float, float, float]:
     counts a line lying along an edge), with the closed-form best offset at the best angles of
     a small polygon; the best wins."""
     cands = list(search.candidates)
+    if not cands:  # no layout with a transect was seen
+        return -math.inf, 0.0, 0.0
     fit = SmithFitness(a=search.a, b=search.b)
     if len(search.v) <= CLOSED_FORM_VERTICES:
         for theta in {c[1] for c in cands[:2]}:
