@@ -12,7 +12,7 @@ import pytest
 import torch
 
 from boustro.errors import InvalidParameterError, NonConvexPolygonError
-from boustro.geometry import Polygon
+from boustro.geometry import Polygon, halfplanes
 from boustro.geometry.random import random_convex_polygon
 from boustro.objectives import ShortestPath, SmithFitness
 from boustro.optimize import evaluate_grid, evaluate_pairs
@@ -20,7 +20,7 @@ from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.exact import global_optimum
 from boustro.optimize.smith_bb import smith_bb
 from boustro.optimize.smith_bb.kernel import _sup, eq1_at_angle, eq1_values
-from boustro.optimize.smith_bb.search import _halfplanes, _Search
+from boustro.optimize.smith_bb.search import _Search
 
 
 def ellipse(n: int, rx: float = 150.0, ry: float = 105.0) -> np.ndarray:
@@ -64,13 +64,13 @@ def test_chord_kernels_agree_with_the_library_model():
         theta, d = rng.uniform(0, math.pi, 40), rng.uniform(0, search.s, 40)
         ours = eq1_values(search.xy, theta, d, search.s, 0.5, 0.5)
         ref = evaluate_pairs(
-            _halfplanes(p), torch.as_tensor(theta), torch.as_tensor(d), search.s,
+            halfplanes(p), torch.as_tensor(theta), torch.as_tensor(d), search.s,
             fitness=SmithFitness(),
         ).numpy()  # fmt: skip
         assert np.allclose(ours, ref, rtol=0, atol=1e-12)
         chains = eq1_at_angle(search.v, float(theta[0]), d, search.s, 0.5, 0.5)
         grid = evaluate_grid(
-            _halfplanes(p), torch.as_tensor(theta[:1]), torch.as_tensor(d), search.s,
+            halfplanes(p), torch.as_tensor(theta[:1]), torch.as_tensor(d), search.s,
             fitness=SmithFitness(),
         ).numpy()[0]  # fmt: skip
         assert np.allclose(chains, grid, rtol=0, atol=1e-12)
@@ -87,7 +87,7 @@ def test_the_box_bound_is_never_below_eq1_inside_the_box(case):
         p, s = Polygon(ellipse(300)), 10.0
     fit = SmithFitness(a=[0.5, 0.9, 0.1, 0.5, 0.3][case], b=[0.5, 0.1, 0.9, 0.5, 0.7][case])
     search = _Search(p, s, fit.a, fit.b)
-    hp = _halfplanes(p)
+    hp = halfplanes(p)
     rng = np.random.default_rng(case)
     m = 40
     size = 10.0 ** rng.uniform(-9, -1, m)
@@ -115,7 +115,7 @@ def test_the_certificate_holds_against_a_dense_grid(case):
     p, s = [*_polygons(7, 2), (Polygon(ellipse(300, 120, 70)), 9.0)][case]
     r = smith_bb(p, s, tol=1e-5)
     assert r.method == "certified-bb" and r.info["converged"] and r.gap <= 1e-5 + 1e-12
-    hp = _halfplanes(p)
+    hp = halfplanes(p)
     s_n = s / p.frame.scale
     n_angles, n_offsets = (361, 49) if case < 2 else (121, 25)
     grid = evaluate_grid(

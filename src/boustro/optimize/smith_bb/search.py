@@ -22,7 +22,7 @@ import torch
 from numpy.typing import ArrayLike, NDArray
 
 from ...errors import InvalidParameterError, NoTransectError
-from ...geometry import HalfPlanes, Polygon, halfplanes
+from ...geometry import Polygon, halfplanes
 from ...geometry.region import Region
 from ...objectives import SmithFitness
 from ...scoring import as_polygon
@@ -272,15 +272,6 @@ def _run(
     return closed, rounds, stopped
 
 
-def _halfplanes(poly: Polygon) -> HalfPlanes:
-    """The polygon's half-planes in its normalised frame, from its own (no second polygon)."""
-    hp = halfplanes(poly, normalise=False)
-    frame = poly.frame
-    centre = torch.as_tensor(frame.centre, dtype=hp.normals.dtype)
-    radius = float(np.hypot(*(poly.vertices - frame.centre).T).max()) / frame.scale
-    return HalfPlanes(hp.normals, (hp.offsets + hp.normals @ centre) / frame.scale, radius)
-
-
 def _final(search: _Search) -> tuple[float, float, float]:
     """``(fitness, theta, d)``: the candidates scored by the library's exact model (which also
     counts a line lying along an edge), with the closed-form best offset at the best angles of
@@ -294,7 +285,7 @@ def _final(search: _Search) -> tuple[float, float, float]:
             d, _ = best_offset(search.v, search.s, theta, fitness=fit)
             cands.append((-math.inf, theta, d))
     values = evaluate_pairs(
-        _halfplanes(search.poly),
+        halfplanes(search.poly),  # the library's own normalised frame (its Eq. 1, exactly)
         torch.tensor([c[1] for c in cands], dtype=torch.float64),
         torch.tensor([c[2] for c in cands], dtype=torch.float64),
         search.s,
