@@ -141,10 +141,17 @@ def test_agrees_with_the_event_method_within_the_gaps(case):
     assert b.upper_bound >= g.fitness - 1e-12 and g.upper_bound >= b.fitness - 1e-12
 
 
-def test_a_thousand_vertex_field_is_planned_certified():
+@pytest.mark.parametrize("lonlat", [False, True])
+def test_a_thousand_vertex_field_is_planned_certified(lonlat):
+    """The 1000-vertex field of benchmarks/web.py, planar and as longitude/latitude (planned in
+    UTM, coordinates of millions of metres: the final scoring must not lose digits there)."""
     from boustro.mission import plan_area
 
-    mission = plan_area(ellipse(1000), 10.0, crs=None)
+    ring = ellipse(1000)
+    if lonlat:
+        lon = 5.66 + ring[:, 0] / (111_320 * math.cos(math.radians(51.99)))
+        ring = np.column_stack([lon, 51.99 + ring[:, 1] / 111_320])
+    mission = plan_area(ring, 10.0) if lonlat else plan_area(ring, 10.0, crs=None)
     opt = mission.optimum
     assert opt.method == "certified-bb"
     assert opt.info["converged"] and opt.gap <= 1e-4
