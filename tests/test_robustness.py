@@ -230,15 +230,16 @@ def test_global_optimiser_refuses_work_beyond_its_limit():
         optimize(ring, 0.02, method="global")
 
 
-def test_plan_falls_back_to_hybrid_when_global_is_too_large(monkeypatch, caplog):
+def test_plan_falls_back_to_certified_bb_when_global_is_too_large(monkeypatch, caplog):
     from boustro import geo
     from boustro.optimize.exact import structure
 
     monkeypatch.setattr(structure, "WORK_LIMIT", 10.0)  # its home (global_opt re-exports it)
-    with caplog.at_level(logging.WARNING):
+    with caplog.at_level(logging.INFO, logger="boustro"):
         mission = geo.plan_area(PENTAGON, 0.7, crs=None)
-    assert mission.optimum.method == "hybrid"
-    assert "planning with the hybrid optimiser instead" in caplog.text
+    assert mission.optimum.method == "certified-bb"  # Eq. 1: still certified
+    assert mission.optimum.info["converged"] and mission.optimum.gap <= 1e-4
+    assert "planning with the certified branch and bound (certified-bb)" in caplog.text
     with pytest.raises(InvalidParameterError, match="units of work"):
         geo.plan_area(PENTAGON, 0.7, crs=None, method="global")  # asked for: no fallback
 

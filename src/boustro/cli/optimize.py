@@ -13,6 +13,7 @@ from ..errors import InvalidParameterError
 from ..objectives import SmithFitness
 from ..optimize import GRID_200, OptimizeResult, TemperatureSchedule, optimize, resolve_method
 from ..optimize import METHODS as _REGISTRY
+from ..optimize.smith_bb import DEFAULT_TOL
 from ..plot import plot_layout
 from ..scoring import score
 from ._common import (
@@ -52,6 +53,9 @@ methods:
             then an exact zoom; never worse than the grid
   global    the certified global optimum of Eq. 1: branch and bound over the angle, exact in
             the offset; prints upper_bound and gap (<= --tol)
+  certified-bb  the same certificate for polygons of hundreds or thousands of vertices:
+            branch and bound over (angle, offset) boxes, O(n + lines) per box; gap <= --tol
+            (default 1e-4)
   learned   the shipped planner network (trained through the differentiable fitness, see
             'boustro train'); --refine adds its fast exact refinement
   Every method ranks layouts by the EXACT fitness. --model and its settings (--temperature,
@@ -214,6 +218,8 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
         ignored.append("--seed")
     if method == "global":
         options["tol"] = 1e-6 if args.tol is None else args.tol
+    elif method == "certified-bb":
+        options["tol"] = DEFAULT_TOL if args.tol is None else args.tol
     elif args.tol is not None:
         ignored.append("--tol")
     if method == "learned":

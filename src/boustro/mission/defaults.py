@@ -11,6 +11,7 @@ __all__ = [
     "FALLBACK_METHOD",
     "METHOD_OPTIONS",
     "REGION_OPTIONS",
+    "SCALE_METHOD",
     "log",
 ]
 
@@ -20,7 +21,10 @@ log = logging.getLogger("boustro")
 #: method. Switching the default is this one line.
 DEFAULT_METHOD = "global"
 #: Used instead of the default when the global optimiser would take too long (many vertices at a
-#: small spacing; :data:`boustro.global_opt.WORK_LIMIT`).
+#: small spacing; :data:`boustro.global_opt.WORK_LIMIT`): Eq. 1 by the certified branch and bound
+#: over (angle, offset) boxes (:func:`boustro.optimize.smith_bb.smith_bb`), other objectives by
+#: the hybrid search.
+SCALE_METHOD = "certified-bb"
 FALLBACK_METHOD = "hybrid"
 METHOD_OPTIONS: dict[str, dict[str, Any]] = {"grid": {"n_angles": 360, "n_offsets": 32}}
 

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, ProblemTooLargeError
 from ..geometry.region import Region
+from ..objectives import SmithFitness
 from ..optimize import OptimizeResult, optimize
 from ..optimize.fixed_angle import optimize_offset
 from ..optimize.methods import resolve_method
@@ -18,7 +19,14 @@ from ..plan import Coverage, Plan, build_plan, coverage
 from ..plan.cells import _frame
 from ..plan.inside import outside_length
 from ..plan.region import plan_region
-from .defaults import DEFAULT_METHOD, FALLBACK_METHOD, METHOD_OPTIONS, REGION_OPTIONS, log
+from .defaults import (
+    DEFAULT_METHOD,
+    FALLBACK_METHOD,
+    METHOD_OPTIONS,
+    REGION_OPTIONS,
+    SCALE_METHOD,
+    log,
+)
 from .project import Frame
 
 __all__ = ["Planned", "main_cell", "plan_concave", "plan_convex", "region_optimum"]
@@ -132,8 +140,10 @@ def _optimize_convex(
     options: dict[str, Any] | None,
     progress: bool = False,
 ) -> OptimizeResult:
-    """The optimum by ``method`` (default: certified, else the hybrid); with ``progress`` the
-    optimiser's bars on stderr where it has them (``progress`` parameter)."""
+    """The optimum by ``method`` (default: certified by the event method; where it would take
+    too long, Eq. 1 by the certified branch and bound :data:`SCALE_METHOD` and any other
+    objective by the hybrid); with ``progress`` the optimiser's bars on stderr where it has
+    them (``progress`` parameter)."""
     chosen = method or DEFAULT_METHOD
     opts = dict(METHOD_OPTIONS.get(chosen, {}))
     if progress and "progress" in inspect.signature(resolve_method(chosen)).parameters:
@@ -144,6 +154,11 @@ def _optimize_convex(
     except ProblemTooLargeError as exc:
         if method is not None:
             raise
+        if fitness is None or type(fitness) is SmithFitness:  # Eq. 1: certified at scale
+            log.info("%s; planning with the certified branch and bound (%s)", exc, SCALE_METHOD)
+            return optimize(
+                frame.poly, s_plan, method=SCALE_METHOD, fitness=fitness, progress=progress
+            )
         log.warning("%s; planning with the hybrid optimiser instead", exc)
         return optimize(
             frame.poly, s_plan, method=FALLBACK_METHOD, fitness=fitness, progress=progress

@@ -42,12 +42,9 @@ class _Problem(NamedTuple):
     sign: float  # +1 to maximise, -1 to minimise
 
 
-def _checked(
-    polygon: Polygon | ArrayLike, spacing: float, fitness: Objective | None, what: str
-) -> tuple[Polygon, float, Objective, float]:
-    """The checks of :func:`_problem` without building its half-planes: ``(polygon, spacing,
-    objective, sign)``."""
-    poly = as_polygon(polygon).require_convex(what)
+def _check_narrower(poly: Polygon, spacing: float) -> float:
+    """The spacing, checked (:func:`check_spacing`) and smaller than the polygon's diameter
+    (else :class:`NoTransectError`: at most one transect can cross it)."""
     spacing = check_spacing(spacing, extent=poly.diameter)
     if spacing >= poly.diameter:
         raise NoTransectError(
@@ -55,6 +52,16 @@ def _checked(
             "(its widest extent at any angle): at most one transect can cross it, so there is "
             "no boustrophedon layout to optimise"
         )
+    return spacing
+
+
+def _checked(
+    polygon: Polygon | ArrayLike, spacing: float, fitness: Objective | None, what: str
+) -> tuple[Polygon, float, Objective, float]:
+    """The checks of :func:`_problem` without building its half-planes: ``(polygon, spacing,
+    objective, sign)``."""
+    poly = as_polygon(polygon).require_convex(what)
+    spacing = _check_narrower(poly, spacing)
     objective: Objective = SmithFitness() if fitness is None else fitness
     return poly, spacing, objective, objective_sign(objective)
 

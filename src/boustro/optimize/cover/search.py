@@ -18,6 +18,8 @@ from ...models import check_spacing
 from ..result import OptimizeResult, canonical
 from .bands import RigidBoxes, band_stats
 from .bounds import lower_bounds
+from .boxes import Boxes as _Boxes
+from .boxes import box_radius, initial_boxes, level_radius, split_boxes
 from .cost import CoverCost
 from .sandwich import Sandwich
 
@@ -36,18 +38,6 @@ PLANS_PER_ROUND = 3
 #: Plans evaluated at the first round, at angles this far apart (radians) at least.
 FIRST_PLANS = 16
 FIRST_SEPARATION = math.radians(3.0)
-
-
-class _Boxes(NamedTuple):
-    """Boxes of layouts: angle ``theta +- delta``, offset ``d +- eta`` (arrays)."""
-
-    theta: NDArray[np.float64]
-    delta: NDArray[np.float64]
-    d: NDArray[np.float64]
-    eta: NDArray[np.float64]
-
-    def take(self, mask: NDArray[np.bool_]) -> _Boxes:
-        return _Boxes(*(a[mask] for a in self))
 
 
 #: Relative distance between a box's bound and the model at its centre at which a box of a
@@ -143,9 +133,8 @@ class CoverSearch:
     def box_bounds(self, boxes: _Boxes) -> NDArray[np.float64]:
         """A lower bound on the cost over each box: the sandwich at the radius that holds
         every rotation by ``delta`` about the origin and shift by ``eta`` across the lines."""
-        eps = boxes.delta * self.radius + boxes.eta
-        level = np.maximum(np.floor(np.log2(self.top_eps / eps)), 0.0)
-        radius = self.top_eps * 2.0 ** (-level)  # >= eps: a level of the sandwich
+        eps = box_radius(boxes, self.radius)
+        radius = level_radius(eps, self.top_eps)  # >= eps: a level of the sandwich
         out = np.empty(len(eps))
         for r in np.unique(radius):
             sel = radius == r
@@ -266,44 +255,8 @@ def _edge_angles(region: Region, count: int) -> list[float]:
     return out
 
 
-def _split(boxes: _Boxes, radius: float) -> _Boxes:
-    """Halve each box along the side that contributes more to its radius (both if close)."""
-    rot, shift = boxes.delta * radius, boxes.eta
-    cut_t = rot >= 0.5 * shift
-    cut_d = shift >= 0.5 * rot
-    parts = []
-    for st in (-1.0, 1.0):
-        for sd in (-1.0, 1.0):
-            keep = (cut_t | (st > 0)) & (cut_d | (sd > 0))
-            b = boxes.take(keep)
-            ct, cd = cut_t[keep], cut_d[keep]
-            delta = np.where(ct, b.delta / 2, b.delta)
-            eta = np.where(cd, b.eta / 2, b.eta)
-            parts.append(
-                _Boxes(
-                    b.theta + np.where(ct, st * delta, 0.0),
-                    delta,
-                    b.d + np.where(cd, sd * eta, 0.0),
-                    eta,
-                )
-            )
-    return _Boxes(*(np.concatenate([getattr(p, f) for p in parts]) for f in _Boxes._fields))
-
-
 def _initial(search: CoverSearch, n_angles: int, angle: float | None) -> _Boxes:
-    if angle is not None:  # one angle: boxes of offsets only
-        n = FIXED_OFFSETS
-        eta = search.s / (2 * n)
-        d = (np.arange(n, dtype=np.float64) + 0.5) * (2 * eta)
-        return _Boxes(np.full(n, angle), np.zeros(n), d, np.full(n, eta))
-    delta = math.pi / (2 * n_angles)
-    n_off = max(1, math.ceil(search.s / (2 * delta * search.radius)))
-    eta = search.s / (2 * n_off)
-    theta = (np.arange(n_angles) + 0.5) * (2 * delta)
-    offsets = (np.arange(n_off) + 0.5) * (2 * eta)
-    tt, dd = np.meshgrid(theta, offsets, indexing="ij")
-    n = tt.size
-    return _Boxes(tt.ravel(), np.full(n, delta), dd.ravel(), np.full(n, eta))
+    return initial_boxes(search.s, search.radius, n_angles, angle, FIXED_OFFSETS)
 
 
 class _Limits(NamedTuple):
@@ -353,7 +306,7 @@ def _branch_and_bound(
             progress(max(0.0, min(1.0, 1.0 - (best - low) / max(abs(best), 1e-300))))
         if not len(boxes.theta):
             break
-        eps = boxes.delta * search.radius + boxes.eta
+        eps = box_radius(boxes, search.radius)
         fine = eps <= lim.min_eps
         if fine.any():
             floor = min(floor, float(bounds[fine].min()))
@@ -370,7 +323,7 @@ def _branch_and_bound(
             floor = min(floor, float(bounds[~fine].min()))
             stopped = f"{lim.max_seconds} s passed"
             break
-        boxes = _split(boxes, search.radius)
+        boxes = split_boxes(boxes, search.radius)
     return floor, rounds, stopped
 
 
@@ -444,7 +397,7 @@ def cover_optimum(
     else:
         angle = float(angle) % math.pi
     boxes = _initial(search, n_angles, angle)
-    search.top_eps = float((boxes.delta * search.radius + boxes.eta).max())
+    search.top_eps = float(box_radius(boxes, search.radius).max())
     limits = _Limits(rtol, resolve, min_eps, max_work, max_seconds, t0)
     floor, rounds, stopped = _branch_and_bound(search, boxes, limits, progress)
     if not boustrophedon and evaluate is not None and math.isfinite(search.best[0]):
