@@ -157,6 +157,11 @@ def test_a_thousand_vertex_field_is_planned_certified(lonlat):
     assert opt.info["converged"] and opt.gap <= 1e-4
     assert mission.coverage is not None and mission.coverage.covered_share > 1 - 1e-9
     assert mission.summary()["certified"] is True
+    if not lonlat:  # the estimate before planning knows this path
+        from boustro.mission import estimate_work
+
+        est = estimate_work(ring, 10.0, crs=None)
+        assert est.kind == "certified-bb" and est.seconds < 3
 
 
 def test_command_line_and_bad_input(capsys, tmp_path):

@@ -58,8 +58,14 @@ SAY_SECONDS = 3.0
 #: Fitted on this machine by ``benchmarks/estimate.py --fit`` (load 4-7); docs/concave.md states
 #: the fit's error (estimate / measured 0.34..2.8 on the calibration, 0.37..4.8 held out). The
 #: ``"concave"`` row was fitted again after issue 21 made a plan near-linear in the vertices.
+#: ``"certified-bb"`` (a convex area beyond that limit, Eq. 1 certified by
+#: :func:`~boustro.optimize.smith_bb.smith_bb`) has the form of ``"convex"``; provisional, set
+#: from six ``plan_area`` runs (superellipses of 200-5000 vertices, 37-216 lanes, and the
+#: 1000-vertex ellipse of ``benchmarks/web.py`` at 22 and 106 lanes, load 0.4-2: 0.12-3.7 s,
+#: within a factor 2), not yet fitted by ``benchmarks/estimate.py --fit``.
 COST_MODEL: dict[str, tuple[float, ...]] = {
     "certified": (0.05, 3.18e-7),
+    "certified-bb": (0.05, 0.005, 1.0, 4.2e-6, 1.6),
     "convex": (0.05, 0.329, 0.61, 8.94e-5, 1.72),
     "concave": (0.05, 2.03e-5, 2.02, 7.67e-5, 1.34),
 }
@@ -76,7 +82,7 @@ class WorkEstimate(NamedTuple):
     vertices: int  #: of the ring and the holes
     holes: int
     area_km2: float  #: ground area, km^2
-    kind: str  #: the row of :data:`COST_MODEL`: "certified", "convex" or "concave"
+    kind: str  #: the row of :data:`COST_MODEL`: "certified", "certified-bb", "convex", "concave"
     work: float  #: the certified optimiser's work (0 unless ``kind == "certified"``)
     seconds: float  #: estimated planning time on a machine like the calibration's
 
@@ -108,6 +114,7 @@ def frame_estimate(frame: Frame, method: str | None = None) -> WorkEstimate:
     vertices = len(frame.ring) + sum(len(h) for h in frame.holes)
     kind, work = ("concave" if frame.region is not None else "convex"), 0.0
     if kind == "convex" and (method or DEFAULT_METHOD) == "global":
+        kind = "certified-bb"  # beyond the event method's limit (mission.steps)
         if len(frame.poly) <= _CERTIFIED_VERTICES:
             w = global_work(frame.poly.vertices, s_plan)
             if w <= WORK_LIMIT:
