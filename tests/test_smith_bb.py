@@ -14,6 +14,7 @@ import torch
 from boustro.errors import InvalidParameterError, NonConvexPolygonError
 from boustro.geometry import Polygon, halfplanes
 from boustro.geometry.random import random_convex_polygon
+from boustro.mission import estimate_work, plan_area
 from boustro.objectives import ShortestPath, SmithFitness
 from boustro.optimize import evaluate_grid, evaluate_pairs
 from boustro.optimize.cover.boxes import Boxes
@@ -141,12 +142,26 @@ def test_agrees_with_the_event_method_within_the_gaps(case):
     assert b.upper_bound >= g.fitness - 1e-12 and g.upper_bound >= b.fitness - 1e-12
 
 
+def test_a_spent_budget_reports_its_gap():
+    """A regular 100-gon (nearly a circle: Eq. 1 nearly the same at every angle) with a small
+    budget: the search stops, says why, and its bound still holds over a dense grid."""
+    t = np.linspace(0, 2 * math.pi, 100, endpoint=False)
+    p = Polygon(np.c_[500 * np.cos(t), 500 * np.sin(t)])
+    r = smith_bb(p, 10.0, max_work=2e6)
+    assert not r.info["converged"] and "work budget" in r.info["stopped"]
+    assert r.gap > 1e-4 and r.upper_bound == pytest.approx(r.fitness + r.gap)
+    hp, s_n = halfplanes(p), 10.0 / p.frame.scale
+    grid = evaluate_grid(
+        hp, torch.linspace(0, math.pi, 181, dtype=torch.float64)[:-1],
+        torch.linspace(0, s_n, 33, dtype=torch.float64)[:-1], s_n, fitness=SmithFitness(),
+    )  # fmt: skip
+    assert float(grid.max()) <= r.upper_bound + 1e-12
+
+
 @pytest.mark.parametrize("lonlat", [False, True])
 def test_a_thousand_vertex_field_is_planned_certified(lonlat):
     """The 1000-vertex field of benchmarks/web.py, planar and as longitude/latitude (planned in
     UTM, coordinates of millions of metres: the final scoring must not lose digits there)."""
-    from boustro.mission import plan_area
-
     ring = ellipse(1000)
     if lonlat:
         lon = 5.66 + ring[:, 0] / (111_320 * math.cos(math.radians(51.99)))
@@ -158,8 +173,6 @@ def test_a_thousand_vertex_field_is_planned_certified(lonlat):
     assert mission.coverage is not None and mission.coverage.covered_share > 1 - 1e-9
     assert mission.summary()["certified"] is True
     if not lonlat:  # the estimate before planning knows this path
-        from boustro.mission import estimate_work
-
         est = estimate_work(ring, 10.0, crs=None)
         assert est.kind == "certified-bb" and est.seconds < 3
 
