@@ -174,3 +174,9 @@ def test_when_the_kernels_are_used(monkeypatch):
         monkeypatch.setenv("BOUSTRO_COMPILED", value)
         assert kernel_module.use_compiled() is expected
         assert kernel_module.use_compiled() is expected  # the same again, whatever came before
+
+
+def test_the_first_compile_is_known_from_the_cache():
+    """After a certified optimum the kernels are in numba's cache: no 'compiling' note."""
+    global_optimum(np.array([(0, 0), (4, 0), (5, 3), (0, 2)], dtype=float), 0.5)
+    assert kernel_module.compiled() is not None and not kernel_module.first_compile()

@@ -11,8 +11,10 @@ polygons. numba is imported on first use (``import boustro`` does not load it).
 
 from __future__ import annotations
 
+import logging
 import os
 from functools import cache
+from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -28,6 +30,7 @@ __all__ = [
     "compiled",
     "evaluate_smith_compiled",
     "exact_smith_compiled",
+    "first_compile",
     "pieces_compiled",
     "search_smith_compiled",
     "use_compiled",
@@ -85,6 +88,20 @@ def use_compiled() -> bool:
     return kernels is not None and (kernels.cached or mode == "on")
 
 
+log = logging.getLogger("boustro")
+
+
+def first_compile() -> bool:
+    """Whether the search kernel is missing from numba's cache in the package's own
+    ``__pycache__`` while that folder is writable: this installation's first use, which
+    compiles the kernels (10-30 s, once). ``False`` where the cache lives elsewhere (a
+    read-only installation), which this does not look into."""
+    folder = Path(kernel_search.__file__).parent / "__pycache__"
+    if not os.access(folder if folder.exists() else folder.parent, os.W_OK):
+        return False
+    return not any(folder.glob("kernel_search._search-*.nbi"))
+
+
 @cache
 def compiled() -> Compiled | None:
     """The compiled kernels, or ``None`` where numba is missing or ``BOUSTRO_COMPILED=0``.
@@ -97,6 +114,8 @@ def compiled() -> Compiled | None:
     except ImportError:  # pragma: no cover - numba is a dependency
         return None
 
+    if first_compile():
+        log.info("compiling the certified optimiser for this installation (once, 10-30 s)")
     cached = [True]
 
     def jit(function: Any) -> Any:
