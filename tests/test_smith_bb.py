@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import json
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 import torch
 
-from boustro.errors import InvalidParameterError, NonConvexPolygonError
+from boustro.errors import InvalidParameterError, NonConvexPolygonError, ProblemTooLargeError
 from boustro.geometry import Polygon, halfplanes
 from boustro.geometry.random import random_convex_polygon
 from boustro.mission import estimate_work, plan_area
@@ -192,3 +194,32 @@ def test_command_line_and_bad_input(capsys, tmp_path):
         smith_bb(ellipse(50), 10.0, fitness=ShortestPath())
     with pytest.raises(NonConvexPolygonError):
         smith_bb([(0, 0), (4, 0), (4, 4), (2, 1), (0, 4)], 0.5)
+
+
+def test_the_first_use_from_several_threads_at_once():
+    """A fresh process whose first certified-bb optima run in four threads at once (the
+    kernels compile or load once, under a lock): four equal answers."""
+    code = (
+        "from concurrent.futures import ThreadPoolExecutor\n"
+        "from boustro.optimize import optimize\n"
+        "sq = [(0, 0), (1, 0), (1, 1), (0, 1)]\n"
+        "run = lambda _: optimize(sq, 0.25, method='certified-bb').fitness\n"
+        "with ThreadPoolExecutor(4) as pool:\n"
+        "    print(sorted(set(round(f, 12) for f in pool.map(run, range(4)))))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=300
+    )
+    alone = smith_bb([(0, 0), (1, 0), (1, 1), (0, 1)], 0.25).fitness
+    assert out.stdout.strip() == f"[{round(alone, 12)}]", out.stderr
+
+
+def test_the_estimate_of_certified_bb_by_name_is_its_own():
+    ring = ellipse(1000)
+    named = estimate_work(ring, 10.0, crs=None, method="certified-bb")
+    assert named.kind == "certified-bb" and named.seconds < 3
+
+
+def test_shortest_path_beyond_the_event_method_is_refused_clearly():
+    with pytest.raises(ProblemTooLargeError, match="shortest-path objective"):
+        plan_area(ellipse(1000), 10.0, crs=None, fitness=ShortestPath())

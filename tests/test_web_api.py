@@ -226,6 +226,16 @@ def test_a_download_of_the_plan_just_answered_is_not_planned_again(embedded, mon
     assert len(calls) == 3
 
 
+def test_a_bad_export_is_refused_whether_its_plan_is_kept_or_not(embedded):
+    body = {"area": embedded, "options": {"spacing": 10}}
+    with testclient.TestClient(create_app(), base_url="http://127.0.0.1") as c:
+        assert c.post("/api/plan", json=body).status_code == 200
+        bad = {**body, "format": "kml", "bogus": 1}
+        for _ in range(2):
+            answer = c.post("/api/export", json=bad)
+            assert answer.status_code == 400 and "bogus" in answer.json()["error"]
+
+
 def test_recent_plans_keep_the_last_few():
     recent = RecentPlans(size=2)
     bodies = [{"area": {"type": "Polygon", "n": k}, "options": {"spacing": 10}} for k in range(3)]

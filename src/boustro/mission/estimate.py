@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, NamedTuple
 from .._validate import MAX_TRANSECTS
 from ..errors import TooMuchWorkError
 from ..optimize.exact import WORK_LIMIT, global_work
-from .defaults import DEFAULT_METHOD
+from .defaults import DEFAULT_METHOD, SCALE_METHOD
 
 if TYPE_CHECKING:
     from .project import Frame
@@ -113,7 +113,9 @@ def frame_estimate(frame: Frame, method: str | None = None) -> WorkEstimate:
     lanes = frame.surveyed.diameter / s_plan  # the hull's diameter: its widest extent
     vertices = len(frame.ring) + sum(len(h) for h in frame.holes)
     kind, work = ("concave" if frame.region is not None else "convex"), 0.0
-    if kind == "convex" and (method or DEFAULT_METHOD) == "global":
+    if kind == "convex" and method == SCALE_METHOD:
+        kind = "certified-bb"
+    elif kind == "convex" and (method or DEFAULT_METHOD) == "global":
         kind = "certified-bb"  # beyond the event method's limit (mission.steps)
         if len(frame.poly) <= _CERTIFIED_VERTICES:
             w = global_work(frame.poly.vertices, s_plan)

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, ProblemTooLargeError
 from ..geometry.region import Region
-from ..objectives import SmithFitness
+from ..objectives import ShortestPath, SmithFitness
 from ..optimize import OptimizeResult, optimize
 from ..optimize.fixed_angle import optimize_offset
 from ..optimize.methods import resolve_method
@@ -159,6 +159,11 @@ def _optimize_convex(
             return optimize(
                 frame.poly, s_plan, method=SCALE_METHOD, fitness=fitness, progress=progress
             )
+        if isinstance(fitness, ShortestPath):  # needs exact chords: no other optimiser has them
+            raise ProblemTooLargeError(
+                f"{exc}; the shortest-path objective is optimised by the certified event method "
+                "only: plan this area with the default objective or --objective time"
+            ) from exc
         log.warning("%s; planning with the hybrid optimiser instead", exc)
         return optimize(
             frame.poly, s_plan, method=FALLBACK_METHOD, fitness=fitness, progress=progress

@@ -125,6 +125,21 @@ def _plan_one(area: Area, opts: PlanOptions) -> Mission:
     return plan_area(area, opts.spacing, progress=False, **kw)
 
 
+def _checked_options(body: Any) -> PlanOptions:
+    """The request's members checked (an object with an ``area``, nothing unknown) and its
+    options parsed: what every request answers for, planned anew or not."""
+    if not isinstance(body, dict):
+        raise InvalidParameterError(
+            'the request must be a JSON object {"area": ..., "options": ...}'
+        )
+    unknown = sorted(set(body) - {"area", "options", "format"})
+    if unknown:
+        raise InvalidParameterError(f"unknown member(s) {', '.join(map(repr, unknown))}")
+    if "area" not in body:
+        raise InvalidParameterError('the request has no "area" (a GeoJSON geometry or feature)')
+    return parse_options(body.get("options"))
+
+
 def plan_request(body: Any) -> list[Mission]:
     """Plan a request ``{"area": <GeoJSON>, "options": {...}}``: one mission per field.
 
@@ -135,16 +150,7 @@ def plan_request(body: Any) -> list[Mission]:
         >>> answer["n_transects"], answer["certified"], answer["geojson"]["type"]
         (12, True, 'FeatureCollection')
     """
-    if not isinstance(body, dict):
-        raise InvalidParameterError(
-            'the request must be a JSON object {"area": ..., "options": ...}'
-        )
-    unknown = sorted(set(body) - {"area", "options", "format"})
-    if unknown:
-        raise InvalidParameterError(f"unknown member(s) {', '.join(map(repr, unknown))}")
-    if "area" not in body:
-        raise InvalidParameterError('the request has no "area" (a GeoJSON geometry or feature)')
-    opts = parse_options(body.get("options"))
+    opts = _checked_options(body)
     areas = request_areas(body["area"], opts)
     missions, failed = [], []
     for area in areas:
@@ -183,6 +189,7 @@ def export_request(body: Any, recent: RecentPlans | None = None) -> tuple[bytes,
     if not isinstance(fmt, str) or fmt not in FORMATS:
         raise InvalidParameterError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r:.40}")
     fmt = format_for("", fmt)
+    _checked_options(body)  # the same answer to a bad request, planned before or not
     missions = None if recent is None else recent.get(body)
     if missions is None:
         missions = plan_request(body)

@@ -22,6 +22,7 @@ and every set of counted lines a convex ``S`` between the two sets can have (doc
 from __future__ import annotations
 
 import math
+import threading
 from functools import cache
 from typing import Any
 
@@ -213,18 +214,29 @@ def _values(xy, cs, sn, d, s, k0, nb, a, b):
     return out
 
 
+_COMPILING = threading.Lock()
+
+
 @cache
 def _compiled() -> tuple[Any, Any]:
-    """``(_bounds, _values)`` compiled by numba (cached on disk), or plain Python without it."""
+    """``(_bounds, _values)`` compiled by numba (cached on disk), or plain Python without it.
+    Safe from several threads at once: ``functools.cache`` lets two first calls run, so the
+    helpers are swapped for their compiled versions under a lock, each from its Python
+    function (``py_func``), never compiled twice over."""
     try:
         import numba
     except ImportError:  # pragma: no cover - numba is a dependency
         return _bounds, _values
-    jit = numba.njit(cache=True)
-    g = globals()
-    for name in ("_spans", "_eq1", "_g", "_sup", "_upper"):
-        g[name] = jit(g[name])
-    return jit(_bounds), jit(_values)
+
+    def jit(fn: Any) -> Any:
+        return numba.njit(cache=True)(getattr(fn, "py_func", fn))
+
+    with _COMPILING:
+        g = globals()
+        for name in ("_spans", "_eq1", "_g", "_sup", "_upper"):
+            if not hasattr(g[name], "py_func"):
+                g[name] = jit(g[name])
+        return jit(_bounds), jit(_values)
 
 
 def lines_range(xy: NDArray[np.float64], spacing: float) -> tuple[int, int]:
