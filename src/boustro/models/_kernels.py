@@ -12,9 +12,12 @@ from __future__ import annotations
 import math
 import os
 from functools import cache
+from importlib.util import find_spec
 from typing import Any, NamedTuple
 
 import numpy as np
+
+from .._jit import jit, jit_globals
 
 __all__ = ["TAU", "Kernels", "kernels"]
 
@@ -506,29 +509,16 @@ def kernels() -> Kernels | None:
     """
     if os.environ.get("BOUSTRO_COMPILED", "1").strip() in ("0", "false", "no", "off"):
         return None
-    try:
-        import numba
-    except ImportError:  # pragma: no cover - numba is a dependency
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return None
-
-    def jit(function: Any, inline: str = "never") -> Any:
-        function = getattr(function, "py_func", function)  # idempotent
-        # sums may be reordered (vectorised reductions); nothing else of fast-math
-        options: dict[str, Any] = {"nogil": True, "error_model": "numpy", "fastmath": {"reassoc"}}
-        options["inline"] = inline
-        try:
-            return numba.njit(cache=True, **options)(function)
-        except RuntimeError:  # no writable cache location: compile per process
-            return numba.njit(**options)(function)
-
+    # sums may be reordered (vectorised reductions); nothing else of fast-math
+    options: dict[str, Any] = {"nogil": True, "error_model": "numpy", "fastmath": {"reassoc"}}
     # The helpers first: the kernels call them by their module-level names, which from here on
     # are compiled functions (numba resolves those names when it compiles a kernel, on its
     # first call).
     helpers = "_edge _finite _windows _envelope _is_near _tail _sums _softplus_sigmoid".split()
-    for name in helpers:
-        globals()[name] = jit(globals()[name])
+    jit_globals(globals(), helpers, inline="never", **options)
     inlined = ("_edges", "_moments", "_hard_grads", "_soft_grads", "_chain_grads")
-    for name in inlined:  # inlined: faster loops in the kernels here
-        globals()[name] = jit(globals()[name], inline="always")
+    jit_globals(globals(), inlined, inline="always", **options)  # faster loops in the kernels
     functions = (chords_forward, chords_backward, smith_forward, smith_backward)
-    return Kernels(*(jit(f) for f in functions))
+    return Kernels(*(jit(f, inline="never", **options) for f in functions))

@@ -12,10 +12,13 @@ from __future__ import annotations
 
 import math
 from functools import cache
+from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from .._jit import jit, jit_globals
 
 __all__ = ["improve_order"]
 
@@ -68,13 +71,10 @@ def _two_opt(order, best, budget, fixed, start, dist, entry, exit_, internal, n_
 
 @cache
 def _compiled() -> Any:
-    try:
-        import numba
-    except ImportError:  # pragma: no cover - numba is a dependency
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _two_opt
-    g = globals()
-    g["_cost"] = numba.njit(cache=True)(g["_cost"])
-    return numba.njit(cache=True)(_two_opt)
+    jit_globals(globals(), ("_cost",))
+    return jit(_two_opt)
 
 
 def improve_order(

@@ -16,10 +16,13 @@ from __future__ import annotations
 
 import math
 from functools import cache
+from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from .._jit import jit, jit_globals
 
 __all__ = ["DENSE_EDGES", "points_near", "segment_crossings"]
 
@@ -86,13 +89,10 @@ def _near(p, e1, e2, n_edges, r, tiny, out):
 
 @cache
 def _compiled() -> Any:
-    try:
-        import numba
-    except ImportError:  # pragma: no cover - numba is a dependency
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _crossings, _near
-    g = globals()
-    g["_side"] = numba.njit(cache=True)(g["_side"])
-    return numba.njit(cache=True)(_crossings), numba.njit(cache=True)(_near)
+    jit_globals(globals(), ("_side",))
+    return jit(_crossings), jit(_near)
 
 
 def segment_crossings(

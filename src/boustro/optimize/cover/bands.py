@@ -19,11 +19,13 @@ from __future__ import annotations
 
 import math
 from functools import cache
+from importlib.util import find_spec
 from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..._jit import jit, jit_globals
 from .rigid import RigidBoxes, _rigid_cuts
 
 __all__ = ["BandStats", "EdgeSet", "RigidBoxes", "band_stats", "edge_set"]
@@ -443,15 +445,10 @@ def _all(
 @cache
 def _compiled() -> Any:
     """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
-    try:
-        import numba
-    except ImportError:  # pragma: no cover - numba is a dependency
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _all
-    jit = numba.njit(cache=True)
-    g = globals()
-    for name in ("_project", "_sort_pairs", "_sort_keys", "_band_intervals", "_hole_chords",
-                 "_minus", "_rigid_cuts", "_leaf"):  # fmt: skip
-        g[name] = jit(g[name])
+    jit_globals(globals(), ("_project", "_sort_pairs", "_sort_keys", "_band_intervals",
+                            "_hole_chords", "_minus", "_rigid_cuts", "_leaf"))  # fmt: skip
     return jit(_all)
 
 

@@ -14,11 +14,13 @@ from __future__ import annotations
 import logging
 import os
 from functools import cache
+from importlib.util import find_spec
 from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
 
+from ..._jit import LOCK, jit_cached, jit_globals
 from ...models import grid_size
 from . import kernel_bounds, kernel_exact, kernel_pieces, kernel_search
 from .kernel_exact import _exact_grid
@@ -109,39 +111,31 @@ def compiled() -> Compiled | None:
     some seconds, once per machine where the cache is writable)."""
     if _mode() == "off":
         return None
-    try:
-        import numba
-    except ImportError:  # pragma: no cover - numba is a dependency
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return None
-
     if first_compile():
         log.info("compiling the certified optimiser for this installation (once, 10-30 s)")
-    cached = [True]
-
-    def jit(function: Any) -> Any:
-        function = getattr(function, "py_func", function)  # idempotent
-        options: dict[str, Any] = {"nogil": True, "error_model": "numpy"}
-        try:
-            return numba.njit(cache=True, **options)(function)
-        except RuntimeError:  # no writable cache location: compile per process
-            cached[0] = False
-            return numba.njit(**options)(function)
-
+    options: dict[str, Any] = {"nogil": True, "error_model": "numpy"}
     # Helpers first: the functions call them by their module-level names, which from here on
-    # are compiled functions (numba resolves those names when it compiles a caller).
-    here = globals()
-    for table in (_HELPERS, _STAGES):
-        for module, names in table.items():
-            for name in names.split():
-                fn = jit(getattr(module, name))
-                setattr(module, name, fn)
-                for other in (kernel_pieces, kernel_bounds, kernel_exact, kernel_search):
-                    if name in vars(other):
-                        setattr(other, name, fn)
-                if name in here:
-                    here[name] = fn
-    found = (kernel_search._evaluate, jit(_exact_grid), jit(_search), jit(_pieces_at))
-    return Compiled(*found, cached[0])
+    # are compiled functions (numba resolves those names when it compiles a caller); a helper
+    # imported by name into another kernel module is swapped there too.
+    homes = (kernel_pieces, kernel_bounds, kernel_exact, kernel_search)
+    with LOCK:
+        for table in (_HELPERS, _STAGES):
+            for module, names in table.items():
+                for name in names.split():
+                    jit_globals(vars(module), (name,), **options)
+                    fn = getattr(module, name)
+                    for other in homes:
+                        if name in vars(other):
+                            setattr(other, name, fn)
+                    if name in globals():
+                        globals()[name] = fn
+    (grid, c1), (search, c2), (pieces, c3) = (
+        jit_cached(f, **options) for f in (_exact_grid, _search, _pieces_at)
+    )
+    on_disk = c1 and c2 and c3  # the same folder as the helpers
+    return Compiled(kernel_search._evaluate, grid, search, pieces, on_disk)
 
 
 def evaluate_smith_compiled(

@@ -22,12 +22,14 @@ and every set of counted lines a convex ``S`` between the two sets can have (doc
 from __future__ import annotations
 
 import math
-import threading
 from functools import cache
+from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from ..._jit import jit, jit_globals
 
 __all__ = ["box_bounds", "eq1_at_angle", "eq1_values", "lines_range"]
 
@@ -214,29 +216,14 @@ def _values(xy, cs, sn, d, s, k0, nb, a, b):
     return out
 
 
-_COMPILING = threading.Lock()
-
-
 @cache
 def _compiled() -> tuple[Any, Any]:
-    """``(_bounds, _values)`` compiled by numba (cached on disk), or plain Python without it.
-    Safe from several threads at once: ``functools.cache`` lets two first calls run, so the
-    helpers are swapped for their compiled versions under a lock, each from its Python
-    function (``py_func``), never compiled twice over."""
-    try:
-        import numba
-    except ImportError:  # pragma: no cover - numba is a dependency
+    """``(_bounds, _values)`` compiled by numba (cached on disk), or plain Python without it
+    (safe from several threads at once: :func:`boustro._jit.jit_globals`)."""
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _bounds, _values
-
-    def jit(fn: Any) -> Any:
-        return numba.njit(cache=True)(getattr(fn, "py_func", fn))
-
-    with _COMPILING:
-        g = globals()
-        for name in ("_spans", "_eq1", "_g", "_sup", "_upper"):
-            if not hasattr(g[name], "py_func"):
-                g[name] = jit(g[name])
-        return jit(_bounds), jit(_values)
+    jit_globals(globals(), ("_spans", "_eq1", "_g", "_sup", "_upper"))
+    return jit(_bounds), jit(_values)
 
 
 def lines_range(xy: NDArray[np.float64], spacing: float) -> tuple[int, int]:
