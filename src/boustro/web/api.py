@@ -150,7 +150,11 @@ def plan_request(body: Any) -> list[Mission]:
         >>> answer["n_transects"], answer["certified"], answer["geojson"]["type"]
         (12, True, 'FeatureCollection')
     """
-    opts = _checked_options(body)
+    return _plan_checked(body, _checked_options(body))
+
+
+def _plan_checked(body: dict[str, Any], opts: PlanOptions) -> list[Mission]:
+    """:func:`plan_request` of a request whose members and options are checked."""
     areas = request_areas(body["area"], opts)
     missions, failed = [], []
     for area in areas:
@@ -189,10 +193,10 @@ def export_request(body: Any, recent: RecentPlans | None = None) -> tuple[bytes,
     if not isinstance(fmt, str) or fmt not in FORMATS:
         raise InvalidParameterError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r:.40}")
     fmt = format_for("", fmt)
-    _checked_options(body)  # the same answer to a bad request, planned before or not
+    opts = _checked_options(body)  # the same answer to a bad request, planned before or not
     missions = None if recent is None else recent.get(body)
     if missions is None:
-        missions = plan_request(body)
+        missions = _plan_checked(body, opts)
     if len(missions) == 1:
         data = render(missions[0], fmt)
         name = missions[0].name or "mission"
