@@ -42,7 +42,7 @@ __all__ = [
 _HELPERS = {
     kernel_pieces: (
         "_nmax _nmin _clip01 _sign _argmax _argsort_into _weighted_row _angular_growth "
-        "_chords_through_vertices _piece_max"
+        "_chords_through_vertices _piece_max _structure_scratch"
     ),
     kernel_bounds: "_mu_ratio _parallel_one _ends_one",
     kernel_exact: "_angle_setup _layout_value",

@@ -111,6 +111,20 @@ def _chords_through_vertices(
         tu_v[i], td_v[i] = up, dn
 
 
+def _structure_scratch(n: int) -> tuple:
+    """The scratch arrays of :func:`_structure_one` and :func:`_pieces_one` for ``n``
+    vertices: ``h, t, x, tu, td, pc, fam, rn, mo, cc, work, iwork``."""
+    n_j = n - 1
+    h, t, x, tu, td = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    pc = np.empty((n, 5))
+    fam = np.empty((n, 2), dtype=np.int64)
+    rn = np.empty((n, n_j, 8))
+    mo = np.empty((n, _NMO))
+    cc = np.empty((n, n_j, 4))
+    work, iwork = np.empty((4, n)), np.empty((2, n), dtype=np.int64)
+    return h, t, x, tu, td, pc, fam, rn, mo, cc, work, iwork
+
+
 def _structure_one(
     v: np.ndarray,
     s: float,

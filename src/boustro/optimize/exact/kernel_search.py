@@ -16,7 +16,6 @@ import numpy as np
 from .kernel_bounds import _kink_one, _runs_one, _second_one
 from .kernel_pieces import (
     _LAM,
-    _NMO,
     _TOTAL,
     _VALUE,
     _argmax,
@@ -25,6 +24,7 @@ from .kernel_pieces import (
     _pieces_one,
     _quick_one,
     _structure_one,
+    _structure_scratch,
     _weighted_row,
 )
 from .structure import BOUND_SLACK
@@ -49,13 +49,7 @@ def _evaluate(
     """:func:`.bounds._evaluate_smith` as loops; writes ``g, d, ub, order``."""
     n = v.shape[0]
     n_j = n - 1
-    h, t, x, tu, td = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    pc = np.empty((n, 5))
-    fam = np.empty((n, 2), dtype=np.int64)
-    rn = np.empty((n, n_j, 8))
-    mo = np.empty((n, _NMO))
-    cc = np.empty((n, n_j, 4))
-    work, iwork = np.empty((4, n)), np.empty((2, n), dtype=np.int64)
+    h, t, x, tu, td, pc, fam, rn, mo, cc, work, iwork = _structure_scratch(n)
     drift, curv = np.empty((n, n_j)), np.empty((n, n_j))
     d0, d1 = np.empty((2, n, n_j)), np.empty(n_j)
     pb, f1s, f2s = np.empty(n), np.empty(n), np.empty(n)
@@ -198,14 +192,7 @@ def _pieces_at(
     """Every piece's exact maximum at each angle: ``out (M, P, 4)`` = lower breakpoint, width,
     value, ``lam`` (as ``_structure`` and ``_smith_pieces`` give them)."""
     n = v.shape[0]
-    n_j = n - 1
-    h, t, x, tu, td = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    pc = np.empty((n, 5))
-    fam = np.empty((n, 2), dtype=np.int64)
-    rn = np.empty((n, n_j, 8))
-    mo = np.empty((n, _NMO))
-    cc = np.empty((n, n_j, 4))
-    work, iwork = np.empty((4, n)), np.empty((2, n), dtype=np.int64)
+    h, t, x, tu, td, pc, fam, rn, mo, cc, work, iwork = _structure_scratch(n)
     for i in range(len(thetas)):
         _structure_one(v, s, thetas[i], h, t, x, tu, td, pc, fam, rn, work, iwork)
         _pieces_one(rn, a, b, mo, cc)
