@@ -31,7 +31,8 @@ from ..plan import (
 from ..sensors import SensorSpacing
 from ..vehicle import Vehicle
 from .camera import camera_trigger, with_camera
-from .cover import cover_cost, flown_cost, plan_cover
+from .cover import cover_cost, plan_cover
+from .decomposed import plan_decomposed
 from .defaults import DEFAULT_HULL_TOLERANCE
 from .estimate import SAY_SECONDS, WorkEstimate, check_work, frame_estimate
 from .map_back import angle_for_bearing, map_back
@@ -232,9 +233,11 @@ def _plan_for_cost(
     skips: bool = False,
 ) -> Planned:
     """A plan-level objective: the certified one-grid plan (:func:`plan_cover`); for a concave
-    area or one with holes also the decomposed plan (cells optimised for Eq. 1, not certified),
-    kept only if it costs less (always with ``decompose=True``, never with ``False``). Costs are
-    of ``finish(plan)`` (headland passes and the vehicle's turns added) where given."""
+    area or one with holes also the decomposed plan (:func:`plan_decomposed`: every cell
+    certified for the same cost, the order of the passes solved), kept only if it costs less
+    (always with ``decompose=True``, never with ``False``). Costs are of ``finish(plan)``
+    (headland passes and the vehicle's turns added) where given; both costs are in the kept
+    plan's ``optimum.info`` (``one_grid``, ``decomposed``)."""
     if settings["method"] not in (None, "certified-cover"):
         raise InvalidParameterError(
             f"the {cost.name} objective is optimised by the certified search over the flown "
@@ -244,18 +247,24 @@ def _plan_for_cost(
     extra: dict[str, Any] = {"finish": finish, "boustrophedon": False if skips else None}
     if frame.region is None or decompose is False or settings["angle"] is not None:
         return plan_cover(frame, cost, **extra, **{k: settings[k] for k in keys})
-    cells = plan_concave(
-        frame, decompose=True, sweep=sweep, **{**settings, "fitness": None, "method": None}
+    cells = plan_decomposed(
+        frame, cost, sweep=sweep, finish=finish, **{k: settings[k] for k in keys}
     )
-    if decompose:
-        return cells
+    if decompose and cells is not None:
+        return _noted(cells, decomposed=cells.optimum.fitness)
     one = plan_cover(frame, cost, **extra, **{k: settings[k] for k in keys})
-    value = flown_cost(cost, cells.plan, frame, finish)
+    if cells is None:
+        return _noted(one, one_grid=one.optimum.fitness, decomposed=None)
+    value = cells.optimum.fitness
     if value < one.optimum.fitness:
-        info = {**cells.optimum.info, "objective": cost.name, "one_grid": one.optimum.fitness}
-        return cells._replace(optimum=dataclasses.replace(cells.optimum, info=info))
-    info = {**one.optimum.info, "decomposed": value}
-    return one._replace(optimum=dataclasses.replace(one.optimum, info=info))
+        return _noted(cells, one_grid=one.optimum.fitness, decomposed=value)
+    return _noted(one, one_grid=one.optimum.fitness, decomposed=value)
+
+
+def _noted(planned: Planned, **info: Any) -> Planned:
+    """The plan with ``info`` added to its optimum's."""
+    optimum = dataclasses.replace(planned.optimum, info={**planned.optimum.info, **info})
+    return planned._replace(optimum=optimum)
 
 
 def _inner_frame(frame: Frame, passes: int) -> tuple[Frame, Region]:

@@ -206,6 +206,13 @@ class Mission:
                 for c in self.plan.cells
             ]
             out["hole_pass_length_m"] = s.hole_pass_length
+            if self.plan.order_solver is not None:
+                out["cell_order"] = self.plan.order_solver
+            info = self.optimum.info
+            if "one_grid" in info:  # the time objective compared one grid and the cells
+                out["compared"] = {"one_grid": info["one_grid"], "decomposed": info["decomposed"]}
+                if "decomposition" in info:
+                    out["decomposition"] = info["decomposition"]
             if self.plan.notes:
                 out["notes"] = list(self.plan.notes)
         out.update(self._flight_summary())

@@ -20,6 +20,7 @@ __all__ = [
     "Decomposition",
     "Trapezoids",
     "decompose",
+    "slab_decomposition",
     "trace_region",
     "trapezoids",
 ]
@@ -452,6 +453,19 @@ def decompose(
             trace_region(tr, np.flatnonzero(membership == k), r.diameter) for k in range(n_cells)
         )
     return Decomposition(float(sweep), cells, tr, membership, hi - lo, shared_m)
+
+
+def slab_decomposition(region: Region | Polygon | ArrayLike, sweep: float) -> Decomposition:
+    """Every trapezoid of the slab decomposition (:func:`trapezoids`) its own cell: the
+    finest decomposition at ``sweep``, cut at every vertex (an L-shape: its two arms)."""
+    r = as_region(region)
+    tr = trapezoids(r, sweep)
+    q = len(tr.a)
+    links = _links(tr, _TOL * r.diameter)
+    membership = np.arange(q, dtype=np.int64)
+    cells = tuple(trace_region(tr, [k], r.diameter) for k in range(q))
+    shared_m = _shared_lengths(links, membership, q)
+    return Decomposition(float(sweep), cells, tr, membership, tr.b - tr.a, shared_m)
 
 
 #: Grid of the quick optimisations that compare sweep directions (:func:`choose_sweep`).

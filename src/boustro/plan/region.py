@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal, NamedTuple
 
@@ -18,6 +18,7 @@ from ..geometry.region import Region, as_region
 from ..models import check_spacing
 from ..optimize import OptimizeResult
 from ..optimize.problem import _progress_bar
+from .cell_order import solve_order
 from .cells import _TOL, _check_float
 from .inside import inside_layout, outside_length
 from .lanes import Lanes, region_lanes
@@ -64,6 +65,8 @@ class PlanOptions:
     area: float | None = None
     merge_angle: float = math.radians(15.0)
     keep_inside: bool = False
+    cells: tuple[tuple[Region, OptimizeResult], ...] | None = None
+    order: str = "heuristic"
 
 
 class _Cells(NamedTuple):
@@ -89,6 +92,7 @@ class _Tour(NamedTuple):
     order: list[int]
     choice: list[int]
     router: Router
+    solver: str | None = None  # how the order was found (None: greedy + 2-opt, not reported)
 
 
 def plan_region(
@@ -116,6 +120,8 @@ def plan_region(
     merge_angle: float = math.radians(15.0),
     keep_inside: bool = False,
     progress: bool | None = False,
+    cells: Sequence[tuple[Region, OptimizeResult]] | None = None,
+    order: str = "heuristic",
 ) -> Plan:
     """Plan a concave area or an area with holes: lanes, hole passes, one connected path.
 
@@ -154,6 +160,12 @@ def plan_region(
             the boundary; no ``nadir_gap``). The passes replace the passes around holes.
         progress: a tqdm bar on stderr over the stages (optimisation of the cells, lanes,
             tour and routing, path); ``None``: if stderr is a terminal.
+        cells: the cells to plan, each with its optimum (angle, offset from the cell's vertex
+            mean), instead of deciding and optimising them (a decomposition chosen by the
+            caller, e.g. :mod:`boustro.mission.decomposed`).
+        order: how the passes are ordered: ``"heuristic"`` (default: greedy + 2-opt) or
+            ``"auto"``, ``"exact"``, ``"or-tools"`` (:func:`boustro.plan.cell_order.solve_order`;
+            the solver used is the plan's ``order_solver``).
 
     Returns:
         a :class:`~boustro.plan.Plan` with ``region``, ``cells``, per-transect angles and
@@ -193,13 +205,15 @@ def plan_region(
         min_width=min_width,
         merge_angle=merge_angle,
         keep_inside=keep_inside,
+        cells=None if cells is None else tuple(cells),
+        order=order,
     )
     notes: list[str] = []
     bar = _Stages(progress)
     with bar.stage("optimising the cells"):
-        cells = _plan_cells(r, opts, notes)
+        chosen = _plan_cells(r, opts, notes)
     with bar.stage("lanes"):
-        cell_lanes = _plan_lanes(r, cells, opts)
+        cell_lanes = _plan_lanes(r, chosen, opts)
     with bar.stage("tour and routing"):
         tour = _plan_tour(r, cell_lanes, opts, notes)
     with bar.stage("path"):
@@ -265,6 +279,10 @@ def _check_options(r: Region, spacing: float, **kw: Any) -> PlanOptions:
             "keep_inside (--keep-inside) does not take a nadir gap: the boundary passes would "
             "not cover their own blind strip"
         )
+    if kw["order"] not in ("heuristic", "auto", "exact", "or-tools"):
+        raise InvalidParameterError(
+            f"order must be 'heuristic', 'auto', 'exact' or 'or-tools', got {kw['order']!r}"
+        )
     min_width = kw["min_width"]
     min_width = 2 * s if min_width is None else _check_float("min_width", min_width, 0.0)
     kw.update(
@@ -286,6 +304,8 @@ def _plan_cells(r: Region, opts: PlanOptions, notes: list[str]) -> _Cells:
     s = opts.spacing
     options = {"n_angles": opts.n_angles, "n_offsets": opts.n_offsets, "fitness": opts.fitness}
     whole = _Cells([r], [None])
+    if opts.cells is not None:
+        return _Cells([c for c, _ in opts.cells], [o for _, o in opts.cells])
     if opts.angle is not None:
         return whole
     optima: list[OptimizeResult | None] = [optimize_region(r, s, **options)]
@@ -386,8 +406,14 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
         start_pt = np.asarray(start, dtype=np.float64).reshape(-1)
         if start_pt.shape != (2,) or not np.all(np.isfinite(start_pt)):
             raise InvalidParameterError(f"start must be a finite (x, y) pair, got {start!r}")
-    order, choice = _order(passes, start_pt, router, force_start=start is not None)
-    return _Tour(passes, order, choice, router)
+    if opts.order == "heuristic":
+        order, choice = _order(passes, start_pt, router, force_start=start is not None)
+        return _Tour(passes, order, choice, router)
+    order, choice, solver, said = solve_order(
+        passes, start_pt, router, force_start=start is not None, solver=opts.order
+    )
+    notes.extend(said)
+    return _Tour(passes, order, choice, router, solver)
 
 
 # -- step 5: drive ----------------------------------------------------------------------------
@@ -467,4 +493,5 @@ def _assemble(
         transect_cells=path.cells,
         notes=tuple(notes),
         keep_inside=opts.keep_inside,
+        order_solver=tour.solver,
     )

@@ -143,6 +143,9 @@ class Plan:
         headland: headland passes around the field (0: none).
         keep_inside: planned so that no part of the path leaves the area or enters a hole
             (:mod:`boustro.plan.inside`).
+        order_solver: how the order of the passes was solved (``"exact"``, ``"or-tools"``,
+            ``"heuristic"``: :func:`boustro.plan.cell_order.solve_order`), or ``None``: the
+            default greedy + 2-opt of :func:`boustro.plan.plan_region` and the convex planner.
     """
 
     polygon: Polygon
@@ -169,6 +172,7 @@ class Plan:
     vehicle: Any = None
     headland: int = 0
     keep_inside: bool = False
+    order_solver: str | None = None
 
     @property
     def n_transects(self) -> int:

@@ -1,0 +1,317 @@
+"""The decomposed plan of a plan-level objective (mission time, fewest transects): candidate
+decompositions, every cell certified by the same search as the one-grid plan, cells merged only
+where one sweep serves both at no more cost, the order of the passes solved.
+
+Candidates: at each sweep direction :func:`boustro.plan.choose_sweep` compares (or the one
+given), the finest decomposition (every trapezoid of the slab decomposition a cell, when there
+are at most :data:`MAX_CELLS`), Choset's cells and the merged cells of
+:func:`boustro.plan.decompose`; each with and without the merges of neighbouring cells whose
+union's plan at one of their two layouts costs no more than the two cells and the turn between
+them. Every cell is optimised by :func:`boustro.optimize.cover.cover_optimum` on the cell as an
+area (its certificate is the cell's), the candidates ranked by the sum of their cells' costs,
+and the best :data:`PLANNED` planned with the order of the passes solved
+(:func:`boustro.plan.cell_order.solve_order`): the least flown cost is kept.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ..errors import InvalidPolygonError, NoTransectError
+from ..geometry.region import Region
+from ..optimize import OptimizeResult
+from ..optimize.cover import CoverCost, centred_offsets, cover_optimum
+from ..optimize.result import canonical
+from ..plan import Plan, coverage
+from ..plan.cells import Decomposition, _frame, decompose, slab_decomposition, trapezoids
+from ..plan.region import plan_region
+from ..plan.types import Layout
+from .cover import flown_cost
+from .project import Frame
+from .steps import Planned, _path_options
+
+__all__ = ["MAX_CELLS", "MAX_SEARCHES", "PLANNED", "plan_decomposed"]
+
+#: Decompositions with more cells are not searched (every trapezoid a cell, Choset's cells);
+#: the merged cells of :func:`boustro.plan.decompose` are, within :data:`MAX_SEARCHES`.
+MAX_CELLS = 12
+#: Certified cell searches per plan at most (a count, not a time: the same plan on any load).
+MAX_SEARCHES = 48
+#: Candidate decompositions planned in full (their passes ordered), best estimate first.
+PLANNED = 3
+#: Edge directions of a cell (longest first) where the lanes laid from its edge are planned.
+CENTRED_ANGLES = 8
+#: Neighbouring cells whose angles differ by less than this are tried as one cell.
+MERGE_ANGLE = math.radians(15.0)
+
+
+class _Candidate(NamedTuple):
+    name: str
+    cells: list[Region]
+    optima: list[OptimizeResult]
+    estimate: float  # the cells' costs and one turn between consecutive cells
+
+
+class _Search:
+    """The certified search of each cell, done once per cell (cached by its vertices)."""
+
+    def __init__(self, frame: Frame, cost: CoverCost, layout: str, options: dict[str, Any]):
+        self.cost, self.layout, self.options = cost, layout, options
+        self.s = frame.sensor.spacing * frame.proj.scale_min
+        self.reach = frame.sensor.reach * frame.proj.scale_min
+        self.cache: dict[bytes, OptimizeResult] = {}
+        self.searches = 0
+
+    def plan(self, cell: Region, angle: float, offset: float) -> Plan:
+        lay: Layout = "chords" if self.layout == "chords" else "guaranteed"
+        return plan_region(
+            cell, self.s, decompose_area=False, angle=angle, offset=offset, layout=lay,
+            **self.options,
+        )  # fmt: skip
+
+    def value(self, cell: Region, angle: float, offset: float) -> float:
+        st = self.plan(cell, angle, offset).stats
+        return self.cost.of(st.path_length * self.options["ground_scale"], st.n_turns)
+
+    def optimum(self, cell: Region) -> OptimizeResult | None:
+        """The cell's certified optimum (``None`` past :data:`MAX_SEARCHES` or no lane)."""
+        key = np.round(cell.shell.vertices, 9).tobytes() + bytes(len(cell.holes))
+        if key in self.cache:
+            return self.cache[key]
+        if self.searches >= MAX_SEARCHES:
+            return None
+        self.searches += 1
+        try:
+            opt = cover_optimum(
+                cell, self.s, self.cost, lambda a, d: self.value(cell, a, d),
+                reach=self.reach, boustrophedon=False,
+            )  # fmt: skip
+        except (NoTransectError, InvalidPolygonError, ValueError):
+            return None
+        opt = self._centred(cell, opt)
+        self.cache[key] = opt
+        return opt
+
+    def _centred(self, cell: Region, opt: OptimizeResult) -> OptimizeResult:
+        """The optimum, or a better plan among the lanes laid from the cell's edge (the first
+        half a spacing inside its extreme, as a person lays them) along its longest edges'
+        directions: a strip one spacing wide is covered by one lane at one offset only, which
+        the search's plans at box centres never hit. The search's lower bound holds for every
+        layout, so the certificate stays valid, its gap only shrinks."""
+        v = cell.shell.vertices
+        e = np.roll(v, -1, axis=0) - v
+        angles = np.unique(np.round(np.arctan2(e[:, 1], e[:, 0]) % math.pi, 12))
+        order = np.argsort(-np.array([_longest(e, a) for a in angles]))[:CENTRED_ANGLES]
+        angles = angles[order]
+        offsets = centred_offsets(cell, angles, self.s, self.reach)
+        best = (opt.fitness, opt.angle, opt.offset)
+        for a, d in zip(angles, offsets, strict=True):
+            try:
+                value = self.value(cell, float(a), float(d))
+            except NoTransectError:
+                continue
+            if value < best[0]:
+                best = (value, float(a), float(d))
+        if best[0] >= opt.fitness:
+            return opt
+        value, angle, offset = best
+        lower = float(opt.info.get("lower_bound", -math.inf))
+        gap = max(0.0, value - lower)
+        rtol = float(opt.info.get("rtol", 1e-3))
+        info = {**opt.info, "gap": gap, "certified": gap <= rtol * abs(value) + 1e-12}
+        angle, offset = canonical(angle, offset, self.s)
+        return dataclasses.replace(opt, angle=angle, offset=offset, fitness=value, info=info)
+
+
+def _longest(e: np.ndarray, angle: float) -> float:
+    """The length of the longest edge of direction ``angle``."""
+    a = np.arctan2(e[:, 1], e[:, 0]) % math.pi
+    return float(np.hypot(e[:, 0], e[:, 1])[np.abs(a - angle) < 1e-9].max(initial=0.0))
+
+
+def _sweeps(region: Region, sweep: float | None) -> list[float]:
+    """The given sweep, or :func:`boustro.plan.choose_sweep`'s candidates: six directions and
+    those of the two longest edges."""
+    if sweep is not None:
+        return [math.radians(float(sweep)) % math.pi]
+    e = region.edges
+    d = e[:, 1] - e[:, 0]
+    longest = np.argsort(-np.linalg.norm(d, axis=1))[:2]
+    out: list[float] = []
+    for a in [*np.arange(6) * math.pi / 6, *(np.arctan2(d[longest, 1], d[longest, 0]) % math.pi)]:
+        if all(abs((a - b + math.pi / 2) % math.pi - math.pi / 2) > 1e-6 for b in out):
+            out.append(float(a))
+    return out
+
+
+def _decompositions(
+    region: Region, sweeps: list[float], s: float
+) -> list[tuple[str, Decomposition]]:
+    """The candidate decompositions, distinct, of more than one cell."""
+    out: list[tuple[str, Decomposition]] = []
+    seen: set[bytes] = set()
+    for sw in sweeps:
+        for name in ("trapezoids", "choset", "merged"):
+            try:
+                dec = _decomposition(region, sw, s, name)
+            except InvalidPolygonError:
+                continue
+            if len(dec.cells) < 2:
+                continue
+            key = np.round(sorted((c.area, *c.centre) for c in dec.cells), 6).tobytes()
+            if key not in seen:
+                seen.add(key)
+                out.append((f"{name} at {math.degrees(sw):.6g} deg", dec))
+    return out
+
+
+def _decomposition(region: Region, sweep: float, s: float, name: str) -> Decomposition:
+    """Every trapezoid a cell, Choset's cells, or the merged cells of :func:`decompose`."""
+    if name == "trapezoids":
+        if len(trapezoids(region, sweep).a) > MAX_CELLS:  # too many cells to search
+            raise InvalidPolygonError("too many trapezoids")
+        return slab_decomposition(region, sweep)
+    return decompose(region, sweep, merge=name == "merged", min_width=2 * s)
+
+
+def _moved(opt: OptimizeResult, cell: Region, union: Region) -> tuple[float, float]:
+    """A cell's layout as a layout of the union (offsets are from each region's centre)."""
+    _, n = _frame(opt.angle)
+    return opt.angle, opt.offset + float((cell.centre - union.centre) @ n)
+
+
+def _merged(
+    dec: Decomposition, diameter: float, search: _Search, optima: list[OptimizeResult]
+) -> tuple[list[Region], list[OptimizeResult]] | None:
+    """Neighbouring cells merged while the union's plan at one of the two cells' layouts costs
+    no more than both cells and one turn (the largest saving first); ``None``: no merge."""
+    groups = [[k] for k in range(len(dec.cells))]
+    regions, opts = list(dec.cells), list(optima)
+    turn = search.cost.per_turn
+    merged = False
+    while len(groups) > 1:
+        best: tuple[float, int, int, Region] | None = None
+        for i in range(len(groups)):
+            for j in range(i + 1, len(groups)):
+                if float(dec.shared[np.ix_(groups[i], groups[j])].sum()) <= 0:
+                    continue
+                gap = abs(opts[i].angle - opts[j].angle) % math.pi
+                if min(gap, math.pi - gap) >= MERGE_ANGLE:
+                    continue
+                try:
+                    union = dec.union(groups[i] + groups[j], diameter)
+                    value = min(
+                        search.value(union, *_moved(opts[k], regions[k], union)) for k in (i, j)
+                    )
+                except (InvalidPolygonError, NoTransectError):
+                    continue
+                saving = opts[i].fitness + opts[j].fitness + turn - value
+                if saving >= 0 and (best is None or saving > best[0]):
+                    best = (saving, i, j, union)
+        if best is None:
+            break
+        _, i, j, union = best
+        opt = search.optimum(union)
+        if opt is None:
+            break
+        groups[i], regions[i], opts[i] = groups[i] + groups[j], union, opt
+        del groups[j], regions[j], opts[j]
+        merged = True
+    return (regions, opts) if merged else None
+
+
+def _candidates(region: Region, search: _Search, sweep: float | None) -> list[_Candidate]:
+    """Every candidate decomposition with its cells' optima, best estimate first."""
+    turn = search.cost.per_turn
+    out: list[_Candidate] = []
+    for name, dec in _decompositions(region, _sweeps(region, sweep), search.s):
+        if len(dec.cells) > MAX_CELLS and not name.startswith("merged"):
+            continue
+        optima = [search.optimum(c) for c in dec.cells]
+        if any(o is None for o in optima):
+            continue
+        got: list[OptimizeResult] = optima  # type: ignore[assignment]
+        for label, cells, opts in [(name, list(dec.cells), got)] + [
+            (f"{name}, merged", *m)
+            for m in [_merged(dec, region.diameter, search, got)]
+            if m is not None
+        ]:
+            estimate = sum(o.fitness for o in opts) + turn * (len(cells) - 1)
+            out.append(_Candidate(label, cells, opts, estimate))
+    out.sort(key=lambda c: c.estimate)
+    return out
+
+
+def plan_decomposed(
+    frame: Frame,
+    cost: CoverCost,
+    *,
+    layout: str,
+    turnaround: float,
+    speed: float | None,
+    turn_time: float,
+    check_coverage: bool,
+    keep_inside: bool = False,
+    sweep: float | None = None,
+    finish: Callable[[Plan], Plan] | None = None,
+    **_: Any,
+) -> Planned | None:
+    """The decomposed plan of least flown ``cost`` (module docstring), or ``None`` when no
+    decomposition has more than one cell. Its optimum's ``info``: ``cells``, ``candidates``,
+    ``searches``, ``decomposition`` (which candidate), ``cell_order`` (the order's solver),
+    ``cells_certified``; its cells carry their certificates."""
+    t0 = time.perf_counter()
+    region = frame.region
+    assert region is not None
+    options = _path_options(frame, turnaround, speed, turn_time)
+    search = _Search(frame, cost, layout, options)
+    candidates = _candidates(region, search, sweep)
+    best: tuple[float, Plan, _Candidate] | None = None
+    lay: Layout = "chords" if layout == "chords" else "guaranteed"
+    for cand in candidates[:PLANNED]:
+        plan = plan_region(
+            region, search.s, layout=lay, cells=list(zip(cand.cells, cand.optima, strict=True)),
+            order="auto", keep_inside=keep_inside,
+            start=frame.start if frame.given_start else None, **options,
+        )  # fmt: skip
+        value = flown_cost(cost, plan, frame, finish)
+        if best is None or value < best[0]:
+            best = (value, plan, cand)
+    if best is None:
+        return None
+    value, plan, cand = best
+    certified = sum(bool(o.info.get("certified")) for o in cand.optima)
+    main = max(range(len(cand.cells)), key=lambda k: cand.cells[k].area)
+    optimum = OptimizeResult(
+        angle=cand.optima[main].angle,
+        offset=cand.optima[main].offset,
+        fitness=value,
+        spacing=search.s,
+        method="decomposed-cover",
+        evaluations=int(sum(o.evaluations for o in cand.optima)),
+        seconds=time.perf_counter() - t0,
+        info={
+            "objective": cost.name,
+            "certified": False,  # each cell is; the choice of cells is not
+            "gap": None,
+            "cells": len(cand.cells),
+            "cells_certified": certified,
+            "decomposition": cand.name,
+            "candidates": len(candidates),
+            "searches": search.searches,
+            "cell_order": plan.order_solver,
+        },
+    )
+    cells = tuple(
+        dataclasses.replace(c, fitness=o.fitness, optimum=o)
+        for c, o in zip(plan.cells, cand.optima, strict=True)
+    )
+    plan = dataclasses.replace(plan, cells=cells)
+    cov = coverage(plan, region) if check_coverage else None
+    return Planned(plan, optimum, cov)
