@@ -1,0 +1,222 @@
+"""The decomposition chosen by mission time (issue 16 item 3): candidate decompositions, every
+cell certified, the order of the passes solved exactly (Held-Karp, checked here against a brute
+force over all orders and options), by OR-Tools beyond, and the decomposed plan kept only when
+it beats one grid; thin shapes planned as a person would (the ring: 4 lanes)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+
+import numpy as np
+import pytest
+import shapely
+
+from boustro.geometry import Polygon
+from boustro.geometry.region import Region
+from boustro.mission import _as_area, _project, _Sensor, _sensor_spacing, plan_area
+from boustro.mission.cover import _planner
+from boustro.mission.steps import _path_options
+from boustro.optimize.cover import centred_offsets
+from boustro.plan import cell_order
+from boustro.plan.cell_order import EXACT_PASSES, solve_order, tour_cost
+from boustro.plan.region import plan_region
+from boustro.plan.routing import router_for
+from boustro.plan.tour import _Pass
+
+from .conftest import run_cli
+
+RING = [(0, 0), (10, 0), (10, 10), (0, 10)]
+RING_HOLE = [(1, 1), (1, 9), (9, 9), (9, 1)]
+L_SHAPE = [(0, 0), (100, 0), (100, 30), (30, 30), (30, 100), (0, 100)]
+SPEED, TURN = 5.0, 10.0
+
+
+def _recomputed_time(mission) -> float:
+    """Path length of the waypoints / speed + (passes - 1) x turn time, from the waypoints."""
+    w = mission.plan.waypoints
+    length = float(np.linalg.norm(np.diff(w, axis=0), axis=1).sum())
+    kinds = list(mission.plan.kinds)
+    passes = kinds.count("start") + sum(
+        1 for a, b in itertools.pairwise(["", *kinds]) if b == "contour" and a != "contour"
+    )
+    return length / SPEED + (passes - 1) * TURN
+
+
+def _covered(mission, area: shapely.Polygon) -> float:
+    """The share of ``area`` (the original boundary) within the lanes' flat bands of ``reach``
+    and the passes' round ones (shapely, not boustro's coverage code)."""
+    plan = mission.plan
+    roles = np.array(plan.role())
+    lanes = shapely.linestrings(plan.transects[roles == "lane"])
+    other = shapely.linestrings(plan.transects[roles != "lane"])
+    left = area
+    for swath in [
+        *shapely.buffer(lanes, plan.reach * (1 + 1e-9), cap_style="flat"),
+        *shapely.buffer(other, plan.reach * (1 + 1e-9), quad_segs=64),
+    ]:
+        left = left.difference(swath)
+    return 1 - left.area / area.area
+
+
+def _ring(**kw):
+    return plan_area(RING, 1.0, crs=None, holes=[RING_HOLE], speed=SPEED, turn_time=TURN, **kw)
+
+
+def test_ring_is_four_lanes_along_the_sides():
+    m = _ring()
+    s = m.summary()
+    assert m.stats.n_transects == 4 and m.stats.duration < 60
+    assert s["method"] == "decomposed-cover" and s["cell_order"] == "exact"
+    assert s["compared"]["decomposed"] < s["compared"]["one_grid"]
+    assert all(c["certified"] and c["n_transects"] == 1 for c in s["cells"])
+    assert m.stats.duration == pytest.approx(_recomputed_time(m), rel=1e-9)
+    area = shapely.Polygon(RING, [RING_HOLE])
+    assert _covered(m, area) >= 1 - 1e-9
+    assert m.stats.outside_length == 0.0
+
+
+def test_ring_keep_inside_stays_inside_and_covers():
+    m = _ring(keep_inside=True)
+    area = shapely.Polygon(RING, [RING_HOLE])
+    assert area.buffer(1e-6).contains(shapely.LineString(m.plan.waypoints))
+    assert _covered(m, area) >= 1 - 1e-9
+    assert m.stats.duration < 60
+    assert m.stats.duration == pytest.approx(_recomputed_time(m), rel=1e-9)
+
+
+def _best_fixed_angle(ring, holes, spacing) -> float:
+    """The fastest of the plans at every whole degree, lanes laid from the area's edge."""
+    area = _as_area(np.asarray(ring, float), None, [np.asarray(h, float) for h in holes])
+    frame = _project(area, _Sensor(*_sensor_spacing(spacing)), 0.5, None, None)
+    plan_of = _planner(frame, "guaranteed", _path_options(frame, 0.0, SPEED, TURN))
+    region = frame.region if frame.region is not None else Region(frame.poly)
+    angles = np.radians(np.arange(180.0))
+    offsets = centred_offsets(region, angles, spacing, spacing / 2)
+    return min(plan_of(a, d).stats.duration for a, d in zip(angles, offsets, strict=True))
+
+
+def test_l_shape_no_worse_than_the_best_fixed_angle():
+    m = plan_area(L_SHAPE, 10.0, crs=None, speed=SPEED, turn_time=TURN, decompose=None)
+    best = _best_fixed_angle(L_SHAPE, [], 10.0)
+    assert m.stats.duration <= best + 1e-9
+    assert m.stats.duration == pytest.approx(_recomputed_time(m), rel=1e-9)
+    assert _covered(m, shapely.Polygon(L_SHAPE)) >= 1 - 1e-9
+
+
+@pytest.mark.parametrize(
+    "shell, holes, spacing",
+    [
+        ([(0, 0), (90, 0), (90, 90), (60, 90), (60, 30), (30, 30), (30, 90), (0, 90)], [], 10.0),
+        ([(0, 0), (120, 0), (120, 80), (0, 80)], [[(30, 20), (90, 20), (90, 60), (30, 60)]], 10.0),
+        ([(0, 0), (80, 10), (100, 70), (40, 50), (10, 90)], [[(40, 20), (55, 25), (45, 35)]], 8.0),
+    ],
+)
+def test_decomposed_never_worse_than_one_grid(shell, holes, spacing):
+    kw = dict(crs=None, holes=holes, speed=SPEED, turn_time=TURN)
+    best = plan_area(shell, spacing, **kw)
+    one = plan_area(shell, spacing, decompose=False, **kw)
+    assert best.stats.duration <= one.stats.duration + 1e-9
+    info = best.optimum.info
+    assert info["one_grid"] == pytest.approx(one.stats.duration, rel=1e-9)
+    assert best.stats.duration == pytest.approx(_recomputed_time(best), rel=1e-9)
+    assert _covered(best, shapely.Polygon(shell, holes)) >= 1 - 1e-9
+
+
+def _random_passes(rng, n: int) -> list[_Pass]:
+    """Chains of 1 to 4 random options (entry, exit, points, length) in a 100 x 100 square."""
+    out = []
+    for k in range(n):
+        options = []
+        for _ in range(int(rng.integers(1, 5))):
+            a, b = rng.uniform(0, 100, 2), rng.uniform(0, 100, 2)
+            options.append((a, b, np.stack([a, b]), float(np.linalg.norm(b - a))))
+        out.append(_Pass("chain", k, 0.0, options))
+    return out
+
+
+def _brute(passes, start, force_start: bool) -> float:
+    """The least cost over every order and every option of every pass."""
+    best = math.inf
+    nearest = None
+    if force_start:
+        entries = [(k, j) for k, p in enumerate(passes) for j in range(len(p.options))]
+        nearest = min(
+            entries, key=lambda kj: np.linalg.norm(passes[kj[0]].options[kj[1]][0] - start)
+        )
+    for order in itertools.permutations(range(len(passes))):
+        if nearest is not None and order[0] != nearest[0]:
+            continue
+        for choice in itertools.product(*(range(len(passes[k].options)) for k in order)):
+            if nearest is not None and choice[0] != nearest[1]:
+                continue
+            total = passes[order[0]].options[choice[0]][3]
+            for (k0, c0), (k1, c1) in itertools.pairwise(zip(order, choice, strict=True)):
+                exit_ = passes[k0].options[c0][1]
+                entry, _, _, length = passes[k1].options[c1]
+                total += float(np.linalg.norm(entry - exit_)) + length
+            best = min(best, total)
+    return best
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("force_start", [False, True])
+def test_exact_order_equals_brute_force(seed, force_start):
+    rng = np.random.default_rng(seed)
+    passes = _random_passes(rng, int(rng.integers(2, 6)))
+    router = router_for(Region(Polygon([(-10, -10), (110, -10), (110, 110), (-10, 110)])), 0.0)
+    start = rng.uniform(0, 100, 2)
+    order, choice, used, _ = solve_order(passes, start, router, force_start=force_start)
+    assert used == "exact" and sorted(order) == list(range(len(passes)))
+    got = tour_cost(passes, start, router, order, choice, force_start=force_start)
+    assert got == pytest.approx(_brute(passes, start, force_start), rel=1e-12)
+    for other in ("or-tools", "heuristic"):
+        o, c, _, _ = solve_order(passes, start, router, force_start=force_start, solver=other)
+        assert tour_cost(passes, start, router, o, c, force_start=force_start) >= got - 1e-9
+
+
+def test_many_passes_use_or_tools_and_beat_nothing_worse_than_greedy():
+    rng = np.random.default_rng(7)
+    passes = _random_passes(rng, EXACT_PASSES + 6)
+    router = router_for(Region(Polygon([(-10, -10), (110, -10), (110, 110), (-10, 110)])), 0.0)
+    start = np.zeros(2)
+    o, c, used, notes = solve_order(passes, start, router)
+    assert used in ("or-tools", "heuristic") and not notes
+    h_o, h_c, h_used, _ = solve_order(passes, start, router, solver="heuristic")
+    assert h_used == "heuristic"
+    assert tour_cost(passes, start, router, o, c) <= tour_cost(passes, start, router, h_o, h_c)
+
+
+def test_without_or_tools_the_greedy_order_with_a_note(monkeypatch):
+    monkeypatch.setattr(cell_order, "_ortools", lambda pb: None)
+    rng = np.random.default_rng(3)
+    passes = _random_passes(rng, EXACT_PASSES + 2)
+    router = router_for(Region(Polygon([(-10, -10), (110, -10), (110, 110), (-10, 110)])), 0.0)
+    _, _, used, notes = solve_order(passes, np.zeros(2), router)
+    assert used == "heuristic" and "boustro[order]" in notes[0]
+
+
+def test_plan_region_order_option_reports_the_solver():
+    u = [(0, 0), (9, 0), (9, 9), (6, 9), (6, 3), (3, 3), (3, 9), (0, 9)]
+    plain = plan_region(u, 1.0)
+    solved = plan_region(u, 1.0, order="auto")
+    assert plain.order_solver is None and solved.order_solver == "exact"
+    assert solved.stats.path_length <= plain.stats.path_length + 1e-9
+
+
+def test_cli_json_says_cells_order_and_comparison(capsys, tmp_path):
+    path = tmp_path / "ring.geojson"
+    ring = [list(map(float, p)) for p in [*RING, RING[0]]]
+    hole = [list(map(float, p)) for p in [*RING_HOLE, RING_HOLE[0]]]
+    path.write_text(json.dumps({"type": "Polygon", "coordinates": [ring, hole]}))
+    code, out, err = run_cli(
+        capsys,
+        "plan", str(path), "--spacing", "1", "--crs", "none", "--speed", "5", "--turn-time",
+        "10", "--json",
+    )  # fmt: skip
+    assert code == 0, err
+    s = json.loads(out)
+    assert s["n_transects"] == 4 and s["cell_order"] == "exact" and s["n_cells"] == 4
+    assert all(c["certified"] is True and c["gap"] is not None for c in s["cells"])
+    assert s["duration_s"] < s["compared"]["one_grid"]
