@@ -23,7 +23,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..errors import InvalidPolygonError, NoTransectError
+from ..errors import InvalidParameterError, InvalidPolygonError, NoTransectError
 from ..geometry.region import Region
 from ..optimize import OptimizeResult
 from ..optimize.cover import CoverCost, centred_offsets, cover_optimum
@@ -92,7 +92,7 @@ class _Search:
                 cell, self.s, self.cost, lambda a, d: self.value(cell, a, d),
                 reach=self.reach, boustrophedon=False,
             )  # fmt: skip
-        except (NoTransectError, InvalidPolygonError, ValueError):
+        except (NoTransectError, InvalidPolygonError, InvalidParameterError):
             return None
         opt = self._centred(cell, opt)
         self.cache[key] = opt

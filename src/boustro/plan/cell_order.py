@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import itertools
 import math
+from importlib.util import find_spec
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, MissingDependencyError
 from .routing import Router
 from .tour import _order, _Pass
 
@@ -190,20 +191,21 @@ def solve_order(
         return order, choice, "exact", []
     notes: list[str] = []
     if solver in ("auto", "or-tools"):
-        found = _ortools(pb)
-        if found is None and solver == "or-tools":
-            raise InvalidParameterError(
+        if solver == "or-tools" and find_spec("ortools") is None:
+            raise MissingDependencyError(
                 "the or-tools order needs OR-Tools: pip install 'boustro[order]'"
             )
+        found = _ortools(pb)
         if found is not None:
             order, choice = _order(passes, start, router, force_start=force_start)
             greedy = pb.nodes(order, choice)
             best = found if pb.cost(found) <= pb.cost(greedy) else greedy
             used: OrderSolver = "or-tools" if best is found else "heuristic"
             return *pb.split(best), used, notes
+        why = "OR-Tools found no tour" if find_spec("ortools") else "OR-Tools is not installed"
         notes.append(
             f"{pb.n} passes ordered by greedy + 2-opt (more than {EXACT_PASSES} for the exact "
-            "order, and OR-Tools is not installed: pip install 'boustro[order]')"
+            f"order, and {why}: pip install 'boustro[order]')"
         )
     order, choice = _order(passes, start, router, force_start=force_start)
     return order, choice, "heuristic", notes
