@@ -25,11 +25,12 @@ import numpy as np
 
 from ..errors import InvalidParameterError, InvalidPolygonError, NoTransectError
 from ..geometry.region import Region
+from ..models.region import segment_moments
 from ..optimize import OptimizeResult
 from ..optimize.cover import CoverCost, centred_offsets, cover_optimum
 from ..optimize.result import canonical
 from ..plan import Plan, coverage
-from ..plan.cells import Decomposition, _frame, decompose, slab_decomposition, trapezoids
+from ..plan.cells import Decomposition, decompose, slab_decomposition, trapezoids
 from ..plan.region import plan_region
 from ..plan.types import Layout
 from .cover import flown_cost
@@ -38,13 +39,16 @@ from .steps import Planned, _path_options
 
 __all__ = ["MAX_CELLS", "MAX_SEARCHES", "PLANNED", "plan_decomposed"]
 
-#: Decompositions with more cells are not searched (every trapezoid a cell, Choset's cells);
-#: the merged cells of :func:`boustro.plan.decompose` are, within :data:`MAX_SEARCHES`.
+#: Decompositions with more cells are not candidates (the exact order takes 12 passes).
 MAX_CELLS = 12
 #: Certified cell searches per plan at most (a count, not a time: the same plan on any load).
-MAX_SEARCHES = 48
-#: Candidate decompositions planned in full (their passes ordered), best estimate first.
-PLANNED = 3
+MAX_SEARCHES = 16
+#: Candidate decompositions whose cells are certified and planned in full (their passes
+#: ordered), best modelled cost first.
+PLANNED = 2
+#: Lane directions of the model of a cell's cost (every 5 degrees) and offsets per spacing.
+MODEL_ANGLES = 36
+MODEL_OFFSETS = 4
 #: Edge directions of a cell (longest first) where the lanes laid from its edge are planned.
 CENTRED_ANGLES = 8
 #: Neighbouring cells whose angles differ by less than this are tried as one cell.
@@ -54,8 +58,8 @@ MERGE_ANGLE = math.radians(15.0)
 class _Candidate(NamedTuple):
     name: str
     cells: list[Region]
-    optima: list[OptimizeResult]
-    estimate: float  # the cells' costs and one turn between consecutive cells
+    models: list[tuple[float, float, float]]  # each cell's modelled (cost, angle, offset)
+    estimate: float  # the cells' modelled costs and one turn between consecutive cells
 
 
 class _Search:
@@ -65,7 +69,8 @@ class _Search:
         self.cost, self.layout, self.options = cost, layout, options
         self.s = frame.sensor.spacing * frame.proj.scale_min
         self.reach = frame.sensor.reach * frame.proj.scale_min
-        self.cache: dict[bytes, OptimizeResult] = {}
+        self.cache: dict[bytes, OptimizeResult | None] = {}
+        self.models: dict[bytes, tuple[float, float, float]] = {}
         self.searches = 0
 
     def plan(self, cell: Region, angle: float, offset: float) -> Plan:
@@ -79,9 +84,52 @@ class _Search:
         st = self.plan(cell, angle, offset).stats
         return self.cost.of(st.path_length * self.options["ground_scale"], st.n_turns)
 
+    def model(self, cell: Region) -> tuple[float, float, float]:
+        """The least modelled cost of the cell and its layout ``(cost, angle, offset)``: its
+        lines' segments (:func:`boustro.models.region.segment_moments`) as lanes, a spacing's
+        move and a turn between consecutive ones, over lane directions every 5 degrees and the
+        cell's edge directions, 4 offsets each. Cheap (no plan): it ranks the candidates; what
+        is kept is planned. With the guaranteed layout the lanes are counted as the lines whose
+        band meets the cell, the length scaled to match."""
+        key = _key(cell)
+        if key in self.models:
+            return self.models[key]
+        v = cell.shell.vertices
+        e = np.roll(v, -1, axis=0) - v
+        angles = (
+            np.concatenate(
+                [np.arange(MODEL_ANGLES) * (math.pi / MODEL_ANGLES), np.arctan2(e[:, 1], e[:, 0])]
+            )
+            % math.pi
+        )
+        base = centred_offsets(cell, angles, self.s, self.reach)
+        a = np.repeat(angles, MODEL_OFFSETS)
+        d = (base[:, None] + np.arange(MODEL_OFFSETS) * (self.s / MODEL_OFFSETS)).ravel()
+        frame = cell.frame
+        n, s1, _ = segment_moments(
+            frame.to_normalised(cell.edges), a, d / frame.scale, self.s / frame.scale, tiny=1e-12
+        )
+        if self.layout != "chords":  # a guaranteed lane on every line whose band meets it
+            normal = np.stack([-np.sin(a), np.cos(a)], axis=1)
+            across = normal @ (v - cell.centre).T
+            tol = 1e-9 * self.s
+            lo = np.ceil((across.min(axis=1) - self.reach + tol - d) / self.s)
+            hi = np.floor((across.max(axis=1) + self.reach - tol - d) / self.s)
+            lanes = np.maximum(hi - lo + 1, n)
+            s1 = s1 * lanes / np.maximum(n, 1)
+            n = lanes
+        turns = np.maximum(n - 1, 0)
+        length = s1 * frame.scale + turns * self.s + 2 * n * self.cost.turnaround
+        values = self.cost.per_length * length + self.cost.per_turn * turns
+        values = np.where(n > 0, values, math.inf)
+        i = int(np.argmin(values))
+        out = (float(values[i]), float(a[i]), float(d[i]))
+        self.models[key] = out
+        return out
+
     def optimum(self, cell: Region) -> OptimizeResult | None:
         """The cell's certified optimum (``None`` past :data:`MAX_SEARCHES` or no lane)."""
-        key = np.round(cell.shell.vertices, 9).tobytes() + bytes(len(cell.holes))
+        key = _key(cell)
         if key in self.cache:
             return self.cache[key]
         if self.searches >= MAX_SEARCHES:
@@ -93,6 +141,7 @@ class _Search:
                 reach=self.reach, boustrophedon=False,
             )  # fmt: skip
         except (NoTransectError, InvalidPolygonError, InvalidParameterError):
+            self.cache[key] = None
             return None
         opt = self._centred(cell, opt)
         self.cache[key] = opt
@@ -127,6 +176,10 @@ class _Search:
         info = {**opt.info, "gap": gap, "certified": gap <= rtol * abs(value) + 1e-12}
         angle, offset = canonical(angle, offset, self.s)
         return dataclasses.replace(opt, angle=angle, offset=offset, fitness=value, info=info)
+
+
+def _key(cell: Region) -> bytes:
+    return np.round(cell.shell.vertices, 9).tobytes() + bytes(len(cell.holes))
 
 
 def _longest(e: np.ndarray, angle: float) -> float:
@@ -180,70 +233,56 @@ def _decomposition(region: Region, sweep: float, s: float, name: str) -> Decompo
     return decompose(region, sweep, merge=name == "merged", min_width=2 * s)
 
 
-def _moved(opt: OptimizeResult, cell: Region, union: Region) -> tuple[float, float]:
-    """A cell's layout as a layout of the union (offsets are from each region's centre)."""
-    _, n = _frame(opt.angle)
-    return opt.angle, opt.offset + float((cell.centre - union.centre) @ n)
-
-
 def _merged(
-    dec: Decomposition, diameter: float, search: _Search, optima: list[OptimizeResult]
-) -> tuple[list[Region], list[OptimizeResult]] | None:
-    """Neighbouring cells merged while the union's plan at one of the two cells' layouts costs
-    no more than both cells and one turn (the largest saving first); ``None``: no merge."""
+    dec: Decomposition, diameter: float, search: _Search, models: list[tuple[float, float, float]]
+) -> tuple[list[Region], list[tuple[float, float, float]]] | None:
+    """Neighbouring cells merged while the union's modelled cost is no more than both cells'
+    and one turn (the largest saving first; never into one cell: that is the one-grid plan);
+    ``None``: no merge."""
     groups = [[k] for k in range(len(dec.cells))]
-    regions, opts = list(dec.cells), list(optima)
+    regions, values = list(dec.cells), list(models)
     turn = search.cost.per_turn
     merged = False
-    while len(groups) > 1:
-        best: tuple[float, int, int, Region] | None = None
+    while len(groups) > 2:
+        best: tuple[float, int, int, Region, tuple[float, float, float]] | None = None
         for i in range(len(groups)):
             for j in range(i + 1, len(groups)):
                 if float(dec.shared[np.ix_(groups[i], groups[j])].sum()) <= 0:
                     continue
-                gap = abs(opts[i].angle - opts[j].angle) % math.pi
+                gap = abs(values[i][1] - values[j][1]) % math.pi
                 if min(gap, math.pi - gap) >= MERGE_ANGLE:
                     continue
                 try:
                     union = dec.union(groups[i] + groups[j], diameter)
-                    value = min(
-                        search.value(union, *_moved(opts[k], regions[k], union)) for k in (i, j)
-                    )
-                except (InvalidPolygonError, NoTransectError):
+                except InvalidPolygonError:
                     continue
-                saving = opts[i].fitness + opts[j].fitness + turn - value
+                model = search.model(union)
+                saving = values[i][0] + values[j][0] + turn - model[0]
                 if saving >= 0 and (best is None or saving > best[0]):
-                    best = (saving, i, j, union)
+                    best = (saving, i, j, union, model)
         if best is None:
             break
-        _, i, j, union = best
-        opt = search.optimum(union)
-        if opt is None:
-            break
-        groups[i], regions[i], opts[i] = groups[i] + groups[j], union, opt
-        del groups[j], regions[j], opts[j]
+        _, i, j, union, model = best
+        groups[i], regions[i], values[i] = groups[i] + groups[j], union, model
+        del groups[j], regions[j], values[j]
         merged = True
-    return (regions, opts) if merged else None
+    return (regions, values) if merged else None
 
 
 def _candidates(region: Region, search: _Search, sweep: float | None) -> list[_Candidate]:
-    """Every candidate decomposition with its cells' optima, best estimate first."""
+    """Every candidate decomposition with its cells' modelled costs, least estimate first."""
     turn = search.cost.per_turn
     out: list[_Candidate] = []
     for name, dec in _decompositions(region, _sweeps(region, sweep), search.s):
-        if len(dec.cells) > MAX_CELLS and not name.startswith("merged"):
+        if len(dec.cells) > MAX_CELLS:
             continue
-        optima = [search.optimum(c) for c in dec.cells]
-        if any(o is None for o in optima):
-            continue
-        got: list[OptimizeResult] = optima  # type: ignore[assignment]
-        for label, cells, opts in [(name, list(dec.cells), got)] + [
-            (f"{name}, merged", *m)
-            for m in [_merged(dec, region.diameter, search, got)]
-            if m is not None
-        ]:
-            estimate = sum(o.fitness for o in opts) + turn * (len(cells) - 1)
-            out.append(_Candidate(label, cells, opts, estimate))
+        models = [search.model(c) for c in dec.cells]
+        merged = _merged(dec, region.diameter, search, models)
+        for label, cells, values in [(name, list(dec.cells), models)] + (
+            [] if merged is None else [(f"{name}, merged", *merged)]
+        ):
+            estimate = sum(v[0] for v in values) + turn * (len(cells) - 1)
+            out.append(_Candidate(label, cells, values, estimate))
     out.sort(key=lambda c: c.estimate)
     return out
 
@@ -260,10 +299,12 @@ def plan_decomposed(
     keep_inside: bool = False,
     sweep: float | None = None,
     finish: Callable[[Plan], Plan] | None = None,
+    beat: float | None = None,
     **_: Any,
 ) -> Planned | None:
     """The decomposed plan of least flown ``cost`` (module docstring), or ``None`` when no
-    decomposition has more than one cell. Its optimum's ``info``: ``cells``, ``candidates``,
+    decomposition has more than one cell (or, with ``beat``, none whose modelled cost is below
+    it: the cost of the one-grid plan). Its optimum's ``info``: ``cells``, ``candidates``,
     ``searches``, ``decomposition`` (which candidate), ``cell_order`` (the order's solver),
     ``cells_certified``; its cells carry their certificates."""
     t0 = time.perf_counter()
@@ -272,29 +313,35 @@ def plan_decomposed(
     options = _path_options(frame, turnaround, speed, turn_time)
     search = _Search(frame, cost, layout, options)
     candidates = _candidates(region, search, sweep)
-    best: tuple[float, Plan, _Candidate] | None = None
+    if beat is not None:  # the model leaves out moves between cells: hopeless if above
+        candidates = [c for c in candidates if c.estimate < beat]
+    best: tuple[float, Plan, _Candidate, list[OptimizeResult]] | None = None
     lay: Layout = "chords" if layout == "chords" else "guaranteed"
     for cand in candidates[:PLANNED]:
+        found = [search.optimum(c) for c in cand.cells]
+        optima = [o for o in found if o is not None]
+        if len(optima) < len(found):
+            continue
         plan = plan_region(
-            region, search.s, layout=lay, cells=list(zip(cand.cells, cand.optima, strict=True)),
+            region, search.s, layout=lay, cells=list(zip(cand.cells, optima, strict=True)),
             order="auto", keep_inside=keep_inside,
             start=frame.start if frame.given_start else None, **options,
         )  # fmt: skip
         value = flown_cost(cost, plan, frame, finish)
         if best is None or value < best[0]:
-            best = (value, plan, cand)
+            best = (value, plan, cand, optima)
     if best is None:
         return None
-    value, plan, cand = best
-    certified = sum(bool(o.info.get("certified")) for o in cand.optima)
+    value, plan, cand, optima = best
+    certified = sum(bool(o.info.get("certified")) for o in optima)
     main = max(range(len(cand.cells)), key=lambda k: cand.cells[k].area)
     optimum = OptimizeResult(
-        angle=cand.optima[main].angle,
-        offset=cand.optima[main].offset,
+        angle=optima[main].angle,
+        offset=optima[main].offset,
         fitness=value,
         spacing=search.s,
         method="decomposed-cover",
-        evaluations=int(sum(o.evaluations for o in cand.optima)),
+        evaluations=int(sum(o.evaluations for o in optima)),
         seconds=time.perf_counter() - t0,
         info={
             "objective": cost.name,
@@ -310,7 +357,7 @@ def plan_decomposed(
     )
     cells = tuple(
         dataclasses.replace(c, fitness=o.fitness, optimum=o)
-        for c, o in zip(plan.cells, cand.optima, strict=True)
+        for c, o in zip(plan.cells, optima, strict=True)
     )
     plan = dataclasses.replace(plan, cells=cells)
     cov = coverage(plan, region) if check_coverage else None

@@ -247,12 +247,15 @@ def _plan_for_cost(
     extra: dict[str, Any] = {"finish": finish, "boustrophedon": False if skips else None}
     if frame.region is None or decompose is False or settings["angle"] is not None:
         return plan_cover(frame, cost, **extra, **{k: settings[k] for k in keys})
+    given = {k: settings[k] for k in keys}
+    if decompose:
+        cells = plan_decomposed(frame, cost, sweep=sweep, finish=finish, **given)
+        if cells is not None:
+            return _noted(cells, decomposed=cells.optimum.fitness)
+    one = plan_cover(frame, cost, **extra, **given)
     cells = plan_decomposed(
-        frame, cost, sweep=sweep, finish=finish, **{k: settings[k] for k in keys}
+        frame, cost, sweep=sweep, finish=finish, beat=one.optimum.fitness, **given
     )
-    if decompose and cells is not None:
-        return _noted(cells, decomposed=cells.optimum.fitness)
-    one = plan_cover(frame, cost, **extra, **{k: settings[k] for k in keys})
     if cells is None:
         return _noted(one, one_grid=one.optimum.fitness, decomposed=None)
     value = cells.optimum.fitness
