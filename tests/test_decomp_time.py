@@ -220,3 +220,21 @@ def test_cli_json_says_cells_order_and_comparison(capsys, tmp_path):
     assert s["n_transects"] == 4 and s["cell_order"] == "exact" and s["n_cells"] == 4
     assert all(c["certified"] is True and c["gap"] is not None for c in s["cells"])
     assert s["duration_s"] < s["compared"]["one_grid"]
+
+
+def test_l_shape_keep_inside_decomposed_inside_and_covered():
+    kw = dict(crs=None, speed=SPEED, turn_time=TURN, keep_inside=True)
+    m = plan_area(L_SHAPE, 10.0, **kw)
+    one = plan_area(L_SHAPE, 10.0, decompose=False, **kw)
+    assert m.stats.duration <= one.stats.duration + 1e-9
+    area = shapely.Polygon(L_SHAPE)
+    assert area.buffer(1e-6).contains(shapely.LineString(m.plan.waypoints))
+    assert _covered(m, area) >= 1 - 1e-9
+    assert m.stats.duration == pytest.approx(_recomputed_time(m), rel=1e-9)
+
+
+def test_fewest_transects_objective_decomposes_the_ring():
+    from boustro.objectives import FewestTransects
+
+    m = plan_area(RING, 1.0, crs=None, holes=[RING_HOLE], fitness=FewestTransects())
+    assert m.stats.n_transects == 4 and m.summary()["cell_order"] == "exact"
