@@ -79,7 +79,10 @@ several fields in one file:
 concave areas and holes:
   holes (GeoJSON interior rings, KML innerBoundaryIs, WKT inner rings) are obstacles: no path
   enters them. A concave area (unless nearly convex, see --hull-tolerance) or one with holes is
-  decomposed into cells, each with its own angle and offset, when that promises fewer turns;
+  decomposed into cells, each with its own angle and offset, when that promises fewer turns
+  (with --speed, the time objective: when the decomposed plan is faster than one grid, its
+  cells each certified, the order of their lanes solved exactly for up to 12 passes, by
+  OR-Tools beyond if installed; --json says "cell_order" and "compared");
   --decompose always decomposes, --no-decompose plans one angle with the lines cut at the
   boundary and the holes. Connecting moves go around holes; a hole that cuts lanes gets one
   pass around it so that the area along its edge is covered too.
@@ -332,7 +335,8 @@ def _add_path(p: argparse.ArgumentParser) -> None:
         default=None,
         help="concave areas and holes: always decompose into cells (--decompose), or plan one "
         "angle with lines cut at the boundary (--no-decompose); default: decompose when it "
-        "promises fewer turns. Either also turns off the hull rule of --hull-tolerance",
+        "promises fewer turns (the time objective: when the decomposed plan is faster). "
+        "Either also turns off the hull rule of --hull-tolerance",
     )
     path.add_argument(
         "--keep-inside",
