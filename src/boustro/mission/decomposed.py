@@ -3,13 +3,14 @@ decompositions, every cell certified by the same search as the one-grid plan, ce
 where one sweep serves both at no more cost, the order of the passes solved.
 
 Candidates: at each sweep direction :func:`boustro.plan.choose_sweep` compares (or the one
-given), the finest decomposition (every trapezoid of the slab decomposition a cell, when there
-are at most :data:`MAX_CELLS`), Choset's cells and the merged cells of
-:func:`boustro.plan.decompose`; each with and without the merges of neighbouring cells whose
-union's plan at one of their two layouts costs no more than the two cells and the turn between
-them. Every cell is optimised by :func:`boustro.optimize.cover.cover_optimum` on the cell as an
-area (its certificate is the cell's), the candidates ranked by the sum of their cells' costs,
-and the best :data:`PLANNED` planned with the order of the passes solved
+given), the finest decomposition (every trapezoid of the slab decomposition a cell), Choset's
+cells and the merged cells of :func:`boustro.plan.decompose`, each of at most
+:data:`MAX_CELLS` cells; each with and without the merges of neighbouring cells (angles within
+15 degrees) whose union's modelled cost is no more than the two cells' and the turn between
+them. The model (:meth:`_Search.model`: the cell's lines' segments as lanes, no plan) ranks the
+candidates; the best :data:`PLANNED` whose model beats the one grid (``beat``) have every cell
+optimised by :func:`boustro.optimize.cover.cover_optimum` on the cell as an area (its
+certificate is the cell's) and are planned with the order of the passes solved
 (:func:`boustro.plan.cell_order.solve_order`): the least flown cost is kept.
 """
 
