@@ -211,8 +211,8 @@ class Mission:
             info = self.optimum.info
             if "one_grid" in info:  # the time objective compared one grid and the cells
                 out["compared"] = {"one_grid": info["one_grid"], "decomposed": info["decomposed"]}
-                if "decomposition" in info:
-                    out["decomposition"] = info["decomposition"]
+            if "decomposition" in info:  # which candidate decomposition was kept
+                out["decomposition"] = info["decomposition"]
             if self.plan.notes:
                 out["notes"] = list(self.plan.notes)
         out.update(self._flight_summary())
