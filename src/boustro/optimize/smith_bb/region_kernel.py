@@ -17,7 +17,11 @@ For a box, the rigidly moved region ``S`` lies between the inner set ``I`` and t
   its pieces and ``|o|``; otherwise the pieces of each ``o`` are grouped by the segments
   (every split point between two pieces tried, at most ``u - r`` splits), a group's length lies
   between its pieces' span and the gap to its neighbours, and up to ``u - r - splits`` free
-  segments (holding no piece) lie in gaps, of length at most the longest gap.
+  segments (holding no piece) lie in gaps, of length at most the longest gap ``G``.
+
+Eq. 1 with ``f`` free segments of one length ``y``: their share ``t = f / (n + f)`` moves the
+mean linearly and the variance concavely (``(1 - t) V + t (1 - t) (m - y)^2``), so Eq. 1 is
+convex in ``t`` and the best count of free segments is none or all of them.
 
 Eq. 1 is concave in the lengths for a fixed count: each choice is maximised exactly
 (:func:`_sup_w`, the convex kernel's closed form with multiplicities), the bound is the largest.
@@ -39,11 +43,20 @@ from .kernel import _g, lines_range
 __all__ = ["region_bounds", "region_values", "ring_starts"]
 
 #: Most split choices enumerated per box (2^gaps), beyond it the crude bound ``a max|o| + b``.
-MAX_CHOICES = 64
-#: Most free segments tried per choice (beyond: the crude bound).
-FREE_CAP = 24
+MAX_CHOICES = 8
 #: Added to every box bound (rounding of the closed forms).
 BOUND_SLACK = 1e-10
+
+
+def _first_line(lo, d, s, k0):
+    """The first line ``k >= k0`` with ``d + k s >= lo`` (exactly, as the crossing rule
+    ``(h1 <= c) != (h2 <= c)`` holds for ``min(h1, h2) <= c < max(h1, h2)``)."""
+    k = max(math.ceil((lo - d) / s), k0)
+    while k > k0 and d + (k - 1) * s >= lo:
+        k -= 1
+    while d + k * s < lo:
+        k += 1
+    return k
 
 
 def _intervals(xy, cs, sn, d, s, k0, nb):
@@ -53,14 +66,10 @@ def _intervals(xy, cs, sn, d, s, k0, nb):
     for i in range(xy.shape[0]):
         h1 = -sn * xy[i, 0] + cs * xy[i, 1]
         h2 = -sn * xy[i, 2] + cs * xy[i, 3]
-        if h1 == h2:
-            continue
-        ka = max(math.floor((min(h1, h2) - d) / s) - 1, k0)
-        kb = min(math.ceil((max(h1, h2) - d) / s) + 1, k0 + nb - 1)
-        for k in range(ka, kb + 1):
-            c = d + k * s
-            if (h1 <= c) != (h2 <= c):
-                cnt[k - k0 + 1] += 1
+        k = _first_line(min(h1, h2), d, s, k0)
+        while k < k0 + nb and (h1 <= d + k * s) != (h2 <= d + k * s):
+            cnt[k - k0 + 1] += 1
+            k += 1
     for q in range(nb):
         cnt[q + 1] += cnt[q]
     t = np.empty(cnt[nb])
@@ -73,24 +82,29 @@ def _intervals(xy, cs, sn, d, s, k0, nb):
             continue
         t1 = cs * x1 + sn * y1
         t2 = cs * x2 + sn * y2
-        ka = max(math.floor((min(h1, h2) - d) / s) - 1, k0)
-        kb = min(math.ceil((max(h1, h2) - d) / s) + 1, k0 + nb - 1)
-        for k in range(ka, kb + 1):
+        k = _first_line(min(h1, h2), d, s, k0)
+        while k < k0 + nb and (h1 <= d + k * s) != (h2 <= d + k * s):
             c = d + k * s
-            if (h1 <= c) != (h2 <= c):
-                j = k - k0
-                t[fill[j]] = t1 + (c - h1) * (t2 - t1) / (h2 - h1)
-                fill[j] += 1
+            j = k - k0
+            t[fill[j]] = t1 + (c - h1) * (t2 - t1) / (h2 - h1)
+            fill[j] += 1
+            k += 1
     start = np.zeros(nb + 1, dtype=np.int64)
     for q in range(nb):
         start[q + 1] = start[q] + (cnt[q + 1] - cnt[q]) // 2
     lo = np.empty(start[nb])
     hi = np.empty(start[nb])
     for q in range(nb):
-        seg = np.sort(t[cnt[q] : cnt[q + 1]])
+        for i in range(cnt[q] + 1, cnt[q + 1]):  # insertion sort: few crossings a line
+            x = t[i]
+            j = i - 1
+            while j >= cnt[q] and t[j] > x:
+                t[j + 1] = t[j]
+                j -= 1
+            t[j + 1] = x
         for j in range(start[q + 1] - start[q]):
-            lo[start[q] + j] = seg[2 * j]
-            hi[start[q] + j] = seg[2 * j + 1]
+            lo[start[q] + j] = t[cnt[q] + 2 * j]
+            hi[start[q] + j] = t[cnt[q] + 2 * j + 1]
     return start, lo, hi
 
 
@@ -278,7 +292,7 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, 
     owner = np.empty(pa.shape[0], dtype=np.int64)
     extra = np.zeros(nb, dtype=np.int64)
     gaps = np.zeros(nb, dtype=np.int64)
-    size = pa.shape[0] + 2
+    size = pa.shape[0] + 3
     lo = np.empty(size)
     hi = np.empty(size)
     w = np.ones(size)
@@ -311,7 +325,8 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, 
                     left = pb[p]
             gfree = max(gfree, ob[o] - left)
     if total_gaps > 30 or (1 << total_gaps) > MAX_CHOICES:
-        return crude
+        return _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_fixed,
+                        gfree, a, b, pos)  # fmt: skip
     best = -np.inf
     for mask in range(1 << total_gaps):
         n, g, free, ok = n_fixed, 0, 0, True
@@ -327,18 +342,61 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, 
             free += extra[q] - splits
         if not ok:
             continue
-        if free > FREE_CAP:
-            return crude
         lo[n] = 0.0
         hi[n] = gfree
         for q in range(n + 1):
             pos[2 * q] = lo[q]
             pos[2 * q + 1] = hi[q]
         order = np.argsort(pos[: 2 * (n + 1)])
-        for f in range(free + 1):
+        for f in (0, free):  # the best count of free segments is none or all (module doc)
             w[n] = float(f)
             best = max(best, _sup_w(lo, hi, w, n + 1, order, a, b, pos))
         w[n] = 1.0
+    return best
+
+
+def _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n, gfree, a, b, pos):
+    """The bound without enumerating the splits (too many): on each uncertain line one
+    segment per component holding pieces, of length between its shortest piece and ``|o|``
+    (whichever group holds that piece), up to ``min(extra, gaps)`` split segments of length
+    between the shortest and the longest of those, and up to ``extra`` free ones in
+    ``[0, G]``; Eq. 1 is convex in the two shares, so only their extreme counts are tried."""
+    splits, free, smin, smax = 0, 0, np.inf, 0.0
+    for q in range(nb):
+        if extra[q] == 0:
+            continue
+        splits += min(extra[q], gaps[q])
+        free += extra[q]
+        prev_o = -1
+        for p in range(ist[q], ist[q + 1]):
+            o = owner[p]
+            if o < 0:
+                continue
+            if o != prev_o:
+                lo[n] = pb[p] - pa[p]
+                hi[n] = ob[o] - oa[o]
+                n += 1
+                prev_o = o
+            else:
+                lo[n - 1] = min(lo[n - 1], pb[p] - pa[p])
+            if gaps[q] > 0:
+                smin = min(smin, pb[p] - pa[p])
+                smax = max(smax, ob[o] - oa[o])
+    if splits == 0:
+        smin, smax = 0.0, 0.0
+    lo[n], hi[n], lo[n + 1], hi[n + 1] = smin, smax, 0.0, gfree
+    for q in range(n + 2):
+        pos[2 * q] = lo[q]
+        pos[2 * q + 1] = hi[q]
+    order = np.argsort(pos[: 2 * (n + 2)])
+    best = -np.inf
+    for ns in (0, splits):
+        for nf in (0, free):
+            w[n] = float(ns)
+            w[n + 1] = float(nf)
+            best = max(best, _sup_w(lo, hi, w, n + 2, order, a, b, pos))
+    w[n] = 1.0
+    w[n + 1] = 1.0
     return best
 
 
@@ -358,9 +416,9 @@ def _compiled() -> tuple[Any, Any]:
     """``(_bounds, _values)`` compiled by numba (cached on disk), or plain Python without it."""
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _bounds, _values
-    jit_globals(
-        globals(), ("_g", "_intervals", "_chain_counts", "_sup_w", "_owners", "_line_segments",
-                    "_bound"))  # fmt: skip
+    helpers = ("_g", "_first_line", "_intervals", "_chain_counts", "_sup_w", "_owners",
+               "_line_segments", "_relaxed", "_bound")  # fmt: skip
+    jit_globals(globals(), helpers)
     return jit(_bounds), jit(_values)
 
 
