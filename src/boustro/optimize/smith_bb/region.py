@@ -120,10 +120,10 @@ def smith_bb_region(
         >= that fitness at every layout, and ``info`` as :func:`smith_bb`'s (``converged``
         False with ``stopped`` when the budget was spent: the bound still holds).
 
-    >>> ring = Region([(0, 0), (4, 0), (4, 4), (0, 4)], holes=[[(1, 1), (1, 3), (3, 3), (3, 1)]])
-    >>> r = smith_bb_region(ring, 0.5)
-    >>> r.gap <= 1e-4
-    True
+    >>> area = Region([(0, 0), (5, 1), (4, 5), (2, 3), (-1, 4)], holes=[[(1, 1), (1, 2), (2, 1.5)]])
+    >>> r = smith_bb_region(area, 0.4)
+    >>> r.info["converged"], r.gap <= 1e-4
+    (True, True)
     """
     t0 = time.perf_counter()
     r = as_region(region)

@@ -130,9 +130,10 @@ def _values(xy, cs, sn, d, s, k0, nb, a, b, tiny):
 
 
 def _chain_counts(xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, cnt):
-    """``cnt[b]``: h-monotone chains of the real rings (or single edges turning with the box,
-    counted twice: they may lie along a line) whose h-range grown by ``eps`` holds line
-    ``k0 + b``: at least the boundary points of every moved region on the line."""
+    """``cnt[b]``: h-monotone chains of the real rings (or single edges that may turn parallel
+    to the lines) whose h-range grown by ``eps`` holds line ``k0 + b``: at least the crossings
+    of every moved region's boundary with the line (the half-open rule crosses a monotone chain
+    at most once, a straight edge at most once, an edge along the line never)."""
     for q in range(nb):
         cnt[q] = 0
     for r in range(rings.shape[0] - 1):
@@ -157,13 +158,12 @@ def _chain_counts(xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, cnt):
                     break
                 lo_h, hi_h = min(lo_h, g2), max(hi_h, g2)
                 j += 1
-            weight = 1 if cls != 0 else 2
             ka = max(math.floor((lo_h - eps - d) / s), k0)
             kb = min(math.ceil((hi_h + eps - d) / s), k0 + nb - 1)
             for k in range(ka, kb + 1):
                 c = d + k * s
                 if lo_h - eps <= c <= hi_h + eps:
-                    cnt[k - k0] += weight
+                    cnt[k - k0] += 1
             i = j
 
 
