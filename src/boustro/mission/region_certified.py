@@ -144,7 +144,7 @@ def _combined(plan: Plan, optima: list[OptimizeResult], s: float) -> OptimizeRes
     areas = np.array([c.region.area for c in plan.cells])
     w = areas / areas.sum()
     fitness = float(np.dot(w, [o.fitness for o in optima]))
-    upper = float(np.dot(w, [o.upper_bound for o in optima]))
+    upper = float(np.dot(w, [float(o.upper_bound or o.fitness) for o in optima]))
     main = int(np.argmax(areas))
     return OptimizeResult(
         angle=plan.cells[main].angle,
