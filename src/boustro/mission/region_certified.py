@@ -25,7 +25,7 @@ from ..optimize import OptimizeResult
 from ..optimize.smith_bb.region import smith_bb_region
 from ..plan import Plan
 from ..plan.region import _assemble as _assemble_plan
-from ..plan.region import _Cells, _check_options, _plan_lanes, _plan_tour, plan_region
+from ..plan.region import _Cells, _check_options, _plan_lanes, _plan_tour, _Stages
 from ..plan.region import _drive as _drive_plan
 from ..plan.region_opt import _cells_for_sweep, _estimate, choose_sweep, optimize_region
 from .defaults import DEFAULT_METHOD, REGION_OPTIONS, SCALE_METHOD, log
@@ -115,27 +115,6 @@ def _cells(
     return [r], [whole]
 
 
-def _plan(r: Region, cells: list[Region], optima: list[OptimizeResult], s: float,
-          settings: dict[str, Any], path: dict[str, Any]) -> Plan:  # fmt: skip
-    """The plan of the cells at their optima (:func:`plan_region`'s steps after the cells)."""
-    start = settings["start"]
-    if len(cells) == 1:
-        plan = plan_region(r, s, decompose_area=False, angle=optima[0].angle,
-                           offset=optima[0].offset, layout=settings["layout"], start=start,
-                           keep_inside=settings["keep_inside"], **path)  # fmt: skip
-        cell = dataclasses.replace(plan.cells[0], fitness=optima[0].fitness, optimum=optima[0])
-        return dataclasses.replace(plan, cells=(cell,))
-    opts = _check_options(
-        r, s, decompose_area=True, sweep=None, angle=None, offset=None, fitness=None,
-        n_angles=REGION_OPTIONS["n_angles"], n_offsets=REGION_OPTIONS["n_offsets"],
-        layout=settings["layout"], start=start, hole_passes=True, min_width=None,
-        merge_angle=MERGE_ANGLE, keep_inside=settings["keep_inside"], **path)  # fmt: skip
-    notes: list[str] = []
-    lanes = _plan_lanes(r, _Cells(cells, list(optima)), opts)
-    tour = _plan_tour(r, lanes, opts, notes)
-    return _assemble_plan(r, lanes, tour, _drive_plan(tour, lanes, opts), opts, notes)
-
-
 def _combined(plan: Plan, optima: list[OptimizeResult], s: float) -> OptimizeResult:
     """One result for the plan: the largest cell's layout, the area-weighted fitness and upper
     bound of the cells (certified when all are)."""
@@ -179,10 +158,26 @@ def plan_certified(
     """``(plan, optimum)``: a concave area or one with holes (plan frame) planned at certified
     optima of Eq. 1 over segments (module docstring); ``path``: the options of the path
     (:func:`boustro.mission.steps.plan_concave`'s), ``sweep`` in degrees, ``start`` ``None``
-    for the shortest tour."""
-    whole = _certify(region, spacing, fitness, progress)
+    for the shortest tour. The options are checked before any work; the stages are
+    :func:`plan_region`'s (its bar with ``progress``)."""
+    opts = _check_options(
+        region, spacing, decompose_area=decompose is not False, sweep=None, angle=None,
+        offset=None, fitness=None, n_angles=REGION_OPTIONS["n_angles"],
+        n_offsets=REGION_OPTIONS["n_offsets"], layout=layout, start=start, hole_passes=True,
+        min_width=None, merge_angle=MERGE_ANGLE, keep_inside=keep_inside, **path)  # fmt: skip
     sweep_rad = None if sweep is None else math.radians(float(sweep))
-    cells, optima = _cells(region, spacing, whole, decompose, sweep_rad, fitness, progress)
-    settings = {"layout": layout, "start": start, "keep_inside": keep_inside}
-    plan = _plan(region, cells, optima, spacing, settings, path)
-    return plan, _combined(plan, optima, spacing)
+    notes: list[str] = []
+    bar = _Stages(progress)
+    with bar.stage("optimising the cells"):
+        whole = _certify(region, opts.spacing, fitness, progress)
+        cells, optima = _cells(region, opts.spacing, whole, decompose, sweep_rad, fitness,
+                               progress)  # fmt: skip
+    with bar.stage("lanes"):
+        lanes = _plan_lanes(region, _Cells(cells, list(optima)), opts)
+    with bar.stage("tour and routing"):
+        tour = _plan_tour(region, lanes, opts, notes)
+    with bar.stage("path"):
+        driven = _drive_plan(tour, lanes, opts)
+    bar.close()
+    plan = _assemble_plan(region, lanes, tour, driven, opts, notes)
+    return plan, _combined(plan, optima, opts.spacing)
