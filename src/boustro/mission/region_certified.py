@@ -54,7 +54,10 @@ def certified_applies(method: str | None, fitness: Any, angle: float | None) -> 
 def _certify(region: Region, spacing: float, fitness: Any, progress: bool) -> OptimizeResult:
     """The certified optimum; where its search stopped before ``tol`` (budget spent) on an
     area of at most :data:`GRID_FALLBACK_VERTICES` vertices, the grid's layout if it is better
-    (the upper bound holds for every layout, so the gap only shrinks)."""
+    (the upper bound holds for every layout, so the gap only shrinks). An area no wider than
+    the spacing gets the grid's single lane along its diameter (Eq. 1 is undefined there)."""
+    if spacing >= region.diameter:
+        return optimize_region(region, spacing, fitness=fitness, **REGION_OPTIONS)
     res = smith_bb_region(region, spacing, fitness=fitness, progress=progress)
     if res.info.get("converged"):
         return res
@@ -123,8 +126,14 @@ def _combined(plan: Plan, optima: list[OptimizeResult], s: float) -> OptimizeRes
     areas = np.array([c.region.area for c in plan.cells])
     w = areas / areas.sum()
     fitness = float(np.dot(w, [o.fitness for o in optima]))
-    upper = float(np.dot(w, [float(o.upper_bound or o.fitness) for o in optima]))
+    bounded = all(o.upper_bound is not None for o in optima)  # a single-lane cell has none
+    upper = float(np.dot(w, [float(o.upper_bound or 0.0) for o in optima])) if bounded else None
     main = int(np.argmax(areas))
+    info: dict[str, Any] = {"cells": len(optima)}
+    if upper is not None:
+        upper = max(upper, fitness)
+        info["gap"] = upper - fitness
+        info["converged"] = all(bool(o.info.get("converged")) for o in optima)
     return OptimizeResult(
         angle=plan.cells[main].angle,
         offset=plan.cells[main].offset,
@@ -133,12 +142,8 @@ def _combined(plan: Plan, optima: list[OptimizeResult], s: float) -> OptimizeRes
         method="decomposed",
         evaluations=int(sum(o.evaluations for o in optima)),
         seconds=float(sum(o.seconds for o in optima)),
-        upper_bound=max(upper, fitness),
-        info={
-            "cells": len(optima),
-            "gap": max(upper - fitness, 0.0),
-            "converged": all(bool(o.info.get("converged")) for o in optima),
-        },
+        upper_bound=upper,
+        info=info,
     )
 
 
