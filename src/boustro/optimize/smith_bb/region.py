@@ -96,6 +96,17 @@ def _final(search: _RegionSearch) -> tuple[float, float, float]:
     return float(values[k]), cands[k][1], cands[k][2]
 
 
+def _checked(region: Region | Polygon | ArrayLike, spacing: float) -> tuple[Region, float]:
+    r = as_region(region)
+    spacing = check_spacing(spacing, extent=r.diameter)
+    if spacing >= r.diameter:
+        raise NoTransectError(
+            f"spacing {spacing:g} is not smaller than the area's diameter {r.diameter:g}: at "
+            "most one transect can cross it"
+        )
+    return r, spacing
+
+
 def smith_bb_region(
     region: Region | Polygon | ArrayLike,
     spacing: float,
@@ -126,13 +137,7 @@ def smith_bb_region(
     (True, True)
     """
     t0 = time.perf_counter()
-    r = as_region(region)
-    spacing = check_spacing(spacing, extent=r.diameter)
-    if spacing >= r.diameter:
-        raise NoTransectError(
-            f"spacing {spacing:g} is not smaller than the area's diameter {r.diameter:g}: at "
-            "most one transect can cross it"
-        )
+    r, spacing = _checked(region, spacing)
     a, b = _weights(a, b, fitness)
     tol = _check("tol", tol, 1e-9)
     if max_work is None:
