@@ -28,6 +28,7 @@ from .defaults import (
     log,
 )
 from .project import Frame
+from .region_certified import certified_applies, plan_certified
 
 __all__ = ["Planned", "main_cell", "plan_concave", "plan_convex", "region_optimum"]
 
@@ -187,14 +188,32 @@ def plan_concave(
     progress: bool = False,
     keep_inside: bool = False,
 ) -> Planned:
-    """A concave area or one with holes: cells, lanes and a tour (:func:`plan_region`); at a
+    """A concave area or one with holes: cells, lanes and a tour. Eq. 1 by default: the
+    certified optimum over the segments of the area and of each cell (:func:`plan_certified`);
+    other objectives and ``method="grid"``/``"region-grid"``: :func:`plan_region`'s grid. At a
     fixed ``angle`` one grid over the whole area, its offset optimised (:func:`optimize_offset`)."""
-    if method not in (None, DEFAULT_METHOD, "grid", "region-grid"):
+    if method not in (None, DEFAULT_METHOD, SCALE_METHOD, "grid", "region-grid"):
         raise InvalidParameterError(
             f"method {method!r} optimises convex areas only; a concave area or one with "
-            "holes is optimised by grid search over its segments (leave --method out)"
+            "holes is optimised by the certified search over its segments (leave --method "
+            "out) or by grid search (--method grid)"
         )
     s_plan = frame.sensor.spacing * frame.proj.scale_min
+    if certified_applies(method, fitness, angle):
+        plan, optimum = plan_certified(
+            frame.region,  # type: ignore[arg-type]
+            s_plan,
+            _path_options(frame, turnaround, speed, turn_time),
+            fitness=fitness,
+            layout=layout,
+            start=frame.start if frame.given_start else None,
+            decompose=decompose,
+            sweep=sweep,
+            progress=progress,
+            keep_inside=keep_inside,
+        )
+        cov = coverage(plan, frame.region) if check_coverage else None
+        return Planned(plan, optimum, cov)
     opts = dict(REGION_OPTIONS)
     opts.update({k: v for k, v in (options or {}).items() if k in ("n_angles", "n_offsets")})
     fixed = None

@@ -1,0 +1,188 @@
+"""Step 2 for a concave area or one with holes under Eq. 1 (the default objective): the
+certified optimum over the segments (:func:`~boustro.optimize.smith_bb.region.smith_bb_region`)
+of the whole area and, where a decomposition promises fewer turns, of each cell.
+
+The decomposition is chosen as :func:`boustro.plan.plan_region` chooses it (its sweep
+candidates, cells and merging scored on the coarse grid), but the whole area's estimate and the
+final cells' angles and offsets are the certified optima; the cells are planned at those
+optima. The plan's certificate: ``certified`` when every cell's search converged, its ``gap``
+the area-weighted mean of the cells' gaps (the plan's fitness is their area-weighted mean).
+The grid (``--method grid``/``region-grid``) stays the baseline.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+
+from ..errors import InvalidPolygonError
+from ..geometry.region import Region
+from ..objectives import SmithFitness
+from ..optimize import OptimizeResult
+from ..optimize.smith_bb.region import smith_bb_region
+from ..plan import Plan
+from ..plan.region import _assemble as _assemble_plan
+from ..plan.region import _Cells, _check_options, _plan_lanes, _plan_tour, _Stages
+from ..plan.region import _drive as _drive_plan
+from ..plan.region_opt import _cells_for_sweep, _estimate, choose_sweep, optimize_region
+from .defaults import DEFAULT_METHOD, REGION_OPTIONS, SCALE_METHOD, log
+
+__all__ = ["certified_applies", "plan_certified"]
+
+#: Cells narrower than this many spacings are merged, and neighbours whose angles differ by
+#: less than this are merged (as :func:`plan_region`'s defaults).
+MIN_WIDTH_SPACINGS = 2.0
+MERGE_ANGLE = math.radians(15.0)
+#: Where the certified search stops short of its tolerance on an area of at most this many
+#: vertices, the grid's layout is also tried (the grid costs seconds beyond).
+GRID_FALLBACK_VERTICES = 300
+
+
+def certified_applies(method: str | None, fitness: Any, angle: float | None) -> bool:
+    """Whether a concave area is planned by the certified region search: the default (or
+    ``certified-bb``) method, Eq. 1 with its default (weighted) statistics, no fixed angle."""
+    if method not in (None, DEFAULT_METHOD, SCALE_METHOD) or angle is not None:
+        return False
+    return fitness is None or (
+        type(fitness) is SmithFitness and getattr(fitness, "statistics", "weighted") == "weighted"
+    )
+
+
+def _certify(region: Region, spacing: float, fitness: Any, progress: bool) -> OptimizeResult:
+    """The certified optimum; where its search stopped before ``tol`` (budget spent) on an
+    area of at most :data:`GRID_FALLBACK_VERTICES` vertices, the grid's layout if it is better
+    (the upper bound holds for every layout, so the gap only shrinks). An area no wider than
+    the spacing gets the grid's single lane along its diameter (Eq. 1 is undefined there)."""
+    if spacing >= region.diameter:
+        return optimize_region(region, spacing, fitness=fitness, **REGION_OPTIONS)
+    res = smith_bb_region(region, spacing, fitness=fitness, progress=progress)
+    if res.info.get("converged"):
+        return res
+    if len(region.vertices) <= GRID_FALLBACK_VERTICES:
+        grid = optimize_region(region, spacing, fitness=fitness, **REGION_OPTIONS)
+        if grid.fitness > res.fitness:
+            upper = max(float(res.upper_bound), grid.fitness)  # type: ignore[arg-type]
+            gap = upper - grid.fitness
+            info = {**res.info, "gap": gap, "converged": gap <= res.info["tol"] * (1 + 1e-9),
+                    "incumbent": "region-grid"}  # fmt: skip
+            res = dataclasses.replace(
+                res, angle=grid.angle, offset=grid.offset, fitness=grid.fitness,
+                upper_bound=upper, info=info)  # fmt: skip
+    if not res.info.get("converged"):
+        log.warning(
+            "the certified optimum of a %d-vertex area stopped at gap %.3g (%s)",
+            len(region.vertices),
+            res.gap,
+            res.info.get("stopped", "not converged"),
+        )
+    return res
+
+
+def _cells(
+    r: Region,
+    s: float,
+    whole: OptimizeResult,
+    decompose: bool | None,
+    sweep: float | None,
+    fitness: Any,
+    progress: bool,
+) -> tuple[list[Region], list[OptimizeResult]]:
+    """The whole area, or the cells of the best sweep with their certified optima where they
+    promise fewer turns (or on a tie less lane length) than the whole area's optimum (always
+    with ``decompose=True``)."""
+    if decompose is False or r.is_convex:
+        return [r], [whole]
+    min_width = MIN_WIDTH_SPACINGS * s
+    single = _estimate([r], [whole], s)
+    if sweep is None:
+        sweep, estimate = choose_sweep(r, s, min_width=min_width, merge_angle=MERGE_ANGLE,
+                                       fitness=fitness)  # fmt: skip
+        if decompose is None and not estimate < single:
+            return [r], [whole]
+    options = {**REGION_OPTIONS, "fitness": fitness}
+    try:
+        regions, _ = _cells_for_sweep(
+            r, s, sweep, min_width=min_width, merge_angle=MERGE_ANGLE, options=options
+        )
+    except InvalidPolygonError as exc:
+        log.info("the decomposition failed (%s); the area is planned as one cell", exc)
+        return [r], [whole]
+    if len(regions) < 2:
+        return [r], [whole]
+    optima = [_certify(c, s, fitness, progress) for c in regions]
+    if decompose or _estimate(regions, optima, s) < single:
+        return regions, optima
+    return [r], [whole]
+
+
+def _combined(plan: Plan, optima: list[OptimizeResult], s: float) -> OptimizeResult:
+    """One result for the plan: the largest cell's layout, the area-weighted fitness and upper
+    bound of the cells (certified when all are)."""
+    if len(optima) == 1:
+        return optima[0]
+    areas = np.array([c.region.area for c in plan.cells])
+    w = areas / areas.sum()
+    fitness = float(np.dot(w, [o.fitness for o in optima]))
+    bounded = all(o.upper_bound is not None for o in optima)  # a single-lane cell has none
+    upper = float(np.dot(w, [float(o.upper_bound or 0.0) for o in optima])) if bounded else None
+    main = int(np.argmax(areas))
+    info: dict[str, Any] = {"cells": len(optima)}
+    if upper is not None:
+        upper = max(upper, fitness)
+        info["gap"] = upper - fitness
+        info["converged"] = all(bool(o.info.get("converged")) for o in optima)
+    return OptimizeResult(
+        angle=plan.cells[main].angle,
+        offset=plan.cells[main].offset,
+        fitness=fitness,
+        spacing=s,
+        method="decomposed",
+        evaluations=int(sum(o.evaluations for o in optima)),
+        seconds=float(sum(o.seconds for o in optima)),
+        upper_bound=upper,
+        info=info,
+    )
+
+
+def plan_certified(
+    region: Region,
+    spacing: float,
+    path: dict[str, Any],
+    *,
+    fitness: Any,
+    layout: str,
+    start: Any,
+    decompose: bool | None,
+    sweep: float | None,
+    progress: bool = False,
+    keep_inside: bool = False,
+) -> tuple[Plan, OptimizeResult]:
+    """``(plan, optimum)``: a concave area or one with holes (plan frame) planned at certified
+    optima of Eq. 1 over segments (module docstring); ``path``: the options of the path
+    (:func:`boustro.mission.steps.plan_concave`'s), ``sweep`` in degrees, ``start`` ``None``
+    for the shortest tour. The options are checked before any work; the stages are
+    :func:`plan_region`'s (its bar with ``progress``)."""
+    opts = _check_options(
+        region, spacing, decompose_area=decompose is not False, sweep=None, angle=None,
+        offset=None, fitness=None, n_angles=REGION_OPTIONS["n_angles"],
+        n_offsets=REGION_OPTIONS["n_offsets"], layout=layout, start=start, hole_passes=True,
+        min_width=None, merge_angle=MERGE_ANGLE, keep_inside=keep_inside, **path)  # fmt: skip
+    sweep_rad = None if sweep is None else math.radians(float(sweep))
+    notes: list[str] = []
+    bar = _Stages(progress)
+    with bar.stage("optimising the cells"):
+        whole = _certify(region, opts.spacing, fitness, progress)
+        cells, optima = _cells(region, opts.spacing, whole, decompose, sweep_rad, fitness,
+                               progress)  # fmt: skip
+    with bar.stage("lanes"):
+        lanes = _plan_lanes(region, _Cells(cells, list(optima)), opts)
+    with bar.stage("tour and routing"):
+        tour = _plan_tour(region, lanes, opts, notes)
+    with bar.stage("path"):
+        driven = _drive_plan(tour, lanes, opts)
+    bar.close()
+    plan = _assemble_plan(region, lanes, tour, driven, opts, notes)
+    return plan, _combined(plan, optima, opts.spacing)

@@ -1,0 +1,473 @@
+"""The per-box work of the Eq. 1 branch and bound on a region (shell and holes; numba).
+
+Lines and layouts as in :mod:`.kernel`. A line meets a set of closed rings in intervals found
+by pairing its sorted crossings even-odd (:func:`_intervals`, ``O(E + crossings log)``); the
+exact value of a layout is Eq. 1 over the real region's intervals (its segments).
+
+For a box, the rigidly moved region ``S`` lies between the inner set ``I`` and the outer set
+``O`` of the sandwich; per line (docs/global_optimum.md, "Concave areas and holes"):
+
+* every S-segment lies in one O-component ``o``; every I-piece lies in one S-segment, so the
+  segment count is at least ``r`` = the O-components holding I-length;
+* the count is at most half the boundary points of ``S`` on the line, and each h-monotone
+  chain of the real boundary (edges whose direction stays on one side of the lines for every
+  angle of the box) meets the line at most once after the motion, if its h-range grown by
+  ``eps`` holds the line (:func:`_chain_counts`): ``u``;
+* with ``u = r`` each ``o`` holding pieces holds one segment, of length between the span of
+  its pieces and ``|o|``; otherwise the pieces of each ``o`` are grouped by the segments
+  (every split point between two pieces tried, at most ``u - r`` splits), a group's length lies
+  between its pieces' span and the gap to its neighbours, and up to ``u - r - splits`` free
+  segments (holding no piece) lie in gaps, of length at most the longest gap ``G``.
+
+Eq. 1 with ``f`` free segments of one length ``y``: their share ``t = f / (n + f)`` moves the
+mean linearly and the variance concavely (``(1 - t) V + t (1 - t) (m - y)^2``), so Eq. 1 is
+convex in ``t`` and the best count of free segments is none or all of them.
+
+Eq. 1 is concave in the lengths for a fixed count: each choice is maximised exactly
+(:func:`_sup_w`, the convex kernel's closed form with multiplicities), the bound is the largest.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+from importlib.util import find_spec
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..._jit import jit, jit_globals
+from .kernel import _g, lines_range
+
+__all__ = ["region_bounds", "region_values", "ring_starts"]
+
+#: Most split choices enumerated per box (2^gaps), beyond it the crude bound ``a max|o| + b``.
+MAX_CHOICES = 8
+#: Added to every box bound (rounding of the closed forms).
+BOUND_SLACK = 1e-10
+
+
+def _first_line(lo, d, s, k0):
+    """The first line ``k >= k0`` with ``d + k s >= lo`` (exactly, as the crossing rule
+    ``(h1 <= c) != (h2 <= c)`` holds for ``min(h1, h2) <= c < max(h1, h2)``)."""
+    k = max(math.ceil((lo - d) / s), k0)
+    while k > k0 and d + (k - 1) * s >= lo:
+        k -= 1
+    while d + k * s < lo:
+        k += 1
+    return k
+
+
+def _intervals(xy, cs, sn, d, s, k0, nb):
+    """``(start (nb + 1,), lo, hi)``: the intervals of the rings ``xy`` on each line (line
+    ``k0 + b`` holds intervals ``start[b]:start[b + 1]``, sorted)."""
+    cnt = np.zeros(nb + 1, dtype=np.int64)
+    for i in range(xy.shape[0]):
+        h1 = -sn * xy[i, 0] + cs * xy[i, 1]
+        h2 = -sn * xy[i, 2] + cs * xy[i, 3]
+        k = _first_line(min(h1, h2), d, s, k0)
+        while k < k0 + nb and (h1 <= d + k * s) != (h2 <= d + k * s):
+            cnt[k - k0 + 1] += 1
+            k += 1
+    for q in range(nb):
+        cnt[q + 1] += cnt[q]
+    t = np.empty(cnt[nb])
+    fill = cnt[:nb].copy()
+    for i in range(xy.shape[0]):
+        x1, y1, x2, y2 = xy[i, 0], xy[i, 1], xy[i, 2], xy[i, 3]
+        h1 = -sn * x1 + cs * y1
+        h2 = -sn * x2 + cs * y2
+        if h1 == h2:
+            continue
+        t1 = cs * x1 + sn * y1
+        t2 = cs * x2 + sn * y2
+        k = _first_line(min(h1, h2), d, s, k0)
+        while k < k0 + nb and (h1 <= d + k * s) != (h2 <= d + k * s):
+            c = d + k * s
+            j = k - k0
+            t[fill[j]] = t1 + (c - h1) * (t2 - t1) / (h2 - h1)
+            fill[j] += 1
+            k += 1
+    start = np.zeros(nb + 1, dtype=np.int64)
+    for q in range(nb):
+        start[q + 1] = start[q] + (cnt[q + 1] - cnt[q]) // 2
+    lo = np.empty(start[nb])
+    hi = np.empty(start[nb])
+    for q in range(nb):
+        for i in range(cnt[q] + 1, cnt[q + 1]):  # insertion sort: few crossings a line
+            x = t[i]
+            j = i - 1
+            while j >= cnt[q] and t[j] > x:
+                t[j + 1] = t[j]
+                j -= 1
+            t[j + 1] = x
+        for j in range(start[q + 1] - start[q]):
+            lo[start[q] + j] = t[cnt[q] + 2 * j]
+            hi[start[q] + j] = t[cnt[q] + 2 * j + 1]
+    return start, lo, hi
+
+
+def _values(xy, cs, sn, d, s, k0, nb, a, b, tiny):
+    """Eq. 1 over the segments longer than ``tiny`` of each layout (``-inf`` without one)."""
+    m = cs.shape[0]
+    out = np.empty(m)
+    for i in range(m):
+        _, lo, hi = _intervals(xy, cs[i], sn[i], d[i], s, k0, nb)
+        n, s1, s2 = 0, 0.0, 0.0
+        for j in range(lo.shape[0]):
+            length = hi[j] - lo[j]
+            if length > tiny:
+                n += 1
+                s1 += length
+                s2 += length * length
+        if n == 0:
+            out[i] = -np.inf
+        else:
+            mean = s1 / n
+            out[i] = a * mean + b * (1.0 - math.sqrt(max(s2 / n - mean * mean, 0.0)))
+    return out
+
+
+def _chain_counts(xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, cnt):
+    """``cnt[b]``: h-monotone chains of the real rings (or single edges that may turn parallel
+    to the lines) whose h-range grown by ``eps`` holds line ``k0 + b``: at least the crossings
+    of every moved region's boundary with the line (the half-open rule crosses a monotone chain
+    at most once, a straight edge at most once, an edge along the line never)."""
+    for q in range(nb):
+        cnt[q] = 0
+    for r in range(rings.shape[0] - 1):
+        i = rings[r]
+        while i < rings[r + 1]:
+            h1 = -sn * xy[i, 0] + cs * xy[i, 1]
+            h2 = -sn * xy[i, 2] + cs * xy[i, 3]
+            ln = math.hypot(xy[i, 2] - xy[i, 0], xy[i, 3] - xy[i, 1])
+            cls = 0
+            if abs(h2 - h1) > ln * sdelta * (1.0 + 1e-9) + 1e-15:
+                cls = 1 if h2 > h1 else -1
+            lo_h, hi_h = min(h1, h2), max(h1, h2)
+            j = i + 1
+            while cls != 0 and j < rings[r + 1]:
+                g1 = -sn * xy[j, 0] + cs * xy[j, 1]
+                g2 = -sn * xy[j, 2] + cs * xy[j, 3]
+                lj = math.hypot(xy[j, 2] - xy[j, 0], xy[j, 3] - xy[j, 1])
+                cj = 0
+                if abs(g2 - g1) > lj * sdelta * (1.0 + 1e-9) + 1e-15:
+                    cj = 1 if g2 > g1 else -1
+                if cj != cls:
+                    break
+                lo_h, hi_h = min(lo_h, g2), max(hi_h, g2)
+                j += 1
+            ka = max(math.floor((lo_h - eps - d) / s), k0)
+            kb = min(math.ceil((hi_h + eps - d) / s), k0 + nb - 1)
+            for k in range(ka, kb + 1):
+                c = d + k * s
+                if lo_h - eps <= c <= hi_h + eps:
+                    cnt[k - k0] += 1
+            i = j
+
+
+def _sup_w(lo, hi, w, m, order, a, b, pos):
+    """The maximum of Eq. 1 over lengths ``lo_q <= L <= hi_q`` of ``m`` intervals, interval
+    ``q`` taken ``w_q`` times (``order``: the argsort of the ends ``lo_0, hi_0, lo_1, ...``):
+    the convex kernel's ``_sup`` with multiplicities (the KKT maximiser gives equal lengths
+    to the copies of one interval)."""
+    n = 0.0
+    ref = 0.0
+    for q in range(m):
+        n += w[q]
+        ref += w[q] * (lo[q] + hi[q])
+    if n == 0.0:
+        return -np.inf
+    ref /= 2 * n
+    for q in range(m):
+        pos[2 * q] = lo[q] - ref
+        pos[2 * q + 1] = hi[q] - ref
+    sx, qx, f = 0.0, 0.0, 0.0
+    for q in range(m):
+        x = pos[2 * q]
+        sx += w[q] * x
+        qx += w[q] * x * x
+    err_share = (8.0 * n + 16.0) * 2.3e-16
+    best = _g(a, b, n, ref, sx, qx, 0.0, 0.0, err_share)
+    prev = pos[order[0]]
+    for e in range(2 * m):
+        i = order[e]
+        wq = w[i // 2]
+        if wq == 0.0:
+            continue
+        ce = pos[i]
+        if f > 0 and ce > prev:
+            best = max(best, _g(a, b, n, ref, sx, qx, f, ce, err_share))
+            p = n - f
+            a2 = p * (a * a * f - b * b * p)
+            a1 = 2.0 * sx * (b * b * p - a * a * f)
+            a0 = a * a * (n * qx - sx * sx) - b * b * sx * sx
+            if p > 0 and a2 != 0.0:
+                disc = a1 * a1 - 4.0 * a2 * a0
+                root = math.sqrt(max(disc, 0.0))
+                qq = -0.5 * (a1 + root if a1 >= 0.0 else a1 - root)
+                for r in (qq / a2, a0 / qq if qq != 0.0 else prev, -0.5 * a1 / a2):
+                    if prev < r < ce:
+                        best = max(best, _g(a, b, n, ref, sx, qx, f, r, err_share))
+        x = pos[i]
+        if i % 2 == 0:
+            sx -= wq * x
+            qx -= wq * x * x
+            f += wq
+        else:
+            sx += wq * x
+            qx += wq * x * x
+            f -= wq
+        prev = ce
+    return best
+
+
+def _owners(oa, ob, o0, o1, pa, pb, p0, p1, tiny, owner):
+    """``owner[p]``: the O-component holding piece ``p`` (``-1``: a piece of length ``<= tiny``,
+    ignored), components widened to hold their pieces; ``False`` if one has none (rounding)."""
+    j = o0
+    for p in range(p0, p1):
+        owner[p] = -1
+        if pb[p] - pa[p] <= tiny:
+            continue
+        mid = 0.5 * (pa[p] + pb[p])
+        while j < o1 and ob[j] < mid:
+            j += 1
+        if j >= o1 or oa[j] > mid:
+            return False
+        owner[p] = j
+        oa[j] = min(oa[j], pa[p])
+        ob[j] = max(ob[j], pb[p])
+    return True
+
+
+def _line_segments(oa, ob, o0, o1, pa, pb, p0, p1, owner, mask, g, lo, hi, n):
+    """Append the segments of one line to ``lo, hi`` from ``n``: per O-component, its pieces
+    grouped at the split points whose bit of ``mask`` (from bit ``g``) is set. Returns
+    ``(n, g, splits)``."""
+    splits = 0
+    p = p0
+    while p < p1:
+        if owner[p] < 0:
+            p += 1
+            continue
+        o = owner[p]
+        left = oa[o]  # the group lies right of this
+        first = p
+        last = p
+        q = p + 1
+        while q < p1 and (owner[q] < 0 or owner[q] == o):
+            if owner[q] < 0:
+                q += 1
+                continue
+            if (mask >> g) & 1:  # a split between last and q
+                lo[n] = pb[last] - pa[first]
+                hi[n] = pa[q] - left
+                n += 1
+                splits += 1
+                left = pb[last]
+                first = q
+            g += 1
+            last = q
+            q += 1
+        lo[n] = pb[last] - pa[first]
+        hi[n] = ob[o] - left
+        n += 1
+        p = q
+    return n, g, splits
+
+
+def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, b, tiny, pos):
+    ost, oa, ob = _intervals(out_xy, cs, sn, d, s, k0, nb)
+    ist, pa, pb = _intervals(in_xy, cs, sn, d, s, k0, nb)
+    top = 0.0
+    for j in range(oa.shape[0]):
+        top = max(top, ob[j] - oa[j])
+    if oa.shape[0] == 0:
+        return -np.inf
+    crude = a * top + b
+    cnt = np.empty(nb, dtype=np.int64)
+    _chain_counts(real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, cnt)
+    owner = np.empty(pa.shape[0], dtype=np.int64)
+    extra = np.zeros(nb, dtype=np.int64)
+    gaps = np.zeros(nb, dtype=np.int64)
+    size = pa.shape[0] + 3
+    lo = np.empty(size)
+    hi = np.empty(size)
+    w = np.ones(size)
+    n_fixed, total_gaps, gfree = 0, 0, 0.0
+    for q in range(nb):
+        if not _owners(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], tiny, owner):
+            return crude
+        r, held, prev_o = 0, 0, -1
+        for p in range(ist[q], ist[q + 1]):
+            if owner[p] >= 0:
+                held += 1
+                if owner[p] != prev_o:
+                    r += 1
+                    prev_o = owner[p]
+        u = cnt[q] // 2
+        if u <= r:  # one segment per component holding pieces
+            n_fixed, _, _ = _line_segments(
+                oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], owner, 0, 0, lo, hi,
+                n_fixed)  # fmt: skip
+            continue
+        extra[q] = u - r
+        gaps[q] = held - r
+        total_gaps += held - r
+        # the longest gap on the line: between pieces, or a component's ends and its pieces
+        for o in range(ost[q], ost[q + 1]):
+            left = oa[o]
+            for p in range(ist[q], ist[q + 1]):
+                if owner[p] == o:
+                    gfree = max(gfree, pa[p] - left)
+                    left = pb[p]
+            gfree = max(gfree, ob[o] - left)
+    if total_gaps > 30 or (1 << total_gaps) > MAX_CHOICES:
+        return _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_fixed,
+                        gfree, a, b, pos)  # fmt: skip
+    best = -np.inf
+    for mask in range(1 << total_gaps):
+        n, g, free, ok = n_fixed, 0, 0, True
+        for q in range(nb):
+            if extra[q] == 0:
+                continue
+            n, g, splits = _line_segments(
+                oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], owner, mask, g, lo, hi,
+                n)  # fmt: skip
+            if splits > extra[q]:
+                ok = False
+                break
+            free += extra[q] - splits
+        if not ok:
+            continue
+        lo[n] = 0.0
+        hi[n] = gfree
+        for q in range(n + 1):
+            pos[2 * q] = lo[q]
+            pos[2 * q + 1] = hi[q]
+        order = np.argsort(pos[: 2 * (n + 1)])
+        for f in (0, free):  # the best count of free segments is none or all (module doc)
+            w[n] = float(f)
+            best = max(best, _sup_w(lo, hi, w, n + 1, order, a, b, pos))
+        w[n] = 1.0
+    return best
+
+
+def _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n, gfree, a, b, pos):
+    """The bound without enumerating the splits (too many): on each uncertain line one
+    segment per component holding pieces, of length between its shortest piece and ``|o|``
+    (whichever group holds that piece), up to ``min(extra, gaps)`` split segments of length
+    between the shortest and the longest of those, and up to ``extra`` free ones in
+    ``[0, G]``; Eq. 1 is convex in the two shares, so only their extreme counts are tried."""
+    splits, free, smin, smax = 0, 0, np.inf, 0.0
+    for q in range(nb):
+        if extra[q] == 0:
+            continue
+        splits += min(extra[q], gaps[q])
+        free += extra[q]
+        prev_o = -1
+        for p in range(ist[q], ist[q + 1]):
+            o = owner[p]
+            if o < 0:
+                continue
+            if o != prev_o:
+                lo[n] = pb[p] - pa[p]
+                hi[n] = ob[o] - oa[o]
+                n += 1
+                prev_o = o
+            else:
+                lo[n - 1] = min(lo[n - 1], pb[p] - pa[p])
+            if gaps[q] > 0:
+                smin = min(smin, pb[p] - pa[p])
+                smax = max(smax, ob[o] - oa[o])
+    if splits == 0:
+        smin, smax = 0.0, 0.0
+    lo[n], hi[n], lo[n + 1], hi[n + 1] = smin, smax, 0.0, gfree
+    for q in range(n + 2):
+        pos[2 * q] = lo[q]
+        pos[2 * q + 1] = hi[q]
+    order = np.argsort(pos[: 2 * (n + 2)])
+    best = -np.inf
+    for ns in (0, splits):
+        for nf in (0, free):
+            w[n] = float(ns)
+            w[n + 1] = float(nf)
+            best = max(best, _sup_w(lo, hi, w, n + 2, order, a, b, pos))
+    w[n] = 1.0
+    w[n + 1] = 1.0
+    return best
+
+
+def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, b, tiny, slack):
+    m = cs.shape[0]
+    out = np.empty(m)
+    pos = np.empty(2 * (in_xy.shape[0] + 4) * nb + 8)
+    for i in range(m):
+        v = _bound(in_xy, out_xy, real_xy, rings, cs[i], sn[i], sdelta[i], d[i], s, eps[i], k0,
+                   nb, a, b, tiny, pos)  # fmt: skip
+        out[i] = v + slack
+    return out
+
+
+@cache
+def _compiled() -> tuple[Any, Any]:
+    """``(_bounds, _values)`` compiled by numba (cached on disk), or plain Python without it."""
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
+        return _bounds, _values
+    helpers = ("_g", "_first_line", "_intervals", "_chain_counts", "_sup_w", "_owners",
+               "_line_segments", "_relaxed", "_bound")  # fmt: skip
+    jit_globals(globals(), helpers)
+    return jit(_bounds), jit(_values)
+
+
+def ring_starts(rings: list[NDArray[np.float64]]) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """``(xy (E, 4), starts (R + 1,))``: the edges of closed rings and where each ring starts."""
+    rows = [np.concatenate([r, np.roll(r, -1, axis=0)], axis=1) for r in rings]
+    starts = np.cumsum([0] + [len(r) for r in rings]).astype(np.int64)
+    return np.ascontiguousarray(np.concatenate(rows)), starts
+
+
+def region_bounds(
+    inner: NDArray[np.float64],
+    outer: NDArray[np.float64],
+    real: tuple[NDArray[np.float64], NDArray[np.int64]],
+    theta: NDArray[np.float64],
+    delta: NDArray[np.float64],
+    d: NDArray[np.float64],
+    eps: NDArray[np.float64],
+    spacing: float,
+    a: float,
+    b: float,
+    tiny: float,
+) -> NDArray[np.float64]:
+    """``(m,)`` an upper bound of Eq. 1 over the segments of every rigid image of the region
+    ``real`` (:func:`ring_starts`) moved by at most ``eps[i]`` (rotation at most ``delta[i]``)
+    that lies between the edge sets ``inner`` and ``outer``, seen by the lines of layout ``i``."""
+    k0, nb = lines_range(outer, spacing)
+    th = np.ascontiguousarray(theta, dtype=np.float64)
+    sdelta = np.sin(np.minimum(np.asarray(delta, dtype=np.float64), math.pi / 2))
+    fn = _compiled()[0]
+    return fn(np.ascontiguousarray(inner), np.ascontiguousarray(outer), real[0], real[1],
+              np.cos(th), np.sin(th), sdelta, np.ascontiguousarray(d, dtype=np.float64),
+              float(spacing), np.ascontiguousarray(eps, dtype=np.float64), k0, nb, float(a),
+              float(b), float(tiny), BOUND_SLACK)  # fmt: skip
+
+
+def region_values(
+    xy: NDArray[np.float64],
+    theta: NDArray[np.float64],
+    d: NDArray[np.float64],
+    spacing: float,
+    a: float,
+    b: float,
+    tiny: float,
+) -> NDArray[np.float64]:
+    """``(m,)`` Eq. 1 over the segments (longer than ``tiny``) of the region of edges ``xy``."""
+    k0, nb = lines_range(xy, spacing)
+    th = np.ascontiguousarray(theta, dtype=np.float64)
+    fn = _compiled()[1]
+    return fn(np.ascontiguousarray(xy), np.cos(th), np.sin(th),
+              np.ascontiguousarray(d, dtype=np.float64), float(spacing), k0, nb, float(a),
+              float(b), float(tiny))  # fmt: skip
