@@ -169,7 +169,8 @@ def plan_certified(
         region, spacing, decompose_area=decompose is not False, sweep=None, angle=None,
         offset=None, fitness=None, n_angles=REGION_OPTIONS["n_angles"],
         n_offsets=REGION_OPTIONS["n_offsets"], layout=layout, start=start, hole_passes=True,
-        min_width=None, merge_angle=MERGE_ANGLE, keep_inside=keep_inside, **path)  # fmt: skip
+        min_width=None, merge_angle=MERGE_ANGLE, keep_inside=keep_inside, order="heuristic",
+        **path)  # fmt: skip
     sweep_rad = None if sweep is None else math.radians(float(sweep))
     notes: list[str] = []
     bar = _Stages(progress)
