@@ -21,6 +21,7 @@ from .bounds import lower_bounds
 from .boxes import Boxes as _Boxes
 from .boxes import box_radius, initial_boxes, level_radius, split_boxes
 from .cost import CoverCost
+from .ends import HoleBoxes, hole_boxes
 from .sandwich import Sandwich
 
 __all__ = ["CoverSearch", "centred_offsets", "cover_optimum"]
@@ -87,6 +88,8 @@ class CoverSearch:
         self.hole_xy = np.concatenate(rings) if rings else np.zeros((0, 2))
         self.hole_start = np.concatenate([[0], np.cumsum([len(h) for h in rings])]).astype(np.int64)
         self.tol = 1e-9 * region.diameter
+        # the lane-ends bound on a routed tour's moves (not with boundary or headland passes)
+        self.ends = not self.boustrophedon and not keep_inside and cost.fixed == 0
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
@@ -97,6 +100,15 @@ class CoverSearch:
 
     def _inner_reach(self) -> float:
         return 0.0 if self.keep_inside else self.reach - 2 * self.tol
+
+    def _hole_boxes(
+        self, theta: NDArray[np.float64], d: NDArray[np.float64], grow: float
+    ) -> HoleBoxes | None:
+        """The holes' boxes of the lane-ends bound (``None`` where it does not apply)."""
+        if not self.ends:
+            return None
+        grow = grow + 2 * self.tol
+        return hole_boxes(self.hole_xy, self.hole_start, theta, d, self.origin, grow)
 
     def k_range(self, eps: float) -> tuple[int, int]:
         far = self.radius + eps + self.reach
@@ -115,7 +127,8 @@ class CoverSearch:
             self.k_range(0.0), self.n_holes, self.tol, inner_reach=self._inner_reach(),
         )  # fmt: skip
         self.bound_evaluations += len(boxes.theta)
-        out = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
+        ends = self._hole_boxes(boxes.theta, boxes.d, 0.0)
+        out = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends)
         self.model_min = min(self.model_min, float(out.min(initial=math.inf)))
         self.points.append(np.stack([out, boxes.theta, boxes.d]))
         return out
@@ -149,7 +162,10 @@ class CoverSearch:
                 self.origin, self.k_range(reach_out), self.n_holes, self.tol,
                 inner_reach=self._inner_reach(), rigid=rigid,
             )  # fmt: skip
-            out[sel] = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
+            ends = self._hole_boxes(boxes.theta[sel], boxes.d[sel], reach_out)
+            out[sel] = lower_bounds(
+                st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends
+            )
         self.bound_evaluations += len(eps)
         return out
 
