@@ -11,19 +11,25 @@ covers); ``count_k`` lanes at least.
 **The argument** (docs/mission_time.md, "The lanes' ends"). Call a line *regular* when
 ``count_k = 1``; its two extreme ends ``e`` each get the charge ``c(e) = min(per_length * D(e) /
 2, per_turn / 4)``, ``D(e)`` a lower bound on the distance from ``e`` to every place where the
-other end of its move can be: an extreme end of another regular line (its two zones), any end
-of a line with ``count_j >= 2`` (its whole outer range), or a hole pass (the pass drives the
-hole's own ring: the hole's box across and along the lines, grown by the box's radius). Then
-``sum c(e)`` minus the two largest charges (the path's two free ends) is at most
-``per_length * moves + per_turn * (lanes - sum count)``:
+other end of its move can be without an extra lane paying for it: the two extreme zones of
+another line with lanes; on a line with ``count_j >= 2``, also ``[f_j, l_j]`` (the end of its
+first inner piece, the start of its last: the lanes holding those pieces end at or beyond
+them, and every lane between lies between); a hole pass (the pass drives the hole's own ring:
+the hole's box across and along the lines, grown by the box's radius). Then ``sum c(e)`` minus
+the two largest charges (the path's two free ends) is at most ``per_length * moves + per_turn *
+(lanes - sum count)``:
 
 * a regular line that holds ``n >= 2`` lanes pays its own two charges (``per_turn / 2``) out of
   its extra turns ``per_turn (n - 1)``;
-* with one lane, each end's move (half of it counted from each side) reaches some other pass:
-  one of the places above (then ``per_length * move / 2 >= c(e)``), or an end the list leaves
-  out: an inner end of a regular line with ``n >= 2`` lanes (at most ``2 (n - 1)`` of them,
-  each charged ``per_turn / 4``: with its own two, ``per_turn n / 2 <= per_turn (n - 1)``) or
-  an end on a line with ``count = 0`` (``2 n`` ends, ``per_turn n / 2`` of its ``per_turn n``).
+* with one lane, each end's move (half of it counted from each side) reaches another pass: at
+  one of the places above (then ``per_length * move / 2 >= c(e)``), or at an end the list
+  leaves out, charged ``per_turn / 4`` to its line's extra lanes: an inner end of a regular
+  line with ``n >= 2`` lanes (``2 (n - 1)`` of them; with its own two charges ``per_turn n / 2
+  <= per_turn (n - 1)``), an end on a line with ``count = 0`` (``2 n`` ends, ``per_turn n / 2``
+  of ``per_turn n``), or on a line with ``count >= 2`` an end of a lane left of the lane holding
+  the first inner piece (such a lane holds no inner piece: an extra lane, ``m >= 1`` of them
+  with ``2 m`` ends and the displaced left end of the first piece's lane, ``(2 m + 1) / 4 <=
+  m`` turns), likewise on the right.
 
 Run-ins and run-outs move the ends outward by ``turnaround``: every range is grown by it. Not
 for keep-inside plans (boundary passes are further passes) nor headland passes.
@@ -95,12 +101,14 @@ def lane_end_bound(
     window = max(1, math.ceil(cap_dist / spacing))
     t = cost.turnaround
     reg = st.count == 1
+    used = st.count >= 1
     many = st.count >= 2
     nan = np.full_like(st.in_lo, np.nan)
-    # the two zones of a regular line; the whole range of a line with 2+ lanes
-    l_lo, l_hi = np.where(reg, st.out_lo - t, nan), np.where(reg, st.in_lo, nan)
-    r_lo, r_hi = np.where(reg, st.in_hi, nan), np.where(reg, st.out_hi + t, nan)
-    f_lo, f_hi = np.where(many, st.out_lo - t, nan), np.where(many, st.out_hi + t, nan)
+    # where the ends that are not charged lie: the two extreme zones of a line with lanes, and
+    # on a line with 2+ lanes between the end of its first inner piece and the start of its last
+    l_lo, l_hi = np.where(used, st.out_lo - t, nan), np.where(used, st.in_lo, nan)
+    r_lo, r_hi = np.where(used, st.in_hi, nan), np.where(used, st.out_hi + t, nan)
+    m_lo, m_hi = np.where(many, st.first_hi - t, nan), np.where(many, st.last_lo + t, nan)
     zones = ((l_lo, l_hi), (r_lo, r_hi))
     best = [np.full((n_layouts, nb), np.inf), np.full((n_layouts, nb), np.inf)]
     for off in range(1, window + 1):
@@ -112,7 +120,7 @@ def lane_end_bound(
                 g = np.minimum(
                     np.minimum(_gap(lo[:, a], hi[:, a], l_lo[:, b], l_hi[:, b]),
                                _gap(lo[:, a], hi[:, a], r_lo[:, b], r_hi[:, b])),
-                    _gap(lo[:, a], hi[:, a], f_lo[:, b], f_hi[:, b]),
+                    _gap(lo[:, a], hi[:, a], m_lo[:, b], m_hi[:, b]),
                 )  # fmt: skip
                 best[z][:, a] = np.minimum(best[z][:, a], np.sqrt(dv2 + g**2))
     if holes is not None and holes.shape[1]:
