@@ -44,7 +44,7 @@ FIRST_SEPARATION = math.radians(3.0)
 #: Relative distance between a box's bound and the model at its centre at which a box of a
 #: routed (non-boustrophedon) plan is not halved further: its bound relaxes the tour's moves
 #: by more than that anyway.
-RESOLVE_RTOL = 1e-2
+RESOLVE_RTOL = 1e-3
 #: Edge directions (longest edges first) whose best offsets are planned before the search,
 #: and offsets scanned at each.
 EDGE_PLANS = 12
@@ -114,10 +114,13 @@ class CoverSearch:
         far = self.radius + eps + self.reach
         return math.floor(-far / self.s) - 1, math.ceil(far / self.s) + 1
 
-    def point_values(self, boxes: _Boxes, exact: bool = False) -> NDArray[np.float64]:
+    def point_values(
+        self, boxes: _Boxes, exact: bool = False, *, span_only: bool = False
+    ) -> NDArray[np.float64]:
         """The bound at each box's centre with the region itself (a layout's own model); of
         the simplified region (:attr:`Sandwich.approximate`) unless ``exact``: the search only
-        ranks and retires boxes by these, a plan's value is always exact."""
+        ranks and retires boxes by these, a plan's value is always exact. ``span_only``: the
+        moves as the lines' span only (a second ranking, not recorded)."""
         if self.keep_inside:  # a relaxation of the plan even at one layout
             lv = self.sandwich.level(0.0, self.shrink)
         else:
@@ -127,8 +130,10 @@ class CoverSearch:
             self.k_range(0.0), self.n_holes, self.tol, inner_reach=self._inner_reach(),
         )  # fmt: skip
         self.bound_evaluations += len(boxes.theta)
-        ends = self._hole_boxes(boxes.theta, boxes.d, 0.0)
+        ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
         out = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends)
+        if span_only:
+            return out
         self.model_min = min(self.model_min, float(out.min(initial=math.inf)))
         self.points.append(np.stack([out, boxes.theta, boxes.d]))
         return out
@@ -171,11 +176,15 @@ class CoverSearch:
 
     def try_edges(self) -> None:
         """Plan the best offset (by the model) along each of the longest edges' directions:
-        areas with parallel sides often have their optimum exactly there."""
+        areas with parallel sides often have their optimum exactly there. With the lane-ends
+        bound, also the best offset by the lines' span alone where it differs: both are lower
+        bounds of a routed tour, and either may rank a layout's real tour better."""
         for a in _edge_angles(self.region, EDGE_PLANS):
             d = (np.arange(EDGE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / EDGE_OFFSETS)
             boxes = _Boxes(np.full(len(d), a), np.zeros(len(d)), d, np.zeros(len(d)))
             self.try_plans(boxes, self.point_values(boxes), limit=1)
+            if self.ends and self.evaluate is not None:
+                self.try_plans(boxes, self.point_values(boxes, span_only=True), limit=1)
 
     def polish(self) -> None:
         """Plan the best modelled layout of each degree of angle whose model beats the best
