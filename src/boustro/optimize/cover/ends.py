@@ -38,10 +38,14 @@ for keep-inside plans (boundary passes are further passes) nor headland passes.
 from __future__ import annotations
 
 import math
+from functools import cache
+from importlib.util import find_spec
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..._jit import jit
 from .bands import BandStats
 from .cost import CoverCost
 
@@ -80,12 +84,54 @@ def hole_boxes(
     return out
 
 
-def _gap(
-    lo: NDArray[np.float64], hi: NDArray[np.float64], lo2: NDArray[np.float64], hi2: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    """Distance between intervals (0 where they meet; ``inf`` where one is empty: ``nan``)."""
-    g = np.maximum(0.0, np.maximum(lo, lo2) - np.minimum(hi, hi2))
-    return np.where(np.isnan(g), np.inf, g)
+def _ends(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, holes, k0, s, t, cap, window):
+    """Per layout: the sum of ``min(D(e), cap)`` over the extreme ends ``e`` of the regular
+    lines, minus its two largest terms (plain Python, compiled by numba on first use)."""
+    n_layouts, nb = count.shape
+    n_holes = holes.shape[1]
+    out = np.zeros(n_layouts)
+    for la in range(n_layouts):
+        total, m1, m2 = 0.0, 0.0, 0.0
+        for k in range(nb):
+            if count[la, k] != 1:
+                continue
+            v = (k0 + k) * s
+            for z in range(2):
+                lo = out_lo[la, k] - t if z == 0 else in_hi[la, k]
+                hi = in_lo[la, k] if z == 0 else out_hi[la, k] + t
+                best = cap
+                for off in range(1, window + 1):
+                    dv = off * s
+                    if dv >= best:
+                        break
+                    for j in (k - off, k + off):
+                        if j < 0 or j >= nb or count[la, j] < 1:
+                            continue
+                        g = max(max(lo, out_lo[la, j] - t) - min(hi, in_lo[la, j]), 0.0)
+                        g = min(g, max(max(lo, in_hi[la, j]) - min(hi, out_hi[la, j] + t), 0.0))
+                        if count[la, j] >= 2:
+                            m_lo, m_hi = first_hi[la, j] - t, last_lo[la, j] + t
+                            g = min(g, max(max(lo, m_lo) - min(hi, m_hi), 0.0))
+                        best = min(best, math.sqrt(dv * dv + g * g))
+                for h in range(n_holes):
+                    dv = max(max(holes[la, h, 0] - v, v - holes[la, h, 1]), 0.0)
+                    du = max(max(holes[la, h, 2] - hi, lo - holes[la, h, 3]), 0.0)
+                    best = min(best, math.sqrt(dv * dv + du * du))
+                total += best
+                if best > m1:
+                    m1, m2 = best, m1
+                elif best > m2:
+                    m2 = best
+        out[la] = max(0.0, total - m1 - m2)
+    return out
+
+
+@cache
+def _compiled() -> Any:
+    """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
+        return _ends
+    return jit(_ends)
 
 
 def lane_end_bound(
@@ -93,52 +139,24 @@ def lane_end_bound(
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound, in cost units, on ``per_length * moves + per_turn * (lanes -
     sum(count))`` of every plan of each layout's sandwich (module docstring)."""
-    n_layouts, nb = st.count.shape
+    n_layouts = st.count.shape[0]
     pl, pt = cost.per_length, cost.per_turn
-    if pl <= 0 or pt <= 0 or nb == 0:
-        return np.zeros(n_layouts)
-    cap_dist = pt / (2.0 * pl)  # D beyond which a charge is capped
-    window = max(1, math.ceil(cap_dist / spacing))
-    t = cost.turnaround
-    reg = st.count == 1
     used = st.count >= 1
-    many = st.count >= 2
-    nan = np.full_like(st.in_lo, np.nan)
-    # where the ends that are not charged lie: the two extreme zones of a line with lanes, and
-    # on a line with 2+ lanes between the end of its first inner piece and the start of its last
-    l_lo, l_hi = np.where(used, st.out_lo - t, nan), np.where(used, st.in_lo, nan)
-    r_lo, r_hi = np.where(used, st.in_hi, nan), np.where(used, st.out_hi + t, nan)
-    m_lo, m_hi = np.where(many, st.first_hi - t, nan), np.where(many, st.last_lo + t, nan)
-    zones = ((l_lo, l_hi), (r_lo, r_hi))
-    best = [np.full((n_layouts, nb), np.inf), np.full((n_layouts, nb), np.inf)]
-    for off in range(1, window + 1):
-        dv2 = (off * spacing) ** 2
-        for sign in (1, -1):
-            a = slice(0, nb - off) if sign > 0 else slice(off, nb)
-            b = slice(off, nb) if sign > 0 else slice(0, nb - off)
-            for z, (lo, hi) in enumerate(zones):
-                g = np.minimum(
-                    np.minimum(_gap(lo[:, a], hi[:, a], l_lo[:, b], l_hi[:, b]),
-                               _gap(lo[:, a], hi[:, a], r_lo[:, b], r_hi[:, b])),
-                    _gap(lo[:, a], hi[:, a], m_lo[:, b], m_hi[:, b]),
-                )  # fmt: skip
-                best[z][:, a] = np.minimum(best[z][:, a], np.sqrt(dv2 + g**2))
-    if holes is not None and holes.shape[1]:
-        v = (np.arange(nb) + st.k0) * spacing  # line centres in the holes' frame
-        dv = np.maximum(
-            0.0,
-            np.maximum(holes[:, None, :, 0] - v[None, :, None], v[None, :, None] - holes[:, None, :, 1]),
-        )  # (L, B, H)
-        for z, (lo, hi) in enumerate(zones):
-            du = np.maximum(
-                0.0,
-                np.maximum(holes[:, None, :, 2] - hi[:, :, None], lo[:, :, None] - holes[:, None, :, 3]),
-            )
-            best[z] = np.minimum(best[z], np.sqrt(dv**2 + du**2).min(axis=2))
-    charges = [
-        np.where(reg, np.minimum(0.5 * pl * np.nan_to_num(b, posinf=cap_dist), pt / 4.0), 0.0)
-        for b in best
-    ]
-    c = np.concatenate(charges, axis=1)
-    top2 = -np.partition(-c, 1, axis=1)[:, :2].sum(axis=1) if c.shape[1] >= 2 else c.sum(axis=1)
-    return np.maximum(0.0, c.sum(axis=1) - top2)
+    cols = np.nonzero(used.any(axis=0))[0]
+    if pl <= 0 or pt <= 0 or not len(cols):
+        return np.zeros(n_layouts)
+    c0, c1 = int(cols[0]), int(cols[-1]) + 1  # the lines that hold lanes in some layout
+    cap_dist = pt / (2.0 * pl)  # D beyond which a charge is capped at per_turn / 4
+    window = max(1, math.ceil(cap_dist / spacing))
+    if holes is None:
+        holes = np.zeros((n_layouts, 0, 4))
+
+    def crop(a: NDArray[Any]) -> NDArray[Any]:
+        return np.ascontiguousarray(a[:, c0:c1])
+
+    sums = _compiled()(
+        crop(st.count), crop(st.out_lo), crop(st.in_lo), crop(st.in_hi), crop(st.out_hi),
+        crop(st.first_hi), crop(st.last_lo), np.ascontiguousarray(holes, dtype=np.float64),
+        int(st.k0 + c0), float(spacing), float(cost.turnaround), float(cap_dist), int(window),
+    )  # fmt: skip
+    return 0.5 * pl * sums

@@ -45,6 +45,9 @@ FIRST_SEPARATION = math.radians(3.0)
 #: routed (non-boustrophedon) plan is not halved further: its bound relaxes the tour's moves
 #: by more than that anyway.
 RESOLVE_RTOL = 1e-3
+#: A box whose bound is within this share of (best plan - lowest model) below the lowest model
+#: is retired (the certificate's gap cannot get much below that difference anyway).
+SETTLE_SHARE = 0.25
 #: Edge directions (longest edges first) whose best offsets are planned before the search,
 #: and offsets scanned at each.
 EDGE_PLANS = 12
@@ -316,7 +319,7 @@ def _branch_and_bound(
         model_min = search.model_min
         # settled: the bound is above the lowest model value by a quarter of the gap between
         # it and the best plan (the certificate's gap cannot get much smaller than that gap)
-        settle = model_min - 0.25 * max(best - model_min, 0.0) - lim.rtol * abs(best)
+        settle = model_min - SETTLE_SHARE * max(best - model_min, 0.0) - lim.rtol * abs(best)
         keep = (
             (bounds < best - lim.rtol * abs(best))
             & (bounds < points - lim.resolve * abs(best))
