@@ -11,8 +11,9 @@ import pytest
 
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region
-from boustro.optimize.cover import CoverCost, cover_optimum
+from boustro.optimize.cover import CoverCost, band_stats, cover_optimum
 from boustro.optimize.cover.boxes import Boxes
+from boustro.optimize.cover.ends import lane_end_bound
 from boustro.optimize.cover.search import CoverSearch
 from boustro.plan import vehicle_stats
 from boustro.plan.region import plan_region
@@ -117,3 +118,62 @@ def test_search_with_lane_ends_is_below_a_brute_force_and_no_worse():
         assert res.info["lower_bound"] <= brute + 1e-9
         assert res.fitness <= brute * (1 + 2e-3)
         assert res.fitness == pytest.approx(evaluate(res.angle, res.offset), rel=1e-9)
+
+
+def _reference(st, spacing, cost, holes):
+    """The lane-ends bound written with arrays, line pair by line pair (every offset, no
+    cropping, no early exit): for the compiled loop."""
+    pl, pt, t = cost.per_length, cost.per_turn, cost.turnaround
+    cap = pt / (2 * pl)
+    n, nb = st.count.shape
+    used, many, reg = st.count >= 1, st.count >= 2, st.count == 1
+
+    def iv(mask, lo, hi):
+        return np.where(mask, lo, np.inf), np.where(mask, hi, -np.inf)
+
+    def gap(lo, hi, lo2, hi2):
+        return np.maximum(np.maximum(lo, lo2) - np.minimum(hi, hi2), 0.0)
+
+    zones = (iv(used, st.out_lo - t, st.in_lo), iv(used, st.in_hi, st.out_hi + t))
+    mid = iv(many, st.first_hi - t, st.last_lo + t)
+    total = np.zeros(n)
+    terms = []
+    for lo, hi in zones:
+        best = np.full((n, nb), cap)
+        for k in range(nb):
+            for j in range(nb):
+                if j == k:
+                    continue
+                g = np.minimum.reduce(
+                    [gap(lo[:, k], hi[:, k], p_lo[:, j], p_hi[:, j]) for p_lo, p_hi in (*zones, mid)]
+                )
+                best[:, k] = np.minimum(best[:, k], np.hypot(abs(j - k) * spacing, g))
+            v = (st.k0 + k) * spacing
+            for h in range(holes.shape[1]):
+                dv = np.maximum(np.maximum(holes[:, h, 0] - v, v - holes[:, h, 1]), 0.0)
+                du = gap(lo[:, k], hi[:, k], holes[:, h, 2], holes[:, h, 3])
+                best[:, k] = np.minimum(best[:, k], np.hypot(dv, du))
+        terms.append(np.where(reg, best, 0.0))
+    c = np.concatenate(terms, axis=1)
+    total = c.sum(axis=1) - np.sort(c, axis=1)[:, -2:].sum(axis=1)
+    return 0.5 * pl * np.maximum(total, 0.0)
+
+
+@pytest.mark.parametrize("turnaround", [0.0, 4.0])
+def test_compiled_lane_ends_loop_equals_the_array_reference(turnaround):
+    cost = CoverCost.time(4.0, 12.0, turnaround=turnaround)
+    rng = np.random.default_rng(3)
+    for region in [_scaled(r) for r in random_regions(12, 3, n_holes=(0, 3))]:
+        search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
+        for eps in (0.0, 2.0):
+            lv = search.sandwich.level(eps) if eps else search.sandwich.exact
+            theta, d = rng.uniform(0, math.pi, 20), rng.uniform(0, SPACING, 20)
+            st = band_stats(
+                lv.inner, lv.outer, theta, d, SPACING, SPACING / 2, search.origin,
+                search.k_range(eps), len(region.holes), search.tol,
+                inner_reach=search._inner_reach(),
+            )  # fmt: skip
+            holes = search._hole_boxes(theta, d, eps)
+            got = lane_end_bound(st, SPACING, cost, holes)
+            assert got == pytest.approx(_reference(st, SPACING, cost, holes), rel=1e-12, abs=1e-9)
+            assert (got > 0).any()
