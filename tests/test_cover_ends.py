@@ -144,9 +144,8 @@ def _reference(st, spacing, cost, holes):
             for j in range(nb):
                 if j == k:
                     continue
-                g = np.minimum.reduce(
-                    [gap(lo[:, k], hi[:, k], p_lo[:, j], p_hi[:, j]) for p_lo, p_hi in (*zones, mid)]
-                )
+                parts = [gap(lo[:, k], hi[:, k], a[:, j], b[:, j]) for a, b in (*zones, mid)]
+                g = np.minimum.reduce(parts)
                 best[:, k] = np.minimum(best[:, k], np.hypot(abs(j - k) * spacing, g))
             v = (st.k0 + k) * spacing
             for h in range(holes.shape[1]):

@@ -97,9 +97,21 @@ class CoverSearch:
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
         self.bound_evaluations = 0
+        self.work = 0.0  # layouts bounded times the edges of the sandwich level used
         self.seen: set[tuple[float, float]] = set()
         self.model_min = math.inf  # the lowest model value at a layout seen
         self.points: list[NDArray[Any]] = []  # (value, theta, d) of every layout modelled
+
+    def work_spent(self, n_boxes: int) -> float:
+        """The work after the next round of ``n_boxes`` boxes (8 layouts each at most: four
+        halves, box and point): layouts bounded times the area's edges, or with simplified
+        sandwiches (whose levels have from a tenth to one and a half times the area's edges)
+        times the edges of the levels they used so far."""
+        if self.sandwich.tolerance <= 0:
+            edges = float(len(self.sandwich.exact.outer.xy))
+            return (self.bound_evaluations + 8 * n_boxes) * edges
+        per_layout = self.work / max(self.bound_evaluations, 1)
+        return self.work + 8 * n_boxes * per_layout
 
     def _inner_reach(self) -> float:
         return 0.0 if self.keep_inside else self.reach - 2 * self.tol
@@ -133,6 +145,7 @@ class CoverSearch:
             self.k_range(0.0), self.n_holes, self.tol, inner_reach=self._inner_reach(),
         )  # fmt: skip
         self.bound_evaluations += len(boxes.theta)
+        self.work += len(boxes.theta) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
         ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
         out = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends)
         if span_only:
@@ -171,6 +184,7 @@ class CoverSearch:
                 inner_reach=self._inner_reach(), rigid=rigid,
             )  # fmt: skip
             ends = self._hole_boxes(boxes.theta[sel], boxes.d[sel], reach_out)
+            self.work += int(sel.sum()) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends
             )
@@ -342,8 +356,7 @@ def _branch_and_bound(
             boxes = boxes.take(~fine)
             if not len(boxes.theta):
                 break
-        edges = len(search.sandwich.exact.outer.xy)
-        if (search.bound_evaluations + 8 * len(boxes.theta)) * edges > lim.max_work:
+        if search.work_spent(len(boxes.theta)) > lim.max_work:
             floor = min(floor, float(bounds[~fine].min()))
             stopped = f"the work budget ({lim.max_work:.0e} box edges) was spent"
             break
