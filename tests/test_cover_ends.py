@@ -126,7 +126,7 @@ def _reference(st, spacing, cost, holes):
     pl, pt, t = cost.per_length, cost.per_turn, cost.turnaround
     cap = pt / (2 * pl)
     n, nb = st.count.shape
-    used, many, reg = st.count >= 1, st.count >= 2, st.count == 1
+    used, many = st.count >= 1, st.count >= 2
 
     def iv(mask, lo, hi):
         return np.where(mask, lo, np.inf), np.where(mask, hi, -np.inf)
@@ -147,12 +147,19 @@ def _reference(st, spacing, cost, holes):
                 parts = [gap(lo[:, k], hi[:, k], a[:, j], b[:, j]) for a, b in (*zones, mid)]
                 g = np.minimum.reduce(parts)
                 best[:, k] = np.minimum(best[:, k], np.hypot(abs(j - k) * spacing, g))
+            same = (
+                (st.first_hi[:, k] - t, st.out_hi[:, k] + t)
+                if lo is zones[0][0]
+                else (st.out_lo[:, k] - t, st.last_lo[:, k] + t)
+            )
+            g = gap(lo[:, k], hi[:, k], *same)
+            best[:, k] = np.where(many[:, k], np.minimum(best[:, k], g), best[:, k])
             v = (st.k0 + k) * spacing
             for h in range(holes.shape[1]):
                 dv = np.maximum(np.maximum(holes[:, h, 0] - v, v - holes[:, h, 1]), 0.0)
                 du = gap(lo[:, k], hi[:, k], holes[:, h, 2], holes[:, h, 3])
                 best[:, k] = np.minimum(best[:, k], np.hypot(dv, du))
-        terms.append(np.where(reg, best, 0.0))
+        terms.append(np.where(used, best, 0.0))
     c = np.concatenate(terms, axis=1)
     total = c.sum(axis=1) - np.sort(c, axis=1)[:, -2:].sum(axis=1)
     return 0.5 * pl * np.maximum(total, 0.0)

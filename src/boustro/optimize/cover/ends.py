@@ -8,28 +8,29 @@ inside the outer projection ``[A_k, B_k]``; the leftmost lane starts in ``[A_k, 
 rightmost ends in ``[b_k, B_k]`` (``a_k, b_k``: the inner projection's extremes, which some lane
 covers); ``count_k`` lanes at least.
 
-**The argument** (docs/mission_time.md, "The lanes' ends"). Call a line *regular* when
-``count_k = 1``; its two extreme ends ``e`` each get the charge ``c(e) = min(per_length * D(e) /
-2, per_turn / 4)``, ``D(e)`` a lower bound on the distance from ``e`` to every place where the
-other end of its move can be without an extra lane paying for it: the two extreme zones of
-another line with lanes; on a line with ``count_j >= 2``, also ``[f_j, l_j]`` (the end of its
-first inner piece, the start of its last: the lanes holding those pieces end at or beyond
-them, and every lane between lies between); a hole pass (the pass drives the hole's own ring:
-the hole's box across and along the lines, grown by the box's radius). Then ``sum c(e)`` minus
-the two largest charges (the path's two free ends) is at most ``per_length * moves + per_turn *
-(lanes - sum count)``:
+**The argument** (docs/mission_time.md, "The lanes' ends"). Every line with ``count_k >= 1``
+has its leftmost end in ``[A_k, a_k]`` and its rightmost in ``[b_k, B_k]``; each of these two
+ends ``e`` gets the charge ``c(e) = min(per_length * D(e) / 2, per_turn / 4)``, ``D(e)`` a lower
+bound on the distance from ``e`` to every place where the other end of its move can be without
+an extra lane paying for it: the two extreme zones of another line with lanes; on a line with
+``count_j >= 2``, also ``[f_j, l_j]`` (the end of its first inner piece, the start of its last:
+the lanes holding those pieces end at or beyond them, and every lane between lies between); on
+``e``'s own line, when ``count_k >= 2``, beyond ``f_k`` (for the leftmost end; before ``l_k``
+for the rightmost): another lane of the line starts after the first piece's lane ends; a hole
+pass (the pass drives the hole's own ring: the hole's box across and along the lines, grown by
+the box's radius). Then ``sum c(e)`` minus the two largest charges (the path's two free ends)
+is at most ``per_length * moves + per_turn * sum_k (lanes_k - count_k)``. With ``E_k = lanes_k -
+count_k`` extra lanes on line ``k``:
 
-* a regular line that holds ``n >= 2`` lanes pays its own two charges (``per_turn / 2``) out of
-  its extra turns ``per_turn (n - 1)``;
-* with one lane, each end's move (half of it counted from each side) reaches another pass: at
-  one of the places above (then ``per_length * move / 2 >= c(e)``), or at an end the list
-  leaves out, charged ``per_turn / 4`` to its line's extra lanes: an inner end of a regular
-  line with ``n >= 2`` lanes (``2 (n - 1)`` of them; with its own two charges ``per_turn n / 2
-  <= per_turn (n - 1)``), an end on a line with ``count = 0`` (``2 n`` ends, ``per_turn n / 2``
-  of ``per_turn n``), or on a line with ``count >= 2`` an end of a lane left of the lane holding
-  the first inner piece (such a lane holds no inner piece: an extra lane, ``m >= 1`` of them
-  with ``2 m`` ends and the displaced left end of the first piece's lane, ``(2 m + 1) / 4 <=
-  m`` turns), likewise on the right.
+* a line with ``E_k >= 1`` pays its own two charges (``per_turn / 2``) out of ``per_turn E_k``;
+* with ``E_k = 0`` (one lane per counted piece, no other: the extreme lanes hold the first and
+  the last inner piece), each end's move (half of it counted from each side) reaches another
+  pass: at one of the places above (then ``per_length * move / 2 >= c(e)``), or at an end the
+  list leaves out, charged ``per_turn / 4`` to its line ``j``, which then has ``E_j >= 1``: at
+  most ``2 E_j`` such ends (on a line with ``count_j = 0`` its ``2 n_j`` ends; with ``count_j =
+  1`` the ``2 (n_j - 1)`` inner ends; with ``count_j >= 2``, ``m`` lanes without an inner piece
+  beside the first piece's lane hold ``2 m`` such ends, that lane's displaced end included, and
+  ``m <= E_j``), so with its own two charges ``per_turn / 2 + per_turn E_j / 2 <= per_turn E_j``.
 
 Run-ins and run-outs move the ends outward by ``turnaround``: every range is grown by it. Not
 for keep-inside plans (boundary passes are further passes) nor headland passes.
@@ -85,21 +86,25 @@ def hole_boxes(
 
 
 def _ends(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, holes, k0, s, t, cap, window):
-    """Per layout: the sum of ``min(D(e), cap)`` over the extreme ends ``e`` of the regular
-    lines, minus its two largest terms (plain Python, compiled by numba on first use)."""
+    """Per layout: the sum of ``min(D(e), cap)`` over the extreme ends ``e`` of the lines with
+    lanes, minus its two largest terms (plain Python, compiled by numba on first use)."""
     n_layouts, nb = count.shape
     n_holes = holes.shape[1]
     out = np.zeros(n_layouts)
     for la in range(n_layouts):
         total, m1, m2 = 0.0, 0.0, 0.0
         for k in range(nb):
-            if count[la, k] != 1:
+            if count[la, k] < 1:
                 continue
             v = (k0 + k) * s
             for z in range(2):
                 lo = out_lo[la, k] - t if z == 0 else in_hi[la, k]
                 hi = in_lo[la, k] if z == 0 else out_hi[la, k] + t
                 best = cap
+                if count[la, k] >= 2:  # another lane of the line: beyond the first inner piece
+                    p_lo = first_hi[la, k] - t if z == 0 else out_lo[la, k] - t
+                    p_hi = out_hi[la, k] + t if z == 0 else last_lo[la, k] + t
+                    best = min(best, max(max(lo, p_lo) - min(hi, p_hi), 0.0))
                 for off in range(1, window + 1):
                     dv = off * s
                     if dv >= best:
