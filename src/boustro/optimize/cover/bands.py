@@ -73,7 +73,10 @@ class BandStats(NamedTuple):
       (``rho``: the hole's farthest vertex from the origin; every point of the hole moves by
       at most ``m``), so it crosses every moved hole (connected), and one inner projection
       interval of band ``k`` covers the hole's extent along the line grown by ``m``, so the
-      chord lies inside every such plan's lane.
+      chord lies inside every such plan's lane;
+    * ``first_hi, last_lo``: the end of the first and the start of the last piece of the inner
+      projection minus the inner set's hole chords (``nan`` where none): the lane holding the
+      first piece ends at ``first_hi`` or beyond (:mod:`~boustro.optimize.cover.ends`).
     """
 
     k0: int
@@ -85,6 +88,8 @@ class BandStats(NamedTuple):
     out_hi: NDArray[np.float64]
     cut: NDArray[np.bool_]
     rigid: NDArray[np.bool_]
+    first_hi: NDArray[np.float64]
+    last_lo: NDArray[np.float64]
 
 
 # -- the loop (plain Python, compiled by numba on first use) ----------------------------------
@@ -305,32 +310,16 @@ def _leaf(
     delta,
     eta,
     rigid,
+    first_hi,
+    last_lo,
 ):
     ih1, ih2, it1, it2 = _project(inner_xy, cs, sn, ox, oy)
     oh1, oh2, ot1, ot2 = _project(outer_xy, cs, sn, ox, oy)
     i_start, i_m, i_lo, i_hi = _band_intervals(ih1, ih2, it1, it2, d, s, r_in, k0, nb)
     o_start, o_m, o_lo, o_hi = _band_intervals(oh1, oh2, ot1, ot2, d, s, r_out, k0, nb)
     if delta >= 0:
-        _rigid_cuts(
-            hxy,
-            hstart,
-            cs,
-            sn,
-            d,
-            s,
-            ox,
-            oy,
-            k0,
-            nb,
-            delta,
-            eta,
-            i_start,
-            i_m,
-            i_lo,
-            i_hi,
-            tol,
-            rigid,
-        )
+        _rigid_cuts(hxy, hstart, cs, sn, d, s, ox, oy, k0, nb, delta, eta,
+                    i_start, i_m, i_lo, i_hi, tol, rigid)  # fmt: skip
     gi_start, gi_t, _gi_h = _hole_chords(ih1, ih2, it1, it2, inner_hole, d, s, k0, nb)
     go_start, go_t, go_h = _hole_chords(oh1, oh2, ot1, ot2, outer_hole, d, s, k0, nb)
     # scratch for the pieces of one band (no arrays allocated per band)
@@ -357,6 +346,9 @@ def _leaf(
         for q in range(n_p):
             total += phi[q] - plo[q]
         length[b] = total
+        if n_p > 0:
+            first_hi[b] = phi[0]
+            last_lo[b] = plo[n_p - 1]
         go = go_t[go_start[b] : go_start[b + 1]]
         gh = go_h[go_start[b] : go_start[b + 1]]
         n_q = _minus(o_lo[q0 : q0 + mo], o_hi[q0 : q0 + mo], mo, go[0::2], go[1::2], 0.0, qlo, qhi)
@@ -409,6 +401,8 @@ def _all(
     out_hi = np.full((n, nb), np.nan)
     cut = np.zeros((n, max(n_holes, 1)), dtype=np.bool_)
     rigid = np.zeros((n, max(n_holes, 1)), dtype=np.bool_)
+    first_hi = np.full((n, nb), np.nan)
+    last_lo = np.full((n, nb), np.nan)
     for leaf in range(n):
         _leaf(
             inner_xy,
@@ -438,8 +432,10 @@ def _all(
             delta[leaf],
             eta[leaf],
             rigid[leaf],
+            first_hi[leaf],
+            last_lo[leaf],
         )
-    return length, count, in_lo, in_hi, out_lo, out_hi, cut, rigid
+    return length, count, in_lo, in_hi, out_lo, out_hi, cut, rigid, first_hi, last_lo
 
 
 @cache

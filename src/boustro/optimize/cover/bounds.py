@@ -7,6 +7,7 @@ from numpy.typing import NDArray
 
 from .bands import BandStats
 from .cost import CoverCost
+from .ends import HoleBoxes, lane_end_bound
 from .sandwich import Level
 
 __all__ = ["lower_bounds"]
@@ -41,7 +42,13 @@ def _boustrophedon_moves(st: BandStats, spacing: float) -> NDArray[np.float64]:
 
 
 def lower_bounds(
-    st: BandStats, level: Level, cost: CoverCost, spacing: float, *, boustrophedon: bool
+    st: BandStats,
+    level: Level,
+    cost: CoverCost,
+    spacing: float,
+    *,
+    boustrophedon: bool,
+    ends: HoleBoxes | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every plan of the layouts' grids over any area
     between ``level``'s inner and outer sets.
@@ -57,7 +64,9 @@ def lower_bounds(
     ``k_min .. k_max`` travels at least ``(k_max - k_min) spacing`` across them; with
     ``boustrophedon`` (the convex planner: one lane
     per line, consecutive lines joined end to end) each move is at least the distance between
-    the ranges of its two ends.
+    the ranges of its two ends. With ``ends`` (the holes' boxes, :func:`~.ends.hole_boxes`; a
+    routed tour without boundary or headland passes) the moves and extra lanes are also at least
+    :func:`~.ends.lane_end_bound`, and the larger of the two is taken.
     """
     n_lanes = st.count.sum(axis=1)
     holes = level.hole_perimeter.shape[0]
@@ -78,6 +87,10 @@ def lower_bounds(
     if boustrophedon:
         exact = _boustrophedon_moves(st, spacing)
         moves = np.where(np.isfinite(exact), np.maximum(moves, exact), moves)
-    length = st.length.sum(axis=1) + 2.0 * cost.turnaround * n_lanes + moves + perimeter
     turns = np.maximum(n_lanes + n_passes - 1, 0)
+    if ends is not None:  # the larger of the two bounds on the moves (and extra lanes)
+        fixed = st.length.sum(axis=1) + 2.0 * cost.turnaround * n_lanes + perimeter
+        move_cost = np.maximum(cost.per_length * moves, lane_end_bound(st, spacing, cost, ends))
+        return cost.per_length * fixed + move_cost + cost.per_turn * turns + cost.fixed
+    length = st.length.sum(axis=1) + 2.0 * cost.turnaround * n_lanes + moves + perimeter
     return cost.per_length * length + cost.per_turn * turns + cost.fixed

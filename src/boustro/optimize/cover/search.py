@@ -21,6 +21,7 @@ from .bounds import lower_bounds
 from .boxes import Boxes as _Boxes
 from .boxes import box_radius, initial_boxes, level_radius, split_boxes
 from .cost import CoverCost
+from .ends import HoleBoxes, hole_boxes
 from .sandwich import Sandwich
 
 __all__ = ["CoverSearch", "centred_offsets", "cover_optimum"]
@@ -41,9 +42,13 @@ FIRST_SEPARATION = math.radians(3.0)
 
 
 #: Relative distance between a box's bound and the model at its centre at which a box of a
-#: routed (non-boustrophedon) plan is not halved further: its bound relaxes the tour's moves
-#: by more than that anyway.
-RESOLVE_RTOL = 1e-2
+#: routed (non-boustrophedon) plan is not halved further (at least ``rtol``): 1e-2 while the
+#: bound took the tour's moves as the lines' span only; the lanes' ends bring the model within
+#: 1e-3 of the plans on Fields2Cover's fields.
+RESOLVE_RTOL = 1e-3
+#: A box whose bound is within this share of (best plan - lowest model) below the lowest model
+#: is retired (the certificate's gap cannot get much below that difference anyway).
+SETTLE_SHARE = 0.25
 #: Edge directions (longest edges first) whose best offsets are planned before the search,
 #: and offsets scanned at each.
 EDGE_PLANS = 12
@@ -87,25 +92,51 @@ class CoverSearch:
         self.hole_xy = np.concatenate(rings) if rings else np.zeros((0, 2))
         self.hole_start = np.concatenate([[0], np.cumsum([len(h) for h in rings])]).astype(np.int64)
         self.tol = 1e-9 * region.diameter
+        # the lane-ends bound on a routed tour's moves (not with boundary or headland passes)
+        self.ends = not self.boustrophedon and not keep_inside and cost.fixed == 0
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
         self.bound_evaluations = 0
+        self.work = 0.0  # layouts bounded times the edges of the sandwich level used
         self.seen: set[tuple[float, float]] = set()
         self.model_min = math.inf  # the lowest model value at a layout seen
         self.points: list[NDArray[Any]] = []  # (value, theta, d) of every layout modelled
 
+    def work_spent(self, n_boxes: int) -> float:
+        """The work after the next round of ``n_boxes`` boxes (8 layouts each at most: four
+        halves, box and point): layouts bounded times the area's edges, or with simplified
+        sandwiches (whose levels have from a tenth to one and a half times the area's edges)
+        times the edges of the levels they used so far."""
+        if self.sandwich.tolerance <= 0:
+            edges = float(len(self.sandwich.exact.outer.xy))
+            return (self.bound_evaluations + 8 * n_boxes) * edges
+        per_layout = self.work / max(self.bound_evaluations, 1)
+        return self.work + 8 * n_boxes * per_layout
+
     def _inner_reach(self) -> float:
         return 0.0 if self.keep_inside else self.reach - 2 * self.tol
+
+    def _hole_boxes(
+        self, theta: NDArray[np.float64], d: NDArray[np.float64], grow: float
+    ) -> HoleBoxes | None:
+        """The holes' boxes of the lane-ends bound (``None`` where it does not apply)."""
+        if not self.ends:
+            return None
+        grow = grow + 2 * self.tol
+        return hole_boxes(self.hole_xy, self.hole_start, theta, d, self.origin, grow)
 
     def k_range(self, eps: float) -> tuple[int, int]:
         far = self.radius + eps + self.reach
         return math.floor(-far / self.s) - 1, math.ceil(far / self.s) + 1
 
-    def point_values(self, boxes: _Boxes, exact: bool = False) -> NDArray[np.float64]:
+    def point_values(
+        self, boxes: _Boxes, exact: bool = False, *, span_only: bool = False
+    ) -> NDArray[np.float64]:
         """The bound at each box's centre with the region itself (a layout's own model); of
         the simplified region (:attr:`Sandwich.approximate`) unless ``exact``: the search only
-        ranks and retires boxes by these, a plan's value is always exact."""
+        ranks and retires boxes by these, a plan's value is always exact. ``span_only``: the
+        moves as the lines' span only (a second ranking, not recorded)."""
         if self.keep_inside:  # a relaxation of the plan even at one layout
             lv = self.sandwich.level(0.0, self.shrink)
         else:
@@ -115,7 +146,11 @@ class CoverSearch:
             self.k_range(0.0), self.n_holes, self.tol, inner_reach=self._inner_reach(),
         )  # fmt: skip
         self.bound_evaluations += len(boxes.theta)
-        out = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
+        self.work += len(boxes.theta) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
+        ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
+        out = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends)
+        if span_only:
+            return out
         self.model_min = min(self.model_min, float(out.min(initial=math.inf)))
         self.points.append(np.stack([out, boxes.theta, boxes.d]))
         return out
@@ -149,17 +184,26 @@ class CoverSearch:
                 self.origin, self.k_range(reach_out), self.n_holes, self.tol,
                 inner_reach=self._inner_reach(), rigid=rigid,
             )  # fmt: skip
-            out[sel] = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon)
+            ends = self._hole_boxes(boxes.theta[sel], boxes.d[sel], reach_out)
+            self.work += int(sel.sum()) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
+            out[sel] = lower_bounds(
+                st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends
+            )
         self.bound_evaluations += len(eps)
         return out
 
     def try_edges(self) -> None:
         """Plan the best offset (by the model) along each of the longest edges' directions:
-        areas with parallel sides often have their optimum exactly there."""
+        areas with parallel sides often have their optimum exactly there. With the lane-ends
+        bound, also the best offset by the lines' span alone where it differs: both are lower
+        bounds of a routed tour, and either may rank a layout's real tour better (on areas of at
+        most :data:`SIMPLIFY_EDGES` edges, where a plan costs milliseconds)."""
         for a in _edge_angles(self.region, EDGE_PLANS):
             d = (np.arange(EDGE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / EDGE_OFFSETS)
             boxes = _Boxes(np.full(len(d), a), np.zeros(len(d)), d, np.zeros(len(d)))
             self.try_plans(boxes, self.point_values(boxes), limit=1)
+            if self.ends and self.evaluate is not None and self.sandwich.tolerance <= 0:
+                self.try_plans(boxes, self.point_values(boxes, span_only=True), limit=1)
 
     def polish(self) -> None:
         """Plan the best modelled layout of each degree of angle whose model beats the best
@@ -291,7 +335,7 @@ def _branch_and_bound(
         model_min = search.model_min
         # settled: the bound is above the lowest model value by a quarter of the gap between
         # it and the best plan (the certificate's gap cannot get much smaller than that gap)
-        settle = model_min - 0.25 * max(best - model_min, 0.0) - lim.rtol * abs(best)
+        settle = model_min - SETTLE_SHARE * max(best - model_min, 0.0) - lim.rtol * abs(best)
         keep = (
             (bounds < best - lim.rtol * abs(best))
             & (bounds < points - lim.resolve * abs(best))
@@ -314,8 +358,7 @@ def _branch_and_bound(
             boxes = boxes.take(~fine)
             if not len(boxes.theta):
                 break
-        edges = len(search.sandwich.exact.outer.xy)
-        if (search.bound_evaluations + 8 * len(boxes.theta)) * edges > lim.max_work:
+        if search.work_spent(len(boxes.theta)) > lim.max_work:
             floor = min(floor, float(bounds[~fine].min()))
             stopped = f"the work budget ({lim.max_work:.0e} box edges) was spent"
             break
