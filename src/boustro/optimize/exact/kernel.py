@@ -41,16 +41,16 @@ __all__ = [
 
 _HELPERS = {
     kernel_pieces: (
-        "_nmax _nmin _clip01 _sign _argmax _argsort_into _weighted_row _angular_growth "
+        "_nmax _nmin _clip01 _sign _argmax _order_desc _argsort_into _weighted_row _angular_growth "
         "_chords_through_vertices _piece_max _structure_scratch"
     ),
-    kernel_bounds: "_mu_ratio _parallel_one _ends_one",
+    kernel_bounds: "_mu_ratio _parallel_edge _parallel_one _ends_one",
     kernel_exact: "_angle_setup _layout_value",
     kernel_search: "_max_into",
 }
 _STAGES = {
     kernel_pieces: "_structure_one _pieces_one _quick_one",
-    kernel_bounds: "_runs_one _linearised_one _second_one _kink_one",
+    kernel_bounds: "_chains_one _runs_piece _linearised_one _second_one _kink_one",
     kernel_search: "_evaluate",
 }
 

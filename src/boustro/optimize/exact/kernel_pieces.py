@@ -67,6 +67,26 @@ def _argmax(values: np.ndarray) -> int:
     return best
 
 
+def _order_desc(values: np.ndarray, out: np.ndarray) -> None:
+    """``out``: the indices of ``values`` from the largest down, NaN first, ties in index order
+    (insertion sort: a handful of pieces)."""
+    n = len(values)
+    for i in range(n):
+        out[i] = i
+    for i in range(1, n):
+        k = out[i]
+        key = values[k]
+        j = i - 1
+        while (
+            j >= 0
+            and not (values[out[j]] != values[out[j]])
+            and (key != key or key > values[out[j]])
+        ):
+            out[j + 1] = out[j]
+            j -= 1
+        out[j + 1] = k
+
+
 def _argsort_into(keys: np.ndarray, out: np.ndarray) -> None:
     """``out[:] = np.argsort(keys, kind="stable")``: insertion sort for small arrays."""
     n = len(keys)
@@ -341,9 +361,11 @@ def _quick_one(
     a: float,
     b: float,
     work: np.ndarray,
+    qp: np.ndarray,
 ) -> float:
     """The cheap first-order bound of the angle (as .bounds._quick_excess): the largest
-    ``value + excess`` over the pieces (``-inf`` without transects, NaN wins)."""
+    ``value + excess`` over the pieces (``-inf`` without transects, NaN wins); each piece's
+    into ``qp (P,)``."""
     n = len(x)
     n_j = n - 1
     extent = tu.max() - td.min()
@@ -363,6 +385,7 @@ def _quick_one(
             w[j] = drift[j] if rn[p, j, 0] > 0 else 0.0
         total = mo[p, _TOTAL]
         val = mo[p, _VALUE] + _weighted_row(rn[p, :, 0], w, total, a, b) if total > 0 else -np.inf
+        qp[p] = val
         if p == 0:
             best = val
         else:
