@@ -266,6 +266,7 @@ def finish_smith_compiled(
     check_angles: Array,
     check_offsets: Array,
     tops: NDArray[np.int64] | None = None,
+    check: bool = True,
 ) -> Array | None:
     """The certified optimiser's work after its search in one compiled call
     (:func:`.kernel_exact._finish`): ``(fitness, angle, offset, check angle, check offset,
@@ -274,7 +275,8 @@ def finish_smith_compiled(
     give them, then a flag: 0 done, 1 the caller must compute them (too many lines for the
     exact model), 2 it must give the candidate pieces ``tops (3, 4)`` (count and pieces at
     each angle, in numpy's order): without them the kernel finds them, unless two pieces'
-    values tie. ``None`` without the compiled kernel."""
+    values tie; ``check=False``: without the spot check (``out[3:6]`` undefined). ``None``
+    without the compiled kernel."""
     kernels = compiled()
     if kernels is None:
         return None
@@ -291,6 +293,7 @@ def finish_smith_compiled(
         np.ascontiguousarray(check_angles, dtype=np.float64),
         np.ascontiguousarray(check_offsets, dtype=np.float64),
         np.ascontiguousarray(tops, dtype=np.int64),
+        bool(check),
         out,
     )
     return out

@@ -199,6 +199,7 @@ def _finish(
     check_angles: np.ndarray,
     check_offsets: np.ndarray,
     tops: np.ndarray,
+    check: bool,
     out: np.ndarray,
 ) -> None:
     """What :func:`.smith.global_optimum` does after its search, in one call: the best layout
@@ -208,9 +209,10 @@ def _finish(
     operations in the same order. ``tops (R, 4)``: at each angle the number of pieces and the
     pieces whose maximisers are candidates (the largest values first: numpy's
     ``argsort(-value)`` keeps them), or ``tops[0, 0] = -1`` to find them here, except at a
-    tie. ``out (7,)``: fitness, angle, offset; the check's angle, offset, fitness; then 0, or
-    1 where the caller must do it all itself (too many lines for the model), or 2 where it
-    must give ``tops`` (two pieces' values tie: their order is numpy's sort's)."""
+    tie; ``check``: whether to do the spot check (first). ``out (7,)``: fitness, angle,
+    offset; the check's angle, offset, fitness; then 0, or 1 where the caller must do it all
+    itself (too many lines for the model), or 2 where it must give ``tops`` (two pieces'
+    values tie: their order is numpy's sort's; the spot check is done)."""
     n = v.shape[0]
     out[6] = 1.0
     normals, boffs = np.empty((n, 2)), np.empty(n)
@@ -223,6 +225,20 @@ def _finish(
     top = np.empty(4, dtype=np.int64)
     lanes = np.empty((3, max(k_count, n)))
     across, along, lengths = lanes[0], lanes[1], lanes[2]
+    if check:
+        cval, check_i, check_j = -np.inf, 0, 0
+        first = True
+        for i in range(len(check_angles)):
+            h_lo, h_hi = _angle_setup(normals, v, check_angles[i], across, along)
+            for j in range(len(check_offsets)):
+                val = _layout_value(
+                    across, along, boffs, h_lo, h_hi, radius, s, k_count, m, check_offsets[j], a, b,
+                    lengths,
+                )  # fmt: skip
+                if first or val > cval:  # np.argmax: the first largest
+                    cval, check_i, check_j = val, i, j
+                    first = False
+        out[3], out[4], out[5] = check_angles[check_i], check_offsets[check_j], cval
     best, best_theta, best_d = -np.inf, thetas[0], 0.0
     for row in range(len(thetas)):
         theta = thetas[row]
@@ -259,17 +275,4 @@ def _finish(
         if row_best > best:
             best, best_theta, best_d = row_best, theta, row_d
     out[0], out[1], out[2] = best, best_theta, best_d
-    check, check_i, check_j = -np.inf, 0, 0
-    first = True
-    for i in range(len(check_angles)):
-        h_lo, h_hi = _angle_setup(normals, v, check_angles[i], across, along)
-        for j in range(len(check_offsets)):
-            val = _layout_value(
-                across, along, boffs, h_lo, h_hi, radius, s, k_count, m, check_offsets[j], a, b,
-                lengths,
-            )  # fmt: skip
-            if first or val > check:
-                check, check_i, check_j = val, i, j
-                first = False
-    out[3], out[4], out[5] = check_angles[check_i], check_offsets[check_j], check
     out[6] = 0.0

@@ -159,7 +159,7 @@ def _candidate_pieces(v: Array, s_n: float, thetas: Array, a: float, b: float) -
     value = pieces[..., 2]
     tops = np.zeros((len(thetas), 4), dtype=np.int64)
     for row in range(len(thetas)):
-        order = [p for p in np.argsort(-value[row])[: min(3, value.shape[1])]]
+        order = np.argsort(-value[row])[: min(3, value.shape[1])]
         kept = [p for p in order if np.isfinite(value[row, p])]
         tops[row, 0] = len(kept)
         tops[row, 1 : 1 + len(kept)] = kept
@@ -275,7 +275,9 @@ def global_optimum(
         done = finish_smith_compiled(v, s_n, angles, a, b, *check_grid) if fast else None
         if done is not None and done[6] == 2.0:  # tied pieces: numpy orders them
             tops = _candidate_pieces(v, s_n, angles, a, b)
-            done = finish_smith_compiled(v, s_n, angles, a, b, *check_grid, tops)
+            again = finish_smith_compiled(v, s_n, angles, a, b, *check_grid, tops, False)
+            assert again is not None
+            done[:3], done[6] = again[:3], again[6]  # the spot check was done
         if done is None or done[6] != 0.0:
             value, theta, d = _attained(score, v, s_n, angles, a, b)
             check = _spot_check(score, v, s_n)

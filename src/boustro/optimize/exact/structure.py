@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -40,25 +41,34 @@ def event_angles(vertices: ArrayLike, spacing: float) -> Array:
         spacing: transect spacing, > 0.
     """
     v = np.asarray(vertices, dtype=np.float64)
-    i, j = np.triu_indices(len(v), k=1)
+    i, j = _pairs(len(v))
     delta = v[i] - v[j]
-    dist = np.hypot(delta[:, 0], delta[:, 1])
+    dx, dy = delta[:, 0], delta[:, 1]
+    dist = np.hypot(dx, dy)
     # n(theta) . delta = -sin(theta) dx + cos(theta) dy = dist * cos(theta - alpha)
-    alpha = np.arctan2(-delta[:, 0], delta[:, 1])
+    alpha = np.arctan2(-dx, dy)[:, None]
     m_max = int(np.floor(dist.max() / spacing)) if len(dist) else 0
     m = np.arange(-m_max, m_max + 1, dtype=np.float64)
     ratio = m[None, :] * spacing / dist[:, None]
     ok = np.abs(ratio) <= 1.0
     acos = np.arccos(np.clip(ratio, -1.0, 1.0))
-    base = np.broadcast_to(alpha[:, None], ratio.shape)
-    cand = np.concatenate([(base + acos)[ok], (base - acos)[ok], [0.0]])
-    cand = np.mod(cand, math.pi)
-    cand = np.sort(cand)
-    keep = np.concatenate([[True], np.diff(cand) > EVENT_MERGE])
+    cand = np.concatenate([(alpha + acos)[ok], (alpha - acos)[ok], [0.0]])
+    cand = np.sort(np.mod(cand, math.pi))
+    keep = np.empty(len(cand), dtype=bool)
+    keep[0] = True
+    np.greater(np.diff(cand), EVENT_MERGE, out=keep[1:])
     cand = cand[keep]
     if cand[-1] > math.pi - EVENT_MERGE:  # equal to 0 modulo pi
         cand = cand[:-1]
-    return np.concatenate([cand, [math.pi]])
+    return np.append(cand, math.pi)
+
+
+@cache
+def _pairs(n: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """``np.triu_indices(n, k=1)``, kept (read-only) per ``n``."""
+    i, j = np.triu_indices(n, k=1)
+    i.flags.writeable = j.flags.writeable = False
+    return i, j
 
 
 #: Most work the exact optimisers take on (events x vertices^2, see :func:`global_work`): about
