@@ -208,6 +208,7 @@ def _chains_one(
     th_lo, th_hi = theta - dl, theta + dl
     trig[2], trig[3] = math.cos(th_lo), math.sin(th_lo)
     trig[4], trig[5] = math.cos(th_hi), math.sin(th_hi)
+    tan_dl = math.tan(dl)
     for j in range(n_j):
         wx = x[j + 1] - x[j]
         wxs = wx if wx > 0 else 1.0
@@ -217,7 +218,7 @@ def _chains_one(
             c0, c1 = (tu[j], tu[j + 1]) if c == 0 else (td[j], td[j + 1])
             cj[_C0], cj[_C1] = c0, c1
             dc = c1 - c0
-            r, zc, grow, drift_k, big_c = _angular_growth(dc, wx, dl)
+            r, zc, grow, drift_k, big_c = _angular_growth(dc, wx, dl, tan_dl)
             cj[_R], cj[_ZC], cj[_GROW], cj[_DRIFT_K] = r, zc, grow, drift_k
             cj[_BIG] = 1.0 if big_c else 0.0
             rs = r if zc > 0 else 1.0

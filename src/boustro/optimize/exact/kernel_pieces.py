@@ -330,12 +330,24 @@ def _weighted_row(cnt: np.ndarray, w: np.ndarray, total: float, a: float, b: flo
     return np.inf if out != out else out
 
 
-def _angular_growth(dc: float, wx: float, dl: float) -> tuple[float, float, float, float, bool]:
-    """For an edge rising ``dc`` over ``wx`` and half-width ``dl``: ``(r, zc, grow, drift_k,
-    big)`` of the chord-end bounds (see .structure._runs)."""
-    top = math.atan2(abs(dc), wx) + dl
-    bad = top >= 0.5 * math.pi
-    r = _HUGE if bad else math.tan(top)
+def _angular_growth(
+    dc: float, wx: float, dl: float, tan_dl: float
+) -> tuple[float, float, float, float, bool]:
+    """For an edge rising ``dc`` over ``wx`` and half-width ``dl`` (``tan_dl = tan(dl)``):
+    ``(r, zc, grow, drift_k, big)`` of the chord-end bounds (see .structure._runs).
+
+    ``r = tan(atan2(|dc|, wx) + dl)`` by the addition formula, ``(m + tan dl) / (1 - m tan
+    dl)`` with ``m = |dc| / wx``, infinite (``_HUGE``) where the sum reaches a right angle
+    (``m tan dl >= 1``): the same number to rounding (a few units in the last place, far inside
+    :data:`.structure.BOUND_SLACK`) without two of the three transcendental functions, which
+    took 40% of the cheap bound's time."""
+    if wx > 0:
+        slope = abs(dc) / wx
+    else:  # atan2(|dc|, 0): a right angle, or 0 for dc = 0
+        slope = 0.0 if dc == 0 else np.inf
+    den = 1.0 - slope * tan_dl
+    bad = not (den > 0) or dl >= 0.5 * math.pi
+    r = _HUGE if bad else (slope + tan_dl) / den
     r = min(r, _HUGE)
     z = r * dl
     big = bad or z > 600.0
@@ -371,12 +383,13 @@ def _quick_one(
     extent = tu.max() - td.min()
     width = x[n - 1] - x[0]
     drift, w = work[0], work[1]
+    tan_dl = math.tan(dl)
     for j in range(n_j):
         wx = x[j + 1] - x[j]
         acc = 0.0
         for c in range(2):
             dc = (tu[j + 1] - tu[j]) if c == 0 else (td[j + 1] - td[j])
-            _, _, grow, drift_k, _ = _angular_growth(dc, wx, dl)
+            _, _, grow, drift_k, _ = _angular_growth(dc, wx, dl, tan_dl)
             acc += extent * grow + width * drift_k
         drift[j] = np.inf if acc >= _HUGE else acc
     best = -np.inf
