@@ -62,7 +62,7 @@ def _parallel_edge(
     xj, xj1 = x[j], x[j + 1]
     edge = -1
     for e in range(n):
-        he, hn = h[e], h[(e + 1) % n]
+        he, hn = h[e], h[e + 1 if e + 1 < n else 0]
         rising = hn > he if chain == 0 else hn < he
         if min(he, hn) <= xj and xj1 <= max(he, hn) and rising:
             edge = e

@@ -115,8 +115,9 @@ def _chords_through_vertices(
         hv = h[i]
         up, dn = -np.inf, np.inf
         for e in range(n):
-            ha, hb = h[e], h[(e + 1) % n]
-            ta, tb = t[e], t[(e + 1) % n]
+            e1 = e + 1 if e + 1 < n else 0  # (e + 1) % n without an integer division
+            ha, hb = h[e], h[e1]
+            ta, tb = t[e], t[e1]
             if not (min(ha, hb) <= hv and hv <= max(ha, hb)):
                 continue
             dh = hb - ha
@@ -183,7 +184,7 @@ def _structure_one(
         bp[i] = h[i] - mult[i] * s
     _argsort_into(bp, fam_lo)
     for p in range(n):
-        lo_f, hi_f = fam_lo[p], fam_lo[(p + 1) % n]
+        lo_f, hi_f = fam_lo[p], fam_lo[p + 1 if p + 1 < n else 0]
         fam[p, 0], fam[p, 1] = lo_f, hi_f
         beta, beta_hi = bp[lo_f], bp[hi_f]
         m_lo, m_hi = mult[lo_f], mult[hi_f]
@@ -194,26 +195,30 @@ def _structure_one(
         hl, hh = h[lo_f], h[hi_f]
         pc[p, 0], pc[p, 1], pc[p, 2], pc[p, 3], pc[p, 4] = beta, width, t[lo_f], t[hi_f], hl
         half = 0.5 * width
+        # (x_j - hl - half) / s ends segment j - 1 and starts segment j: one division each
+        q_lo = (x[0] - hl - half) / s
         for j in range(n - 1):
             x0, x1 = x[j], x[j + 1]
             wx = x1 - x0
-            k_lo = np.floor((x0 - hl - half) / s) + 1.0
-            k_hi = np.ceil((x1 - hl - half) / s) - 1.0
+            q_hi = (x1 - hl - half) / s
+            k_lo = np.floor(q_lo) + 1.0
+            k_hi = np.ceil(q_hi) - 1.0
+            q_lo = q_hi
             count = max(k_hi - k_lo + 1.0, 0.0)
-            has = count > 0
-            wx_safe = wx if has else 1.0
             rel_lo = (hl - x0) + k_lo * s
             k_hi_fam = k_lo + (m_lo - m_hi)
-            rel_hi = (hh - x0) + k_hi_fam * s
-            y0 = tu[j] - td[j]
-            dy = (tu[j + 1] - td[j + 1]) - y0
-            r = rn[p, j]
-            r[0] = count
-            r[1] = y0 + (rel_lo / wx_safe) * dy if has else 0.0
-            r[2] = dy * (s / wx_safe) if has else 0.0
-            r[3] = dy * (width / wx_safe) if has else 0.0
-            r[4], r[5], r[6] = rel_lo, rel_hi, k_lo
-            r[7] = k_hi_fam
+            rn[p, j, 0] = count
+            rn[p, j, 4] = rel_lo
+            rn[p, j, 5] = (hh - x0) + k_hi_fam * s
+            rn[p, j, 6], rn[p, j, 7] = k_lo, k_hi_fam
+            if count > 0:
+                y0 = tu[j] - td[j]
+                dy = (tu[j + 1] - td[j + 1]) - y0
+                rn[p, j, 1] = y0 + (rel_lo / wx) * dy
+                rn[p, j, 2] = dy * (s / wx)
+                rn[p, j, 3] = dy * (width / wx)
+            else:
+                rn[p, j, 1], rn[p, j, 2], rn[p, j, 3] = 0.0, 0.0, 0.0
 
 
 def _piece_max(
