@@ -358,10 +358,7 @@ def _runs(v: Array, st: _Structure, delta: Array, s: float, second: bool) -> _Ru
     c0, c1 = chains[:, :, None, :-1], chains[:, :, None, 1:]  # (2, M, 1, J)
     dc = c1 - c0
     dl = delta[None, :, None, None]
-    top = np.arctan2(np.abs(dc), wx) + dl
-    bad = top >= 0.5 * math.pi
-    r = np.where(bad, _HUGE, np.tan(np.where(bad, 0.0, top)))
-    r = np.minimum(r, _HUGE)
+    r, bad = _edge_rate(dc, wx, dl)
     z = r * dl
     big = bad | (z > 600.0)
     zc = np.where(big, 0.0, z)
@@ -397,6 +394,22 @@ def _runs(v: Array, st: _Structure, delta: Array, s: float, second: bool) -> _Ru
     d0 = (sign[:, None] * tau[:, 0::2] * rate[:, None]).sum(axis=0)  # (2, M, P, J)
     d1 = (sign * (-s) * rate * rate).sum(axis=0)  # (M, 1, J)
     return _Runs(drift, None, np.where(has, d0, 0.0), d1, curv)
+
+
+def _edge_rate(dc: Array, wx: Array, dl: Array) -> tuple[Array, NDArray[np.bool_]]:
+    """``(r, bad)``: ``r = tan(atan2(|dc|, wx) + dl)``, the largest ``|across / along|`` of an
+    edge rising ``dc`` over ``wx`` within ``dl`` of the centre angle, by the addition formula
+    ``(m + tan dl) / (1 - m tan dl)`` (``m = |dc| / wx``; one tangent per angle instead of an
+    arctangent and a tangent per edge, as the compiled kernels compute it), and ``_HUGE``
+    where that angle reaches a right angle (``bad``)."""
+    tan_dl = np.tan(dl)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pos = wx > 0
+        slope = np.where(pos, np.abs(dc) / np.where(pos, wx, 1.0), np.where(dc == 0, 0.0, np.inf))
+        den = 1.0 - slope * tan_dl
+        bad = ~(den > 0) | (dl >= 0.5 * math.pi)
+        r = np.where(bad, _HUGE, (slope + tan_dl) / np.where(bad, 1.0, den))
+    return np.minimum(r, _HUGE), bad
 
 
 def _weighted(cnt: Array, w: Array, total: Array, a: float, b: float) -> Array:
