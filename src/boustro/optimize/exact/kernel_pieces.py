@@ -269,13 +269,15 @@ def _pieces_one(rn: np.ndarray, a: float, b: float, mo: np.ndarray, cc: np.ndarr
         sb = 0.0
         for j in range(n_j):
             c = rn[p, j, 0]
-            i1 = c * (c - 1.0) * 0.5
-            cc[p, j, 0] = i1
-            cc[p, j, 1] = (c - 1.0) * c * (2.0 * c - 1.0) / 6.0
             if c > 0:
+                i1 = c * (c - 1.0) * 0.5
+                cc[p, j, 0] = i1
+                cc[p, j, 1] = (c - 1.0) * c * (2.0 * c - 1.0) / 6.0
                 total += c
                 sa += c * rn[p, j, 1] + rn[p, j, 2] * i1
                 sb += c * rn[p, j, 3]
+            else:  # the same formulas at c = 0: -0.0 and 0.0
+                cc[p, j, 0], cc[p, j, 1] = -0.0, 0.0
         ok = total > 0
         tsafe = total if ok else 1.0
         mean_a, mean_b = sa / tsafe, sb / tsafe
