@@ -9,7 +9,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 import torch
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from ...errors import InvalidParameterError, NoTransectError
 from ...geometry import Polygon, halfplanes
@@ -150,7 +150,9 @@ def _attained(
     return best
 
 
-def _candidate_pieces(v: Array, s_n: float, thetas: Array, a: float, b: float) -> Array:
+def _candidate_pieces(
+    v: Array, s_n: float, thetas: Array, a: float, b: float
+) -> NDArray[np.int64]:
     """``(R, 4)``: at each angle of ``thetas`` the number of candidate pieces of
     :func:`_attained` and the pieces (its order: the three largest values, numpy's sort
     deciding ties; finite values only)."""
@@ -404,7 +406,7 @@ def _check_grid(v: Array, s: float) -> tuple[Array, Array]:
     angles = np.concatenate(
         [_CHECK_ANGLES, edge_angles, np.mod(edge_angles + math.pi / 2, math.pi)]
     )
-    return angles, _CHECK_STEPS * (s / 9)
+    return angles, (_CHECK_STEPS * (s / 9)).astype(np.float64, copy=False)
 
 
 def _spot_check(score: _Scorer, v: Array, s: float) -> tuple[float, float, float]:
