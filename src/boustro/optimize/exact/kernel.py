@@ -47,7 +47,7 @@ _HELPERS = {
         "_chords_through_vertices _piece_max _structure_scratch"
     ),
     kernel_bounds: "_mu_ratio _parallel_edge _parallel_one _ends_one",
-    kernel_exact: "_angle_setup _layout_value _halfplanes_into _top_pieces",
+    kernel_exact: "_angle_setup _layout_value _halfplanes_into _top_pieces _check_into",
     kernel_search: "_max_into",
 }
 _STAGES = {

@@ -226,19 +226,8 @@ def _finish(
     lanes = np.empty((3, max(k_count, n)))
     across, along, lengths = lanes[0], lanes[1], lanes[2]
     if check:
-        cval, check_i, check_j = -np.inf, 0, 0
-        first = True
-        for i in range(len(check_angles)):
-            h_lo, h_hi = _angle_setup(normals, v, check_angles[i], across, along)
-            for j in range(len(check_offsets)):
-                val = _layout_value(
-                    across, along, boffs, h_lo, h_hi, radius, s, k_count, m, check_offsets[j], a, b,
-                    lengths,
-                )  # fmt: skip
-                if first or val > cval:  # np.argmax: the first largest
-                    cval, check_i, check_j = val, i, j
-                    first = False
-        out[3], out[4], out[5] = check_angles[check_i], check_offsets[check_j], cval
+        _check_into(v, normals, boffs, radius, s, k_count, m, a, b, check_angles, check_offsets,
+                    lanes, out)  # fmt: skip
     best, best_theta, best_d = -np.inf, thetas[0], 0.0
     for row in range(len(thetas)):
         theta = thetas[row]
@@ -276,3 +265,36 @@ def _finish(
             best, best_theta, best_d = row_best, theta, row_d
     out[0], out[1], out[2] = best, best_theta, best_d
     out[6] = 0.0
+
+
+def _check_into(
+    v: np.ndarray,
+    normals: np.ndarray,
+    boffs: np.ndarray,
+    radius: float,
+    s: float,
+    k_count: int,
+    m: int,
+    a: float,
+    b: float,
+    angles: np.ndarray,
+    offsets: np.ndarray,
+    lanes: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """The spot check of :func:`_finish` (:func:`.smith._spot_check`): the first best layout of
+    the grid ``angles x offsets`` by the exact model into ``out[3:6]`` (angle, offset,
+    fitness); ``lanes (3, max(k_count, N))`` scratch."""
+    across, along, lengths = lanes[0], lanes[1], lanes[2]
+    top, top_i, top_j = -np.inf, 0, 0
+    first = True
+    for i in range(len(angles)):
+        h_lo, h_hi = _angle_setup(normals, v, angles[i], across, along)
+        for j in range(len(offsets)):
+            val = _layout_value(
+                across, along, boffs, h_lo, h_hi, radius, s, k_count, m, offsets[j], a, b, lengths
+            )
+            if first or val > top:  # np.argmax: the first largest
+                top, top_i, top_j = val, i, j
+                first = False
+    out[3], out[4], out[5] = angles[top_i], offsets[top_j], top

@@ -150,9 +150,7 @@ def _attained(
     return best
 
 
-def _candidate_pieces(
-    v: Array, s_n: float, thetas: Array, a: float, b: float
-) -> NDArray[np.int64]:
+def _candidate_pieces(v: Array, s_n: float, thetas: Array, a: float, b: float) -> NDArray[np.int64]:
     """``(R, 4)``: at each angle of ``thetas`` the number of candidate pieces of
     :func:`_attained` and the pieces (its order: the three largest values, numpy's sort
     deciding ties; finite values only)."""
