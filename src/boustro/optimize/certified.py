@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import logging
 from typing import Any
 
@@ -13,7 +12,7 @@ from ..geometry import Polygon
 from ..objectives import SmithFitness
 from .exact import exact_solver
 from .hybrid import hybrid
-from .methods import _check_options, register_method
+from .methods import _check_options, _takes, register_method
 from .problem import _checked
 from .result import OptimizeResult
 
@@ -42,7 +41,7 @@ def _global(
         _check_options("global", hybrid, options)
         result = hybrid(polygon, spacing, fitness=fitness, **options)
         return dataclasses.replace(result, info={**result.info, "note": note})
-    if "fitness" in inspect.signature(solver).parameters:
+    if _takes(solver, "fitness"):
         options = {**options, "fitness": fitness}
     _check_options("global", solver, options)
     return solver(polygon, spacing, **options)

@@ -11,6 +11,7 @@ from .structure import (
     _HUGE,
     BOUND_SLACK,
     Array,
+    _edge_rate,
     _Moments,
     _Runs,
     _runs,
@@ -219,9 +220,7 @@ def _quick_excess(st: _Structure, mo: _Moments, delta: Array, a: float, b: float
     chains = np.stack([st.tu, st.td])
     dc = chains[:, :, None, 1:] - chains[:, :, None, :-1]
     dl = delta[None, :, None, None]
-    top = np.arctan2(np.abs(dc), wx) + dl
-    bad = top >= 0.5 * math.pi
-    r = np.where(bad, _HUGE, np.tan(np.where(bad, 0.0, top)))
+    r, bad = _edge_rate(dc, wx, dl)
     z = r * dl
     big = bad | (z > 600.0)
     zc = np.where(big, 0.0, z)

@@ -19,11 +19,12 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..._jit import LOCK, jit_cached, jit_globals
-from ...models import grid_size
+from ...models import MAX_CANDIDATES, grid_size
 from . import kernel_bounds, kernel_exact, kernel_pieces, kernel_search
-from .kernel_exact import _exact_grid
+from .kernel_exact import _exact_grid, _finish
 from .kernel_search import _pieces_at, _search
 from .structure import Array
 
@@ -32,6 +33,7 @@ __all__ = [
     "compiled",
     "evaluate_smith_compiled",
     "exact_smith_compiled",
+    "finish_smith_compiled",
     "first_compile",
     "pieces_compiled",
     "search_smith_compiled",
@@ -41,16 +43,16 @@ __all__ = [
 
 _HELPERS = {
     kernel_pieces: (
-        "_nmax _nmin _clip01 _sign _argmax _argsort_into _weighted_row _angular_growth "
+        "_nmax _nmin _clip01 _sign _argmax _order_desc _argsort_into _weighted_row _angular_growth "
         "_chords_through_vertices _piece_max _structure_scratch"
     ),
-    kernel_bounds: "_mu_ratio _parallel_one _ends_one",
-    kernel_exact: "_angle_setup _layout_value",
+    kernel_bounds: "_mu_ratio _parallel_edge _parallel_one _ends_one",
+    kernel_exact: "_angle_setup _layout_value _halfplanes_into _top_pieces _check_into",
     kernel_search: "_max_into",
 }
 _STAGES = {
     kernel_pieces: "_structure_one _pieces_one _quick_one",
-    kernel_bounds: "_runs_one _linearised_one _second_one _kink_one",
+    kernel_bounds: "_chains_one _runs_piece _linearised_one _second_one _kink_one",
     kernel_search: "_evaluate",
 }
 
@@ -62,6 +64,7 @@ class Compiled(NamedTuple):
     exact_grid: Any  # .kernel_exact._exact_grid
     search: Any  # .kernel_search._search
     pieces_at: Any  # .kernel_search._pieces_at
+    finish: Any  # .kernel_exact._finish
     cached: bool  # numba's on-disk cache holds them (else they compile in every process)
 
 
@@ -131,11 +134,11 @@ def compiled() -> Compiled | None:
                             setattr(other, name, fn)
                     if name in globals():
                         globals()[name] = fn
-    (grid, c1), (search, c2), (pieces, c3) = (
-        jit_cached(f, **options) for f in (_exact_grid, _search, _pieces_at)
+    (grid, c1), (search, c2), (pieces, c3), (finish, c4) = (
+        jit_cached(f, **options) for f in (_exact_grid, _search, _pieces_at, _finish)
     )
-    on_disk = c1 and c2 and c3  # the same folder as the helpers
-    return Compiled(kernel_search._evaluate, grid, search, pieces, on_disk)
+    on_disk = c1 and c2 and c3 and c4  # the same folder as the helpers
+    return Compiled(kernel_search._evaluate, grid, search, pieces, finish, on_disk)
 
 
 def evaluate_smith_compiled(
@@ -251,4 +254,46 @@ def pieces_compiled(v: Array, s: float, thetas: Array, a: float, b: float) -> Ar
     thetas = np.ascontiguousarray(thetas, dtype=np.float64)
     out = np.empty((len(thetas), len(v), 4))
     kernels.pieces_at(np.ascontiguousarray(v, dtype=np.float64), float(s), thetas, a, b, out)
+    return out
+
+
+def finish_smith_compiled(
+    v: Array,
+    s: float,
+    thetas: Array,
+    a: float,
+    b: float,
+    check_angles: Array,
+    check_offsets: Array,
+    tops: NDArray[np.int64] | None = None,
+    check: bool = True,
+) -> Array | None:
+    """The certified optimiser's work after its search in one compiled call
+    (:func:`.kernel_exact._finish`): ``(fitness, angle, offset, check angle, check offset,
+    check fitness)`` of the best layout near the closed-form optimum at ``thetas`` and of the
+    spot check, normalised frame, as :func:`.smith._attained` and :func:`.smith._spot_check`
+    give them, then a flag: 0 done, 1 the caller must compute them (too many lines for the
+    exact model), 2 it must give the candidate pieces ``tops (3, 4)`` (count and pieces at
+    each angle, in numpy's order): without them the kernel finds them, unless two pieces'
+    values tie; ``check=False``: without the spot check (``out[3:6]`` undefined). ``None``
+    without the compiled kernel."""
+    kernels = compiled()
+    if kernels is None:
+        return None
+    if tops is None:
+        tops = np.full((len(thetas), 4), -1, dtype=np.int64)
+    out = np.empty(7)
+    kernels.finish(
+        np.ascontiguousarray(v, dtype=np.float64),
+        float(s),
+        np.ascontiguousarray(thetas, dtype=np.float64),
+        float(a),
+        float(b),
+        float(MAX_CANDIDATES),
+        np.ascontiguousarray(check_angles, dtype=np.float64),
+        np.ascontiguousarray(check_offsets, dtype=np.float64),
+        np.ascontiguousarray(tops, dtype=np.int64),
+        bool(check),
+        out,
+    )
     return out

@@ -35,10 +35,10 @@ __all__: list[str] = []
 
 
 def _mu_ratio(
-    th: float, pv0: float, pv1: float, qv0: float, qv1: float, big_k: float, qn: float
+    c: float, sn: float, pv0: float, pv1: float, qv0: float, qv1: float, big_k: float, qn: float
 ) -> float:
-    """The position ``mu`` in ``[0, 1]`` of a chord end on its edge at angle ``th``."""
-    c, sn = math.cos(th), math.sin(th)
+    """The position ``mu`` in ``[0, 1]`` of a chord end on its edge at the angle whose cosine
+    and sine are ``c``, ``sn``."""
     num = -sn * pv0 + c * pv1 + big_k
     den = -sn * qv0 + c * qv1
     if abs(den) <= 1e-12 * qn:
@@ -52,55 +52,75 @@ def _mu_ratio(
     return min(max(mu, 0.0), 1.0)
 
 
-def _parallel_one(
-    v: np.ndarray,
-    h: np.ndarray,
-    x: np.ndarray,
-    s: float,
-    theta: float,
-    dl: float,
-    chain: int,
-    fam_v: int,
-    kap: float,
-    j: int,
-) -> float:
-    """Drift of one chord end on an edge within ``dl`` of parallel (as
-    .structure._parallel_drift, which documents the bound)."""
+def _parallel_edge(
+    v: np.ndarray, h: np.ndarray, x: np.ndarray, chain: int, j: int, out: np.ndarray
+) -> None:
+    """The edge of ``chain`` (0 upper, 1 lower) covering segment ``j`` at the centre angle, for
+    :func:`_parallel_one`: ``out[:5]`` = edge index (-1: none), ``V2 - V1``, its length, its
+    direction's angle. The same for every piece and end of the segment, so computed once."""
     n = v.shape[0]
     xj, xj1 = x[j], x[j + 1]
     edge = -1
     for e in range(n):
-        he, hn = h[e], h[(e + 1) % n]
+        he, hn = h[e], h[e + 1 if e + 1 < n else 0]
         rising = hn > he if chain == 0 else hn < he
         if min(he, hn) <= xj and xj1 <= max(he, hn) and rising:
             edge = e
             break
+    out[0] = edge
+    if edge < 0:
+        return
+    e2 = (edge + 1) % n
+    qv0, qv1 = v[e2, 0] - v[edge, 0], v[e2, 1] - v[edge, 1]
+    out[1], out[2] = qv0, qv1
+    out[3] = math.hypot(qv0, qv1)
+    out[4] = math.atan2(qv1, qv0)
+
+
+def _parallel_one(
+    v: np.ndarray,
+    s: float,
+    theta: float,
+    dl: float,
+    trig: np.ndarray,
+    edge_row: np.ndarray,
+    fam_v: int,
+    kap: float,
+) -> float:
+    """Drift of one chord end on an edge within ``dl`` of parallel (as
+    .structure._parallel_drift, which documents the bound). ``trig``: cosine and sine of
+    ``theta``, ``theta - dl``, ``theta + dl``; ``edge_row``: the edge (:func:`_parallel_edge`)."""
+    edge = int(edge_row[0])
     if edge < 0:
         return np.inf
-    e2 = (edge + 1) % n
     pv0, pv1 = v[fam_v, 0] - v[edge, 0], v[fam_v, 1] - v[edge, 1]
-    qv0, qv1 = v[e2, 0] - v[edge, 0], v[e2, 1] - v[edge, 1]
-    qn = math.hypot(qv0, qv1)
+    qv0, qv1, qn = edge_row[1], edge_row[2], edge_row[3]
     big_k = kap * s
-    mu0 = _mu_ratio(theta, pv0, pv1, qv0, qv1, big_k, qn)
+    mu0 = _mu_ratio(trig[0], trig[1], pv0, pv1, qv0, qv1, big_k, qn)
     span = max(
-        abs(_mu_ratio(theta - dl, pv0, pv1, qv0, qv1, big_k, qn) - mu0),
-        abs(_mu_ratio(theta + dl, pv0, pv1, qv0, qv1, big_k, qn) - mu0),
+        abs(_mu_ratio(trig[2], trig[3], pv0, pv1, qv0, qv1, big_k, qn) - mu0),
+        abs(_mu_ratio(trig[4], trig[5], pv0, pv1, qv0, qv1, big_k, qn) - mu0),
     )
     cross = pv0 * qv1 - pv1 * qv0
     rhs = cross / (big_k * qn)
     ok = big_k != 0 and abs(rhs) <= 1.0
     if ok:
-        phase = math.atan2(qv1, qv0)
+        phase = edge_row[4]
         acos = math.acos(min(max(rhs, -1.0), 1.0))
         for sign in (1.0, -1.0):
             crit = phase + sign * acos
             crit = crit + np.rint((theta - crit) / (2 * math.pi)) * 2 * math.pi
             if abs(crit - theta) < dl:
-                span = max(span, abs(_mu_ratio(crit, pv0, pv1, qv0, qv1, big_k, qn) - mu0))
+                mu_c = _mu_ratio(math.cos(crit), math.sin(crit), pv0, pv1, qv0, qv1, big_k, qn)
+                span = max(span, abs(mu_c - mu0))
     span = min(span, max(mu0, 1.0 - mu0))
     dist = math.hypot(pv0, pv1)
     return dl * dist + qn * (span + mu0 * dl)
+
+
+#: Columns of a segment's chain terms ``chain (J, 2, _NCH)`` (:func:`_chains_one`).
+_R, _ZC, _GROW, _DRIFT_K, _REACH, _RATE, _BIG, _C0, _C1 = range(9)
+_NCH = 9
 
 
 def _ends_one(
@@ -115,20 +135,17 @@ def _ends_one(
     pc: np.ndarray,
     fam: np.ndarray,
     rn: np.ndarray,
+    cj: np.ndarray,
+    ej: np.ndarray,
+    trig: np.ndarray,
     scratch: np.ndarray,
 ) -> tuple[float, float]:
     """Drift and curvature bound of the run of piece ``p`` in segment ``j`` (its ends ``q``:
-    first and last transect at either piece end, on both chains ``c``), the segment's chain
-    terms already in ``scratch``; leaves the ends' offsets ``tau`` in ``scratch[14:16]``."""
-    r, grow, drift_k, reach = scratch[0], scratch[2], scratch[3], scratch[4]
-    c0, c1, kap, rel, tfam, big = (
-        scratch[6],
-        scratch[7],
-        scratch[8],
-        scratch[9],
-        scratch[10],
-        scratch[11],
-    )
+    first and last transect at either piece end, on both chains ``c``); ``cj (2, _NCH)`` the
+    segment's chain terms, ``ej (2, 6)`` its edges for :func:`_parallel_one` (computed here
+    when first needed: column 5 says whether they are), ``trig`` the angles' cosines and sines
+    (:func:`_chains_one`). Leaves the ends' offsets ``tau`` in ``scratch[14:16]``."""
+    kap, rel, tfam = scratch[8], scratch[9], scratch[10]
     ed, tau = scratch[12:14], scratch[14:16]
     wx = x[j + 1] - x[j]
     wxs = wx if wx > 0 else 1.0
@@ -140,23 +157,29 @@ def _ends_one(
     kap[0], kap[1] = abs(kraw0) * s, abs(kraw0 + last) * s
     kap[2], kap[3] = abs(kraw1) * s, abs(kraw1 + last) * s
     for c in range(2):
+        grow_c, drift_kc = cj[c, _GROW], cj[c, _DRIFT_K]
+        c0, c1 = cj[c, _C0], cj[c, _C1]
         for q in range(4):
             phi = rel[q] / wxs
-            tq = (1.0 - phi) * c0[c] + phi * c1[c] - tfam[q]
+            tq = (1.0 - phi) * c0 + phi * c1 - tfam[q]
             tau[c, q] = tq
-            e = abs(tq) * grow[c] + kap[q] * drift_k[c]
-            if e >= 1e-3 and big[c] > 0:  # an edge near parallel: bound it on the edge
+            e = abs(tq) * grow_c + kap[q] * drift_kc
+            if e >= 1e-3 and cj[c, _BIG] > 0:  # an edge near parallel: bound it on the edge
                 kraw = (kraw0 if q < 2 else kraw1) + (last if q % 2 == 1 else 0.0)
                 fam_v = fam[p, 0] if q < 2 else fam[p, 1]
-                e = _nmin(e, _parallel_one(v, h, x, s, theta, dl, c, fam_v, kraw, j))
+                if ej[c, 5] == 0.0:  # the segment's edge, once per segment and chain
+                    _parallel_edge(v, h, x, c, j, ej[c])
+                    ej[c, 5] = 1.0
+                e = _nmin(e, _parallel_one(v, s, theta, dl, trig, ej[c], fam_v, kraw))
             ed[c, q] = e
     dr = 0.0
     cv = 0.0
     for q in range(4):  # the sums over the chains, the largest over the ends (NaN wins)
         cq = 0.0
         for c in range(2):
-            tmax = abs(tau[c, q]) * (1.0 + grow[c]) + kap[q] * reach[c]
-            term = kap[q] * r[c] + tmax * (1.0 + 2.0 * r[c] ** 2)
+            r_c = cj[c, _R]
+            tmax = abs(tau[c, q]) * (1.0 + cj[c, _GROW]) + kap[q] * cj[c, _REACH]
+            term = kap[q] * r_c + tmax * (1.0 + 2.0 * r_c**2)
             cq = term if c == 0 else cq + term
         dq = ed[0, q] + ed[1, q]
         dr = dq if q == 0 else _nmax(dr, dq)
@@ -164,56 +187,86 @@ def _ends_one(
     return dr, cv
 
 
-def _runs_one(
+def _chains_one(
+    s: float,
+    theta: float,
+    dl: float,
+    x: np.ndarray,
+    tu: np.ndarray,
+    td: np.ndarray,
+    chain: np.ndarray,
+    edges: np.ndarray,
+    d1: np.ndarray,
+    trig: np.ndarray,
+) -> None:
+    """The terms of every segment's edges on the upper and lower chain, the same for every
+    piece (as .structure._runs): ``chain (J, 2, _NCH)``, ``d1 (J,)``; ``trig (6,)`` the
+    cosine and sine of ``theta``, ``theta - dl`` and ``theta + dl``; ``edges (J, 2, 6)``
+    marked not computed yet."""
+    n_j = len(x) - 1
+    trig[0], trig[1] = math.cos(theta), math.sin(theta)
+    th_lo, th_hi = theta - dl, theta + dl
+    trig[2], trig[3] = math.cos(th_lo), math.sin(th_lo)
+    trig[4], trig[5] = math.cos(th_hi), math.sin(th_hi)
+    tan_dl = math.tan(dl)
+    for j in range(n_j):
+        wx = x[j + 1] - x[j]
+        wxs = wx if wx > 0 else 1.0
+        dsum = 0.0
+        for c in range(2):  # the segment's edges on the upper and lower chain
+            cj = chain[j, c]
+            c0, c1 = (tu[j], tu[j + 1]) if c == 0 else (td[j], td[j + 1])
+            cj[_C0], cj[_C1] = c0, c1
+            dc = c1 - c0
+            r, zc, grow, drift_k, big_c = _angular_growth(dc, wx, dl, tan_dl)
+            cj[_R], cj[_ZC], cj[_GROW], cj[_DRIFT_K] = r, zc, grow, drift_k
+            cj[_BIG] = 1.0 if big_c else 0.0
+            rs = r if zc > 0 else 1.0
+            cj[_REACH] = _HUGE if big_c else (grow / rs if zc > 0 else dl)
+            rate = -dc / wxs
+            cj[_RATE] = rate
+            sign = -1.0 if c == 0 else 1.0
+            dsum += sign * (-s) * rate * rate
+            edges[j, c, 5] = 0.0
+        d1[j] = dsum
+
+
+def _runs_piece(
+    p: int,
     v: np.ndarray,
     s: float,
     theta: float,
     dl: float,
     h: np.ndarray,
     x: np.ndarray,
-    tu: np.ndarray,
-    td: np.ndarray,
     pc: np.ndarray,
     fam: np.ndarray,
     rn: np.ndarray,
+    chain: np.ndarray,
+    edges: np.ndarray,
+    trig: np.ndarray,
     drift: np.ndarray,
     curv: np.ndarray,
     d0: np.ndarray,
-    d1: np.ndarray,
     scratch: np.ndarray,
 ) -> None:
-    """Derivative data of every run (as .structure._runs with ``second=True``): ``drift,
-    curv (P, J)``, ``d0 (2, P, J)``, ``d1 (J,)``; ``scratch (16, 4)``."""
-    n_p, n_j = rn.shape[0], rn.shape[1]
-    r, zc, grow, drift_k, reach = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4]
-    rate, c0, c1, big, tau = scratch[5], scratch[6], scratch[7], scratch[11], scratch[14:16]
-    for j in range(n_j):
-        wx = x[j + 1] - x[j]
-        wxs = wx if wx > 0 else 1.0
-        c0[0], c1[0], c0[1], c1[1] = tu[j], tu[j + 1], td[j], td[j + 1]
-        dsum = 0.0
-        for c in range(2):  # the segment's edges on the upper and lower chain
-            dc = c1[c] - c0[c]
-            r[c], zc[c], grow[c], drift_k[c], big_c = _angular_growth(dc, wx, dl)
-            big[c] = 1.0 if big_c else 0.0
-            rs = r[c] if zc[c] > 0 else 1.0
-            reach[c] = _HUGE if big_c else (grow[c] / rs if zc[c] > 0 else dl)
-            rate[c] = -dc / wxs
-            sign = -1.0 if c == 0 else 1.0
-            dsum += sign * (-s) * rate[c] * rate[c]
-        d1[j] = dsum
-        for p in range(n_p):
-            if not rn[p, j, 0] > 0:  # no transect: the numpy code's np.where(has, ..., 0)
-                drift[p, j] = 0.0
-                curv[p, j] = 0.0
-                d0[0, p, j] = 0.0
-                d0[1, p, j] = 0.0
-                continue
-            dr, cv = _ends_one(v, h, x, s, theta, dl, j, p, pc, fam, rn, scratch)
-            drift[p, j] = np.inf if dr >= _HUGE else dr
-            curv[p, j] = np.inf if cv >= _HUGE else cv
-            for e_ in range(2):
-                d0[e_, p, j] = (-1.0 * tau[0, 2 * e_]) * rate[0] + (tau[1, 2 * e_]) * rate[1]
+    """Derivative data of piece ``p``'s runs (as .structure._runs with ``second=True``):
+    ``drift[p], curv[p] (J,)``, ``d0[:, p] (2, J)``, the segments' terms from
+    :func:`_chains_one`; ``scratch (16, 4)``."""
+    tau = scratch[14:16]
+    for j in range(rn.shape[1]):
+        if not rn[p, j, 0] > 0:  # no transect: the numpy code's np.where(has, ..., 0)
+            drift[p, j] = 0.0
+            curv[p, j] = 0.0
+            d0[0, p, j] = 0.0
+            d0[1, p, j] = 0.0
+            continue
+        cj = chain[j]
+        dr, cv = _ends_one(v, h, x, s, theta, dl, j, p, pc, fam, rn, cj, edges[j], trig, scratch)
+        drift[p, j] = np.inf if dr >= _HUGE else dr
+        curv[p, j] = np.inf if cv >= _HUGE else cv
+        for e_ in range(2):
+            d0[e_, p, j] = (-1.0 * tau[0, 2 * e_]) * cj[0, _RATE] + (tau[1, 2 * e_]) * cj[1, _RATE]
 
 
 def _linearised_one(

@@ -18,6 +18,8 @@ import math
 
 import numpy as np
 
+from .kernel_pieces import _LAM, _VALUE, _pieces_one, _structure_one, _structure_scratch
+
 __all__: list[str] = []
 
 
@@ -134,3 +136,165 @@ def _exact_grid(
             out[i * n_o + j] = _layout_value(
                 across, along, boffs, h_lo, h_hi, radius, s, k_count, m, offset, a, b, lengths
             )
+
+
+def _halfplanes_into(v: np.ndarray, normals: np.ndarray, boffs: np.ndarray) -> float:
+    """:func:`boustro.geometry.polygon.edge_halfplanes` of ``v`` into ``normals (N, 2)`` and
+    ``boffs (N,)``, the same operations (so the same numbers); returns the largest distance of
+    a vertex from the origin (``max(np.linalg.norm(v, axis=1))``)."""
+    n = v.shape[0]
+    radius = -np.inf
+    for i in range(n):
+        k = (i + 1) % n
+        nx, ny = v[i, 1] - v[k, 1], v[k, 0] - v[i, 0]
+        off = v[i, 0] * v[k, 1] - v[k, 0] * v[i, 1]
+        norm = math.sqrt(nx * nx + ny * ny)
+        normals[i, 0], normals[i, 1], boffs[i] = nx / norm, ny / norm, off / norm
+        r = math.sqrt(v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+        radius = r if r > radius else radius
+    return radius
+
+
+def _top_pieces(value: np.ndarray, top: np.ndarray) -> int:
+    """The (at most 3) pieces of largest finite ``value``, from the largest down, into ``top``;
+    returns how many, or -1 when two finite values tie there (their order would be numpy's
+    sort's, which the caller then asks numpy for) or a value is ``+inf``."""
+    count = 0
+    for p in range(len(value)):
+        x = value[p]
+        if x == np.inf:
+            return -1  # first in numpy's order, and not a candidate: let numpy order them
+        if not math.isfinite(x):
+            continue
+        if count < 4:  # keep the 4 largest, in order (the 4th only to see a tie at the 3rd)
+            k = count
+            count += 1
+        elif x > value[top[3]]:
+            k = 3
+        else:
+            if x == value[top[3]]:
+                top[3] = p  # an equal value at the 4th place: only equality matters there
+            continue
+        while k > 0 and value[top[k - 1]] < x:
+            top[k] = top[k - 1]
+            k -= 1
+        top[k] = p
+    kept = min(count, 3)
+    for k in range(min(count - 1, 3)):
+        if value[top[k]] == value[top[k + 1]]:
+            return -1
+    return kept
+
+
+_ETAS = (0.0, 1e-9, 1e-6, 1e-3)
+
+
+def _finish(
+    v: np.ndarray,
+    s: float,
+    thetas: np.ndarray,
+    a: float,
+    b: float,
+    max_candidates: float,
+    check_angles: np.ndarray,
+    check_offsets: np.ndarray,
+    tops: np.ndarray,
+    check: bool,
+    out: np.ndarray,
+) -> None:
+    """What :func:`.smith.global_optimum` does after its search, in one call: the best layout
+    near the closed-form optimum (:func:`.smith._attained` at ``thetas``) and the spot check's
+    best layout (:func:`.smith._spot_check` on ``check_angles x check_offsets``), scored by
+    the exact model with the polygon's half-planes (:func:`_halfplanes_into`), the same
+    operations in the same order. ``tops (R, 4)``: at each angle the number of pieces and the
+    pieces whose maximisers are candidates (the largest values first: numpy's
+    ``argsort(-value)`` keeps them), or ``tops[0, 0] = -1`` to find them here, except at a
+    tie; ``check``: whether to do the spot check (first). ``out (7,)``: fitness, angle,
+    offset; the check's angle, offset, fitness; then 0, or 1 where the caller must do it all
+    itself (too many lines for the model), or 2 where it must give ``tops`` (two pieces'
+    values tie: their order is numpy's sort's; the spot check is done)."""
+    n = v.shape[0]
+    out[6] = 1.0
+    normals, boffs = np.empty((n, 2)), np.empty(n)
+    radius = _halfplanes_into(v, normals, boffs)
+    if 2 * radius / s > max_candidates:
+        return  # grid_size refuses it: the caller raises its error
+    m = int(np.ceil(radius / s)) + 1
+    k_count = 2 * m
+    h, t, x, tu, td, pc, fam, rn, mo, cc, work, iwork = _structure_scratch(n)
+    top = np.empty(4, dtype=np.int64)
+    lanes = np.empty((3, max(k_count, n)))
+    across, along, lengths = lanes[0], lanes[1], lanes[2]
+    if check:
+        _check_into(v, normals, boffs, radius, s, k_count, m, a, b, check_angles, check_offsets,
+                    lanes, out)  # fmt: skip
+    best, best_theta, best_d = -np.inf, thetas[0], 0.0
+    for row in range(len(thetas)):
+        theta = thetas[row]
+        _structure_one(v, s, theta, h, t, x, tu, td, pc, fam, rn, work, iwork)
+        _pieces_one(rn, a, b, mo, cc)
+        if tops[0, 0] < 0:
+            kept = _top_pieces(mo[:, _VALUE], top)
+            if kept < 0:
+                out[6] = 2.0
+                return
+        else:
+            kept = tops[row, 0]
+            top[:3] = tops[row, 1:]
+        if kept == 0:
+            continue
+        h_lo, h_hi = _angle_setup(normals, v, theta, across, along)
+        row_best, row_d = -np.inf, 0.0
+        first = True
+        for k in range(kept):
+            p = top[k]
+            lam = mo[p, _LAM]
+            for eta in _ETAS:
+                lam_p = eta if eta > lam else lam  # Python's min(max(lam, eta), 1 - eta)
+                upper = 1.0 - eta
+                lam_p = upper if upper < lam_p else lam_p
+                offset = pc[p, 0] + lam_p * pc[p, 1]
+                val = _layout_value(
+                    across, along, boffs, h_lo, h_hi, radius, s, k_count, m, offset, a, b,
+                    lengths,
+                )  # fmt: skip
+                if first or val > row_best:  # np.argmax: the first largest
+                    row_best, row_d = val, offset
+                    first = False
+        if row_best > best:
+            best, best_theta, best_d = row_best, theta, row_d
+    out[0], out[1], out[2] = best, best_theta, best_d
+    out[6] = 0.0
+
+
+def _check_into(
+    v: np.ndarray,
+    normals: np.ndarray,
+    boffs: np.ndarray,
+    radius: float,
+    s: float,
+    k_count: int,
+    m: int,
+    a: float,
+    b: float,
+    angles: np.ndarray,
+    offsets: np.ndarray,
+    lanes: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """The spot check of :func:`_finish` (:func:`.smith._spot_check`): the first best layout of
+    the grid ``angles x offsets`` by the exact model into ``out[3:6]`` (angle, offset,
+    fitness); ``lanes (3, max(k_count, N))`` scratch."""
+    across, along, lengths = lanes[0], lanes[1], lanes[2]
+    top, top_i, top_j = -np.inf, 0, 0
+    first = True
+    for i in range(len(angles)):
+        h_lo, h_hi = _angle_setup(normals, v, angles[i], across, along)
+        for j in range(len(offsets)):
+            val = _layout_value(
+                across, along, boffs, h_lo, h_hi, radius, s, k_count, m, offsets[j], a, b, lengths
+            )
+            if first or val > top:  # np.argmax: the first largest
+                top, top_i, top_j = val, i, j
+                first = False
+    out[3], out[4], out[5] = angles[top_i], offsets[top_j], top

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kernel_bounds import _kink_one, _runs_one, _second_one
+from .kernel_bounds import _NCH, _chains_one, _kink_one, _runs_piece, _second_one
 from .kernel_pieces import (
     _LAM,
     _TOTAL,
@@ -21,6 +21,7 @@ from .kernel_pieces import (
     _argmax,
     _nmax,
     _nmin,
+    _order_desc,
     _pieces_one,
     _quick_one,
     _structure_one,
@@ -30,6 +31,14 @@ from .kernel_pieces import (
 from .structure import BOUND_SLACK
 
 __all__: list[str] = []
+
+
+#: A piece whose cheap bound is below the best second-order bound of the angle by more than
+#: this (relative to 1 or to the bound) cannot hold the angle's bound: its cheap bound is, up to
+#: rounding (about 1e-15 of it), at least its second-order one (both start from the piece's
+#: exact maximum; the cheap one takes every chord end as far from its pivot as the polygon
+#: allows), so :func:`_evaluate` does not compute its second-order bound.
+_SKIP_MARGIN = 1e-9
 
 
 def _evaluate(
@@ -46,13 +55,20 @@ def _evaluate(
     ub: np.ndarray,
     order: np.ndarray,
 ) -> None:
-    """:func:`.bounds._evaluate_smith` as loops; writes ``g, d, ub, order``."""
+    """:func:`.bounds._evaluate_smith` as loops; writes ``g, d, ub, order``.
+
+    The second-order bound of an angle is the largest over its pieces; the pieces are bounded
+    from the highest cheap bound down, and those whose cheap bound falls below the best so far
+    by more than :data:`_SKIP_MARGIN` are skipped (they cannot be the largest: the same
+    bound, the same order, less work)."""
     n = v.shape[0]
     n_j = n - 1
     h, t, x, tu, td, pc, fam, rn, mo, cc, work, iwork = _structure_scratch(n)
     drift, curv = np.empty((n, n_j)), np.empty((n, n_j))
     d0, d1 = np.empty((2, n, n_j)), np.empty(n_j)
-    pb, f1s, f2s = np.empty(n), np.empty(n), np.empty(n)
+    chain, edges, trig = np.empty((n_j, 2, _NCH)), np.empty((n_j, 2, 6)), np.empty(6)
+    pb, f1s, f2s, qp = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    porder = np.empty(n, dtype=np.int64)
     scratch = np.empty((16, 4))
     bound = np.empty(len(lo))
     for start in range(0, len(lo), batch):
@@ -67,7 +83,7 @@ def _evaluate(
             g[m] = mo[ip, _VALUE]
             d[m] = pc[ip, 0] + mo[ip, _LAM] * pc[ip, 1]
             gmax = g[m] if m == start else _nmax(gmax, g[m])
-            bound[m] = _quick_one(x, tu, td, rn, mo, half, a, b, work)
+            bound[m] = _quick_one(x, tu, td, rn, mo, half, a, b, work, qp)
             order[m] = 1.0
         thr = gmax if gmax > threshold else threshold  # Python's max(threshold, gmax)
         for m in range(start, stop):
@@ -76,8 +92,21 @@ def _evaluate(
                 half = 0.5 * (hi[m] - lo[m])
                 _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
                 _pieces_one(rn, a, b, mo, cc)
-                _runs_one(v, s, mid, half, h, x, tu, td, pc, fam, rn, drift, curv, d0, d1, scratch)
-                for p in range(n):
+                _quick_one(x, tu, td, rn, mo, half, a, b, work, qp)
+                _chains_one(s, mid, half, x, tu, td, chain, edges, d1, trig)
+                _order_desc(qp, porder)
+                best = -np.inf
+                for k in range(n):
+                    p = porder[k]
+                    q = qp[p]
+                    if k > 0 and q < 1e90 and q + _SKIP_MARGIN * max(1.0, abs(q)) < best:
+                        pb[p] = -np.inf  # below the best: not the angle's bound
+                        f1s[p], f2s[p] = 0.0, 0.0
+                        continue
+                    _runs_piece(
+                        p, v, s, mid, half, h, x, pc, fam, rn, chain, edges, trig, drift, curv,
+                        d0, scratch
+                    )  # fmt: skip
                     total = mo[p, _TOTAL]
                     f1 = _weighted_row(rn[p, :, 0], drift[p], total, a, b)
                     second = _second_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
@@ -86,6 +115,7 @@ def _evaluate(
                     excess = _nmax(_nmin(f1, f2), 0.0)
                     pb[p] = mo[p, _VALUE] + excess if total > 0 else -np.inf
                     f1s[p], f2s[p] = f1, f2
+                    best = pb[p] if k == 0 else _nmax(best, pb[p])
                 top = _argmax(pb)
                 bound[m] = pb[top]
                 order[m] = 2.0 if f2s[top] < f1s[top] else 1.0

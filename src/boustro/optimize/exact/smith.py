@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import math
 import time
+from functools import cached_property
 from typing import Any, NamedTuple
 
 import numpy as np
 import torch
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from ...errors import InvalidParameterError, NoTransectError
 from ...geometry import Polygon, halfplanes
@@ -23,6 +24,7 @@ from ..result import OptimizeResult, canonical
 from .bounds import _evaluate_smith, _smith_pieces
 from .kernel import (
     exact_smith_compiled,
+    finish_smith_compiled,
     pieces_compiled,
     search_smith_compiled,
     use_compiled,
@@ -61,8 +63,12 @@ class _Scorer:
 
     def __init__(self, poly: Polygon, v: Array, s: float, a: float, b: float, fast: bool) -> None:
         self.poly, self.v, self.s, self.a, self.b, self.fast = poly, v, s, a, b, fast
-        normals, boffs = edge_halfplanes(v)
-        self.halfplanes = (normals, boffs, float(np.max(np.linalg.norm(v, axis=1))))
+
+    @cached_property
+    def halfplanes(self) -> tuple[Array, Array, float]:
+        """``(normals, offsets, radius)`` of the polygon in the normalised frame."""
+        normals, boffs = edge_halfplanes(self.v)
+        return normals, boffs, float(np.max(np.linalg.norm(self.v, axis=1)))
 
     def pairs(self, angles: Array, offsets: Array) -> Array | None:
         """Values of the pairs ``(angles[i], offsets[i])`` by the compiled kernel (if
@@ -142,6 +148,22 @@ def _attained(
         if float(values[k]) > best[0]:
             best = (float(values[k]), float(theta), float(offsets[k]))
     return best
+
+
+def _candidate_pieces(v: Array, s_n: float, thetas: Array, a: float, b: float) -> NDArray[np.int64]:
+    """``(R, 4)``: at each angle of ``thetas`` the number of candidate pieces of
+    :func:`_attained` and the pieces (its order: the three largest values, numpy's sort
+    deciding ties; finite values only)."""
+    pieces = pieces_compiled(v, s_n, thetas, a, b)
+    assert pieces is not None  # only called where the compiled kernels run
+    value = pieces[..., 2]
+    tops = np.zeros((len(thetas), 4), dtype=np.int64)
+    for row in range(len(thetas)):
+        order = np.argsort(-value[row])[: min(3, value.shape[1])]
+        kept = [p for p in order if np.isfinite(value[row, p])]
+        tops[row, 0] = len(kept)
+        tops[row, 1 : 1 + len(kept)] = kept
+    return tops
 
 
 def best_offset(
@@ -248,11 +270,24 @@ def global_optimum(
         search = _search_smith(v, s_n, a, b, tol, cap, fast)
         angles = np.array([search.theta, search.lo, search.hi])
         score = _Scorer(poly, v, s_n, a, b, fast)
-        value, theta, d = _attained(score, v, s_n, angles, a, b)
+        # the candidates' scores and the spot check in one compiled call (where it can)
+        check_grid = _check_grid(v, s_n)
+        done = finish_smith_compiled(v, s_n, angles, a, b, *check_grid) if fast else None
+        if done is not None and done[6] == 2.0:  # tied pieces: numpy orders them
+            tops = _candidate_pieces(v, s_n, angles, a, b)
+            again = finish_smith_compiled(v, s_n, angles, a, b, *check_grid, tops, False)
+            assert again is not None
+            done[:3], done[6] = again[:3], again[6]  # the spot check was done
+        if done is None or done[6] != 0.0:
+            value, theta, d = _attained(score, v, s_n, angles, a, b)
+            check = _spot_check(score, v, s_n)
+        else:
+            value, theta, d = (float(x) for x in done[:3])
+            check = (float(done[3]), float(done[4]), float(done[5]))
     upper = search.upper_bound
     if not search.converged and not math.isfinite(upper):
         upper = a + b  # every length is at most the diameter (1) and std >= 0
-    answer = _reconcile(score, v, s_n, a, b, search, tol, upper, (value, theta, d))
+    answer = _reconcile(score, v, s_n, a, b, search, tol, upper, (value, theta, d), check)
     value, theta, d, upper, notes = answer
     converged = search.converged and not notes
     angle, offset = canonical(theta, d * frame.scale, spacing)
@@ -323,6 +358,7 @@ def _reconcile(
     tol: float,
     upper: float,
     attained: tuple[float, float, float],
+    check: tuple[float, float, float],
 ) -> _Answer:
     """The search's attained layout checked against an independent spot check.
 
@@ -332,7 +368,7 @@ def _reconcile(
     event; the check then finds a better layout, and the result says it is not certified.
     """
     value, theta, d = attained
-    check_theta, check_d, check_value = _spot_check(score, v, s_n)
+    check_theta, check_d, check_value = check
     notes = []
     if check_value > value + 1e-12:
         with np.errstate(all="ignore"):
@@ -356,16 +392,25 @@ def _reconcile(
     return _Answer(value, theta, d, upper, notes)
 
 
-def _spot_check(score: _Scorer, v: Array, s: float) -> tuple[float, float, float]:
-    """``(angle, offset, fitness)``, normalised frame (``v``: the polygon's vertices in it): the
-    best of the exact fitness over 90 angles, every edge's direction and its normal, and 9
-    offsets (0 included)."""
+_CHECK_ANGLES = np.arange(90) * (math.pi / 90)
+_CHECK_STEPS = np.arange(9)
+
+
+def _check_grid(v: Array, s: float) -> tuple[Array, Array]:
+    """The spot check's angles (90 angles, every edge's direction and its normal) and offsets
+    (9, 0 included), normalised frame (``v``: the polygon's vertices in it)."""
     edges = np.roll(v, -1, axis=0) - v
     edge_angles = np.mod(np.arctan2(edges[:, 1], edges[:, 0]), math.pi)
     angles = np.concatenate(
-        [np.arange(90) * (math.pi / 90), edge_angles, np.mod(edge_angles + math.pi / 2, math.pi)]
+        [_CHECK_ANGLES, edge_angles, np.mod(edge_angles + math.pi / 2, math.pi)]
     )
-    offsets = np.arange(9) * (s / 9)
+    return angles, (_CHECK_STEPS * (s / 9)).astype(np.float64, copy=False)
+
+
+def _spot_check(score: _Scorer, v: Array, s: float) -> tuple[float, float, float]:
+    """``(angle, offset, fitness)``, normalised frame: the best of the exact fitness on the
+    grid of :func:`_check_grid`."""
+    angles, offsets = _check_grid(v, s)
     values = score.grid(angles, offsets)
     i, j = np.unravel_index(int(np.argmax(values)), values.shape)
     return float(angles[i]), float(offsets[j]), float(values[i, j])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -40,25 +41,34 @@ def event_angles(vertices: ArrayLike, spacing: float) -> Array:
         spacing: transect spacing, > 0.
     """
     v = np.asarray(vertices, dtype=np.float64)
-    i, j = np.triu_indices(len(v), k=1)
+    i, j = _pairs(len(v))
     delta = v[i] - v[j]
-    dist = np.hypot(delta[:, 0], delta[:, 1])
+    dx, dy = delta[:, 0], delta[:, 1]
+    dist = np.hypot(dx, dy)
     # n(theta) . delta = -sin(theta) dx + cos(theta) dy = dist * cos(theta - alpha)
-    alpha = np.arctan2(-delta[:, 0], delta[:, 1])
+    alpha = np.arctan2(-dx, dy)[:, None]
     m_max = int(np.floor(dist.max() / spacing)) if len(dist) else 0
     m = np.arange(-m_max, m_max + 1, dtype=np.float64)
     ratio = m[None, :] * spacing / dist[:, None]
     ok = np.abs(ratio) <= 1.0
     acos = np.arccos(np.clip(ratio, -1.0, 1.0))
-    base = np.broadcast_to(alpha[:, None], ratio.shape)
-    cand = np.concatenate([(base + acos)[ok], (base - acos)[ok], [0.0]])
-    cand = np.mod(cand, math.pi)
-    cand = np.sort(cand)
-    keep = np.concatenate([[True], np.diff(cand) > EVENT_MERGE])
+    cand = np.concatenate([(alpha + acos)[ok], (alpha - acos)[ok], [0.0]])
+    cand = np.sort(np.mod(cand, math.pi))
+    keep = np.empty(len(cand), dtype=bool)
+    keep[0] = True
+    np.greater(np.diff(cand), EVENT_MERGE, out=keep[1:])
     cand = cand[keep]
     if cand[-1] > math.pi - EVENT_MERGE:  # equal to 0 modulo pi
         cand = cand[:-1]
-    return np.concatenate([cand, [math.pi]])
+    return np.append(cand, math.pi)
+
+
+@cache
+def _pairs(n: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """``np.triu_indices(n, k=1)``, kept (read-only) per ``n``."""
+    i, j = np.triu_indices(n, k=1)
+    i.flags.writeable = j.flags.writeable = False
+    return i, j
 
 
 #: Most work the exact optimisers take on (events x vertices^2, see :func:`global_work`): about
@@ -348,10 +358,7 @@ def _runs(v: Array, st: _Structure, delta: Array, s: float, second: bool) -> _Ru
     c0, c1 = chains[:, :, None, :-1], chains[:, :, None, 1:]  # (2, M, 1, J)
     dc = c1 - c0
     dl = delta[None, :, None, None]
-    top = np.arctan2(np.abs(dc), wx) + dl
-    bad = top >= 0.5 * math.pi
-    r = np.where(bad, _HUGE, np.tan(np.where(bad, 0.0, top)))
-    r = np.minimum(r, _HUGE)
+    r, bad = _edge_rate(dc, wx, dl)
     z = r * dl
     big = bad | (z > 600.0)
     zc = np.where(big, 0.0, z)
@@ -387,6 +394,22 @@ def _runs(v: Array, st: _Structure, delta: Array, s: float, second: bool) -> _Ru
     d0 = (sign[:, None] * tau[:, 0::2] * rate[:, None]).sum(axis=0)  # (2, M, P, J)
     d1 = (sign * (-s) * rate * rate).sum(axis=0)  # (M, 1, J)
     return _Runs(drift, None, np.where(has, d0, 0.0), d1, curv)
+
+
+def _edge_rate(dc: Array, wx: Array, dl: Array) -> tuple[Array, NDArray[np.bool_]]:
+    """``(r, bad)``: ``r = tan(atan2(|dc|, wx) + dl)``, the largest ``|across / along|`` of an
+    edge rising ``dc`` over ``wx`` within ``dl`` of the centre angle, by the addition formula
+    ``(m + tan dl) / (1 - m tan dl)`` (``m = |dc| / wx``; one tangent per angle instead of an
+    arctangent and a tangent per edge, as the compiled kernels compute it), and ``_HUGE``
+    where that angle reaches a right angle (``bad``)."""
+    tan_dl = np.tan(dl)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pos = wx > 0
+        slope = np.where(pos, np.abs(dc) / np.where(pos, wx, 1.0), np.where(dc == 0, 0.0, np.inf))
+        den = 1.0 - slope * tan_dl
+        bad = ~(den > 0) | (dl >= 0.5 * math.pi)
+        r = np.where(bad, _HUGE, (slope + tan_dl) / np.where(bad, 1.0, den))
+    return np.minimum(r, _HUGE), bad
 
 
 def _weighted(cnt: Array, w: Array, total: Array, a: float, b: float) -> Array:
