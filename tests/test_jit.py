@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
-from boustro._jit import jit, jit_globals
+from boustro._jit import _CHECKED, fresh_cache, jit, jit_cached, jit_globals, sources_digest
 
 
 def _twice(x: float) -> float:
@@ -27,3 +28,27 @@ def test_first_use_from_several_threads_at_once():
     with ThreadPoolExecutor(4) as pool:
         list(pool.map(lambda _: jit_globals(ns, ("_twice",)), range(8)))
     assert ns["_twice"].py_func is _twice and ns["_twice"](2.0) == 4.0
+
+
+def test_a_cache_folder_of_other_sources_loses_its_kernels_once(tmp_path):
+    stale = tmp_path / "stale"
+    stale.mkdir()
+    for name in ("kernel._search-40.py311.nbi", "kernel._search-40.py311.1.nbc", "x.pyc"):
+        (stale / name).write_bytes(b"old")
+    (stale / "boustro-sources-0123456789abcdef.stamp").touch()
+    fresh_cache(stale)
+    stamp = f"boustro-sources-{sources_digest()}.stamp"
+    assert sorted(p.name for p in stale.iterdir()) == sorted([stamp, "x.pyc"])
+    # a folder already stamped with these sources keeps what numba wrote there
+    (stale / "kernel._search-40.py311.nbi").write_bytes(b"new")
+    _CHECKED.discard(stale)
+    fresh_cache(stale)
+    assert (stale / "kernel._search-40.py311.nbi").read_bytes() == b"new"
+
+
+def test_compiling_with_the_disk_cache_checks_its_folder():
+    compiled, on_disk = jit_cached(_twice)
+    if on_disk:  # the tests' folder is writable here; elsewhere numba compiles in memory
+        assert Path(compiled._cache.cache_path) in _CHECKED
+        assert any(Path(compiled._cache.cache_path).glob("boustro-sources-*.stamp"))
+    assert compiled(2.5) == 5.0

@@ -7,18 +7,60 @@ one process-wide lock and never compiles a compiled function again, so two threa
 module's first use at once (a ``functools.cache`` lets both in) get the same kernels.
 :func:`jit` uses numba's disk cache where a cache location is writable, and compiles in every
 process otherwise. numba is imported by the calls, never by ``import boustro``.
+
+numba keys a cached function to its own source file only: a kernel whose helpers live in
+another file would keep its old machine code after the helpers change (an upgrade, a checkout).
+So each cache folder carries a stamp of the package's sources (:func:`fresh_cache`): a folder
+whose stamp differs loses its cached kernels, once, and they are compiled again.
 """
 
 from __future__ import annotations
 
+import hashlib
 import threading
 from collections.abc import Iterable, MutableMapping
+from functools import cache
+from pathlib import Path
 from typing import Any
 
-__all__ = ["LOCK", "jit", "jit_cached", "jit_globals"]
+__all__ = ["LOCK", "fresh_cache", "jit", "jit_cached", "jit_globals", "sources_digest"]
 
 #: Held while helpers are swapped (re-entrant: a module's first use may reach another's).
 LOCK = threading.RLock()
+#: Cache folders checked by :func:`fresh_cache` in this process.
+_CHECKED: set[Path] = set()
+
+
+@cache
+def sources_digest() -> str:
+    """A digest of every Python source of the package (names and contents)."""
+    root = Path(__file__).parent
+    digest = hashlib.blake2b(digest_size=8)
+    for path in sorted(root.rglob("*.py")):
+        digest.update(path.relative_to(root).as_posix().encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def fresh_cache(folder: str | Path) -> None:
+    """Make numba's cache ``folder`` hold only kernels compiled from the package's present
+    sources: unless it carries this digest's stamp, its cached kernels (``*.nbi``, ``*.nbc``)
+    and old stamps are removed and the stamp written. Once per folder and process; a folder
+    that cannot be changed is left as it is."""
+    folder = Path(folder)
+    with LOCK:
+        if folder in _CHECKED:
+            return
+        _CHECKED.add(folder)
+        stamp = folder / f"boustro-sources-{sources_digest()}.stamp"
+        if stamp.exists() or not folder.is_dir():
+            return
+        try:
+            for old in [*folder.glob("*.nb[ic]"), *folder.glob("boustro-sources-*.stamp")]:
+                old.unlink(missing_ok=True)
+            stamp.touch()
+        except OSError:  # pragma: no cover - a folder numba writes but we may not change
+            return
 
 
 def jit_cached(function: Any, **options: Any) -> tuple[Any, bool]:
@@ -29,9 +71,11 @@ def jit_cached(function: Any, **options: Any) -> tuple[Any, bool]:
 
     function = getattr(function, "py_func", function)
     try:
-        return numba.njit(cache=True, **options)(function), True
+        compiled = numba.njit(cache=True, **options)(function)
     except RuntimeError:  # no writable cache location
         return numba.njit(**options)(function), False
+    fresh_cache(compiled._cache.cache_path)  # before the first call loads from it
+    return compiled, True
 
 
 def jit(function: Any, **options: Any) -> Any:

@@ -21,7 +21,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._jit import LOCK, jit_cached, jit_globals
+from ..._jit import LOCK, fresh_cache, jit_cached, jit_globals
 from ...models import MAX_CANDIDATES, grid_size
 from . import kernel_bounds, kernel_exact, kernel_pieces, kernel_search
 from .kernel_exact import _exact_grid, _finish
@@ -104,6 +104,7 @@ def first_compile() -> bool:
     folder = Path(kernel_search.__file__).parent / "__pycache__"
     if not os.access(folder if folder.exists() else folder.parent, os.W_OK):
         return False
+    fresh_cache(folder)  # kernels of other sources are dropped first: they compile again
     return not any(folder.glob("kernel_search._search-*.nbi"))
 
 
