@@ -26,9 +26,9 @@ from ..problem import _progress_bar
 from ..region_grid import evaluate_region_grid
 from ..result import OptimizeResult, canonical
 from .region_kernel import region_bounds, region_values, ring_starts
-from .search import DEFAULT_TOL, MAX_WORK, SEED_ANGLES, _check, _run, _Search, _weights
+from .search import DEFAULT_TOL, SEED_ANGLES, _check, _run, _Search, _weights
 
-__all__ = ["smith_bb_region"]
+__all__ = ["REGION_MAX_WORK", "smith_bb_region"]
 
 #: Segments at most this long (share of the normalised frame) are not counted, as
 #: :func:`~boustro.models.region.segment_moments` is called by ``region-grid``.
@@ -79,6 +79,15 @@ class _RegionSearch(_Search):
         return self.values(np.full(len(offsets), theta), np.asarray(offsets, dtype=np.float64))
 
 
+#: Work budget of a region's search (as :data:`~boustro.optimize.smith_bb.search.MAX_WORK`),
+#: a tenth of the convex one's: a region's box costs more, and where the bound stalls (lines
+#: along an edge beside a reflex corner or a hole: docs/global_optimum.md, section 10) more work
+#: does not close the gap. Measured (2026-11-27, load 4): the L-shape, the square with a hole and
+#: a slanted L at 10 m stop at the same gaps (2.3e-3, 3.2e-2, 7.2e-3) with 1e7 (0.16-0.20 s) as
+#: with 1e8 (0.36-1.64 s); 10 random concave areas with holes converge in 0.06-0.20 s with either.
+REGION_MAX_WORK = 1e7
+
+
 def _final(search: _RegionSearch) -> tuple[float, float, float]:
     """``(fitness, theta, d)``: the candidates scored by ``region-grid``'s exact evaluator."""
     cands = list(search.candidates)
@@ -122,7 +131,8 @@ def smith_bb_region(
     """The maximum of Eq. 1 over the segments of a region (shell and holes, concave or not)
     over every angle and offset, with a certified upper bound.
 
-    Args and budget as :func:`~boustro.optimize.smith_bb.smith_bb`; ``region`` in user units.
+    Args as :func:`~boustro.optimize.smith_bb.smith_bb` (the budget's default
+    :data:`REGION_MAX_WORK`); ``region`` in user units.
 
     Returns:
         :class:`OptimizeResult` with ``method="certified-bb"``, the offset from the shell's
@@ -141,7 +151,7 @@ def smith_bb_region(
     a, b = _weights(a, b, fitness)
     tol = _check("tol", tol, 1e-9)
     if max_work is None:
-        max_work = MAX_WORK * max(1.0, DEFAULT_TOL / tol)
+        max_work = REGION_MAX_WORK * max(1.0, DEFAULT_TOL / tol)
     max_work = _check("max_work", max_work, 0.0)
     n_angles = int(_check("n_angles", n_angles, 1))
     search = _RegionSearch(r, spacing, a, b)
