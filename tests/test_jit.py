@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -52,3 +55,16 @@ def test_compiling_with_the_disk_cache_checks_its_folder():
         assert Path(compiled._cache.cache_path) in _CHECKED
         assert any(Path(compiled._cache.cache_path).glob("boustro-sources-*.stamp"))
     assert compiled(2.5) == 5.0
+
+
+def test_numba_disabled_runs_the_python_functions():
+    code = (
+        "from boustro._jit import jit_cached\n"
+        "def twice(x):\n    return 2.0 * x\n"
+        "f, on_disk = jit_cached(twice)\n"
+        "print(f is twice, on_disk, f(2.0))\n"
+    )
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["True", "False", "4.0"]

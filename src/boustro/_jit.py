@@ -74,7 +74,10 @@ def jit_cached(function: Any, **options: Any) -> tuple[Any, bool]:
         compiled = numba.njit(cache=True, **options)(function)
     except RuntimeError:  # no writable cache location
         return numba.njit(**options)(function), False
-    fresh_cache(compiled._cache.cache_path)  # before the first call loads from it
+    cache = getattr(compiled, "_cache", None)  # None under NUMBA_DISABLE_JIT (a plain function)
+    if cache is None:
+        return compiled, False
+    fresh_cache(cache.cache_path)  # before the first call loads from it
     return compiled, True
 
 
