@@ -9,7 +9,8 @@ other plan (concave areas, holes, headlands) keeps its order; every connecting m
 passes becomes the vehicle's turn between their poses, unless the turn would enter a hole or
 leave ``field`` (then the routed move is kept and a note says how many). The turns' waypoints
 (kind ``turn``) are on the curve, densified so that no chord departs from it by more than
-``tolerance``; the statistics count the exact length of the curves.
+``tolerance``; the statistics count the exact length of the curves, and the length outside
+(``outside_length``) is measured again on the driven path, curves included.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from numpy.typing import NDArray
 from ..errors import InvalidParameterError
 from ..geometry.region import Region
 from ..vehicle import Turn, Vehicle, dubins_paths, lane_order, reeds_shepp_paths, turns_between
+from .inside import with_outside_length
 from .types import Plan, PlanStats
 
 __all__ = ["drive_vehicle", "order_lanes", "vehicle_stats"]
@@ -138,7 +140,11 @@ class _Allowed:
         return self.field is not None or self.forbidden is not None
 
     def leaves(self, points: NDArray[np.float64]) -> bool:
-        line = self.shapely.LineString(points)
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        if len(pts) < 2:  # a turn of length 0 (the next pass starts where this one ends)
+            line = self.shapely.Point(pts[0]) if len(pts) else self.shapely.Point()
+        else:
+            line = self.shapely.LineString(pts)
         if self.field is not None:
             return not bool(self.field.covers(line))
         return self.forbidden is not None and bool(self.forbidden.intersects(line))
@@ -257,7 +263,7 @@ def _turn_moves(
             f"{kept} of {len(moves)} moves between passes are straight or routed: the turn of "
             f"radius {ground.turn_radius:g} m would {what}"
         )
-    return dataclasses.replace(
+    driven = dataclasses.replace(
         plan,
         waypoints=np.asarray(points),
         kinds=tuple(kinds),
@@ -265,7 +271,10 @@ def _turn_moves(
         stats=_stats(plan, replaced, curves),
         notes=tuple(notes),
         vehicle=ground,
+        routed_moves=kept,
     )
+    area = field if field is not None else plan.polygon  # the curves included
+    return with_outside_length(driven, area)
 
 
 def _stats(plan: Plan, replaced: float, curves: float) -> PlanStats:
