@@ -10,7 +10,7 @@ import pytest
 import shapely
 
 from boustro.mission import plan_area
-from boustro.vehicle import Vehicle
+from boustro.vehicle import Vehicle, every_turn, turn_between
 
 from .test_keep_inside import _check_inside_and_covered, _independent_outside
 
@@ -77,6 +77,31 @@ def test_keep_inside_with_a_turn_radius_stays_inside_and_covers(shape, speed):
     assert summary["covered_share"] == pytest.approx(1.0, abs=1e-9)
     routed = summary["vehicle"]["routed_moves"]
     assert routed == plan.routed_moves
-    assert "turn" in plan.kinds  # the turns that fit are driven
     if routed:  # what was done is said
         assert any("routed" in n and "12 m" in n for n in summary["notes"])
+
+
+@pytest.mark.parametrize("shape", sorted(SHAPES))
+def test_keep_inside_turns_the_other_way_or_reverses_rather_than_leave(shape):
+    """A turn whose shortest path leaves the area takes a longer one that stays inside (a loop
+    the other way, reversing where the vehicle may): with reverse most turns are driven."""
+    forward, _ = _plan(shape, vehicle=R12, keep_inside=True)
+    reverse, area = _plan(shape, vehicle=Vehicle(turn_radius=12.0, reverse=True), keep_inside=True)
+    assert reverse.plan.routed_moves <= 1 < forward.plan.routed_moves
+    assert reverse.kinds.count("turn") > forward.kinds.count("turn")
+    assert any("longer path" in n for n in reverse.plan.notes)
+    assert _independent_outside(np.asarray(reverse.waypoints), area) == pytest.approx(0, abs=1e-6)
+    assert reverse.coverage.covered_share == pytest.approx(1.0, abs=1e-9)
+
+
+def test_every_turn_is_sorted_and_reaches_the_goal():
+    start, goal = (0.0, 0.0, 0.0), (0.0, 10.0, np.pi)
+    for vehicle in (R12, Vehicle(turn_radius=12.0, reverse=True)):
+        turns = every_turn(vehicle, start, goal)
+        lengths = [t.length for t in turns]
+        assert lengths == sorted(lengths) and len(turns) > 2
+        assert lengths[0] == pytest.approx(turn_between(vehicle, start, goal).length)
+        for t in turns:
+            assert np.allclose(t.points[-1], goal[:2])
+            steps = np.linalg.norm(np.diff(t.points, axis=0), axis=1)
+            assert steps.sum() == pytest.approx(t.length, rel=5e-3)  # chords of the curve

@@ -46,8 +46,8 @@ __all__ = [
     "clip_lanes",
     "inside_layout",
     "outside_length",
-    "with_outside_length",
     "shapely_area",
+    "with_outside_length",
 ]
 
 #: Patches (short passes over corners and thin parts) placed at most; more means the area has

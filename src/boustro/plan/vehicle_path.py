@@ -23,7 +23,15 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
 from ..geometry.region import Region
-from ..vehicle import Turn, Vehicle, dubins_paths, lane_order, reeds_shepp_paths, turns_between
+from ..vehicle import (
+    Turn,
+    Vehicle,
+    dubins_paths,
+    every_turn,
+    lane_order,
+    reeds_shepp_paths,
+    turns_between,
+)
 from .inside import with_outside_length
 from .types import Plan, PlanStats
 
@@ -233,10 +241,16 @@ def _turn_moves(
     kept = 0
     allowed = None if field is None else _Allowed(field, holes_only)
     starts, goals = _poses(plan, moves)
-    for (i, j), turn in zip(moves, turns_between(v, starts, goals, tol), strict=True):
+    longer = 0
+    for k, ((i, j), turn) in enumerate(
+        zip(moves, turns_between(v, starts, goals, tol), strict=True)
+    ):
         if allowed is not None and allowed.leaves(turn.points):
-            kept += 1
-            continue
+            inside = _turn_inside(v, starts[k], goals[k], tol, allowed)
+            if inside is None:
+                kept += 1
+                continue
+            turn, longer = inside, longer + 1
         turns[i] = (j, turn)
     points, kinds, lane = [], [], []
     replaced = 0.0
@@ -257,6 +271,12 @@ def _turn_moves(
             continue
         i += 1
     notes = list(plan.notes)
+    if longer:
+        notes.append(
+            f"{longer} of {len(moves)} turns take a longer path of radius "
+            f"{ground.turn_radius:g} m than the shortest, which would leave the field or enter "
+            "a hole"
+        )
     if kept:
         what = "enter a hole" if holes_only else "leave the field or enter a hole"
         notes.append(
@@ -275,6 +295,18 @@ def _turn_moves(
     )
     area = field if field is not None else plan.polygon  # the curves included
     return with_outside_length(driven, area)
+
+
+def _turn_inside(
+    v: Vehicle, start: tuple, goal: tuple, tol: float, allowed: _Allowed
+) -> Turn | None:
+    """The shortest of the vehicle's other turns between the poses (:func:`every_turn`: the
+    loop the other way, a bulb, with ``reverse`` a manoeuvre with reversing) that stays where
+    ``allowed``; ``None`` if none does."""
+    for turn in every_turn(v, start, goal, tol)[1:]:
+        if not allowed.leaves(turn.points):
+            return turn
+    return None
 
 
 def _stats(plan: Plan, replaced: float, curves: float) -> PlanStats:
