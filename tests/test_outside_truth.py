@@ -10,6 +10,7 @@ import pytest
 import shapely
 
 from boustro.mission import plan_area
+from boustro.mission.crosshatch import plan_crosshatch
 from boustro.vehicle import Vehicle, every_turn, turn_between
 
 from .test_keep_inside import _check_inside_and_covered, _independent_outside
@@ -105,3 +106,12 @@ def test_every_turn_is_sorted_and_reaches_the_goal():
             assert np.allclose(t.points[-1], goal[:2])
             steps = np.linalg.norm(np.diff(t.points, axis=0), axis=1)
             assert steps.sum() == pytest.approx(t.length, rel=5e-3)  # chords of the curve
+
+
+def test_crosshatch_measures_both_passes_and_the_move_between():
+    shell, holes = SHAPES["U"]
+    mission = plan_crosshatch(shell, 10.0, crs=None, holes=holes, vehicle=R12)
+    area = shapely.Polygon(shell, holes)
+    want = _independent_outside(np.asarray(mission.waypoints), area)
+    assert mission.stats.outside_length == pytest.approx(want, rel=1e-6, abs=1e-6)
+    assert want > 0
