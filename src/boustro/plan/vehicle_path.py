@@ -78,7 +78,10 @@ def vehicle_stats(
 ) -> PlanStats:
     """``drive_vehicle(plan, vehicle, tolerance=tolerance, field=field).stats`` without
     building its waypoints where no turn has to be tested against the field or holes (the
-    turns' lengths from their words): what a search needs of each layout's plan."""
+    turns' lengths from their words): what a search needs of each layout's plan. Without the
+    waypoints the length outside is not measured again: ``outside_length`` is then the
+    plan's own (:func:`drive_vehicle` and :func:`boustro.mission.plan_area` measure it on the
+    driven path)."""
     region = plan.region if field is None else field
     allowed = None if region is None else _Allowed(region, field is None)
     if vehicle.turn_radius == 0 or (allowed is not None and allowed.tests):
