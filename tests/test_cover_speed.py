@@ -4,6 +4,8 @@ the band kernel's sorts, turns found at once, compiled visibility and nearness."
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from boustro.geometry.region import Region, random_region
@@ -136,7 +138,9 @@ def test_vehicle_stats_are_the_driven_plans_stats():
         for vehicle in (Vehicle(turn_radius=6.0), Vehicle(turn_radius=4.0, reverse=True)):
             for field in (None, holed if plan.region is holed else None):
                 driven = drive_vehicle(plan, vehicle, field=field).stats
-                assert vehicle_stats(plan, vehicle, field=field) == driven
+                stats = vehicle_stats(plan, vehicle, field=field)
+                # all but the length outside, measured on the driven curves only
+                assert dataclasses.replace(stats, outside_length=driven.outside_length) == driven
                 assert driven.turn_length > 0 or field is not None  # all refused: outside
 
 

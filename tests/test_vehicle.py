@@ -286,7 +286,12 @@ def test_plan_area_with_a_vehicle_and_every_export(tmp_path):
     )
     base = plan_area(embedded_field(), 10.0, speed=4.0, altitude=30.0)
     s = mission.summary()
-    assert s["vehicle"] == {"turns": "dubins", "turn_radius_m": 6.0, "reverse": False}
+    assert s["vehicle"] == {
+        "turns": "dubins",
+        "turn_radius_m": 6.0,
+        "reverse": False,
+        "routed_moves": 0,
+    }
     assert s["turn_length_m"] > 0 and s["path_length_m"] > base.summary()["path_length_m"]
     assert s["duration_s"] == pytest.approx(s["path_length_m"] / 4.0)
     assert "turn" in mission.kinds and s["covered_share"] == pytest.approx(1.0, abs=1e-9)

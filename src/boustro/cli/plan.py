@@ -94,7 +94,10 @@ keeping inside (--keep-inside):
   lanes are cut at the boundary (or half a spacing inside it, whichever needs less driving),
   moves follow the inside, and boundary passes along the contour half a spacing inside the edge
   (plus short patches over corners and parts narrower than a spacing) cover what the cut lanes
-  leave; coverage is still checked with shapely on the area itself.
+  leave; coverage is still checked with shapely on the area itself. With --turn-radius a turn
+  whose shortest path would leave the area takes the shortest other one that stays inside (the
+  loop the other way, or with --reverse a manoeuvre with reversing), else the move stays the
+  routed one inside the area; --json counts those (vehicle.routed_moves) and notes say it.
 
 coverage:
   every transect covers the strip of width SPACING centred on it, and its segment spans the
@@ -346,8 +349,11 @@ def _add_path(p: argparse.ArgumentParser) -> None:
         "and boundary passes (the contour half a spacing inside the edge, short patches over "
         "corners and thin parts) cover what the lane ends leave, so coverage stays 100%%; "
         "exported as transects of pass 'boundary', waypoints of kind 'contour'. Without it, "
-        "outside_length_m (--json) is the length of the path outside the area or in a hole. "
-        "Run-ins and run-outs (--turnaround) end at the boundary. Not with --nadir-gap",
+        "outside_length_m (--json) is the length of the path flown (turn curves and headland "
+        "passes included) outside the area or in a hole. Run-ins and run-outs (--turnaround) "
+        "end at the boundary. With --turn-radius a turn that would leave takes the shortest "
+        "other turn that stays inside, else the routed move (vehicle.routed_moves in --json). "
+        "Not with --nadir-gap",
     )
     path.add_argument(
         "--sweep",

@@ -20,10 +20,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import InvalidParameterError, ProblemTooLargeError
+from ..geometry.region import Region
 from ..objectives import SmithFitness, objective_sign
 from ..optimize import optimize
 from ..optimize.fixed_angle import optimize_offset
 from ..plan import PlanStats
+from ..plan.inside import outside_length
 from .camera import with_camera
 from .defaults import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD
 from .map_back import angle_for_bearing
@@ -109,7 +111,7 @@ def join_passes(first: Mission, second: Mission) -> Mission:
         duration=None if s1.speed is None else path / s1.speed + turns * s1.turn_time,
         n_cells=s1.n_cells + s2.n_cells,
         hole_pass_length=s1.hole_pass_length + s2.hole_pass_length,
-        outside_length=s1.outside_length + s2.outside_length,
+        outside_length=_outside(first, p1.waypoints, p2.waypoints),
     )
 
     def both(a: Any, b: Any) -> Any:
@@ -140,6 +142,14 @@ def join_passes(first: Mission, second: Mission) -> Mission:
         passes=(first, second),
     )
     return with_camera(out, first.camera)
+
+
+def _outside(first: Mission, w1: np.ndarray, w2: np.ndarray) -> float:
+    """The length of both passes' path and the move between them outside the area or in a
+    hole, measured once on the whole path (ground units)."""
+    proj, area = first.projection, first.area
+    region = Region(proj.to_plan(area.ring), [proj.to_plan(h) for h in area.holes])
+    return outside_length(np.concatenate([w1, w2]), region) / first.plan.ground_scale
 
 
 def plan_crosshatch(

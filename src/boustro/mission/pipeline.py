@@ -28,6 +28,7 @@ from ..plan import (
     order_lanes,
     vehicle_stats,
 )
+from ..plan.inside import with_outside_length
 from ..sensors import SensorSpacing
 from ..vehicle import Vehicle
 from .camera import camera_trigger, with_camera
@@ -174,8 +175,11 @@ def plan_area(
     sensor = Sensor(*sensor_spacing(spacing))
     frame = project(area, sensor, hull_tolerance, decompose, start)
     field = None
+    whole = frame.region if frame.region is not None else Region(frame.surveyed)
     if passes:
         frame, field = _inner_frame(frame, passes)
+    # where the vehicle's turns must stay: the field with headlands or keep_inside
+    turns_in = field if field is not None or not keep_inside else whole
     angle = fixed if bearing is None or fixed is None else angle_for_bearing(frame, fixed)
     if _narrower_than_the_spacing(frame, sensor):
         # Nothing to optimise: the region planner lays one lane along the area's diameter.
@@ -207,8 +211,10 @@ def plan_area(
 
             def finish(plan: Plan) -> Plan:
                 if field is None and vehicle is not None:  # its statistics, no waypoints
-                    return dataclasses.replace(plan, stats=vehicle_stats(plan, vehicle))
-                return _drive(frame, Planned(plan, None, None), field, passes, vehicle, False).plan  # type: ignore[arg-type]
+                    stats = vehicle_stats(plan, vehicle, field=turns_in)
+                    return dataclasses.replace(plan, stats=stats)
+                empty = Planned(plan, None, None)  # type: ignore[arg-type]
+                return _drive(frame, empty, field, passes, vehicle, False, turns_in).plan
 
         skips = vehicle is not None and vehicle.turn_radius > 0  # every other lane possible
         planned = _plan_for_cost(frame, cost, decompose, sweep, settings, finish, skips)
@@ -216,7 +222,10 @@ def plan_area(
         planned = plan_convex(frame, **settings)
     else:
         planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
-    planned = _drive(frame, planned, field, passes, vehicle, check_coverage)
+    planned = _drive(frame, planned, field, passes, vehicle, check_coverage, turns_in)
+    # the length outside, measured once on the path flown (lanes, passes, moves, curves)
+    # against the whole area (not its hull, nor the inner field of a headland)
+    planned = planned._replace(plan=with_outside_length(planned.plan, whole))
     if keep_inside:  # planned on the area, not its hull: nothing reaches beyond it
         frame = frame._replace(depth=0.0)
     mission = map_back(frame, planned, altitude=altitude, turnaround=turnaround)
@@ -290,8 +299,10 @@ def _drive(
     passes: int,
     vehicle: Vehicle | None,
     check_coverage: bool,
+    turns_in: Region | None = None,
 ) -> Planned:
-    """The headland passes added around the planned inner field, then the vehicle's turns."""
+    """The headland passes added around the planned inner field, then the vehicle's turns
+    (kept inside ``turns_in`` where given: a turn that would leave it keeps the routed move)."""
     plan, cov = planned.plan, planned.coverage
     if field is not None:
         scale = frame.proj.scale_min
@@ -306,7 +317,7 @@ def _drive(
         )
         cov = coverage(plan, field) if check_coverage else None
     if vehicle is not None:
-        plan = drive_vehicle(plan, vehicle, field=field)
+        plan = drive_vehicle(plan, vehicle, field=turns_in)
     return Planned(plan, planned.optimum, cov)
 
 

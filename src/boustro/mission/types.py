@@ -186,6 +186,8 @@ class Mission:
                 "turns": vehicle.kind,
                 "turn_radius_m": vehicle.turn_radius,
                 "reverse": vehicle.reverse,
+                # moves kept straight or routed: the turn would leave the field or a hole
+                "routed_moves": self.plan.routed_moves,
             }
             out["turn_length_m"] = s.turn_length
         if self.plan.headland:

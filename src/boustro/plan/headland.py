@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError, InvalidPolygonError
 from ..geometry.region import Region
+from .inside import with_outside_length
 from .routing import Router
 from .types import Plan
 
@@ -190,7 +191,8 @@ def _rotate(ring: NDArray[np.float64], near: NDArray[np.float64]) -> NDArray[np.
 
 def add_headland(inner: Plan, field: Region, passes: int, *, spacing: float, reach: float) -> Plan:
     """``inner`` (a plan of :func:`inner_field`) followed by the headland passes, innermost
-    first, in one path inside ``field``; plan units. Statistics recomputed (ground units)."""
+    first, in one path inside ``field``; plan units. Statistics recomputed (ground units), the
+    length outside measured on the whole path against ``field``."""
     router = Router(field, reach=0.0)
     rings = headland_rings(field, spacing, passes)
     rings = [
@@ -240,7 +242,7 @@ def add_headland(inner: Plan, field: Region, passes: int, *, spacing: float, rea
         duration=duration,
         headland_length=headland_length / scale,
     )
-    return dataclasses.replace(
+    plan = dataclasses.replace(
         inner,
         polygon=field.shell,
         waypoints=w,
@@ -255,3 +257,4 @@ def add_headland(inner: Plan, field: Region, passes: int, *, spacing: float, rea
         region=field,
         headland=passes,
     )
+    return with_outside_length(plan, field)  # the whole path against the whole field

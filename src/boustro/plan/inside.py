@@ -24,6 +24,7 @@ Shapely is imported inside the functions (``import boustro.plan`` does not load 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -36,6 +37,7 @@ from .cells import _frame
 from .contour import _contour_passes, _lines, _pieces
 from .coverage import _aligned_boxes, _axes
 from .lanes import Lanes, _intervals_on_lines
+from .types import Plan
 
 __all__ = [
     "MARGINS",
@@ -45,6 +47,7 @@ __all__ = [
     "inside_layout",
     "outside_length",
     "shapely_area",
+    "with_outside_length",
 ]
 
 #: Patches (short passes over corners and thin parts) placed at most; more means the area has
@@ -319,3 +322,12 @@ def outside_length(waypoints: ArrayLike, area: Region | Polygon | ArrayLike) -> 
     lines = shapely.linestrings(segs[keep])
     inside = shapely.length(shapely.intersection(lines, target))
     return float(np.sum(np.maximum(lengths[keep] - inside, 0.0)))
+
+
+def with_outside_length(plan: Plan, area: Region | Polygon | ArrayLike) -> Plan:
+    """``plan`` with its ``outside_length`` measured on its whole path (every waypoint, the
+    turns' curves included) against ``area`` (plan frame; its holes count as outside), in
+    ground units."""
+    outside = outside_length(plan.waypoints, area) / plan.ground_scale
+    stats = dataclasses.replace(plan.stats, outside_length=outside)
+    return dataclasses.replace(plan, stats=stats)

@@ -146,6 +146,9 @@ class Plan:
         order_solver: how the order of the passes was solved (``"exact"``, ``"or-tools"``,
             ``"heuristic"``: :func:`boustro.plan.cell_order.solve_order`), or ``None``: the
             default greedy + 2-opt of :func:`boustro.plan.plan_region` and the convex planner.
+        routed_moves: with a vehicle, the connecting moves kept straight or routed instead of
+            the vehicle's turn, because the turn would leave the field or enter a hole
+            (:func:`boustro.plan.drive_vehicle`).
     """
 
     polygon: Polygon
@@ -173,6 +176,7 @@ class Plan:
     headland: int = 0
     keep_inside: bool = False
     order_solver: str | None = None
+    routed_moves: int = 0
 
     @property
     def n_transects(self) -> int:

@@ -9,7 +9,8 @@ other plan (concave areas, holes, headlands) keeps its order; every connecting m
 passes becomes the vehicle's turn between their poses, unless the turn would enter a hole or
 leave ``field`` (then the routed move is kept and a note says how many). The turns' waypoints
 (kind ``turn``) are on the curve, densified so that no chord departs from it by more than
-``tolerance``; the statistics count the exact length of the curves.
+``tolerance``; the statistics count the exact length of the curves, and the length outside
+(``outside_length``) is measured again on the driven path, curves included.
 """
 
 from __future__ import annotations
@@ -22,7 +23,16 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
 from ..geometry.region import Region
-from ..vehicle import Turn, Vehicle, dubins_paths, lane_order, reeds_shepp_paths, turns_between
+from ..vehicle import (
+    Turn,
+    Vehicle,
+    dubins_paths,
+    every_turn,
+    lane_order,
+    reeds_shepp_paths,
+    turns_between,
+)
+from .inside import with_outside_length
 from .types import Plan, PlanStats
 
 __all__ = ["drive_vehicle", "order_lanes", "vehicle_stats"]
@@ -68,7 +78,10 @@ def vehicle_stats(
 ) -> PlanStats:
     """``drive_vehicle(plan, vehicle, tolerance=tolerance, field=field).stats`` without
     building its waypoints where no turn has to be tested against the field or holes (the
-    turns' lengths from their words): what a search needs of each layout's plan."""
+    turns' lengths from their words): what a search needs of each layout's plan. Without the
+    waypoints the length outside is not measured again: ``outside_length`` is then the
+    plan's own (:func:`drive_vehicle` and :func:`boustro.mission.plan_area` measure it on the
+    driven path)."""
     region = plan.region if field is None else field
     allowed = None if region is None else _Allowed(region, field is None)
     if vehicle.turn_radius == 0 or (allowed is not None and allowed.tests):
@@ -138,7 +151,11 @@ class _Allowed:
         return self.field is not None or self.forbidden is not None
 
     def leaves(self, points: NDArray[np.float64]) -> bool:
-        line = self.shapely.LineString(points)
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        if len(pts) < 2:  # a turn of length 0 (the next pass starts where this one ends)
+            line = self.shapely.Point(pts[0]) if len(pts) else self.shapely.Point()
+        else:
+            line = self.shapely.LineString(pts)
         if self.field is not None:
             return not bool(self.field.covers(line))
         return self.forbidden is not None and bool(self.forbidden.intersects(line))
@@ -227,10 +244,16 @@ def _turn_moves(
     kept = 0
     allowed = None if field is None else _Allowed(field, holes_only)
     starts, goals = _poses(plan, moves)
-    for (i, j), turn in zip(moves, turns_between(v, starts, goals, tol), strict=True):
+    longer = 0
+    for k, ((i, j), turn) in enumerate(
+        zip(moves, turns_between(v, starts, goals, tol), strict=True)
+    ):
         if allowed is not None and allowed.leaves(turn.points):
-            kept += 1
-            continue
+            inside = _turn_inside(v, starts[k], goals[k], tol, allowed)
+            if inside is None:
+                kept += 1
+                continue
+            turn, longer = inside, longer + 1
         turns[i] = (j, turn)
     points, kinds, lane = [], [], []
     replaced = 0.0
@@ -251,13 +274,19 @@ def _turn_moves(
             continue
         i += 1
     notes = list(plan.notes)
+    if longer:
+        notes.append(
+            f"{longer} of {len(moves)} turns take a longer path of radius "
+            f"{ground.turn_radius:g} m than the shortest, which would leave the field or enter "
+            "a hole"
+        )
     if kept:
         what = "enter a hole" if holes_only else "leave the field or enter a hole"
         notes.append(
             f"{kept} of {len(moves)} moves between passes are straight or routed: the turn of "
             f"radius {ground.turn_radius:g} m would {what}"
         )
-    return dataclasses.replace(
+    driven = dataclasses.replace(
         plan,
         waypoints=np.asarray(points),
         kinds=tuple(kinds),
@@ -265,7 +294,22 @@ def _turn_moves(
         stats=_stats(plan, replaced, curves),
         notes=tuple(notes),
         vehicle=ground,
+        routed_moves=kept,
     )
+    area = field if field is not None else plan.polygon  # the curves included
+    return with_outside_length(driven, area)
+
+
+def _turn_inside(
+    v: Vehicle, start: tuple, goal: tuple, tol: float, allowed: _Allowed
+) -> Turn | None:
+    """The shortest of the vehicle's other turns between the poses (:func:`every_turn`: the
+    loop the other way, a bulb, with ``reverse`` a manoeuvre with reversing) that stays where
+    ``allowed``; ``None`` if none does."""
+    for turn in every_turn(v, start, goal, tol)[1:]:
+        if not allowed.leaves(turn.points):
+            return turn
+    return None
 
 
 def _stats(plan: Plan, replaced: float, curves: float) -> PlanStats:

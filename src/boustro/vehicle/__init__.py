@@ -6,6 +6,7 @@ from .model import Vehicle
 from .reeds_shepp import reeds_shepp_length, reeds_shepp_path, reeds_shepp_paths, reeds_shepp_words
 from .turns import (
     Turn,
+    every_turn,
     lane_order,
     pose_length,
     skip_order,
@@ -25,6 +26,7 @@ __all__ = [
     "dubins_paths",
     "dubins_words",
     "end_pose",
+    "every_turn",
     "lane_order",
     "pose_length",
     "reeds_shepp_length",

@@ -18,12 +18,18 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .curves import Word, sample_word
-from .dubins import dubins_length, dubins_path, dubins_paths
+from .dubins import DUBINS_WORDS, _local, dubins_length, dubins_path, dubins_paths, dubins_words
 from .model import Vehicle
-from .reeds_shepp import reeds_shepp_length, reeds_shepp_path, reeds_shepp_paths
+from .reeds_shepp import (
+    reeds_shepp_length,
+    reeds_shepp_path,
+    reeds_shepp_paths,
+    reeds_shepp_words,
+)
 
 __all__ = [
     "Turn",
+    "every_turn",
     "lane_order",
     "pose_length",
     "skip_order",
@@ -117,6 +123,41 @@ def turns_between(
         poses, gear = sample_word(a, word, vehicle.turn_radius, tolerance)
         poses[-1] = b
         out.append(Turn(poses[:, :2], poses[:, 2], gear, word.length, word.letters))
+    return out
+
+
+def every_turn(
+    vehicle: Vehicle, start: ArrayLike, goal: ArrayLike, tolerance: float = 0.05
+) -> list[Turn]:
+    """Every turn of the vehicle from pose ``start`` to pose ``goal``, shortest first: the six
+    Dubins words that exist (forward only) or the Reeds-Shepp candidates (with ``reverse``),
+    each densified as in :func:`turn_between`; the first is :func:`turn_between`'s length.
+    What a planner tries when the shortest turn leaves the field (a longer loop the other way,
+    or a manoeuvre with reversing, may stay inside)."""
+    s = np.asarray(start, dtype=np.float64)
+    g = np.asarray(goal, dtype=np.float64)
+    r = vehicle.turn_radius
+    if r == 0:
+        return [turn_between(vehicle, s, g, tolerance)]
+    x, y, phi = _local(s, g, r)
+    if vehicle.reverse:
+        found = [(w, np.asarray(v, dtype=np.float64)) for w, v in reeds_shepp_words(x, y, phi)]
+    else:
+        words = dubins_words(x, y, phi)
+        found = [(w, np.asarray(words[w], dtype=np.float64)) for w in DUBINS_WORDS]
+    exists = [(float(np.sum(np.abs(v))), w, v) for w, v in found if np.all(np.isfinite(v))]
+    out, seen = [], set()
+    for total, letters, v in sorted(exists, key=lambda e: e[0]):
+        key = (letters, tuple(np.round(v, 9)))
+        if key in seen:  # the same word from two of the Reeds-Shepp candidates
+            continue
+        seen.add(key)
+        word = Word(letters, tuple(float(e) for e in v), r * total)
+        poses, gear = sample_word(s, word, r, tolerance)
+        if np.linalg.norm(poses[-1, :2] - g[:2]) > 1e-6 * max(r, 1.0):  # rounding: not a path
+            continue
+        poses[-1] = g
+        out.append(Turn(poses[:, :2], poses[:, 2], gear, word.length, letters))
     return out
 
 
