@@ -137,21 +137,14 @@ def _random_passes(rng, n: int) -> list[_Pass]:
 
 
 def _brute(passes, start, force_start: bool) -> float:
-    """The least cost over every order and every option of every pass."""
+    """The least cost over every order and every option of every pass; with ``force_start``
+    the approach from ``start`` to the first entry counts."""
     best = math.inf
-    nearest = None
-    if force_start:
-        entries = [(k, j) for k, p in enumerate(passes) for j in range(len(p.options))]
-        nearest = min(
-            entries, key=lambda kj: np.linalg.norm(passes[kj[0]].options[kj[1]][0] - start)
-        )
     for order in itertools.permutations(range(len(passes))):
-        if nearest is not None and order[0] != nearest[0]:
-            continue
         for choice in itertools.product(*(range(len(passes[k].options)) for k in order)):
-            if nearest is not None and choice[0] != nearest[1]:
-                continue
-            total = passes[order[0]].options[choice[0]][3]
+            entry, _, _, total = passes[order[0]].options[choice[0]]
+            if force_start:
+                total += float(np.linalg.norm(entry - start))
             for (k0, c0), (k1, c1) in itertools.pairwise(zip(order, choice, strict=True)):
                 exit_ = passes[k0].options[c0][1]
                 entry, _, _, length = passes[k1].options[c1]
@@ -189,7 +182,7 @@ def test_many_passes_use_or_tools_no_worse_than_greedy():
 
 
 def test_without_or_tools_the_greedy_order_with_a_note(monkeypatch):
-    monkeypatch.setattr(cell_order, "_ortools", lambda pb: None)
+    monkeypatch.setattr(cell_order, "_ortools", lambda pb: (None, False))
     rng = np.random.default_rng(3)
     passes = _random_passes(rng, EXACT_PASSES + 2)
     router = router_for(Region(Polygon([(-10, -10), (110, -10), (110, 110), (-10, 110)])), 0.0)
@@ -238,3 +231,61 @@ def test_fewest_transects_objective_decomposes_the_ring():
 
     m = plan_area(RING, 1.0, crs=None, holes=[RING_HOLE], fitness=FewestTransects())
     assert m.stats.n_transects == 4 and m.summary()["cell_order"] == "exact"
+
+
+SLANT_L = [(0, 0), (100, 0), (90, 30), (30, 30), (30, 100), (0, 100)]
+
+
+def test_keep_inside_cells_searched_keeping_inside(monkeypatch):
+    """The cells' search plans them with keep_inside (the reviewer's slanted L: 211.26 s flown
+    when the cells were searched without it), and the flown plan keeps inside and covers."""
+    from boustro.mission import decomposed
+
+    seen = []
+    real = decomposed.cover_optimum
+
+    def spy(*args, **kw):
+        seen.append(kw.get("keep_inside"))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(decomposed, "cover_optimum", spy)
+    kw = dict(crs=None, speed=SPEED, turn_time=TURN, keep_inside=True, decompose=True)
+    m = plan_area(SLANT_L, 10.0, **kw)
+    assert True in seen  # the cells' search with keep_inside (and without: the better kept)
+    assert m.optimum.method == "decomposed-cover"
+    assert m.stats.duration <= 211.26 - 0.4
+    area = shapely.Polygon(SLANT_L)
+    assert area.buffer(1e-6).contains(shapely.LineString(m.plan.waypoints))
+    assert _covered(m, area) >= 1 - 1e-9
+    assert m.stats.duration == pytest.approx(_recomputed_time(m), rel=1e-9)
+
+
+def _comb(teeth: int) -> list[tuple[float, float]]:
+    pts = [(0.0, 0.0), (20.0 * teeth, 0.0)]
+    for i in reversed(range(teeth)):
+        x0 = 20.0 * i
+        pts += [(x0 + 20, 10), (x0 + 20, 60), (x0 + 10, 60), (x0 + 10, 10)]
+    return [*pts[:2], *pts[3:], (0.0, 10.0)]
+
+
+def test_decompose_without_a_candidate_plans_the_sweep_cells(monkeypatch):
+    """A comb of 13 teeth (14 cells > MAX_CELLS): --decompose never plans one grid, and the
+    decomposition search runs once."""
+    from boustro.mission import decomposed, pipeline
+
+    calls = []
+    real = pipeline.plan_decomposed
+
+    def spy(*args, **kw):
+        calls.append(1)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(pipeline, "plan_decomposed", spy)
+    comb = _comb(13)
+    assert shapely.Polygon(comb).is_valid
+    m = plan_area(comb, 5.0, crs=None, speed=SPEED, turn_time=TURN, decompose=True)
+    assert len(calls) == 1
+    assert len(m.plan.cells) > decomposed.MAX_CELLS
+    assert m.optimum.method != "certified-cover"
+    assert any("no decomposition of at most" in n for n in m.plan.notes)
+    assert _covered(m, shapely.Polygon(comb)) >= 1 - 1e-9

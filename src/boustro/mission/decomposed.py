@@ -66,8 +66,17 @@ class _Candidate(NamedTuple):
 class _Search:
     """The certified search of each cell, done once per cell (cached by its vertices)."""
 
-    def __init__(self, frame: Frame, cost: CoverCost, layout: str, options: dict[str, Any]):
+    def __init__(
+        self,
+        frame: Frame,
+        cost: CoverCost,
+        layout: str,
+        options: dict[str, Any],
+        keep_inside: bool = False,
+        finish: Callable[[Plan], Plan] | None = None,
+    ):
         self.cost, self.layout, self.options = cost, layout, options
+        self.keep_inside, self.finish = keep_inside, finish
         self.s = frame.sensor.spacing * frame.proj.scale_min
         self.reach = frame.sensor.reach * frame.proj.scale_min
         self.cache: dict[bytes, OptimizeResult | None] = {}
@@ -78,11 +87,14 @@ class _Search:
         lay: Layout = "chords" if self.layout == "chords" else "guaranteed"
         return plan_region(
             cell, self.s, decompose_area=False, angle=angle, offset=offset, layout=lay,
-            **self.options,
+            keep_inside=self.keep_inside, **self.options,
         )  # fmt: skip
 
     def value(self, cell: Region, angle: float, offset: float) -> float:
-        st = self.plan(cell, angle, offset).stats
+        """The cost of the cell's plan as it is flown alone: with ``keep_inside`` as the final
+        plan lays it, the vehicle's turns added (``finish``, where given: a cell's own)."""
+        plan = self.plan(cell, angle, offset)
+        st = (plan if self.finish is None else self.finish(plan)).stats
         return self.cost.of(st.path_length * self.options["ground_scale"], st.n_turns)
 
     def model(self, cell: Region) -> tuple[float, float, float]:
@@ -139,12 +151,13 @@ class _Search:
         try:
             opt = cover_optimum(
                 cell, self.s, self.cost, lambda a, d: self.value(cell, a, d),
-                reach=self.reach, boustrophedon=False,
+                reach=self.reach, boustrophedon=False, keep_inside=self.keep_inside,
             )  # fmt: skip
         except (NoTransectError, InvalidPolygonError, InvalidParameterError):
             self.cache[key] = None
             return None
         opt = self._centred(cell, opt)
+        opt = dataclasses.replace(opt, info={**opt.info, "keep_inside": self.keep_inside})
         self.cache[key] = opt
         return opt
 
@@ -300,6 +313,7 @@ def plan_decomposed(
     keep_inside: bool = False,
     sweep: float | None = None,
     finish: Callable[[Plan], Plan] | None = None,
+    cell_finish: Callable[[Plan], Plan] | None = None,
     beat: float | None = None,
     **_: Any,
 ) -> Planned | None:
@@ -307,40 +321,51 @@ def plan_decomposed(
     decomposition has more than one cell (or, with ``beat``, none whose modelled cost is below
     it: the cost of the one-grid plan). Its optimum's ``info``: ``cells``, ``candidates``,
     ``searches``, ``decomposition`` (which candidate), ``cell_order`` (the order's solver),
-    ``cells_certified``; its cells carry their certificates."""
+    ``cells_certified``, ``cells_keep_inside`` (whether the kept cells' searches planned them
+    with ``keep_inside``); its cells carry their certificates.
+
+    Each cell's search costs the cell's own plan (``cell_finish``: the vehicle's turns; never
+    headland passes). With ``keep_inside`` a cell alone is planned keeping inside the cell (its
+    cut edges get boundary passes the whole plan does not fly), so the cells are searched both
+    with and without it and the whole plan (always keeping inside) of least flown cost is kept.
+    """
     t0 = time.perf_counter()
     region = frame.region
     assert region is not None
     options = _path_options(frame, turnaround, speed, turn_time)
-    search = _Search(frame, cost, layout, options)
-    candidates = _candidates(region, search, sweep)
+    searches = [_Search(frame, cost, layout, options, keep_inside, cell_finish)]
+    if keep_inside:
+        searches.append(_Search(frame, cost, layout, options, False, cell_finish))
+        searches[1].models = searches[0].models  # the model does not depend on it
+    candidates = _candidates(region, searches[0], sweep)
     if beat is not None:  # the model leaves out moves between cells: hopeless if above
         candidates = [c for c in candidates if c.estimate < beat]
-    best: tuple[float, Plan, _Candidate, list[OptimizeResult]] | None = None
+    best: tuple[float, Plan, _Candidate, list[OptimizeResult], bool] | None = None
     lay: Layout = "chords" if layout == "chords" else "guaranteed"
     for cand in candidates[:PLANNED]:
-        found = [search.optimum(c) for c in cand.cells]
-        optima = [o for o in found if o is not None]
-        if len(optima) < len(found):
-            continue
-        plan = plan_region(
-            region, search.s, layout=lay, cells=list(zip(cand.cells, optima, strict=True)),
-            order="auto", keep_inside=keep_inside,
-            start=frame.start if frame.given_start else None, **options,
-        )  # fmt: skip
-        value = flown_cost(cost, plan, frame, finish)
-        if best is None or value < best[0]:
-            best = (value, plan, cand, optima)
+        for search in searches:
+            found = [search.optimum(c) for c in cand.cells]
+            optima = [o for o in found if o is not None]
+            if len(optima) < len(found):
+                continue
+            plan = plan_region(
+                region, search.s, layout=lay, cells=list(zip(cand.cells, optima, strict=True)),
+                order="auto", keep_inside=keep_inside,
+                start=frame.start if frame.given_start else None, **options,
+            )  # fmt: skip
+            value = flown_cost(cost, plan, frame, finish)
+            if best is None or value < best[0]:
+                best = (value, plan, cand, optima, search.keep_inside)
     if best is None:
         return None
-    value, plan, cand, optima = best
+    value, plan, cand, optima, cells_inside = best
     certified = sum(bool(o.info.get("certified")) for o in optima)
     main = max(range(len(cand.cells)), key=lambda k: cand.cells[k].area)
     optimum = OptimizeResult(
         angle=optima[main].angle,
         offset=optima[main].offset,
         fitness=value,
-        spacing=search.s,
+        spacing=searches[0].s,
         method="decomposed-cover",
         evaluations=int(sum(o.evaluations for o in optima)),
         seconds=time.perf_counter() - t0,
@@ -352,7 +377,8 @@ def plan_decomposed(
             "cells_certified": certified,
             "decomposition": cand.name,
             "candidates": len(candidates),
-            "searches": search.searches,
+            "searches": sum(search.searches for search in searches),
+            "cells_keep_inside": cells_inside,
             "cell_order": plan.order_solver,
         },
     )
