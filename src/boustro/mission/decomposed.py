@@ -38,7 +38,14 @@ from .cover import flown_cost
 from .project import Frame
 from .steps import Planned, _path_options
 
-__all__ = ["MAX_CELLS", "MAX_SEARCHES", "PLANNED", "plan_decomposed"]
+__all__ = [
+    "LARGE_EDGES",
+    "MAX_CELLS",
+    "MAX_SEARCHES",
+    "MAX_UNION_EDGES",
+    "PLANNED",
+    "plan_decomposed",
+]
 
 #: Decompositions with more cells are not candidates (the exact order takes 12 passes).
 MAX_CELLS = 12
@@ -47,6 +54,12 @@ MAX_SEARCHES = 16
 #: Candidate decompositions whose cells are certified and planned in full (their passes
 #: ordered), best modelled cost first.
 PLANNED = 2
+#: Edges of the unions of cells traced to try merges, per plan at most (a count, not a time:
+#: the same plan on any load); past it the candidates keep the merges found so far.
+MAX_UNION_EDGES = 8000
+#: Outer and hole edges of an area beyond which only the best candidate is planned (its cells'
+#: searches are the work: a large area's cells have many edges).
+LARGE_EDGES = 120
 #: Lane directions of the model of a cell's cost (every 5 degrees) and offsets per spacing.
 MODEL_ANGLES = 36
 MODEL_OFFSETS = 4
@@ -82,6 +95,7 @@ class _Search:
         self.cache: dict[bytes, OptimizeResult | None] = {}
         self.models: dict[bytes, tuple[float, float, float]] = {}
         self.searches = 0
+        self.union_edges = 0
 
     def plan(self, cell: Region, angle: float, offset: float) -> Plan:
         lay: Layout = "chords" if self.layout == "chords" else "guaranteed"
@@ -101,19 +115,15 @@ class _Search:
         """The least modelled cost of the cell and its layout ``(cost, angle, offset)``: its
         lines' segments (:func:`boustro.models.region.segment_moments`) as lanes, a spacing's
         move and a turn between consecutive ones, over lane directions every 5 degrees and the
-        cell's edge directions, 4 offsets each. Cheap (no plan): it ranks the candidates; what
-        is kept is planned. With the guaranteed layout the lanes are counted as the lines whose
-        band meets the cell, the length scaled to match."""
+        directions of its :data:`CENTRED_ANGLES` longest edges, 4 offsets each. Cheap (no
+        plan): it ranks the candidates; what is kept is planned. With the guaranteed layout the
+        lanes are counted as the lines whose band meets the cell, the length scaled to match."""
         key = _key(cell)
         if key in self.models:
             return self.models[key]
         v = cell.shell.vertices
-        e = np.roll(v, -1, axis=0) - v
-        angles = (
-            np.concatenate(
-                [np.arange(MODEL_ANGLES) * (math.pi / MODEL_ANGLES), np.arctan2(e[:, 1], e[:, 0])]
-            )
-            % math.pi
+        angles = np.concatenate(
+            [np.arange(MODEL_ANGLES) * (math.pi / MODEL_ANGLES), _edge_angles(cell)]
         )
         base = centred_offsets(cell, angles, self.s, self.reach)
         a = np.repeat(angles, MODEL_OFFSETS)
@@ -167,11 +177,7 @@ class _Search:
         directions: a strip one spacing wide is covered by one lane at one offset only, which
         the search's plans at box centres never hit. The search's lower bound holds for every
         layout, so the certificate stays valid, its gap only shrinks."""
-        v = cell.shell.vertices
-        e = np.roll(v, -1, axis=0) - v
-        angles = np.unique(np.round(np.arctan2(e[:, 1], e[:, 0]) % math.pi, 12))
-        order = np.argsort(-np.array([_longest(e, a) for a in angles]))[:CENTRED_ANGLES]
-        angles = angles[order]
+        angles = _edge_angles(cell)
         offsets = centred_offsets(cell, angles, self.s, self.reach)
         best = (opt.fitness, opt.angle, opt.offset)
         for a, d in zip(angles, offsets, strict=True):
@@ -196,10 +202,16 @@ def _key(cell: Region) -> bytes:
     return np.round(cell.shell.vertices, 9).tobytes() + bytes(len(cell.holes))
 
 
-def _longest(e: np.ndarray, angle: float) -> float:
-    """The length of the longest edge of direction ``angle``."""
-    a = np.arctan2(e[:, 1], e[:, 0]) % math.pi
-    return float(np.hypot(e[:, 0], e[:, 1])[np.abs(a - angle) < 1e-9].max(initial=0.0))
+def _edge_angles(cell: Region) -> np.ndarray:
+    """The :data:`CENTRED_ANGLES` distinct directions (mod pi) of the cell's outer edges whose
+    longest edge is longest, longest first."""
+    v = cell.shell.vertices
+    e = np.roll(v, -1, axis=0) - v
+    a = np.round(np.arctan2(e[:, 1], e[:, 0]) % math.pi, 12)
+    angles, inverse = np.unique(a, return_inverse=True)
+    longest = np.zeros(len(angles))
+    np.maximum.at(longest, inverse.ravel(), np.hypot(e[:, 0], e[:, 1]))
+    return angles[np.argsort(-longest, kind="stable")[:CENTRED_ANGLES]]
 
 
 def _sweeps(region: Region, sweep: float | None) -> list[float]:
@@ -257,6 +269,23 @@ def _merged(
     regions, values = list(dec.cells), list(models)
     turn = search.cost.per_turn
     merged = False
+    unions: dict[tuple[int, ...], tuple[Region, tuple[float, float, float]] | None] = {}
+
+    def union_of(group: list[int]) -> tuple[Region, tuple[float, float, float]] | None:
+        """The union of the cells and its model, once per set of cells (``None``: invalid)."""
+        key = tuple(sorted(group))
+        if key not in unions:
+            if search.union_edges >= MAX_UNION_EDGES:
+                return None
+            search.union_edges += sum(len(dec.cells[k].edges) for k in key)
+            try:
+                union = dec.union(group, diameter)
+            except InvalidPolygonError:
+                unions[key] = None
+            else:
+                unions[key] = (union, search.model(union))
+        return unions[key]
+
     while len(groups) > 2:
         best: tuple[float, int, int, Region, tuple[float, float, float]] | None = None
         for i in range(len(groups)):
@@ -266,11 +295,10 @@ def _merged(
                 gap = abs(values[i][1] - values[j][1]) % math.pi
                 if min(gap, math.pi - gap) >= MERGE_ANGLE:
                     continue
-                try:
-                    union = dec.union(groups[i] + groups[j], diameter)
-                except InvalidPolygonError:
+                found = union_of(groups[i] + groups[j])
+                if found is None:
                     continue
-                model = search.model(union)
+                union, model = found
                 saving = values[i][0] + values[j][0] + turn - model[0]
                 if saving >= 0 and (best is None or saving > best[0]):
                     best = (saving, i, j, union, model)
@@ -342,7 +370,8 @@ def plan_decomposed(
         candidates = [c for c in candidates if c.estimate < beat]
     best: tuple[float, Plan, _Candidate, list[OptimizeResult], bool] | None = None
     lay: Layout = "chords" if layout == "chords" else "guaranteed"
-    for cand in candidates[:PLANNED]:
+    planned = PLANNED if len(region.edges) <= LARGE_EDGES else 1
+    for cand in candidates[:planned]:
         for search in searches:
             found = [search.optimum(c) for c in cand.cells]
             optima = [o for o in found if o is not None]
