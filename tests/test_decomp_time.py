@@ -24,6 +24,7 @@ from boustro.plan.cell_order import EXACT_PASSES, solve_order, tour_cost
 from boustro.plan.region import plan_region
 from boustro.plan.routing import router_for
 from boustro.plan.tour import _Pass
+from boustro.vehicle import Vehicle
 
 from .conftest import run_cli
 
@@ -33,15 +34,34 @@ L_SHAPE = [(0, 0), (100, 0), (100, 30), (30, 30), (30, 100), (0, 100)]
 SPEED, TURN = 5.0, 10.0
 
 
+def _passes(plan) -> int:
+    """The passes the plan flies, from its transects: every lane, and every chain of boundary
+    or hole edges (an edge that starts where the previous one of its role ends continues its
+    pass; a connecting move begins a new one)."""
+    roles, t = plan.role(), plan.transects
+    return sum(
+        1
+        for k in range(len(t))
+        if roles[k] == "lane"
+        or k == 0
+        or roles[k - 1] != roles[k]
+        or not np.allclose(t[k][0], t[k - 1][1], rtol=0, atol=1e-9)
+    )
+
+
 def _recomputed_time(mission) -> float:
-    """Path length of the waypoints / speed + (passes - 1) x turn time, from the waypoints."""
+    """Path length of the waypoints / speed + (passes - 1) x turn time (:func:`_passes`)."""
     w = mission.plan.waypoints
     length = float(np.linalg.norm(np.diff(w, axis=0), axis=1).sum())
-    kinds = list(mission.plan.kinds)
-    passes = kinds.count("start") + sum(
+    return length / SPEED + (_passes(mission.plan) - 1) * TURN
+
+
+def _contour_runs(plan) -> int:
+    """Starts of lanes and runs of contour waypoints (the count this file used before)."""
+    kinds = list(plan.kinds)
+    return kinds.count("start") + sum(
         1 for a, b in itertools.pairwise(["", *kinds]) if b == "contour" and a != "contour"
     )
-    return length / SPEED + (passes - 1) * TURN
 
 
 def _covered(mission, area: shapely.Polygon) -> float:
@@ -289,3 +309,52 @@ def test_decompose_without_a_candidate_plans_the_sweep_cells(monkeypatch):
     assert m.optimum.method != "certified-cover"
     assert any("no decomposition of at most" in n for n in m.plan.notes)
     assert _covered(m, shapely.Polygon(comb)) >= 1 - 1e-9
+
+
+#: A random concave field with a hole (spacing 20) whose keep-inside decomposed plan flies two
+#: boundary passes one after the other: their contour waypoints make one run.
+ADJACENT = (
+    [(198.1, 110.3), (147.6, 107.2), (157.6, 172.9), (51.8, 80.9), (26.0, 68.9), (91.4, 23.8),
+     (102.6, 38.4), (120.0, 56.8), (148.9, 86.2)],
+    [[(134.7, 96.7), (112.7, 109.3), (112.9, 84.0)]],
+)  # fmt: skip
+
+
+def test_recomputed_time_counts_the_passes_flown():
+    shell, holes = ADJACENT
+    kw = dict(crs=None, holes=holes, speed=SPEED, turn_time=TURN, keep_inside=True)
+    m = plan_area(shell, 20.0, decompose=True, **kw)
+    assert _passes(m.plan) == m.stats.n_turns + 1
+    assert _contour_runs(m.plan) < _passes(m.plan)  # what the old count missed
+    assert m.stats.duration == pytest.approx(_recomputed_time(m), rel=1e-9)
+    area = shapely.Polygon(shell, holes)
+    assert area.buffer(1e-6).contains(shapely.LineString(m.plan.waypoints))
+    assert _covered(m, area) >= 1 - 1e-9
+
+
+def test_decomposed_with_a_vehicle_and_a_headland_covers_inside():
+    """The L-shape with a tractor's turns and one headland pass: decomposed (asked), its cells
+    searched with the vehicle's turns, the headland noted; the whole field covered and the path
+    inside it where the headland promises (turns that would leave keep the straight move)."""
+    tractor = Vehicle(turn_radius=4.0, speed=SPEED, turn_time=TURN)
+    m = plan_area(L_SHAPE, 10.0, crs=None, vehicle=tractor, headland=1, decompose=True)
+    assert m.optimum.method == "decomposed-cover"
+    assert any("without the headland passes" in n for n in m.plan.notes)
+    area = shapely.Polygon(L_SHAPE)
+    assert _covered(m, area) >= 1 - 1e-9
+    assert m.coverage.covered_share == pytest.approx(1.0, abs=1e-9)
+    assert area.buffer(1e-6).contains(shapely.LineString(m.plan.waypoints))
+    assert m.plan.vehicle is not None and m.stats.turn_length > 0
+
+
+def test_or_tools_order_is_deterministic_and_says_its_cap(monkeypatch):
+    """Greedy descent to its local optimum: the same tour twice; a cap hit is noted."""
+    rng = np.random.default_rng(5)
+    passes = _random_passes(rng, EXACT_PASSES + 10)
+    router = router_for(Region(Polygon([(-10, -10), (110, -10), (110, 110), (-10, 110)])), 0.0)
+    a = solve_order(passes, np.zeros(2), router, solver="or-tools")
+    b = solve_order(passes, np.zeros(2), router, solver="or-tools")
+    assert a[:2] == b[:2] and not any("safety cap" in n for n in a[3])
+    monkeypatch.setattr(cell_order, "ORTOOLS_SECONDS", 1e-3)
+    c = solve_order(passes, np.zeros(2), router, solver="or-tools")
+    assert any("safety cap" in n for n in c[3])

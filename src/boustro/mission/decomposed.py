@@ -1,6 +1,7 @@
 """The decomposed plan of a plan-level objective (mission time, fewest transects): candidate
-decompositions, every cell certified by the same search as the one-grid plan, cells merged only
-where one sweep serves both at no more cost, the order of the passes solved.
+decompositions, every cell searched by the same certified search as the one-grid plan (each
+carries its certificate: ``certified``, ``gap``), cells merged only where one sweep serves both
+at no more cost, the order of the passes solved.
 
 Candidates: at each sweep direction :func:`boustro.plan.choose_sweep` compares (or the one
 given), the finest decomposition (every trapezoid of the slab decomposition a cell), Choset's
