@@ -109,7 +109,9 @@ def plan_area(
         decompose: for a concave area or one with holes: ``None`` (default) decomposes into
             cells when that promises fewer turns, ``True`` always, ``False`` plans one angle
             with lines cut at the boundary and the holes (:func:`boustro.plan.plan_region`).
-            Given, it also turns off the convex-hull rule for nearly convex areas.
+            Given, it also turns off the convex-hull rule for nearly convex areas. With a
+            plan-level objective and no candidate decomposition of at most 12 cells, ``True``
+            plans the sweep decomposition's cells (each optimised for Eq. 1) with a note.
         sweep: sweep direction of the decomposition, degrees in the plan frame (default:
             chosen by :func:`boustro.plan.choose_sweep`).
         angle: a fixed transect angle, radians counter-clockwise from +x in the plan frame
