@@ -24,6 +24,7 @@ from boustro.plan.cell_order import EXACT_PASSES, solve_order, tour_cost
 from boustro.plan.region import plan_region
 from boustro.plan.routing import router_for
 from boustro.plan.tour import _Pass
+from boustro.vehicle import Vehicle
 
 from .conftest import run_cli
 
@@ -33,15 +34,34 @@ L_SHAPE = [(0, 0), (100, 0), (100, 30), (30, 30), (30, 100), (0, 100)]
 SPEED, TURN = 5.0, 10.0
 
 
+def _passes(plan) -> int:
+    """The passes the plan flies, from its transects: every lane, and every chain of boundary
+    or hole edges (an edge that starts where the previous one of its role ends continues its
+    pass; a connecting move begins a new one)."""
+    roles, t = plan.role(), plan.transects
+    return sum(
+        1
+        for k in range(len(t))
+        if roles[k] == "lane"
+        or k == 0
+        or roles[k - 1] != roles[k]
+        or not np.allclose(t[k][0], t[k - 1][1], rtol=0, atol=1e-9)
+    )
+
+
 def _recomputed_time(mission) -> float:
-    """Path length of the waypoints / speed + (passes - 1) x turn time, from the waypoints."""
+    """Path length of the waypoints / speed + (passes - 1) x turn time (:func:`_passes`)."""
     w = mission.plan.waypoints
     length = float(np.linalg.norm(np.diff(w, axis=0), axis=1).sum())
-    kinds = list(mission.plan.kinds)
-    passes = kinds.count("start") + sum(
+    return length / SPEED + (_passes(mission.plan) - 1) * TURN
+
+
+def _contour_runs(plan) -> int:
+    """Starts of lanes and runs of contour waypoints (the count this file used before)."""
+    kinds = list(plan.kinds)
+    return kinds.count("start") + sum(
         1 for a, b in itertools.pairwise(["", *kinds]) if b == "contour" and a != "contour"
     )
-    return length / SPEED + (passes - 1) * TURN
 
 
 def _covered(mission, area: shapely.Polygon) -> float:
@@ -137,21 +157,14 @@ def _random_passes(rng, n: int) -> list[_Pass]:
 
 
 def _brute(passes, start, force_start: bool) -> float:
-    """The least cost over every order and every option of every pass."""
+    """The least cost over every order and every option of every pass; with ``force_start``
+    the approach from ``start`` to the first entry counts."""
     best = math.inf
-    nearest = None
-    if force_start:
-        entries = [(k, j) for k, p in enumerate(passes) for j in range(len(p.options))]
-        nearest = min(
-            entries, key=lambda kj: np.linalg.norm(passes[kj[0]].options[kj[1]][0] - start)
-        )
     for order in itertools.permutations(range(len(passes))):
-        if nearest is not None and order[0] != nearest[0]:
-            continue
         for choice in itertools.product(*(range(len(passes[k].options)) for k in order)):
-            if nearest is not None and choice[0] != nearest[1]:
-                continue
-            total = passes[order[0]].options[choice[0]][3]
+            entry, _, _, total = passes[order[0]].options[choice[0]]
+            if force_start:
+                total += float(np.linalg.norm(entry - start))
             for (k0, c0), (k1, c1) in itertools.pairwise(zip(order, choice, strict=True)):
                 exit_ = passes[k0].options[c0][1]
                 entry, _, _, length = passes[k1].options[c1]
@@ -189,7 +202,7 @@ def test_many_passes_use_or_tools_no_worse_than_greedy():
 
 
 def test_without_or_tools_the_greedy_order_with_a_note(monkeypatch):
-    monkeypatch.setattr(cell_order, "_ortools", lambda pb: None)
+    monkeypatch.setattr(cell_order, "_ortools", lambda pb: (None, False))
     rng = np.random.default_rng(3)
     passes = _random_passes(rng, EXACT_PASSES + 2)
     router = router_for(Region(Polygon([(-10, -10), (110, -10), (110, 110), (-10, 110)])), 0.0)
@@ -238,3 +251,110 @@ def test_fewest_transects_objective_decomposes_the_ring():
 
     m = plan_area(RING, 1.0, crs=None, holes=[RING_HOLE], fitness=FewestTransects())
     assert m.stats.n_transects == 4 and m.summary()["cell_order"] == "exact"
+
+
+SLANT_L = [(0, 0), (100, 0), (90, 30), (30, 30), (30, 100), (0, 100)]
+
+
+def test_keep_inside_cells_searched_keeping_inside(monkeypatch):
+    """The cells' search plans them with keep_inside (the reviewer's slanted L: 211.26 s flown
+    when the cells were searched without it), and the flown plan keeps inside and covers."""
+    from boustro.mission import decomposed
+
+    seen = []
+    real = decomposed.cover_optimum
+
+    def spy(*args, **kw):
+        seen.append(kw.get("keep_inside"))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(decomposed, "cover_optimum", spy)
+    kw = dict(crs=None, speed=SPEED, turn_time=TURN, keep_inside=True, decompose=True)
+    m = plan_area(SLANT_L, 10.0, **kw)
+    assert True in seen  # the cells' search with keep_inside (and without: the better kept)
+    assert m.optimum.method == "decomposed-cover"
+    assert m.stats.duration <= 211.26 - 0.4
+    area = shapely.Polygon(SLANT_L)
+    assert area.buffer(1e-6).contains(shapely.LineString(m.plan.waypoints))
+    assert _covered(m, area) >= 1 - 1e-9
+    assert m.stats.duration == pytest.approx(_recomputed_time(m), rel=1e-9)
+
+
+def _comb(teeth: int) -> list[tuple[float, float]]:
+    pts = [(0.0, 0.0), (20.0 * teeth, 0.0)]
+    for i in reversed(range(teeth)):
+        x0 = 20.0 * i
+        pts += [(x0 + 20, 10), (x0 + 20, 60), (x0 + 10, 60), (x0 + 10, 10)]
+    return [*pts[:2], *pts[3:], (0.0, 10.0)]
+
+
+def test_decompose_without_a_candidate_plans_the_sweep_cells(monkeypatch):
+    """A comb of 13 teeth (14 cells > MAX_CELLS): --decompose never plans one grid, and the
+    decomposition search runs once."""
+    from boustro.mission import decomposed, pipeline
+
+    calls = []
+    real = pipeline.plan_decomposed
+
+    def spy(*args, **kw):
+        calls.append(1)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(pipeline, "plan_decomposed", spy)
+    comb = _comb(13)
+    assert shapely.Polygon(comb).is_valid
+    m = plan_area(comb, 5.0, crs=None, speed=SPEED, turn_time=TURN, decompose=True)
+    assert len(calls) == 1
+    assert len(m.plan.cells) > decomposed.MAX_CELLS
+    assert m.optimum.method != "certified-cover"
+    assert any("no decomposition of at most" in n for n in m.plan.notes)
+    assert _covered(m, shapely.Polygon(comb)) >= 1 - 1e-9
+
+
+#: A random concave field with a hole (spacing 20) whose keep-inside decomposed plan flies two
+#: boundary passes one after the other: their contour waypoints make one run.
+ADJACENT = (
+    [(198.1, 110.3), (147.6, 107.2), (157.6, 172.9), (51.8, 80.9), (26.0, 68.9), (91.4, 23.8),
+     (102.6, 38.4), (120.0, 56.8), (148.9, 86.2)],
+    [[(134.7, 96.7), (112.7, 109.3), (112.9, 84.0)]],
+)  # fmt: skip
+
+
+def test_recomputed_time_counts_the_passes_flown():
+    shell, holes = ADJACENT
+    kw = dict(crs=None, holes=holes, speed=SPEED, turn_time=TURN, keep_inside=True)
+    m = plan_area(shell, 20.0, decompose=True, **kw)
+    assert _passes(m.plan) == m.stats.n_turns + 1
+    assert _contour_runs(m.plan) < _passes(m.plan)  # what the old count missed
+    assert m.stats.duration == pytest.approx(_recomputed_time(m), rel=1e-9)
+    area = shapely.Polygon(shell, holes)
+    assert area.buffer(1e-6).contains(shapely.LineString(m.plan.waypoints))
+    assert _covered(m, area) >= 1 - 1e-9
+
+
+def test_decomposed_with_a_vehicle_and_a_headland_covers_inside():
+    """The L-shape with a tractor's turns and one headland pass: decomposed (asked), its cells
+    searched with the vehicle's turns, the headland noted; the whole field covered and the path
+    inside it where the headland promises (turns that would leave keep the straight move)."""
+    tractor = Vehicle(turn_radius=4.0, speed=SPEED, turn_time=TURN)
+    m = plan_area(L_SHAPE, 10.0, crs=None, vehicle=tractor, headland=1, decompose=True)
+    assert m.optimum.method == "decomposed-cover"
+    assert any("without the headland passes" in n for n in m.plan.notes)
+    area = shapely.Polygon(L_SHAPE)
+    assert _covered(m, area) >= 1 - 1e-9
+    assert m.coverage.covered_share == pytest.approx(1.0, abs=1e-9)
+    assert area.buffer(1e-6).contains(shapely.LineString(m.plan.waypoints))
+    assert m.plan.vehicle is not None and m.stats.turn_length > 0
+
+
+def test_or_tools_order_is_deterministic_and_says_its_cap(monkeypatch):
+    """Greedy descent to its local optimum: the same tour twice; a cap hit is noted."""
+    rng = np.random.default_rng(5)
+    passes = _random_passes(rng, EXACT_PASSES + 10)
+    router = router_for(Region(Polygon([(-10, -10), (110, -10), (110, 110), (-10, 110)])), 0.0)
+    a = solve_order(passes, np.zeros(2), router, solver="or-tools")
+    b = solve_order(passes, np.zeros(2), router, solver="or-tools")
+    assert a[:2] == b[:2] and not any("safety cap" in n for n in a[3])
+    monkeypatch.setattr(cell_order, "ORTOOLS_SECONDS", 1e-3)
+    c = solve_order(passes, np.zeros(2), router, solver="or-tools")
+    assert any("safety cap" in n for n in c[3])

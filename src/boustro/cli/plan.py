@@ -81,7 +81,8 @@ concave areas and holes:
   enters them. A concave area (unless nearly convex, see --hull-tolerance) or one with holes is
   decomposed into cells, each with its own angle and offset, when that promises fewer turns
   (with --speed, the time objective: when the decomposed plan is faster than one grid, its
-  cells each certified, the order of their lanes solved exactly for up to 12 passes, by
+  cells each searched by the certified search and carrying its certificate (certified, gap),
+  the order of their lanes solved exactly for up to 12 passes, by
   OR-Tools beyond if installed; --json says "cell_order" and "compared");
   --decompose always decomposes, --no-decompose plans one angle with the lines cut at the
   boundary and the holes. Connecting moves go around holes; a hole that cuts lanes gets one

@@ -1,6 +1,7 @@
 """The decomposed plan of a plan-level objective (mission time, fewest transects): candidate
-decompositions, every cell certified by the same search as the one-grid plan, cells merged only
-where one sweep serves both at no more cost, the order of the passes solved.
+decompositions, every cell searched by the same certified search as the one-grid plan (each
+carries its certificate: ``certified``, ``gap``), cells merged only where one sweep serves both
+at no more cost, the order of the passes solved.
 
 Candidates: at each sweep direction :func:`boustro.plan.choose_sweep` compares (or the one
 given), the finest decomposition (every trapezoid of the slab decomposition a cell), Choset's
@@ -38,7 +39,14 @@ from .cover import flown_cost
 from .project import Frame
 from .steps import Planned, _path_options
 
-__all__ = ["MAX_CELLS", "MAX_SEARCHES", "PLANNED", "plan_decomposed"]
+__all__ = [
+    "LARGE_EDGES",
+    "MAX_CELLS",
+    "MAX_SEARCHES",
+    "MAX_UNION_EDGES",
+    "PLANNED",
+    "plan_decomposed",
+]
 
 #: Decompositions with more cells are not candidates (the exact order takes 12 passes).
 MAX_CELLS = 12
@@ -47,6 +55,12 @@ MAX_SEARCHES = 16
 #: Candidate decompositions whose cells are certified and planned in full (their passes
 #: ordered), best modelled cost first.
 PLANNED = 2
+#: Edges of the unions of cells traced to try merges, per plan at most (a count, not a time:
+#: the same plan on any load); past it the candidates keep the merges found so far.
+MAX_UNION_EDGES = 8000
+#: Outer and hole edges of an area beyond which only the best candidate is planned (its cells'
+#: searches are the work: a large area's cells have many edges).
+LARGE_EDGES = 120
 #: Lane directions of the model of a cell's cost (every 5 degrees) and offsets per spacing.
 MODEL_ANGLES = 36
 MODEL_OFFSETS = 4
@@ -66,42 +80,51 @@ class _Candidate(NamedTuple):
 class _Search:
     """The certified search of each cell, done once per cell (cached by its vertices)."""
 
-    def __init__(self, frame: Frame, cost: CoverCost, layout: str, options: dict[str, Any]):
+    def __init__(
+        self,
+        frame: Frame,
+        cost: CoverCost,
+        layout: str,
+        options: dict[str, Any],
+        keep_inside: bool = False,
+        finish: Callable[[Plan], Plan] | None = None,
+    ):
         self.cost, self.layout, self.options = cost, layout, options
+        self.keep_inside, self.finish = keep_inside, finish
         self.s = frame.sensor.spacing * frame.proj.scale_min
         self.reach = frame.sensor.reach * frame.proj.scale_min
         self.cache: dict[bytes, OptimizeResult | None] = {}
         self.models: dict[bytes, tuple[float, float, float]] = {}
         self.searches = 0
+        self.union_edges = 0
 
     def plan(self, cell: Region, angle: float, offset: float) -> Plan:
         lay: Layout = "chords" if self.layout == "chords" else "guaranteed"
         return plan_region(
             cell, self.s, decompose_area=False, angle=angle, offset=offset, layout=lay,
-            **self.options,
+            keep_inside=self.keep_inside, **self.options,
         )  # fmt: skip
 
     def value(self, cell: Region, angle: float, offset: float) -> float:
-        st = self.plan(cell, angle, offset).stats
+        """The cost of the cell's plan as it is flown alone: with ``keep_inside`` as the final
+        plan lays it, the vehicle's turns added (``finish``, where given: a cell's own)."""
+        plan = self.plan(cell, angle, offset)
+        st = (plan if self.finish is None else self.finish(plan)).stats
         return self.cost.of(st.path_length * self.options["ground_scale"], st.n_turns)
 
     def model(self, cell: Region) -> tuple[float, float, float]:
         """The least modelled cost of the cell and its layout ``(cost, angle, offset)``: its
         lines' segments (:func:`boustro.models.region.segment_moments`) as lanes, a spacing's
         move and a turn between consecutive ones, over lane directions every 5 degrees and the
-        cell's edge directions, 4 offsets each. Cheap (no plan): it ranks the candidates; what
-        is kept is planned. With the guaranteed layout the lanes are counted as the lines whose
-        band meets the cell, the length scaled to match."""
+        directions of its :data:`CENTRED_ANGLES` longest edges, 4 offsets each. Cheap (no
+        plan): it ranks the candidates; what is kept is planned. With the guaranteed layout the
+        lanes are counted as the lines whose band meets the cell, the length scaled to match."""
         key = _key(cell)
         if key in self.models:
             return self.models[key]
         v = cell.shell.vertices
-        e = np.roll(v, -1, axis=0) - v
-        angles = (
-            np.concatenate(
-                [np.arange(MODEL_ANGLES) * (math.pi / MODEL_ANGLES), np.arctan2(e[:, 1], e[:, 0])]
-            )
-            % math.pi
+        angles = np.concatenate(
+            [np.arange(MODEL_ANGLES) * (math.pi / MODEL_ANGLES), _edge_angles(cell)]
         )
         base = centred_offsets(cell, angles, self.s, self.reach)
         a = np.repeat(angles, MODEL_OFFSETS)
@@ -139,12 +162,13 @@ class _Search:
         try:
             opt = cover_optimum(
                 cell, self.s, self.cost, lambda a, d: self.value(cell, a, d),
-                reach=self.reach, boustrophedon=False,
+                reach=self.reach, boustrophedon=False, keep_inside=self.keep_inside,
             )  # fmt: skip
         except (NoTransectError, InvalidPolygonError, InvalidParameterError):
             self.cache[key] = None
             return None
         opt = self._centred(cell, opt)
+        opt = dataclasses.replace(opt, info={**opt.info, "keep_inside": self.keep_inside})
         self.cache[key] = opt
         return opt
 
@@ -154,11 +178,7 @@ class _Search:
         directions: a strip one spacing wide is covered by one lane at one offset only, which
         the search's plans at box centres never hit. The search's lower bound holds for every
         layout, so the certificate stays valid, its gap only shrinks."""
-        v = cell.shell.vertices
-        e = np.roll(v, -1, axis=0) - v
-        angles = np.unique(np.round(np.arctan2(e[:, 1], e[:, 0]) % math.pi, 12))
-        order = np.argsort(-np.array([_longest(e, a) for a in angles]))[:CENTRED_ANGLES]
-        angles = angles[order]
+        angles = _edge_angles(cell)
         offsets = centred_offsets(cell, angles, self.s, self.reach)
         best = (opt.fitness, opt.angle, opt.offset)
         for a, d in zip(angles, offsets, strict=True):
@@ -183,10 +203,16 @@ def _key(cell: Region) -> bytes:
     return np.round(cell.shell.vertices, 9).tobytes() + bytes(len(cell.holes))
 
 
-def _longest(e: np.ndarray, angle: float) -> float:
-    """The length of the longest edge of direction ``angle``."""
-    a = np.arctan2(e[:, 1], e[:, 0]) % math.pi
-    return float(np.hypot(e[:, 0], e[:, 1])[np.abs(a - angle) < 1e-9].max(initial=0.0))
+def _edge_angles(cell: Region) -> np.ndarray:
+    """The :data:`CENTRED_ANGLES` distinct directions (mod pi) of the cell's outer edges whose
+    longest edge is longest, longest first."""
+    v = cell.shell.vertices
+    e = np.roll(v, -1, axis=0) - v
+    a = np.round(np.arctan2(e[:, 1], e[:, 0]) % math.pi, 12)
+    angles, inverse = np.unique(a, return_inverse=True)
+    longest = np.zeros(len(angles))
+    np.maximum.at(longest, inverse.ravel(), np.hypot(e[:, 0], e[:, 1]))
+    return angles[np.argsort(-longest, kind="stable")[:CENTRED_ANGLES]]
 
 
 def _sweeps(region: Region, sweep: float | None) -> list[float]:
@@ -244,6 +270,23 @@ def _merged(
     regions, values = list(dec.cells), list(models)
     turn = search.cost.per_turn
     merged = False
+    unions: dict[tuple[int, ...], tuple[Region, tuple[float, float, float]] | None] = {}
+
+    def union_of(group: list[int]) -> tuple[Region, tuple[float, float, float]] | None:
+        """The union of the cells and its model, once per set of cells (``None``: invalid)."""
+        key = tuple(sorted(group))
+        if key not in unions:
+            if search.union_edges >= MAX_UNION_EDGES:
+                return None
+            search.union_edges += sum(len(dec.cells[k].edges) for k in key)
+            try:
+                union = dec.union(group, diameter)
+            except InvalidPolygonError:
+                unions[key] = None
+            else:
+                unions[key] = (union, search.model(union))
+        return unions[key]
+
     while len(groups) > 2:
         best: tuple[float, int, int, Region, tuple[float, float, float]] | None = None
         for i in range(len(groups)):
@@ -253,11 +296,10 @@ def _merged(
                 gap = abs(values[i][1] - values[j][1]) % math.pi
                 if min(gap, math.pi - gap) >= MERGE_ANGLE:
                     continue
-                try:
-                    union = dec.union(groups[i] + groups[j], diameter)
-                except InvalidPolygonError:
+                found = union_of(groups[i] + groups[j])
+                if found is None:
                     continue
-                model = search.model(union)
+                union, model = found
                 saving = values[i][0] + values[j][0] + turn - model[0]
                 if saving >= 0 and (best is None or saving > best[0]):
                     best = (saving, i, j, union, model)
@@ -300,6 +342,7 @@ def plan_decomposed(
     keep_inside: bool = False,
     sweep: float | None = None,
     finish: Callable[[Plan], Plan] | None = None,
+    cell_finish: Callable[[Plan], Plan] | None = None,
     beat: float | None = None,
     **_: Any,
 ) -> Planned | None:
@@ -307,40 +350,52 @@ def plan_decomposed(
     decomposition has more than one cell (or, with ``beat``, none whose modelled cost is below
     it: the cost of the one-grid plan). Its optimum's ``info``: ``cells``, ``candidates``,
     ``searches``, ``decomposition`` (which candidate), ``cell_order`` (the order's solver),
-    ``cells_certified``; its cells carry their certificates."""
+    ``cells_certified``, ``cells_keep_inside`` (whether the kept cells' searches planned them
+    with ``keep_inside``); its cells carry their certificates.
+
+    Each cell's search costs the cell's own plan (``cell_finish``: the vehicle's turns; never
+    headland passes). With ``keep_inside`` a cell alone is planned keeping inside the cell (its
+    cut edges get boundary passes the whole plan does not fly), so the cells are searched both
+    with and without it and the whole plan (always keeping inside) of least flown cost is kept.
+    """
     t0 = time.perf_counter()
     region = frame.region
     assert region is not None
     options = _path_options(frame, turnaround, speed, turn_time)
-    search = _Search(frame, cost, layout, options)
-    candidates = _candidates(region, search, sweep)
+    searches = [_Search(frame, cost, layout, options, keep_inside, cell_finish)]
+    if keep_inside:
+        searches.append(_Search(frame, cost, layout, options, False, cell_finish))
+        searches[1].models = searches[0].models  # the model does not depend on it
+    candidates = _candidates(region, searches[0], sweep)
     if beat is not None:  # the model leaves out moves between cells: hopeless if above
         candidates = [c for c in candidates if c.estimate < beat]
-    best: tuple[float, Plan, _Candidate, list[OptimizeResult]] | None = None
+    best: tuple[float, Plan, _Candidate, list[OptimizeResult], bool] | None = None
     lay: Layout = "chords" if layout == "chords" else "guaranteed"
-    for cand in candidates[:PLANNED]:
-        found = [search.optimum(c) for c in cand.cells]
-        optima = [o for o in found if o is not None]
-        if len(optima) < len(found):
-            continue
-        plan = plan_region(
-            region, search.s, layout=lay, cells=list(zip(cand.cells, optima, strict=True)),
-            order="auto", keep_inside=keep_inside,
-            start=frame.start if frame.given_start else None, **options,
-        )  # fmt: skip
-        value = flown_cost(cost, plan, frame, finish)
-        if best is None or value < best[0]:
-            best = (value, plan, cand, optima)
+    planned = PLANNED if len(region.edges) <= LARGE_EDGES else 1
+    for cand in candidates[:planned]:
+        for search in searches:
+            found = [search.optimum(c) for c in cand.cells]
+            optima = [o for o in found if o is not None]
+            if len(optima) < len(found):
+                continue
+            plan = plan_region(
+                region, search.s, layout=lay, cells=list(zip(cand.cells, optima, strict=True)),
+                order="auto", keep_inside=keep_inside,
+                start=frame.start if frame.given_start else None, **options,
+            )  # fmt: skip
+            value = flown_cost(cost, plan, frame, finish)
+            if best is None or value < best[0]:
+                best = (value, plan, cand, optima, search.keep_inside)
     if best is None:
         return None
-    value, plan, cand, optima = best
+    value, plan, cand, optima, cells_inside = best
     certified = sum(bool(o.info.get("certified")) for o in optima)
     main = max(range(len(cand.cells)), key=lambda k: cand.cells[k].area)
     optimum = OptimizeResult(
         angle=optima[main].angle,
         offset=optima[main].offset,
         fitness=value,
-        spacing=search.s,
+        spacing=searches[0].s,
         method="decomposed-cover",
         evaluations=int(sum(o.evaluations for o in optima)),
         seconds=time.perf_counter() - t0,
@@ -352,7 +407,8 @@ def plan_decomposed(
             "cells_certified": certified,
             "decomposition": cand.name,
             "candidates": len(candidates),
-            "searches": search.searches,
+            "searches": sum(search.searches for search in searches),
+            "cells_keep_inside": cells_inside,
             "cell_order": plan.order_solver,
         },
     )

@@ -32,8 +32,8 @@ from ..plan.inside import with_outside_length
 from ..sensors import SensorSpacing
 from ..vehicle import Vehicle
 from .camera import camera_trigger, with_camera
-from .cover import cover_cost, plan_cover
-from .decomposed import plan_decomposed
+from .cover import cover_cost, flown_cost, plan_cover
+from .decomposed import MAX_CELLS, plan_decomposed
 from .defaults import DEFAULT_HULL_TOLERANCE
 from .estimate import SAY_SECONDS, WorkEstimate, check_work, frame_estimate
 from .map_back import angle_for_bearing, map_back
@@ -110,7 +110,9 @@ def plan_area(
         decompose: for a concave area or one with holes: ``None`` (default) decomposes into
             cells when that promises fewer turns, ``True`` always, ``False`` plans one angle
             with lines cut at the boundary and the holes (:func:`boustro.plan.plan_region`).
-            Given, it also turns off the convex-hull rule for nearly convex areas.
+            Given, it also turns off the convex-hull rule for nearly convex areas. With a
+            plan-level objective and no candidate decomposition of at most 12 cells, ``True``
+            plans the sweep decomposition's cells (each optimised for Eq. 1) with a note.
         sweep: sweep direction of the decomposition, degrees in the plan frame (default:
             chosen by :func:`boustro.plan.choose_sweep`).
         angle: a fixed transect angle, radians counter-clockwise from +x in the plan frame
@@ -216,8 +218,16 @@ def plan_area(
                 empty = Planned(plan, None, None)  # type: ignore[arg-type]
                 return _drive(frame, empty, field, passes, vehicle, False, turns_in).plan
 
+        cell_finish = None
+        if vehicle is not None:  # a cell's own lanes with the vehicle's turns (no headland)
+
+            def cell_finish(plan: Plan) -> Plan:
+                return dataclasses.replace(plan, stats=vehicle_stats(plan, vehicle))
+
         skips = vehicle is not None and vehicle.turn_radius > 0  # every other lane possible
-        planned = _plan_for_cost(frame, cost, decompose, sweep, settings, finish, skips)
+        planned = _plan_for_cost(
+            frame, cost, decompose, sweep, settings, finish, skips, cell_finish, passes
+        )
     elif frame.region is None:
         planned = plan_convex(frame, **settings)
     else:
@@ -240,13 +250,19 @@ def _plan_for_cost(
     settings: dict[str, Any],
     finish: Callable[[Plan], Plan] | None = None,
     skips: bool = False,
+    cell_finish: Callable[[Plan], Plan] | None = None,
+    headland: int = 0,
 ) -> Planned:
     """A plan-level objective: the certified one-grid plan (:func:`plan_cover`); for a concave
     area or one with holes also the decomposed plan (:func:`plan_decomposed`: every cell
     certified for the same cost, the order of the passes solved), kept only if it costs less
     (always with ``decompose=True``, never with ``False``). Costs are of ``finish(plan)``
     (headland passes and the vehicle's turns added) where given; both costs are in the kept
-    plan's ``optimum.info`` (``one_grid``, ``decomposed``)."""
+    plan's ``optimum.info`` (``one_grid``, ``decomposed``). A cell's search costs its own plan
+    with the vehicle's turns (``cell_finish``), never the headland passes (they go around the
+    whole field: a note says so). With ``decompose=True`` and no candidate decomposition (more
+    than :data:`~boustro.mission.decomposed.MAX_CELLS` cells) the cells of
+    :func:`plan_concave` (each optimised for Eq. 1), with a note; never one grid."""
     if settings["method"] not in (None, "certified-cover"):
         raise InvalidParameterError(
             f"the {cost.name} objective is optimised by the certified search over the flown "
@@ -257,20 +273,55 @@ def _plan_for_cost(
     if frame.region is None or decompose is False or settings["angle"] is not None:
         return plan_cover(frame, cost, **extra, **{k: settings[k] for k in keys})
     given = {k: settings[k] for k in keys}
+    both = dict(sweep=sweep, finish=finish, cell_finish=cell_finish, **given)
     if decompose:
-        cells = plan_decomposed(frame, cost, sweep=sweep, finish=finish, **given)
-        if cells is not None:
-            return _noted(cells, decomposed=cells.optimum.fitness)
+        cells = plan_decomposed(frame, cost, **both)
+        if cells is None:
+            return _fallback(frame, cost, sweep, settings, finish)
+        return _noted(_headland_note(cells, headland), decomposed=cells.optimum.fitness)
     one = plan_cover(frame, cost, **extra, **given)
-    cells = plan_decomposed(
-        frame, cost, sweep=sweep, finish=finish, beat=one.optimum.fitness, **given
-    )
+    cells = plan_decomposed(frame, cost, beat=one.optimum.fitness, **both)
+    if cells is not None:
+        cells = _headland_note(cells, headland)
     if cells is None:
         return _noted(one, one_grid=one.optimum.fitness, decomposed=None)
     value = cells.optimum.fitness
     if value < one.optimum.fitness:
         return _noted(cells, one_grid=one.optimum.fitness, decomposed=value)
     return _noted(one, one_grid=one.optimum.fitness, decomposed=value)
+
+
+def _fallback(
+    frame: Frame,
+    cost: CoverCost,
+    sweep: float | None,
+    settings: dict[str, Any],
+    finish: Callable[[Plan], Plan] | None,
+) -> Planned:
+    """``decompose=True`` without a candidate: :func:`plan_concave`'s cells (Eq. 1), noted."""
+    planned = plan_concave(
+        frame, decompose=True, sweep=sweep, **{**settings, "fitness": None, "method": None}
+    )
+    note = (
+        f"no decomposition of at most {MAX_CELLS} cells to search for the {cost.name} "
+        "objective: the cells of the sweep decomposition, each optimised for Eq. 1 (not "
+        "certified)"
+    )
+    plan = dataclasses.replace(planned.plan, notes=(*planned.plan.notes, note))
+    value = flown_cost(cost, plan, frame, finish)
+    return _noted(planned._replace(plan=plan), objective=cost.name, decomposed=value)
+
+
+def _headland_note(planned: Planned, headland: int) -> Planned:
+    """With headland passes, the note that each cell's certificate is of its own plan."""
+    if not headland:
+        return planned
+    note = (
+        "each cell's certificate is of its own plan, without the headland passes around the "
+        "field (the plan's cost includes them)"
+    )
+    plan = dataclasses.replace(planned.plan, notes=(*planned.plan.notes, note))
+    return planned._replace(plan=plan)
 
 
 def _noted(planned: Planned, **info: Any) -> Planned:

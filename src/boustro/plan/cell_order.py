@@ -27,8 +27,9 @@ __all__ = ["EXACT_PASSES", "ORDER_SOLVERS", "OrderSolver", "solve_order", "tour_
 
 #: Passes up to which the order is solved exactly (Held-Karp: 2^n x options^2 work).
 EXACT_PASSES = 12
-#: OR-Tools' search: its local search stops at a local optimum; this many seconds at most.
-ORTOOLS_SECONDS = 2.0
+#: OR-Tools' search is a greedy descent from the cheapest-arc tour to its local optimum: the same
+#: tour on any load. This many seconds is only a safety cap (a note says when it was hit).
+ORTOOLS_SECONDS = 60.0
 OrderSolver = Literal["exact", "or-tools", "heuristic"]
 ORDER_SOLVERS: tuple[OrderSolver, ...] = ("exact", "or-tools", "heuristic")
 
@@ -57,10 +58,8 @@ class _Problem:
         # move[a, b]: from option a's exit to option b's entry, plus b's own length
         self.move = dist[np.ix_(exit_, entry)] + self.internal[None, :]
         self.first = self.internal.copy()  # begin anywhere: the tour starts where it is best
-        if force_start:  # begin at the entry nearest the start (as the greedy order does)
-            nearest = int(np.argmin(dist[0, entry]))
-            self.first = np.full(len(entry), math.inf)
-            self.first[nearest] = self.internal[nearest]
+        if force_start:  # begin at the start: the approach to the first entry counts
+            self.first = dist[0, entry] + self.internal
         self.options = [
             np.flatnonzero(np.asarray(self.pass_of) == k).astype(np.int64) for k in range(self.n)
         ]
@@ -119,13 +118,14 @@ def _held_karp(pb: _Problem) -> list[int]:
     return nodes[::-1]
 
 
-def _ortools(pb: _Problem) -> list[int] | None:
+def _ortools(pb: _Problem) -> tuple[list[int] | None, bool]:
     """The sequence of options by OR-Tools' routing (one option of each pass: a disjunction),
-    or ``None`` when OR-Tools is not installed or finds none."""
+    or ``None`` when OR-Tools is not installed or finds none; and whether the search stopped at
+    :data:`ORTOOLS_SECONDS` before its local optimum."""
     try:
         from ortools.constraint_solver import pywrapcp, routing_enums_pb2
     except ImportError:
-        return None
+        return None, False
     m = len(pb.pass_of)
     finite = np.concatenate([pb.move[np.isfinite(pb.move)], pb.first[np.isfinite(pb.first)]])
     unit = 1e6 / max(float(finite.max(initial=0.0)), 1e-300)
@@ -145,16 +145,22 @@ def _ortools(pb: _Problem) -> list[int] | None:
         routing.AddDisjunction([manager.NodeToIndex(int(o) + 1) for o in opts], -1, 1)
     params = pywrapcp.DefaultRoutingSearchParameters()
     params.first_solution_strategy = routing_enums_pb2.FirstSolutionStrategy.PATH_CHEAPEST_ARC
+    params.local_search_metaheuristic = routing_enums_pb2.LocalSearchMetaheuristic.GREEDY_DESCENT
     params.time_limit.FromMilliseconds(int(ORTOOLS_SECONDS * 1000))
     solution = routing.SolveWithParameters(params)
+    status = routing_enums_pb2.RoutingSearchStatus
+    capped = routing.status() in (
+        status.ROUTING_PARTIAL_SUCCESS_LOCAL_OPTIMUM_NOT_REACHED,
+        status.ROUTING_FAIL_TIMEOUT,
+    )
     if solution is None:
-        return None
+        return None, capped
     nodes, index = [], routing.Start(0)
     index = solution.Value(routing.NextVar(index))
     while not routing.IsEnd(index):
         nodes.append(manager.IndexToNode(index) - 1)
         index = solution.Value(routing.NextVar(index))
-    return nodes if len(nodes) == pb.n else None
+    return (nodes if len(nodes) == pb.n else None), capped
 
 
 def solve_order(
@@ -172,7 +178,10 @@ def solve_order(
     2-opt one is kept), else greedy + 2-opt (:func:`boustro.plan.tour._order`) with a note;
     ``"exact"``, ``"or-tools"`` or ``"heuristic"`` asks for one (``"exact"`` refuses more than
     :data:`EXACT_PASSES` passes, ``"or-tools"`` needs the extra). With ``force_start`` the tour
-    begins at the entry nearest ``start``; without, wherever it is shortest.
+    begins at ``start`` (the routed approach to the first entry counted; the greedy order begins
+    at the entry nearest it); without, wherever it is shortest. OR-Tools' search is a greedy
+    descent to its local optimum (deterministic), capped at :data:`ORTOOLS_SECONDS` for safety
+    (a note says when the cap was hit).
 
     Returns:
         ``(order, choice, solver used, notes)``.
@@ -195,7 +204,12 @@ def solve_order(
             raise MissingDependencyError(
                 "the or-tools order needs OR-Tools: pip install 'boustro[order]'"
             )
-        found = _ortools(pb)
+        found, capped = _ortools(pb)
+        if capped:
+            notes.append(
+                f"OR-Tools stopped at its {ORTOOLS_SECONDS:g} s safety cap before its local "
+                "optimum: this order may differ on another machine or load"
+            )
         if found is not None:
             order, choice = _order(passes, start, router, force_start=force_start)
             greedy = pb.nodes(order, choice)
