@@ -5,8 +5,9 @@ of the whole area and, where a decomposition promises fewer turns, of each cell.
 The decomposition is chosen as :func:`boustro.plan.plan_region` chooses it (its sweep
 candidates, cells and merging scored on the coarse grid), but the whole area's estimate and the
 final cells' angles and offsets are the certified optima; the cells are planned at those
-optima. The plan's certificate: ``certified`` when every cell's search converged, its ``gap``
-the area-weighted mean of the cells' gaps (the plan's fitness is their area-weighted mean).
+optima. The plan's certificate (:func:`_combined`): ``certified`` when every cell's search
+converged, its ``gap`` the largest of the cells' gaps (the plan's fitness is their area-weighted
+mean); it holds for the cells as chosen: the choice of cells itself is not certified.
 The grid (``--method grid``/``region-grid``) stays the baseline.
 """
 
@@ -39,6 +40,11 @@ MERGE_ANGLE = math.radians(15.0)
 #: Where the certified search stops short of its tolerance on an area of at most this many
 #: vertices, the grid's layout is also tried (the grid costs seconds beyond).
 GRID_FALLBACK_VERTICES = 300
+#: The note of a plan of several cells (``--json``'s ``notes``).
+CELLS_NOTE = (
+    "certificate for these cells fixed: each cell is at its own certified optimum, the plan's "
+    "gap is the largest cell's; the choice of cells is not certified"
+)
 
 
 def certified_applies(method: str | None, fitness: Any, angle: float | None) -> bool:
@@ -119,21 +125,27 @@ def _cells(
 
 
 def _combined(plan: Plan, optima: list[OptimizeResult], s: float) -> OptimizeResult:
-    """One result for the plan: the largest cell's layout, the area-weighted fitness and upper
-    bound of the cells (certified when all are)."""
+    """One result for the plan: the largest cell's layout, the area-weighted fitness of the
+    cells (a single-lane cell, NaN fitness and no bound, left out) and as its gap the LARGEST
+    of the cells' gaps (each cell is within it of its own certified optimum), ``converged``
+    only when every cell's search converged. The choice of cells is not certified: the
+    certificate is for the cells fixed (``info["cells_fixed"]``)."""
     if len(optima) == 1:
         return optima[0]
     areas = np.array([c.region.area for c in plan.cells])
-    w = areas / areas.sum()
-    fitness = float(np.dot(w, [o.fitness for o in optima]))
-    bounded = all(o.upper_bound is not None for o in optima)  # a single-lane cell has none
-    upper = float(np.dot(w, [float(o.upper_bound or 0.0) for o in optima])) if bounded else None
+    values = np.array([o.fitness for o in optima], dtype=np.float64)
+    scored = np.isfinite(values)
+    w = areas * scored
+    fitness = float(np.dot(w, np.where(scored, values, 0.0)) / w.sum()) if w.any() else math.nan
+    gaps = [o.gap for o in optima if math.isfinite(o.fitness)]
     main = int(np.argmax(areas))
-    info: dict[str, Any] = {"cells": len(optima)}
-    if upper is not None:
-        upper = max(upper, fitness)
-        info["gap"] = upper - fitness
-        info["converged"] = all(bool(o.info.get("converged")) for o in optima)
+    info: dict[str, Any] = {"cells": len(optima), "cells_fixed": True}
+    upper = None
+    if gaps and all(g is not None for g in gaps) and math.isfinite(fitness):
+        gap = max(float(g) for g in gaps if g is not None)
+        upper = fitness + gap  # >= the area-weighted mean of the cells' upper bounds
+        info["gap"] = gap
+        info["converged"] = all(bool(o.info.get("converged")) for o in optima if o.gap is not None)
     return OptimizeResult(
         angle=plan.cells[main].angle,
         offset=plan.cells[main].offset,
@@ -178,6 +190,8 @@ def plan_certified(
         whole = _certify(region, opts.spacing, fitness, progress)
         cells, optima = _cells(region, opts.spacing, whole, decompose, sweep_rad, fitness,
                                progress)  # fmt: skip
+    if len(cells) > 1:
+        notes.append(CELLS_NOTE)
     with bar.stage("lanes"):
         lanes = _plan_lanes(region, _Cells(cells, list(optima)), opts)
     with bar.stage("tour and routing"):
