@@ -10,10 +10,12 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from boustro.errors import InvalidParameterError
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region, random_region
 from boustro.mission import plan_area
 from boustro.mission.region_certified import _combined
+from boustro.objectives import SmithFitness
 from boustro.optimize import OptimizeResult
 from boustro.optimize.cover.boxes import Boxes, box_radius
 from boustro.optimize.region_grid import evaluate_region_grid
@@ -182,3 +184,16 @@ def test_plan_gap_is_the_largest_cells_and_a_lane_cell_keeps_the_fitness() -> No
     optima[1] = opt(0.6, 0.6 + 2e-5, True)
     res = _combined(plan, optima, 1.0)  # type: ignore[arg-type]
     assert res.info["converged"] is True and res.gap == pytest.approx(2e-5)
+
+
+@pytest.mark.parametrize("search", [smith_bb, smith_bb_region])
+def test_paper_statistics_and_fractional_angles_are_refused(search) -> None:  # type: ignore[no-untyped-def]
+    """Review: both searches certified ``statistics="paper"`` as weighted, and the region's
+    truncated ``n_angles=1.5``."""
+    square = [(0, 0), (4, 0), (4, 4), (0, 4)]
+    with pytest.raises(InvalidParameterError, match="weighted"):
+        search(square, 0.5, fitness=SmithFitness(statistics="paper"))
+    for bad in (1.5, 0, "x"):
+        with pytest.raises(InvalidParameterError, match="n_angles"):
+            search(square, 0.5, n_angles=bad)
+    assert search(square, 0.5, n_angles=90.0).info["converged"]

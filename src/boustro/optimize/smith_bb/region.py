@@ -26,7 +26,7 @@ from ..problem import _progress_bar
 from ..region_grid import evaluate_region_grid
 from ..result import OptimizeResult, canonical
 from .region_kernel import region_bounds, region_values, ring_starts
-from .search import DEFAULT_TOL, SEED_ANGLES, _check, _run, _Search, _weights
+from .search import DEFAULT_TOL, SEED_ANGLES, _check, _check_angles, _run, _Search, _weights
 
 __all__ = ["REGION_MAX_WORK", "ROBUST_ANGLE", "ROBUST_OFFSET", "robust_values", "smith_bb_region"]
 
@@ -198,7 +198,7 @@ def smith_bb_region(
     if max_work is None:
         max_work = REGION_MAX_WORK * max(1.0, DEFAULT_TOL / tol)
     max_work = _check("max_work", max_work, 0.0)
-    n_angles = int(_check("n_angles", n_angles, 1))
+    n_angles = _check_angles(n_angles)
     search = _RegionSearch(r, spacing, a, b)
     boxes = initial_boxes(search.s, search.radius, n_angles)
     search.seed(SEED_ANGLES * n_angles)
