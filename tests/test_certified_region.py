@@ -13,7 +13,7 @@ import pytest
 from boustro.errors import InvalidParameterError
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region, random_region
-from boustro.mission import plan_area
+from boustro.mission import plan_area, region_certified
 from boustro.mission.region_certified import _combined
 from boustro.objectives import SmithFitness
 from boustro.optimize import OptimizeResult
@@ -197,3 +197,36 @@ def test_paper_statistics_and_fractional_angles_are_refused(search) -> None:  # 
         with pytest.raises(InvalidParameterError, match="n_angles"):
             search(square, 0.5, n_angles=bad)
     assert search(square, 0.5, n_angles=90.0).info["converged"]
+
+
+def test_grid_layout_is_the_first_incumbent_and_decompose_skips_the_whole_area(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """CPU: the grid's optimum seeds the search (a spent budget still returns at least the
+    grid's value), and ``decompose=True`` certifies only the cells, not the whole area."""
+    region = Region([(0, 0), (60, 0), (60, 20), (25, 20), (25, 50), (0, 50)],
+                    holes=[[(5, 5), (15, 5), (15, 15), (5, 15)]])  # fmt: skip
+    grid = optimize_region(region, 4.0)
+    starved = smith_bb_region(region, 4.0, max_work=1.0, incumbents=[(grid.angle, grid.offset)])
+    assert not starved.info["converged"]
+    assert starved.fitness >= grid.fitness - 1e-6
+    assert starved.upper_bound >= _dense(region, 4.0, 180, 30) - 1e-12
+
+    searched: list[int] = []
+    seeded: list[int] = []
+
+    def spy(r, spacing, **kw):  # type: ignore[no-untyped-def]
+        searched.append(len(r.vertices))
+        seeded.append(len(kw.get("incumbents", ())))
+        return smith_bb_region(r, spacing, **kw)
+
+    monkeypatch.setattr(region_certified, "smith_bb_region", spy)
+    mission = plan_area(region.shell.vertices, 4.0, crs=None,
+                        holes=[h.vertices for h in region.holes], decompose=True)  # fmt: skip
+    assert len(mission.plan.cells) >= 2
+    assert len(searched) == len(mission.plan.cells)  # the cells only
+    assert all(n == 1 for n in seeded)
+    searched.clear()
+    plan_area(region.shell.vertices, 4.0, crs=None, holes=[h.vertices for h in region.holes],
+              decompose=False)  # fmt: skip
+    assert searched == [len(region.vertices)]

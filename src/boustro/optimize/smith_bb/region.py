@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -172,12 +173,16 @@ def smith_bb_region(
     n_angles: int = 90,
     max_work: float | None = None,
     progress: bool | None = False,
+    incumbents: Sequence[tuple[float, float]] = (),
 ) -> OptimizeResult:
     """The maximum of Eq. 1 over the segments of a region (shell and holes, concave or not)
     over every angle and offset, with a certified upper bound.
 
     Args as :func:`~boustro.optimize.smith_bb.smith_bb` (the budget's default
-    :data:`REGION_MAX_WORK`); ``region`` in user units.
+    :data:`REGION_MAX_WORK`); ``region`` in user units; ``incumbents``: layouts ``(angle,
+    offset)`` (radians; user units from the shell's vertex mean, as returned, e.g. by
+    ``region-grid``) scored and polished before the first boxes: a good first incumbent
+    prunes more boxes (the result is as certified without them).
 
     Returns:
         :class:`OptimizeResult` with ``method="certified-bb"``, the offset from the shell's
@@ -201,6 +206,12 @@ def smith_bb_region(
     n_angles = _check_angles(n_angles)
     search = _RegionSearch(r, spacing, a, b)
     boxes = initial_boxes(search.s, search.radius, n_angles)
+    for angle, offset in incumbents:
+        theta, d = float(angle), float(offset) / search.frame.scale
+        value = float(search.values(np.array([theta]), np.array([d]))[0])
+        if math.isfinite(value):
+            search.offer(value, theta, d)
+        search.polish(theta, d)
     search.seed(SEED_ANGLES * n_angles)
     search.top_eps = float(box_radius(boxes, search.radius).max())
     bar = _progress_bar(100, progress, "certified-bb", unit="%")
