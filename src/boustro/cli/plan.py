@@ -231,7 +231,12 @@ def _add_spacing(p: argparse.ArgumentParser) -> None:
 def _add_optimiser(p: argparse.ArgumentParser) -> None:
     """The optimiser options: method and objective."""
     opt = p.add_argument_group("optimisation")
-    opt.add_argument("--method", default=None, help=f"optimiser (default: {DEFAULT_METHOD})")
+    opt.add_argument(
+        "--method",
+        default=None,
+        help=f"optimiser (default: {DEFAULT_METHOD}; a concave area or one with holes: the "
+        "certified optimum of Eq. 1 over its segments, 'grid' for the grid search)",
+    )
     opt.add_argument(
         "--objective",
         choices=sorted(cli_objectives()),

@@ -63,11 +63,19 @@ SAY_SECONDS = 3.0
 #: from six ``plan_area`` runs (superellipses of 200-5000 vertices, 37-216 lanes, and the
 #: 1000-vertex ellipse of ``benchmarks/web.py`` at 22 and 106 lanes, load 0.4-2: 0.12-3.7 s,
 #: within a factor 2), not yet fitted by ``benchmarks/estimate.py --fit``.
+#: ``"region-certified"`` (a concave area or one with holes under the default method: the
+#: certified optimum over segments of the area and its cells,
+#: :mod:`boustro.mission.region_certified`) has the form of ``"concave"`` (its exponents);
+#: ``a``, ``c1``, ``c2`` set on the nine areas of ``benchmarks/region_certified.py``
+#: (2026-11-27, load 2-2.7: five searches stopped by their budget, 0.37-1.05 s, and four
+#: converging, 0.14-0.17 s): estimate / measured 0.50-1.98. A budget-bound search costs about
+#: the same whatever the area (its budget), so the constant dominates on small areas.
 COST_MODEL: dict[str, tuple[float, ...]] = {
     "certified": (0.05, 3.18e-7),
     "certified-bb": (0.05, 0.005, 1.0, 4.2e-6, 1.6),
     "convex": (0.05, 0.329, 0.61, 8.94e-5, 1.72),
     "concave": (0.05, 2.03e-5, 2.02, 7.67e-5, 1.34),
+    "region-certified": (0.26, 6e-5, 2.02, 8.9e-5, 1.34),
 }
 
 #: Above this many (hull) vertices the certified optimiser's work is over its limit whatever
@@ -82,13 +90,14 @@ class WorkEstimate(NamedTuple):
     vertices: int  #: of the ring and the holes
     holes: int
     area_km2: float  #: ground area, km^2
-    kind: str  #: the row of :data:`COST_MODEL`: "certified", "certified-bb", "convex", "concave"
+    kind: str  #: the row of :data:`COST_MODEL`: "certified", "certified-bb", "convex",
+    #: "concave" (the grid), "region-certified"
     work: float  #: the certified optimiser's work (0 unless ``kind == "certified"``)
     seconds: float  #: estimated planning time on a machine like the calibration's
 
     @property
     def concave(self) -> bool:
-        return self.kind == "concave"
+        return self.kind in ("concave", "region-certified")
 
     def describe(self) -> str:
         """``"planning ~N lanes over V vertices, estimated T s"``."""
@@ -113,7 +122,9 @@ def frame_estimate(frame: Frame, method: str | None = None) -> WorkEstimate:
     lanes = frame.surveyed.diameter / s_plan  # the hull's diameter: its widest extent
     vertices = len(frame.ring) + sum(len(h) for h in frame.holes)
     kind, work = ("concave" if frame.region is not None else "convex"), 0.0
-    if kind == "convex" and method == SCALE_METHOD:
+    if kind == "concave" and method in (None, DEFAULT_METHOD, SCALE_METHOD):
+        kind = "region-certified"  # mission.region_certified (Eq. 1; the grid otherwise)
+    elif kind == "convex" and method == SCALE_METHOD:
         kind = "certified-bb"
     elif kind == "convex" and (method or DEFAULT_METHOD) == "global":
         kind = "certified-bb"  # beyond the event method's limit (mission.steps)

@@ -90,8 +90,11 @@ def plan_area(
             CRS; a GeoJSON mapping's ``crs`` member is used if it has one).
         method: optimiser (default :data:`DEFAULT_METHOD`), see :func:`boustro.optimize.optimize`;
             ``options`` override :data:`METHOD_OPTIONS`. Concave areas and areas with holes
-            are optimised by :func:`boustro.plan.optimize_region` (a grid search with the
-            exact per-segment fitness, :data:`REGION_OPTIONS`, ``options`` override it).
+            get, under Eq. 1 by default, the certified optimum over their segments
+            (:func:`~boustro.optimize.smith_bb.region.smith_bb_region`, of the area and of
+            each cell, :mod:`boustro.mission.region_certified`); ``method="grid"`` (or another
+            objective) the grid search :func:`boustro.plan.optimize_region` (exact
+            per-segment fitness, :data:`REGION_OPTIONS`, ``options`` override it).
         fitness: the objective (default Eq. 1, or mission time when ``speed`` is given):
             :class:`~boustro.objectives.MissionTime` (and fewest transects on a concave area or
             one with holes) is minimised over the flown plan by the certified search

@@ -155,7 +155,8 @@ def _optimize_convex(
     except ProblemTooLargeError as exc:
         if method is not None:
             raise
-        if fitness is None or type(fitness) is SmithFitness:  # Eq. 1: certified at scale
+        weighted = type(fitness) is SmithFitness and fitness.statistics == "weighted"
+        if fitness is None or weighted:  # Eq. 1 (weighted statistics): certified at scale
             log.info("%s; planning with the certified branch and bound (%s)", exc, SCALE_METHOD)
             return optimize(
                 frame.poly, s_plan, method=SCALE_METHOD, fitness=fitness, progress=progress

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -26,13 +27,22 @@ from ..problem import _progress_bar
 from ..region_grid import evaluate_region_grid
 from ..result import OptimizeResult, canonical
 from .region_kernel import region_bounds, region_values, ring_starts
-from .search import DEFAULT_TOL, SEED_ANGLES, _check, _run, _Search, _weights
+from .search import DEFAULT_TOL, SEED_ANGLES, _check, _check_angles, _run, _Search, _weights
 
-__all__ = ["REGION_MAX_WORK", "smith_bb_region"]
+__all__ = ["REGION_MAX_WORK", "ROBUST_ANGLE", "ROBUST_OFFSET", "robust_values", "smith_bb_region"]
 
 #: Segments at most this long (share of the normalised frame) are not counted, as
 #: :func:`~boustro.models.region.segment_moments` is called by ``region-grid``.
 TINY = 1e-12
+
+
+#: The perturbations of a candidate layout at which :func:`_final` also scores it: its angle by
+#: this many radians and its offset by this share of the spacing (the normalised frame, radius
+#: about 1). Far above float rounding (1e-16) and far below any real feature of an area (a
+#: vertex 1e-9 of the area's size from a line): a value that exists only at one layout, a line
+#: exactly through a vertex that rounding counts on one side, is not a layout one can fly.
+ROBUST_ANGLE = 1e-9
+ROBUST_OFFSET = 1e-9
 
 
 class _RegionSearch(_Search):
@@ -78,6 +88,22 @@ class _RegionSearch(_Search):
     def at_angle(self, theta: float, offsets: NDArray[np.float64]) -> NDArray[np.float64]:
         return self.values(np.full(len(offsets), theta), np.asarray(offsets, dtype=np.float64))
 
+    def offer(self, value: float, theta: float, d: float) -> None:
+        """As :meth:`_Search.offer`, but a layout that would raise the incumbent is first
+        scored robustly (the least value at it and its eight neighbours, :func:`robust_values`'s
+        steps): an incumbent that float rounding grants one layout (a line exactly through a
+        vertex) would prune the boxes holding the real optimum."""
+        if value > self.best:
+            steps = np.array([-1.0, 0.0, 1.0])
+            near = self.values(
+                theta + np.repeat(steps, 3) * ROBUST_ANGLE,
+                d + np.tile(steps, 3) * (ROBUST_OFFSET * self.s),
+            )
+            value = float(np.min(np.where(np.isnan(near), -np.inf, near)))
+            if not math.isfinite(value):
+                return
+        super().offer(value, theta, d)
+
 
 #: Work budget of a region's search (as :data:`~boustro.optimize.smith_bb.search.MAX_WORK`),
 #: a tenth of the convex one's: a region's box costs more, and where the bound stalls (lines
@@ -88,18 +114,38 @@ class _RegionSearch(_Search):
 REGION_MAX_WORK = 1e7
 
 
+def robust_values(
+    xy: NDArray[np.float64], theta: ArrayLike, d: ArrayLike, s: float, a: float, b: float
+) -> NDArray[np.float64]:
+    """Per layout, the least exact value (``region-grid``'s evaluator over the segments
+    ``xy``, normalised frame) at it and at its eight neighbours ``+-``:data:`ROBUST_ANGLE`,
+    ``+-``:data:`ROBUST_OFFSET` ``* s`` (NaN or no segment at any of them: ``-inf``)."""
+    th = np.asarray(theta, dtype=np.float64).reshape(-1)
+    dd = np.asarray(d, dtype=np.float64).reshape(-1)
+    steps = np.array([-1.0, 0.0, 1.0])
+    dt = np.repeat(steps, 3) * ROBUST_ANGLE
+    do = np.tile(steps, 3) * (ROBUST_OFFSET * s)
+    values = evaluate_region_grid(
+        xy.reshape(-1, 2, 2),
+        (th[:, None] + dt[None, :]).reshape(-1),
+        (dd[:, None] + do[None, :]).reshape(-1),
+        s,
+        fitness=SmithFitness(a=a, b=b),
+        pairs=True,
+    ).reshape(len(th), 9)
+    values = np.where(np.isnan(values), -np.inf, values)
+    return np.asarray(values.min(axis=1), dtype=np.float64)
+
+
 def _final(search: _RegionSearch) -> tuple[float, float, float]:
-    """``(fitness, theta, d)``: the candidates scored by ``region-grid``'s exact evaluator."""
+    """``(fitness, theta, d)``: the candidate of the best robust value (:func:`robust_values`,
+    the exact evaluator at the layout and its neighbours), and that value: a fitness that float
+    rounding grants a single layout (a line through a vertex) is not reported."""
     cands = list(search.candidates)
     if not cands:
         return -math.inf, 0.0, 0.0
-    values = evaluate_region_grid(
-        search.xy.reshape(-1, 2, 2),
-        [c[1] for c in cands],
-        [c[2] for c in cands],
-        search.s,
-        fitness=SmithFitness(a=search.a, b=search.b),
-        pairs=True,
+    values = robust_values(
+        search.xy, [c[1] for c in cands], [c[2] for c in cands], search.s, search.a, search.b
     )
     k = int(np.argmax(values))
     return float(values[k]), cands[k][1], cands[k][2]
@@ -127,12 +173,16 @@ def smith_bb_region(
     n_angles: int = 90,
     max_work: float | None = None,
     progress: bool | None = False,
+    incumbents: Sequence[tuple[float, float]] = (),
 ) -> OptimizeResult:
     """The maximum of Eq. 1 over the segments of a region (shell and holes, concave or not)
     over every angle and offset, with a certified upper bound.
 
     Args as :func:`~boustro.optimize.smith_bb.smith_bb` (the budget's default
-    :data:`REGION_MAX_WORK`); ``region`` in user units.
+    :data:`REGION_MAX_WORK`); ``region`` in user units; ``incumbents``: layouts ``(angle,
+    offset)`` (radians; user units from the shell's vertex mean, as returned, e.g. by
+    ``region-grid``) scored and polished before the first boxes: a good first incumbent
+    prunes more boxes (the result is as certified without them).
 
     Returns:
         :class:`OptimizeResult` with ``method="certified-bb"``, the offset from the shell's
@@ -153,9 +203,15 @@ def smith_bb_region(
     if max_work is None:
         max_work = REGION_MAX_WORK * max(1.0, DEFAULT_TOL / tol)
     max_work = _check("max_work", max_work, 0.0)
-    n_angles = int(_check("n_angles", n_angles, 1))
+    n_angles = _check_angles(n_angles)
     search = _RegionSearch(r, spacing, a, b)
     boxes = initial_boxes(search.s, search.radius, n_angles)
+    for angle, offset in incumbents:
+        theta, d = float(angle), float(offset) / search.frame.scale
+        value = float(search.values(np.array([theta]), np.array([d]))[0])
+        if math.isfinite(value):
+            search.offer(value, theta, d)
+        search.polish(theta, d)
     search.seed(SEED_ANGLES * n_angles)
     search.top_eps = float(box_radius(boxes, search.radius).max())
     bar = _progress_bar(100, progress, "certified-bb", unit="%")

@@ -206,6 +206,11 @@ def _weights(a: float, b: float, fitness: Any) -> tuple[float, float]:
                 "the certified-bb optimiser maximises Eq. 1 (a SmithFitness), got "
                 f"{type(fitness).__name__}"
             )
+        if getattr(fitness, "statistics", "weighted") != "weighted":
+            raise InvalidParameterError(
+                "the certified-bb optimiser maximises Eq. 1 with weighted statistics, got "
+                f"statistics={fitness.statistics!r} (use the grid or another method)"
+            )
         return float(fitness.a), float(fitness.b)
     SmithFitness(a=a, b=b)  # validates a, b >= 0 and finite
     return float(a), float(b)
@@ -219,6 +224,16 @@ def _check(name: str, value: Any, low: float) -> float:
     if not (x >= low and math.isfinite(x)):
         raise InvalidParameterError(f"{name} must be a finite number >= {low:g}, got {value!r}")
     return x
+
+
+def _check_angles(n_angles: Any) -> int:
+    """``n_angles`` as an int, or :class:`InvalidParameterError` (not a whole number >= 1)."""
+    ok = isinstance(n_angles, (int, float, np.integer, np.floating)) and not isinstance(
+        n_angles, bool
+    )
+    if not ok or not math.isfinite(n_angles) or int(n_angles) != n_angles or n_angles < 1:
+        raise InvalidParameterError(f"n_angles must be an integer >= 1, got {n_angles!r}")
+    return int(n_angles)
 
 
 def _evaluate(search: _Search, boxes: Boxes) -> NDArray[np.float64]:
@@ -347,8 +362,7 @@ def smith_bb(
     if max_work is None:
         max_work = MAX_WORK * max(1.0, DEFAULT_TOL / tol)
     max_work = _check("max_work", max_work, 0.0)
-    if int(n_angles) != n_angles or n_angles < 1:
-        raise InvalidParameterError(f"n_angles must be an integer >= 1, got {n_angles!r}")
+    n_angles = _check_angles(n_angles)
     frame = poly.frame
     search = _Search(poly, spacing, a, b)
     boxes = initial_boxes(search.s, search.radius, int(n_angles))
