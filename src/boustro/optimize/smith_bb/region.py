@@ -23,11 +23,10 @@ from ...objectives import SmithFitness
 from ..cover.boxes import Boxes, box_radius, initial_boxes, level_radius
 from ..cover.sandwich import Sandwich
 from ..cover.search import SIMPLIFY_EDGES, SIMPLIFY_SPACING
-from ..problem import _progress_bar
 from ..region_grid import evaluate_region_grid
-from ..result import OptimizeResult, canonical
+from ..result import OptimizeResult
 from .region_kernel import region_bounds, region_values, ring_starts
-from .search import DEFAULT_TOL, SEED_ANGLES, _check, _check_angles, _run, _Search, _weights
+from .search import DEFAULT_TOL, SEED_ANGLES, _check, _check_angles, _Search, _weights, solve
 
 __all__ = ["REGION_MAX_WORK", "ROBUST_ANGLE", "ROBUST_OFFSET", "robust_values", "smith_bb_region"]
 
@@ -213,38 +212,4 @@ def smith_bb_region(
             search.offer(value, theta, d)
         search.polish(theta, d)
     search.seed(SEED_ANGLES * n_angles)
-    search.top_eps = float(box_radius(boxes, search.radius).max())
-    bar = _progress_bar(100, progress, "certified-bb", unit="%")
-    try:
-        with np.errstate(all="ignore"):
-            closed, rounds, stopped = _run(search, boxes, tol, max_work, bar)
-    finally:
-        if bar is not None:
-            bar.close()
-    value, theta, d = _final(search)
-    if not math.isfinite(value):
-        raise NoTransectError(f"no transect crosses the area at spacing {spacing:g}")
-    upper = max(closed, search.best, value)
-    gap = upper - value
-    angle, offset = canonical(theta, d * search.frame.scale, spacing)
-    return OptimizeResult(
-        angle=angle,
-        offset=offset,
-        fitness=value,
-        spacing=spacing,
-        method="certified-bb",
-        evaluations=search.evaluations,
-        seconds=time.perf_counter() - t0,
-        upper_bound=upper,
-        info={
-            "gap": gap,
-            "converged": gap <= tol * (1 + 1e-9),
-            "tol": tol,
-            "a": a,
-            "b": b,
-            "boxes": search.bounded,
-            "rounds": rounds,
-            "region": True,
-            **({"stopped": stopped} if stopped else {}),
-        },
-    )
+    return solve(search, boxes, spacing, tol, max_work, progress, t0, "area", _final, region=True)

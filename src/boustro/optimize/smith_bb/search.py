@@ -35,7 +35,7 @@ from ..problem import _check_narrower, _progress_bar, evaluate_pairs
 from ..result import OptimizeResult, canonical
 from .kernel import box_bounds, eq1_at_angle, eq1_values
 
-__all__ = ["DEFAULT_TOL", "MAX_WORK", "smith_bb"]
+__all__ = ["DEFAULT_TOL", "MAX_WORK", "smith_bb", "solve"]
 
 #: Default certified gap (absolute, on Eq. 1, which lies in ``[b/2, a + b]``).
 DEFAULT_TOL = 1e-4
@@ -363,10 +363,28 @@ def smith_bb(
         max_work = MAX_WORK * max(1.0, DEFAULT_TOL / tol)
     max_work = _check("max_work", max_work, 0.0)
     n_angles = _check_angles(n_angles)
-    frame = poly.frame
     search = _Search(poly, spacing, a, b)
     boxes = initial_boxes(search.s, search.radius, int(n_angles))
     search.seed(SEED_ANGLES * int(n_angles))
+    return solve(search, boxes, spacing, tol, max_work, progress, t0, "polygon", _final)
+
+
+def solve(
+    search: Any,
+    boxes: Boxes,
+    spacing: float,
+    tol: float,
+    max_work: float,
+    progress: bool | None,
+    t0: float,
+    what: str,
+    final: Any,
+    **info: Any,
+) -> OptimizeResult:
+    """Run a seeded search (:class:`_Search` or the region's) over its first ``boxes`` to
+    ``tol`` or ``max_work`` and return its certified result; ``final(search)`` gives the
+    returned ``(value, theta, d)``, ``what`` names the area in the error of no transect,
+    ``info`` is added to the result's."""
     search.top_eps = float(box_radius(boxes, search.radius).max())
     bar = _progress_bar(100, progress, "certified-bb", unit="%")
     try:
@@ -375,12 +393,12 @@ def smith_bb(
     finally:
         if bar is not None:
             bar.close()
-    value, theta, d = _final(search)
+    value, theta, d = final(search)
     if not math.isfinite(value):
-        raise NoTransectError(f"no transect crosses the polygon at spacing {spacing:g}")
+        raise NoTransectError(f"no transect crosses the {what} at spacing {spacing:g}")
     upper = max(closed, search.best, value)
     gap = upper - value
-    angle, offset = canonical(theta, d * frame.scale, spacing)
+    angle, offset = canonical(theta, d * search.frame.scale, spacing)
     return OptimizeResult(
         angle=angle,
         offset=offset,
@@ -394,10 +412,11 @@ def smith_bb(
             "gap": gap,
             "converged": gap <= tol * (1 + 1e-9),
             "tol": tol,
-            "a": a,
-            "b": b,
+            "a": search.a,
+            "b": search.b,
             "boxes": search.bounded,
             "rounds": rounds,
+            **info,
             **({"stopped": stopped} if stopped else {}),
         },
     )
