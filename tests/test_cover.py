@@ -281,3 +281,18 @@ def test_keep_inside_time_plan_stays_inside_and_covers():
     assert m.stats.outside_length == 0.0
     assert m.coverage.covered_share == pytest.approx(1.0, abs=1e-9)
     assert m.optimum.info["lower_bound"] <= m.stats.duration
+
+
+def test_chords_layout_is_not_certified_by_the_guaranteed_lanes_bound(capsys, tmp_path):
+    # the bound counts coverage-guaranteed lanes; a chords plan can cost less than it (a review
+    # found lower_bound 319.97 above a chords plan of 289.40 on a comb), so no certificate
+    ring = tmp_path / "tri.geojson"
+    ring.write_text(json.dumps({"type": "Polygon", "coordinates": [
+        [[0, 0], [100, 0], [50, 13], [0, 0]]]}))  # fmt: skip
+    code, out, err = run_cli(capsys, "plan", str(ring), "--crs", "none", "--spacing", "9",
+                             "--layout", "chords", "--speed", "5", "--turn-time", "10",
+                             "--json")  # fmt: skip
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["objective"] == "time" and d["certified"] is False and d["gap"] is None
+    assert "lower_bound" not in d

@@ -202,3 +202,18 @@ def test_chevron_plan_gap_is_cut_by_the_lane_ends():
         for d in np.linspace(0, 10.0, 3, endpoint=False)
     )
     assert m.stats.duration - s["gap"] <= brute + 1e-9
+
+
+def test_runins_cut_at_a_hole_are_not_counted_by_the_bound():
+    # a run-in or run-out that would enter a hole is cut by the planner (a review's case: the
+    # bound counted 2 x 3 m per lane, 2022.31 > the plan's 2022.20)
+    area = Region(Polygon([(0, 0), (100, 0), (100, 60), (0, 60)]),
+                  [Polygon([(3, 3), (97, 3), (97, 5), (3, 5)])])  # fmt: skip
+    cost = CoverCost.time(5.0, 200.0, turnaround=3.0)
+    theta, d = math.radians(177.075), 4.636
+    plan = plan_region(area, 9.0, decompose_area=False, angle=theta, offset=d, speed=5.0,
+                       turn_time=10.0, turnaround=3.0)  # fmt: skip
+    flown = cost.of(plan.stats.path_length, plan.stats.n_turns)
+    search = CoverSearch(area, 9.0, 4.5, cost, None, False)
+    box = Boxes(np.array([theta]), np.zeros(1), np.array([d]), np.zeros(1))
+    assert search.point_values(box, exact=True)[0] <= flown + 1e-9

@@ -11,6 +11,7 @@ from ..errors import InvalidParameterError
 from ..geometry import Polygon
 from ..geometry.region import Region
 from ..objectives import FewestTransects, MissionTime
+from ..optimize import OptimizeResult
 from ..optimize.cover import CoverCost, cover_optimum
 from ..plan import Plan, build_plan, coverage
 from ..plan.region import plan_region
@@ -112,6 +113,14 @@ def _cost_key(plan: Plan) -> tuple[float, int]:
     return (plan.stats.path_length, plan.stats.n_turns)
 
 
+def _uncertified_chords(optimum: OptimizeResult) -> OptimizeResult:
+    """The search's result without its certificate: its bound counts coverage-guaranteed
+    lanes, which the chords layout's lanes (shorter, sometimes fewer) can undercut."""
+    info = {k: v for k, v in optimum.info.items() if k != "lower_bound"}
+    info.update(certified=False, gap=None, uncertified="the chords layout has no certificate")
+    return dataclasses.replace(optimum, info=info)
+
+
 def plan_cover(
     frame: Frame,
     cost: CoverCost,
@@ -159,6 +168,8 @@ def plan_cover(
         boustrophedon=boustrophedon,
         keep_inside=keep_inside,
     )
+    if layout == "chords":
+        optimum = _uncertified_chords(optimum)
     plan = planner(optimum.angle, optimum.offset)
     if plan.cells:  # the one cell carries the certificate
         cells = tuple(

@@ -49,6 +49,7 @@ def lower_bounds(
     *,
     boustrophedon: bool,
     ends: HoleBoxes | None = None,
+    runins: bool = True,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every plan of the layouts' grids over any area
     between ``level``'s inner and outer sets.
@@ -66,7 +67,9 @@ def lower_bounds(
     per line, consecutive lines joined end to end) each move is at least the distance between
     the ranges of its two ends. With ``ends`` (the holes' boxes, :func:`~.ends.hole_boxes`; a
     routed tour without boundary or headland passes) the moves and extra lanes are also at least
-    :func:`~.ends.lane_end_bound`, and the larger of the two is taken.
+    :func:`~.ends.lane_end_bound`, and the larger of the two is taken. ``runins=False`` (an
+    area with holes: the planner cuts a run-in or run-out that would enter a hole) counts no
+    run-ins or run-outs in the lanes' length.
     """
     n_lanes = st.count.sum(axis=1)
     holes = level.hole_perimeter.shape[0]
@@ -88,9 +91,10 @@ def lower_bounds(
         exact = _boustrophedon_moves(st, spacing)
         moves = np.where(np.isfinite(exact), np.maximum(moves, exact), moves)
     turns = np.maximum(n_lanes + n_passes - 1, 0)
+    runs = 2.0 * cost.turnaround * n_lanes if runins else 0.0
     if ends is not None:  # the larger of the two bounds on the moves (and extra lanes)
-        fixed = st.length.sum(axis=1) + 2.0 * cost.turnaround * n_lanes + perimeter
+        fixed = st.length.sum(axis=1) + runs + perimeter
         move_cost = np.maximum(cost.per_length * moves, lane_end_bound(st, spacing, cost, ends))
         return cost.per_length * fixed + move_cost + cost.per_turn * turns + cost.fixed
-    length = st.length.sum(axis=1) + 2.0 * cost.turnaround * n_lanes + moves + perimeter
+    length = st.length.sum(axis=1) + runs + moves + perimeter
     return cost.per_length * length + cost.per_turn * turns + cost.fixed

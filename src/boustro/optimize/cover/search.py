@@ -148,7 +148,10 @@ class CoverSearch:
         self.bound_evaluations += len(boxes.theta)
         self.work += len(boxes.theta) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
         ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
-        out = lower_bounds(st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends)
+        out = lower_bounds(
+            st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
+            runins=self.n_holes == 0,
+        )  # fmt: skip
         if span_only:
             return out
         self.model_min = min(self.model_min, float(out.min(initial=math.inf)))
@@ -187,8 +190,9 @@ class CoverSearch:
             ends = self._hole_boxes(boxes.theta[sel], boxes.d[sel], reach_out)
             self.work += int(sel.sum()) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
             out[sel] = lower_bounds(
-                st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends
-            )
+                st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
+                runins=self.n_holes == 0,
+            )  # fmt: skip
         self.bound_evaluations += len(eps)
         return out
 
