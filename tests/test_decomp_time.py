@@ -358,3 +358,24 @@ def test_or_tools_order_is_deterministic_and_says_its_cap(monkeypatch):
     monkeypatch.setattr(cell_order, "ORTOOLS_SECONDS", 1e-3)
     c = solve_order(passes, np.zeros(2), router, solver="or-tools")
     assert any("safety cap" in n for n in c[3])
+
+
+def test_cells_searched_largest_first_and_stopped_once_their_bounds_reach_the_grid():
+    from types import SimpleNamespace
+
+    from boustro.mission.decomposed import _cell_optima
+
+    cells = [SimpleNamespace(area=a) for a in (1.0, 5.0, 3.0)]
+    asked = []
+
+    class Search:
+        def optimum(self, cell):
+            asked.append(cell.area)
+            return SimpleNamespace(info={"lower_bound": 10.0 * cell.area})
+
+    got = _cell_optima(Search(), cells, beat=None)
+    assert asked == [5.0, 3.0, 1.0]
+    assert [o.info["lower_bound"] for o in got] == [10.0, 50.0, 30.0]  # the cells' order
+    asked.clear()
+    assert _cell_optima(Search(), cells, beat=70.0) is None  # 50 + 30 >= 70: no third search
+    assert asked == [5.0, 3.0]

@@ -330,6 +330,27 @@ def _candidates(region: Region, search: _Search, sweep: float | None) -> list[_C
     return out
 
 
+def _cell_optima(
+    search: _Search, cells: list[Region], beat: float | None
+) -> list[OptimizeResult] | None:
+    """The cells' certified optima, largest cell first; ``None`` when a cell has none, or when
+    (with ``beat``, the one grid's cost) the cells' lower bounds already add up to ``beat``:
+    the whole plan flies every cell's lanes, moves and turns, and more (moves between cells, a
+    turn each), so it would not win (a screen, not a bound: the solved order may interleave
+    the cells' passes)."""
+    found: dict[int, OptimizeResult] = {}
+    floor = 0.0
+    for k in sorted(range(len(cells)), key=lambda k: -cells[k].area):
+        opt = search.optimum(cells[k])
+        if opt is None:
+            return None
+        found[k] = opt
+        floor += float(opt.info.get("lower_bound") or 0.0)
+        if beat is not None and floor >= beat:
+            return None
+    return [found[k] for k in range(len(cells))]
+
+
 def plan_decomposed(
     frame: Frame,
     cost: CoverCost,
@@ -374,9 +395,8 @@ def plan_decomposed(
     planned = PLANNED if len(region.edges) <= LARGE_EDGES else 1
     for cand in candidates[:planned]:
         for search in searches:
-            found = [search.optimum(c) for c in cand.cells]
-            optima = [o for o in found if o is not None]
-            if len(optima) < len(found):
+            optima = _cell_optima(search, cand.cells, beat)
+            if optima is None:
                 continue
             plan = plan_region(
                 region, search.s, layout=lay, cells=list(zip(cand.cells, optima, strict=True)),
