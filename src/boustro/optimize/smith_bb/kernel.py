@@ -105,26 +105,49 @@ def _sup(lo, hi, j0, j1, a, b, pos):
     Between consecutive interval ends the free lengths (``lo < c < hi``) equal ``c`` and the
     others are fixed, so ``G`` is concave there: its maximum is at an end or where
     ``a n std = b ((n - f) c - S)`` (``f`` free, ``S`` the fixed sum, centred), a quadratic
-    solved in closed form. A sweep over the ``2 n`` sorted ends keeps the running sums."""
+    solved in closed form. A sweep over the ``2 n`` sorted ends keeps the running sums
+    (:func:`_sup_w` with every interval taken once)."""
     n = j1 - j0 + 1
     ref = 0.0
     for k in range(j0, j1 + 1):
         ref += lo[k] + hi[k]
     ref /= 2 * n
-    for q in range(n):
+    for q in range(n):  # the ends sorted as _sup_w centres them (the same order on ties)
         pos[2 * q] = lo[j0 + q] - ref
         pos[2 * q + 1] = hi[j0 + q] - ref
     order = np.argsort(pos[: 2 * n])
-    sx, qx, f = 0.0, 0.0, 0
-    for q in range(n):
+    return _sup_w(lo[j0 : j1 + 1], hi[j0 : j1 + 1], np.ones(n), n, order, a, b, pos)
+
+
+def _sup_w(lo, hi, w, m, order, a, b, pos):
+    """The maximum of Eq. 1 over lengths ``lo_q <= L <= hi_q`` of ``m`` intervals, interval
+    ``q`` taken ``w_q`` times (``order``: the argsort of the ends ``lo_0, hi_0, lo_1, ...``):
+    the convex kernel's ``_sup`` with multiplicities (the KKT maximiser gives equal lengths
+    to the copies of one interval)."""
+    n = 0.0
+    ref = 0.0
+    for q in range(m):
+        n += w[q]
+        ref += w[q] * (lo[q] + hi[q])
+    if n == 0.0:
+        return -np.inf
+    ref /= 2 * n
+    for q in range(m):
+        pos[2 * q] = lo[q] - ref
+        pos[2 * q + 1] = hi[q] - ref
+    sx, qx, f = 0.0, 0.0, 0.0
+    for q in range(m):
         x = pos[2 * q]
-        sx += x
-        qx += x * x
+        sx += w[q] * x
+        qx += w[q] * x * x
     err_share = (8.0 * n + 16.0) * 2.3e-16
-    best = _g(a, b, n, ref, sx, qx, 0, 0.0, err_share)  # every length at its lower end
+    best = _g(a, b, n, ref, sx, qx, 0.0, 0.0, err_share)
     prev = pos[order[0]]
-    for e in range(2 * n):
+    for e in range(2 * m):
         i = order[e]
+        wq = w[i // 2]
+        if wq == 0.0:
+            continue
         ce = pos[i]
         if f > 0 and ce > prev:
             best = max(best, _g(a, b, n, ref, sx, qx, f, ce, err_share))
@@ -133,8 +156,6 @@ def _sup(lo, hi, j0, j1, a, b, pos):
             a1 = 2.0 * sx * (b * b * p - a * a * f)
             a0 = a * a * (n * qx - sx * sx) - b * b * sx * sx
             if p > 0 and a2 != 0.0:
-                # the roots, and the parabola's vertex: a double root (a = 0: the least std)
-                # that rounding may push to a negative discriminant; any c is a valid point
                 disc = a1 * a1 - 4.0 * a2 * a0
                 root = math.sqrt(max(disc, 0.0))
                 qq = -0.5 * (a1 + root if a1 >= 0.0 else a1 - root)
@@ -142,14 +163,14 @@ def _sup(lo, hi, j0, j1, a, b, pos):
                     if prev < r < ce:
                         best = max(best, _g(a, b, n, ref, sx, qx, f, r, err_share))
         x = pos[i]
-        if i % 2 == 0:  # a lower end: the length becomes free
-            sx -= x
-            qx -= x * x
-            f += 1
-        else:  # an upper end: fixed there
-            sx += x
-            qx += x * x
-            f -= 1
+        if i % 2 == 0:
+            sx -= wq * x
+            qx -= wq * x * x
+            f += wq
+        else:
+            sx += wq * x
+            qx += wq * x * x
+            f -= wq
         prev = ce
     return best
 
@@ -222,7 +243,7 @@ def _compiled() -> tuple[Any, Any]:
     (safe from several threads at once: :func:`boustro._jit.jit_globals`)."""
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _bounds, _values
-    jit_globals(globals(), ("_spans", "_eq1", "_g", "_sup", "_upper"))
+    jit_globals(globals(), ("_spans", "_eq1", "_g", "_sup_w", "_sup", "_upper"))
     return jit(_bounds), jit(_values)
 
 

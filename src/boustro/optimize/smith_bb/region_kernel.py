@@ -38,7 +38,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._jit import jit, jit_globals
-from .kernel import _g, lines_range
+from . import kernel
+from .kernel import _sup_w, lines_range
 
 __all__ = ["region_bounds", "region_values", "ring_starts"]
 
@@ -165,62 +166,6 @@ def _chain_counts(xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, cnt):
                 if lo_h - eps <= c <= hi_h + eps:
                     cnt[k - k0] += 1
             i = j
-
-
-def _sup_w(lo, hi, w, m, order, a, b, pos):
-    """The maximum of Eq. 1 over lengths ``lo_q <= L <= hi_q`` of ``m`` intervals, interval
-    ``q`` taken ``w_q`` times (``order``: the argsort of the ends ``lo_0, hi_0, lo_1, ...``):
-    the convex kernel's ``_sup`` with multiplicities (the KKT maximiser gives equal lengths
-    to the copies of one interval)."""
-    n = 0.0
-    ref = 0.0
-    for q in range(m):
-        n += w[q]
-        ref += w[q] * (lo[q] + hi[q])
-    if n == 0.0:
-        return -np.inf
-    ref /= 2 * n
-    for q in range(m):
-        pos[2 * q] = lo[q] - ref
-        pos[2 * q + 1] = hi[q] - ref
-    sx, qx, f = 0.0, 0.0, 0.0
-    for q in range(m):
-        x = pos[2 * q]
-        sx += w[q] * x
-        qx += w[q] * x * x
-    err_share = (8.0 * n + 16.0) * 2.3e-16
-    best = _g(a, b, n, ref, sx, qx, 0.0, 0.0, err_share)
-    prev = pos[order[0]]
-    for e in range(2 * m):
-        i = order[e]
-        wq = w[i // 2]
-        if wq == 0.0:
-            continue
-        ce = pos[i]
-        if f > 0 and ce > prev:
-            best = max(best, _g(a, b, n, ref, sx, qx, f, ce, err_share))
-            p = n - f
-            a2 = p * (a * a * f - b * b * p)
-            a1 = 2.0 * sx * (b * b * p - a * a * f)
-            a0 = a * a * (n * qx - sx * sx) - b * b * sx * sx
-            if p > 0 and a2 != 0.0:
-                disc = a1 * a1 - 4.0 * a2 * a0
-                root = math.sqrt(max(disc, 0.0))
-                qq = -0.5 * (a1 + root if a1 >= 0.0 else a1 - root)
-                for r in (qq / a2, a0 / qq if qq != 0.0 else prev, -0.5 * a1 / a2):
-                    if prev < r < ce:
-                        best = max(best, _g(a, b, n, ref, sx, qx, f, r, err_share))
-        x = pos[i]
-        if i % 2 == 0:
-            sx -= wq * x
-            qx -= wq * x * x
-            f += wq
-        else:
-            sx += wq * x
-            qx += wq * x * x
-            f -= wq
-        prev = ce
-    return best
 
 
 def _owners(oa, ob, o0, o1, pa, pb, p0, p1, tiny, owner):
@@ -416,7 +361,8 @@ def _compiled() -> tuple[Any, Any]:
     """``(_bounds, _values)`` compiled by numba (cached on disk), or plain Python without it."""
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _bounds, _values
-    helpers = ("_g", "_first_line", "_intervals", "_chain_counts", "_sup_w", "_owners",
+    kernel._compiled()  # _sup_w's own helpers (kernel's _g) compiled where it looks them up
+    helpers = ("_first_line", "_intervals", "_chain_counts", "_sup_w", "_owners",
                "_line_segments", "_relaxed", "_bound")  # fmt: skip
     jit_globals(globals(), helpers)
     return jit(_bounds), jit(_values)
