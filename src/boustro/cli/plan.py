@@ -327,7 +327,11 @@ def _add_path(p: argparse.ArgumentParser) -> None:
         "--layout",
         choices=("guaranteed", "chords"),
         default="guaranteed",
-        help="transect segments: coverage-guaranteed (default) or the lines' chords",
+        help=(
+            "transect segments: coverage-guaranteed (default) or the lines' chords (chords "
+            "leave the area's edges partly uncovered; a time plan of chords carries no "
+            "certificate)"
+        ),
     )
     path.add_argument(
         "--hull-tolerance",
