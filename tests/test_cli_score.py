@@ -159,3 +159,20 @@ def test_soft_model(capsys):
     assert soft["model"] == "soft" and soft["smoothing"] == pytest.approx(1e-4)
     code, out, _ = run(capsys, "score", "--angle", "20", "--offset", "0.1", "--json")
     assert abs(json.loads(out)["fitness"] - soft["fitness"]) < 1e-3
+
+
+@pytest.mark.parametrize(
+    "argv, quiet, verbose",
+    [
+        (["-q", "score", "x.json"], True, 0),
+        (["score", "x.json", "-q"], True, 0),
+        (["score", "x.json"], False, 0),
+        (["-v", "score", "x.json"], False, 1),
+        (["score", "-v", "x.json"], False, 1),
+    ],
+)
+def test_verbosity_before_or_after_the_command(argv, quiet, verbose):
+    from boustro.cli import build_parser
+
+    args = build_parser().parse_args(argv)
+    assert (args.quiet, args.verbose) == (quiet, verbose)

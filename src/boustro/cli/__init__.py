@@ -29,15 +29,33 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Run 'boustro COMMAND --help' for the options of a command.",
     )
     parser.add_argument("--version", action="version", version=f"boustro {__version__}")
-    verbosity = parser.add_mutually_exclusive_group()
-    verbosity.add_argument("-v", "--verbose", action="count", default=0, help="more logging")
-    verbosity.add_argument(
-        "-q", "--quiet", action="store_true", help="no progress bars, warnings only"
-    )
+    _add_verbosity(parser, default=True)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in SUBCOMMANDS:
         importlib.import_module(f"{__name__}.{name}").register(sub)
+    for command in sub.choices.values():  # `boustro plan F -q` as well as `boustro -q plan F`
+        _add_verbosity(command, default=False)
     return parser
+
+
+def _add_verbosity(parser: argparse.ArgumentParser, default: bool) -> None:
+    """``-v``/``-q`` on ``parser``; a subcommand's copies set nothing unless given (SUPPRESS),
+    so they never undo the same option given before the subcommand."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument(
+        "-v",
+        "--verbose",
+        action="count",
+        default=0 if default else argparse.SUPPRESS,
+        help="more logging",
+    )
+    group.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        default=False if default else argparse.SUPPRESS,
+        help="no progress bars, warnings only",
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
