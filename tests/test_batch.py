@@ -414,6 +414,8 @@ def test_plan_area_for_the_geo_stack():
         boustro.plan_area(shapely.Polygon([(0, 0), (10, 10), (10, 0), (0, 10)]), 1.0)
     with pytest.raises(PolygonFileError):
         boustro.plan_area(shapely.Point(0, 0), 1.0)
+    with pytest.raises(PolygonFileError, match=r"\(N, 2\) ring .* boustro.mission.plan_area"):
+        boustro.plan_area(np.array([(0, 0), (10, 0), (10, 10)]), 1.0)
 
 
 def test_geodataframes_in_and_out(tmp_path):

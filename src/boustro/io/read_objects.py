@@ -57,6 +57,12 @@ def _mapping(obj: Any, where: str) -> dict[str, Any]:
         raise PolygonFileError(
             f"{where}: expected a GeoJSON geometry, Feature or FeatureCollection mapping, or an "
             f"object with __geo_interface__, got {type(obj).__name__}"
+            + (
+                " (for an (N, 2) ring of coordinates use boustro.mission.plan_area, or "
+                "shapely.Polygon(ring))"
+                if isinstance(obj, (list, tuple, np.ndarray))
+                else ""
+            )
         )
     return _plain(geo)
 
