@@ -72,14 +72,15 @@ def _place_gap(lo, hi, la, j, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, t
 
 
 def _charges(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, s, t, half, window):
-    """Per layout: ``sum_k min(sum of line k's v(e), 2 half) - (the two largest v)`` (module
-    docstring; plain Python, compiled by numba on first use)."""
+    """Per layout: ``sum_k min(sum of line k's v(e), 2 half)`` minus the two path ends' charges
+    (module docstring; plain Python, compiled by numba on first use)."""
     n_layouts, nb = count.shape
     out = np.zeros(n_layouts)
     zlo, zhi = np.empty(4), np.empty(4)
     olo, ohi = np.empty(4), np.empty(4)
+    vals = np.empty(4)
     for la in range(n_layouts):
-        total, m1, m2 = 0.0, 0.0, 0.0
+        total, m1, m2, lanes, lone = 0.0, 0.0, 0.0, 0, 0.0
         for k in range(nb):
             c = count[la, k]
             if c < 1:
@@ -123,14 +124,25 @@ def _charges(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, s, 
                         g = _place_gap(lo, hi, la, j, out_lo, in_lo, in_hi, out_hi, first_hi,
                                        last_lo, t)  # fmt: skip
                         best = min(best, math.sqrt(dv * dv + g * g))
-                v = 0.5 * best
-                line += v
+                vals[z] = 0.5 * best
+                line += vals[z]
+            total += min(line, 2.0 * half)
+            # the lanes' largest charges: ends 0 and 2 are one lane's, 1 and 3 another's
+            if n_z == 2:
+                lane_max = (max(vals[0], vals[1]), -1.0)
+                lone = vals[0] + vals[1]
+            else:
+                lane_max = (max(vals[0], vals[2]), max(vals[1], vals[3]))
+            for v in lane_max:
+                if v < 0:
+                    continue
+                lanes += 1
                 if v > m1:
                     m1, m2 = v, m1
                 elif v > m2:
                     m2 = v
-            total += min(line, 2.0 * half)
-        out[la] = max(0.0, total - m1 - m2)
+        free = lone if lanes == 1 else m1 + m2  # one lane: both its ends may be free
+        out[la] = max(0.0, total - free)
     return out
 
 
