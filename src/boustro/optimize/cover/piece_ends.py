@@ -62,15 +62,6 @@ def _gap(lo, hi, lo2, hi2):
     return max(max(lo, lo2) - min(hi, hi2), 0.0)
 
 
-def _place_gap(lo, hi, la, j, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, t):
-    """Distance along the lines from ``[lo, hi]`` to the places of line ``j``."""
-    g = min(_gap(lo, hi, out_lo[la, j] - t, in_lo[la, j]),
-            _gap(lo, hi, in_hi[la, j], out_hi[la, j] + t))  # fmt: skip
-    if first_hi[la, j] <= last_lo[la, j]:
-        g = min(g, _gap(lo, hi, first_hi[la, j] - t, last_lo[la, j] + t))
-    return g
-
-
 def _charges(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, s, t, half, window):
     """Per layout: ``sum_k min(sum of line k's v(e), 2 half)`` minus the two path ends' charges
     (module docstring; plain Python, compiled by numba on first use)."""
@@ -98,11 +89,16 @@ def _charges(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, s, 
                 zlo[3], zhi[3] = pieces[la, k, 2] - t, last_lo[la, k]
                 olo[3], ohi[3] = out_lo[la, k] - t, pieces[la, k, 3] + t
                 n_z = 4
+            near = 0  # count-0 lines with an outer projection within half: look that far
+            for off in range(1, min(window, int(half / s) + 1) + 1):
+                for j in (k - off, k + off):
+                    if 0 <= j < nb and count[la, j] == 0 and not math.isnan(out_lo[la, j]):
+                        near = off
             line = 0.0
             for z in range(n_z):
                 lo, hi = zlo[z], zhi[z]
                 d0 = half  # beyond it the other term is the cap
-                for off in range(1, window + 1):
+                for off in range(1, near + 1):
                     dv = off * s
                     if dv >= d0:
                         break
@@ -121,8 +117,14 @@ def _charges(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, s, 
                     for j in (k - off, k + off):
                         if j < 0 or j >= nb or count[la, j] < 1:
                             continue
-                        g = _place_gap(lo, hi, la, j, out_lo, in_lo, in_hi, out_hi, first_hi,
-                                       last_lo, t)  # fmt: skip
+                        g = max(max(lo, out_lo[la, j] - t) - min(hi, in_lo[la, j]), 0.0)
+                        g2 = max(max(lo, in_hi[la, j]) - min(hi, out_hi[la, j] + t), 0.0)
+                        g = min(g, g2)
+                        if g > 0.0 and first_hi[la, j] <= last_lo[la, j]:
+                            g2 = max(
+                                max(lo, first_hi[la, j] - t) - min(hi, last_lo[la, j] + t), 0.0
+                            )
+                            g = min(g, g2)
                         best = min(best, math.sqrt(dv * dv + g * g))
                 vals[z] = 0.5 * best
                 line += vals[z]
@@ -151,7 +153,7 @@ def _compiled() -> Any:
     """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _charges
-    jit_globals(globals(), ("_gap", "_place_gap"))
+    jit_globals(globals(), ("_gap",))
     return jit(_charges)
 
 
