@@ -228,7 +228,12 @@ def test_exact_tour_never_longer_than_greedy_two_opt(force_start, monkeypatch):
             start = region.shell.vertices[0] if force_start else None
             kw = dict(decompose_area=False, angle=a, offset=d, speed=5.0, turn_time=10.0,
                       start=start)  # fmt: skip
-            exact = plan_region(region, SPACING, **kw).stats
+            plan = plan_region(region, SPACING, **kw)
+            exact = plan.stats
+            # the mission time is the one recomputed from the waypoints
+            path = float(np.linalg.norm(np.diff(plan.waypoints, axis=0), axis=1).sum())
+            assert exact.path_length == pytest.approx(path, rel=1e-9)
+            assert exact.duration == pytest.approx(path / 5.0 + 10.0 * exact.n_turns, rel=1e-9)
             with monkeypatch.context() as m:
                 m.setattr(tour_module, "EXACT_TOUR_PASSES", 0)
                 heuristic = plan_region(region, SPACING, **kw).stats
