@@ -77,11 +77,9 @@ class BandStats(NamedTuple):
     * ``first_hi, last_lo``: the end of the first and the start of the last piece of the inner
       projection minus the inner set's hole chords (``nan`` where none): the lane holding the
       first piece ends at ``first_hi`` or beyond (:mod:`~boustro.optimize.cover.ends`);
-    * ``pieces (L, B, 4)``: of the outer pieces that hold inner length (those ``count``
-      counts), the end of the first, the start of the second, the start of the last and the
-      end of the one before it (``nan`` where fewer than two): the lane holding the first
-      inner piece lies in the first of them, so it ends in ``[first_hi, pieces[..., 0]]``, and
-      a lane in another of them starts at ``pieces[..., 1]`` or beyond.
+    * ``pieces (L, B, 4)``: of the outer pieces ``count`` counts, the end of the first, the
+      start of the second, the start of the last, the end of the one before (``nan`` if fewer
+      than two; :mod:`~boustro.optimize.cover.piece_ends`).
     """
 
     k0: int
@@ -362,7 +360,7 @@ def _leaf(
         # outer pieces holding inner length
         c = 0
         j = 0
-        before = math.nan  # the end of the counted piece before the current last one
+        before = math.nan  # the end of the counted piece before the last one
         for q in range(n_q):
             while j < n_p and phi[j] <= qlo[q] + tol:
                 j += 1
