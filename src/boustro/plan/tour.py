@@ -15,6 +15,7 @@ from .cells import _frame
 from .lanes import Lanes
 from .order_kernel import improve_order
 from .routing import Router
+from .tour_exact import EXACT_TOUR_PASSES, exact_nodes
 from .types import KINDS
 
 __all__ = [
@@ -130,7 +131,8 @@ def _order(
     """Order and driving option of every pass. With ``force_start`` the first is the pass and
     option whose entry (a lane end) is nearest ``start``; without, ``start`` only seeds the
     greedy order and the tour begins where it is shortest. The rest greedy, then 2-opt (at most
-    ``budget`` orders evaluated) with the options chosen by dynamic programming."""
+    ``budget`` orders evaluated) with the options chosen by dynamic programming; for at most
+    :data:`~.tour_exact.EXACT_TOUR_PASSES` passes the exact order where it is shorter."""
     pts, entry_idx, exit_idx = [start], [], []
     for p in passes:
         e_i, x_i = [], []
@@ -201,7 +203,43 @@ def _order(
         order, best_cost, budget, int(force_start), first_cost, dist, entry_idx, exit_idx, internal
     )
     _, choice = cost(order)
+    if 1 < len(passes) <= EXACT_TOUR_PASSES:
+        pin = forced if force_start else None
+        return _exact(order, choice, dist, entry_idx, exit_idx, internal, pin, first_pass)
     return order, choice
+
+
+def _exact(
+    order: list[int],
+    choice: list[int],
+    dist: NDArray[np.float64],
+    entry_idx: list[NDArray[np.int64]],
+    exit_idx: list[NDArray[np.int64]],
+    internal: list[NDArray[np.float64]],
+    forced: NDArray[np.float64] | None,
+    first_pass: int,
+) -> tuple[list[int], list[int]]:
+    """The exact order of few passes (:mod:`.tour_exact`), or ``order, choice`` where it is
+    not shorter. The tour's cost is the driven one: its passes and the moves between them, plus
+    with a forced start (``forced``: the first pass's options, 0 for the forced one) the
+    approach from the start (the greedy + 2-opt order also counts that approach without one)."""
+    pass_of = np.concatenate([np.full(len(e), k) for k, e in enumerate(entry_idx)])
+    option = np.concatenate([np.arange(len(e)) for e in entry_idx])
+    entries, exits = np.concatenate(entry_idx), np.concatenate(exit_idx)
+    own = np.concatenate(internal)
+    move = dist[np.ix_(exits, entries)] + own[None, :]
+    first = own.copy()
+    if forced is not None:  # the forced pass and option only, with the approach
+        first = np.full(len(own), math.inf)
+        sel = np.flatnonzero(pass_of == first_pass)
+        first[sel] = dist[0, entries[sel]] + own[sel] + forced
+    node = {(int(k), int(c)): a for a, (k, c) in enumerate(zip(pass_of, option, strict=True))}
+    base = [node[(k, c)] for k, c in zip(order, choice, strict=True)]
+    base_cost = float(first[base[0]]) + sum(float(move[a, b]) for a, b in itertools.pairwise(base))
+    nodes, cost = exact_nodes(pass_of, first, move)
+    if not cost < base_cost * (1 - 1e-12):
+        return order, choice
+    return [int(pass_of[a]) for a in nodes], [int(option[a]) for a in nodes]
 
 
 # -- driving the tour ------------------------------------------------------------------------

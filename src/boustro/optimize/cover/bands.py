@@ -76,7 +76,10 @@ class BandStats(NamedTuple):
       chord lies inside every such plan's lane;
     * ``first_hi, last_lo``: the end of the first and the start of the last piece of the inner
       projection minus the inner set's hole chords (``nan`` where none): the lane holding the
-      first piece ends at ``first_hi`` or beyond (:mod:`~boustro.optimize.cover.ends`).
+      first piece ends at ``first_hi`` or beyond (:mod:`~boustro.optimize.cover.ends`);
+    * ``pieces (L, B, 4)``: of the outer pieces ``count`` counts, the end of the first, the
+      start of the second, the start of the last, the end of the one before (``nan`` if fewer
+      than two; :mod:`~boustro.optimize.cover.piece_ends`).
     """
 
     k0: int
@@ -90,6 +93,7 @@ class BandStats(NamedTuple):
     rigid: NDArray[np.bool_]
     first_hi: NDArray[np.float64]
     last_lo: NDArray[np.float64]
+    pieces: NDArray[np.float64]
 
 
 # -- the loop (plain Python, compiled by numba on first use) ----------------------------------
@@ -312,6 +316,7 @@ def _leaf(
     rigid,
     first_hi,
     last_lo,
+    pieces,
 ):
     ih1, ih2, it1, it2 = _project(inner_xy, cs, sn, ox, oy)
     oh1, oh2, ot1, ot2 = _project(outer_xy, cs, sn, ox, oy)
@@ -355,11 +360,20 @@ def _leaf(
         # outer pieces holding inner length
         c = 0
         j = 0
+        before = math.nan  # the end of the counted piece before the last one
         for q in range(n_q):
             while j < n_p and phi[j] <= qlo[q] + tol:
                 j += 1
             if j < n_p and plo[j] < qhi[q] - tol:
                 c += 1
+                if c == 1:
+                    pieces[b, 0] = qhi[q]
+                elif c == 2:
+                    pieces[b, 1] = qlo[q]
+                if c >= 2:
+                    pieces[b, 2] = qlo[q]
+                    pieces[b, 3] = before
+                before = qhi[q]
         count[b] = c
         # holes whose outer chord overlaps the inner projection
         for q in range(0, go.shape[0] - 1, 2):
@@ -403,6 +417,7 @@ def _all(
     rigid = np.zeros((n, max(n_holes, 1)), dtype=np.bool_)
     first_hi = np.full((n, nb), np.nan)
     last_lo = np.full((n, nb), np.nan)
+    pieces = np.full((n, nb, 4), np.nan)
     for leaf in range(n):
         _leaf(
             inner_xy,
@@ -434,8 +449,9 @@ def _all(
             rigid[leaf],
             first_hi[leaf],
             last_lo[leaf],
+            pieces[leaf],
         )
-    return length, count, in_lo, in_hi, out_lo, out_hi, cut, rigid, first_hi, last_lo
+    return length, count, in_lo, in_hi, out_lo, out_hi, cut, rigid, first_hi, last_lo, pieces
 
 
 @cache

@@ -8,6 +8,7 @@ from numpy.typing import NDArray
 from .bands import BandStats
 from .cost import CoverCost
 from .ends import HoleBoxes, lane_end_bound
+from .piece_ends import piece_end_bound
 from .sandwich import Level
 
 __all__ = ["lower_bounds"]
@@ -67,7 +68,8 @@ def lower_bounds(
     per line, consecutive lines joined end to end) each move is at least the distance between
     the ranges of its two ends. With ``ends`` (the holes' boxes, :func:`~.ends.hole_boxes`; a
     routed tour without boundary or headland passes) the moves and extra lanes are also at least
-    :func:`~.ends.lane_end_bound`, and the larger of the two is taken. ``runins=False`` (an
+    :func:`~.ends.lane_end_bound` and :func:`~.piece_ends.piece_end_bound`, and the largest
+    is taken. ``runins=False`` (an
     area with holes: the planner cuts a run-in or run-out that would enter a hole) counts no
     run-ins or run-outs in the lanes' length.
     """
@@ -95,6 +97,7 @@ def lower_bounds(
     if ends is not None:  # the larger of the two bounds on the moves (and extra lanes)
         fixed = st.length.sum(axis=1) + runs + perimeter
         move_cost = np.maximum(cost.per_length * moves, lane_end_bound(st, spacing, cost, ends))
+        move_cost = np.maximum(move_cost, piece_end_bound(st, spacing, cost))
         return cost.per_length * fixed + move_cost + cost.per_turn * turns + cost.fixed
     length = st.length.sum(axis=1) + runs + moves + perimeter
     return cost.per_length * length + cost.per_turn * turns + cost.fixed
