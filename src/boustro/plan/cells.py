@@ -15,6 +15,7 @@ from ..errors import InvalidParameterError, InvalidPolygonError
 from ..geometry import Polygon
 from ..geometry.region import Region, as_region, points_in_ring
 from .cell_merge import _merge_narrow
+from .cell_trace import _Members, _ring_indices, _UnionFind
 
 __all__ = [
     "Decomposition",
@@ -170,43 +171,6 @@ def trapezoids(
 
 
 # -- cells ------------------------------------------------------------------------------------
-class _UnionFind:
-    def __init__(self, n: int) -> None:
-        self.parent = list(range(n))
-
-    def find(self, i: int) -> int:
-        while self.parent[i] != i:
-            self.parent[i] = self.parent[self.parent[i]]
-            i = self.parent[i]
-        return i
-
-    def union(self, i: int, j: int) -> int:
-        ri, rj = self.find(i), self.find(j)
-        self.parent[rj] = ri
-        return ri
-
-
-def _interval_minus(
-    a: list[tuple[float, float]], b: list[tuple[float, float]], tol: float
-) -> list[tuple[float, float]]:
-    out = []
-    for lo, hi in a:
-        pieces = [(lo, hi)]
-        for g0, g1 in b:
-            nxt = []
-            for x0, x1 in pieces:
-                if g1 <= x0 or g0 >= x1:
-                    nxt.append((x0, x1))
-                    continue
-                if g0 > x0:
-                    nxt.append((x0, g0))
-                if g1 < x1:
-                    nxt.append((g1, x1))
-            pieces = nxt
-        out += [(x0, x1) for x0, x1 in pieces if x1 - x0 > tol]
-    return out
-
-
 def _straighten(ring: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
     """Drop the vertices where a traced ring goes straight on (many: every slab line crossing
     an edge makes one), all at once: those within ``tol`` of the line through their
@@ -239,62 +203,11 @@ def trace_region(tr: Trapezoids, members: ArrayLike, diameter: float) -> Region:
     """
     idx = np.asarray(members, dtype=np.int64)
     tol = _TOL * diameter
-    segs: list[tuple[float, float, float, float]] = []  # (c0, t0, c1, t1), union on the left
-    for i in idx:
-        segs.append((tr.a[i], tr.te_a[i], tr.b[i], tr.te_b[i]))
-        segs.append((tr.b[i], tr.tx_b[i], tr.a[i], tr.tx_a[i]))
-    by_b: dict[float, list[tuple[float, float]]] = {}
-    by_a: dict[float, list[tuple[float, float]]] = {}
-    for i in idx:
-        by_b.setdefault(float(tr.b[i]), []).append((float(tr.te_b[i]), float(tr.tx_b[i])))
-        by_a.setdefault(float(tr.a[i]), []).append((float(tr.te_a[i]), float(tr.tx_a[i])))
-    for line in set(by_a) | set(by_b):
-        left, right = by_b.get(line, []), by_a.get(line, [])
-        segs += [(line, lo, line, hi) for lo, hi in _interval_minus(left, right, tol)]
-        segs += [(line, hi, line, lo) for lo, hi in _interval_minus(right, left, tol)]
-    seg = np.array(segs, dtype=np.float64).reshape(-1, 4)
-    seg = seg[np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) > tol]
-    ends = np.concatenate([seg[:, :2], seg[:, 2:]])
-    # Cluster end points that differ by rounding only: snap to a grid, then join grid cells
-    # that are neighbours (a cluster straddling a grid line).
-    snap = 0.1 * tol  # below the gap between distinct slab lines (> tol)
-    key = np.floor(ends / snap).astype(np.int64)
-    _, label = np.unique(key, axis=0, return_inverse=True)
-    label = label.ravel()
-    cells: dict[tuple[int, int], int] = {}
-    for (kx, ky), raw in zip(map(tuple, key), label, strict=True):
-        cells.setdefault((int(kx), int(ky)), int(raw))
-    uf = _UnionFind(int(label.max()) + 1 if len(label) else 0)
-    first = np.zeros(len(uf.parent), dtype=np.int64)
-    first[label[::-1]] = np.arange(len(label))[::-1]
-    for (kx, ky), lab in cells.items():
-        for dx in (-1, 0, 1):
-            for dy in (-1, 0, 1):
-                other = cells.get((kx + dx, ky + dy))
-                if other is not None and other != lab:
-                    a, b = ends[first[lab]], ends[first[other]]
-                    if np.max(np.abs(a - b)) <= snap:
-                        uf.union(int(lab), int(other))
-    label = np.array([uf.find(int(x)) for x in label])
-    m = len(seg)
-    start, stop = label[:m], label[m:]
-    outgoing: dict[int, list[int]] = {}
-    for k in range(m):
-        outgoing.setdefault(int(start[k]), []).append(k)
-    used = np.zeros(m, dtype=bool)
+    m = _Members(tr.a[idx], tr.b[idx], tr.te_a[idx], tr.te_b[idx], tr.tx_a[idx], tr.tx_b[idx])
+    seg, ring_indices = _ring_indices(m, tol)
     rings = []
-    for k0 in range(m):
-        if used[k0]:
-            continue
-        ring, k = [], k0
-        while not used[k]:
-            used[k] = True
-            ring.append(seg[k, :2])
-            nxt = [j for j in outgoing.get(int(stop[k]), []) if not used[j]]
-            if not nxt:
-                break
-            k = nxt[0]
-        cs, ts = np.array([p[0] for p in ring]), np.array([p[1] for p in ring])
+    for ring in ring_indices:
+        cs, ts = seg[ring, 0], seg[ring, 1]
         arr = _straighten(tr.point(cs, ts), tol)
         if len(arr) >= 3 and abs(_ring_area(arr)) > tol * diameter:
             rings.append(arr)
