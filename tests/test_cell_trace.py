@@ -6,9 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from boustro.geometry.region import as_region
 from boustro.geometry.traced import traced_field
 from boustro.plan import cell_trace as ct
-from boustro.plan.cells import _TOL, decompose, trace_region
+from boustro.plan.cells import _TOL, _links, decompose, trace_region, trapezoids
 
 
 def _rings(tr, idx, diameter, loops):
@@ -61,3 +62,38 @@ def test_interval_difference():
     )
     assert list(zip(lo.tolist(), hi.tolist(), strict=True)) == want
     assert want == [(0.0, 1.0), (3.0, 4.0), (5.0, 6.0), (7.0, 8.0), (9.0, 12.0)]
+
+
+def _links_dense(tr, tol):
+    """The per-slab dense links :func:`_links` replaced (reference)."""
+    out = []
+    by_slab = {int(s): np.flatnonzero(tr.slab == s) for s in np.unique(tr.slab)}
+    for s, lower in by_slab.items():
+        upper = by_slab.get(s + 1)
+        if upper is None or tr.b[lower[0]] != tr.a[upper[0]]:
+            continue
+        lo = np.maximum(tr.te_b[lower][:, None], tr.te_a[upper][None])
+        hi = np.minimum(tr.tx_b[lower][:, None], tr.tx_a[upper][None])
+        overlap = hi - lo
+        touching = overlap > tol
+        for i, j in zip(*np.nonzero(touching), strict=True):
+            single = bool(touching[i].sum() == 1 and touching[:, j].sum() == 1)
+            out.append((float(overlap[i, j]), int(lower[i]), int(upper[j]), single))
+    return out
+
+
+@pytest.mark.parametrize(
+    "area",
+    [
+        [(0, 0), (9, 0), (9, 9), (6, 9), (6, 3), (3, 3), (3, 9), (0, 9)],
+        [(0, 0), (4, 0), (4, 1), (1, 1), (1, 2), (4, 2), (4, 3), (0, 3)],
+        (60, 1),
+        (500, 10),
+    ],
+)
+def test_links_sweep_matches_dense(area):
+    r = traced_field(*area) if isinstance(area, tuple) else as_region(area)
+    for sweep in np.linspace(0.0, np.pi, 9):
+        tr = trapezoids(r, sweep)
+        tol = _TOL * r.diameter
+        assert _links(tr, tol) == _links_dense(tr, tol)

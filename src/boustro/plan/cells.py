@@ -249,23 +249,37 @@ class Decomposition:
 
 
 def _links(tr: Trapezoids, tol: float) -> list[tuple[float, int, int, bool]]:
-    """Trapezoids touching across slab lines: ``(overlap, lower, upper, one-to-one)``."""
-    out = []
-    by_slab: dict[int, NDArray[np.int64]] = {}
-    for s in np.unique(tr.slab):
-        by_slab[int(s)] = np.flatnonzero(tr.slab == s)
-    for s, lower in by_slab.items():
-        upper = by_slab.get(s + 1)
-        if upper is None or tr.b[lower[0]] != tr.a[upper[0]]:
-            continue
-        lo = np.maximum(tr.te_b[lower][:, None], tr.te_a[upper][None])
-        hi = np.minimum(tr.tx_b[lower][:, None], tr.tx_a[upper][None])
-        overlap = hi - lo
-        touching = overlap > tol
-        for i, j in zip(*np.nonzero(touching), strict=True):
-            single = bool(touching[i].sum() == 1 and touching[:, j].sum() == 1)
-            out.append((float(overlap[i, j]), int(lower[i]), int(upper[j]), single))
-    return out
+    """Trapezoids touching across slab lines: ``(overlap, lower, upper, one-to-one)``, ordered
+    by the lower trapezoid, then the upper one.
+
+    A sweep: the trapezoids of a slab are ordered along the lines, so the upper trapezoids
+    that may overlap a lower one are a run of the next slab, found by ``searchsorted`` on
+    ``(slab, t)`` keys (complex numbers sort lexicographically; the run is widened by two each
+    side against rounding), then tested with the dense code's arithmetic. ``O(Q log Q +
+    candidates)`` instead of a ``(lower, upper)`` matrix per slab in a Python loop."""
+    q = len(tr.a)
+    if q == 0:
+        return []
+    slab = tr.slab
+    n_slab = int(slab.max()) + 1
+    bounds = np.searchsorted(slab, np.arange(n_slab + 2))  # trapezoids of slab s: [b[s], b[s+1])
+    up_lo, up_hi = bounds[np.minimum(slab + 1, n_slab)], bounds[np.minimum(slab + 2, n_slab + 1)]
+    key_te, key_tx = slab + 1j * tr.te_a, slab + 1j * tr.tx_a
+    j0 = np.searchsorted(key_tx, (slab + 1) + 1j * tr.te_b, side="right") - 2
+    j1 = np.searchsorted(key_te, (slab + 1) + 1j * tr.tx_b, side="left") + 2
+    j0, j1 = np.maximum(j0, up_lo), np.minimum(j1, up_hi)
+    cnt = np.maximum(j1 - j0, 0)
+    lower = np.repeat(np.arange(q), cnt)
+    upper = j0[lower] + np.arange(len(lower)) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    lo = np.maximum(tr.te_b[lower], tr.te_a[upper])
+    hi = np.minimum(tr.tx_b[lower], tr.tx_a[upper])
+    overlap = hi - lo
+    touching = overlap > tol
+    lower, upper, overlap = lower[touching], upper[touching], overlap[touching]
+    single = (np.bincount(lower, minlength=q)[lower] == 1) & (
+        np.bincount(upper, minlength=q)[upper] == 1
+    )
+    return list(zip(overlap.tolist(), lower.tolist(), upper.tolist(), single.tolist(), strict=True))
 
 
 def _membership(tr: Trapezoids, roots: list[int]) -> NDArray[np.int64]:

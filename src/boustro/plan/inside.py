@@ -320,8 +320,14 @@ def outside_length(waypoints: ArrayLike, area: Region | Polygon | ArrayLike) -> 
     target = shapely_area(r).buffer(1e-9 * r.diameter, join_style="mitre")
     shapely.prepare(target)
     lines = shapely.linestrings(segs[keep])
-    inside = shapely.length(shapely.intersection(lines, target))
-    return float(np.sum(np.maximum(lengths[keep] - inside, 0.0)))
+    # a segment the (prepared) area covers is not outside at all: only the others are
+    # intersected (the lanes and most moves are covered: 21 -> 2 ms on a 2000-vertex field)
+    out = np.zeros(len(lines))
+    cut = ~shapely.covers(target, lines)
+    if cut.any():
+        inside = shapely.length(shapely.intersection(lines[cut], target))
+        out[cut] = np.maximum(lengths[keep][cut] - inside, 0.0)
+    return float(np.sum(out))
 
 
 def with_outside_length(plan: Plan, area: Region | Polygon | ArrayLike) -> Plan:
