@@ -307,6 +307,29 @@ def _shared_lengths(
     return shared_m
 
 
+def _extents(
+    tr: Trapezoids, roots: list[int]
+) -> tuple[dict[int, int], dict[int, int], dict[int, float], dict[int, float]]:
+    """Per root: its top and bottom slab and its extent ``[lo, hi]`` across the lines."""
+    r = np.asarray(roots, dtype=np.int64)
+    u, inv = np.unique(r, return_inverse=True)
+    inv = inv.ravel()
+    top = np.full(len(u), np.iinfo(np.int64).min)
+    bottom = np.full(len(u), np.iinfo(np.int64).max)
+    lo, hi = np.full(len(u), np.inf), np.full(len(u), -np.inf)
+    np.maximum.at(top, inv, tr.slab)
+    np.minimum.at(bottom, inv, tr.slab)
+    np.minimum.at(lo, inv, tr.a)
+    np.maximum.at(hi, inv, tr.b)
+    keys = u.tolist()
+    return (
+        dict(zip(keys, top.tolist(), strict=True)),
+        dict(zip(keys, bottom.tolist(), strict=True)),
+        dict(zip(keys, lo.tolist(), strict=True)),
+        dict(zip(keys, hi.tolist(), strict=True)),
+    )
+
+
 def decompose(
     region: Region | Polygon | ArrayLike,
     sweep: float,
@@ -344,16 +367,7 @@ def decompose(
             uf.union(i, j)
         else:
             stacked.append((overlap, i, j))
-    lo_c: dict[int, float] = {}
-    hi_c: dict[int, float] = {}
-    top: dict[int, int] = {}
-    bottom: dict[int, int] = {}
-    for i in range(q):
-        rt, sl = uf.find(i), int(tr.slab[i])
-        top[rt] = max(top.get(rt, sl), sl)
-        bottom[rt] = min(bottom.get(rt, sl), sl)
-        lo_c[rt] = min(lo_c.get(rt, math.inf), float(tr.a[i]))
-        hi_c[rt] = max(hi_c.get(rt, -math.inf), float(tr.b[i]))
+    top, bottom, lo_c, hi_c = _extents(tr, [uf.find(i) for i in range(q)])
 
     def join(ri: int, rj: int) -> None:
         new = uf.union(ri, rj)
