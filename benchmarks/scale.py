@@ -18,6 +18,18 @@ Usage::
     python benchmarks/scale.py --quick          # CI size: 50, 200, 500 vertices
     python benchmarks/scale.py --part cover --vertices 200 2000 --timeout 60
                                                 # the certified search, model only
+    python benchmarks/scale.py --part area      # plan_area end to end (the default: certified
+                                                # region search), per stage, 50 .. 5000 vertices
+    python benchmarks/scale.py --part area-spacing  # the same, 2000 vertices + 10 holes,
+                                                # spacing 1/10 .. 1/500 of the diameter
+
+The ``area`` parts time ``boustro.mission.plan_area(shell, spacing, crs=None, holes=...)`` (Eq. 1,
+the certified region search with its work budget, coverage measured with shapely) and its
+stages (``choose_sweep``, the certified searches, lanes, tour and routing, path, assembly:
+the functions :mod:`boustro.mission.region_certified` calls, wrapped with a CPU timer), print
+the estimate made before planning (``estimate_work``) beside the measured time, and fit the
+growth exponent of every stage over the sizes (least squares of ``log time`` on ``log n``).
+Their baseline is :data:`AREA_BASELINE`.
 """
 
 from __future__ import annotations
@@ -37,6 +49,16 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 BASELINE = "42b81be"  # main when issue 21's work started
+AREA_BASELINE = "8882b43"  # main before the vectorised trace and links (parts area*)
+STAGES = (
+    "choose_sweep",
+    "_cells_for_sweep",
+    "_certify",
+    "_plan_lanes",
+    "_plan_tour",
+    "_drive_plan",
+    "_assemble_plan",
+)
 VERTICES = (50, 200, 500, 1000, 2000, 5000)
 QUICK_VERTICES = (50, 200, 500)
 HOLES = (0, 10)
@@ -78,6 +100,44 @@ def worker(path: str, spacing: float, part: str) -> None:
     hwm = [line for line in open("/proc/self/status") if line.startswith("VmHWM:")]
     peak_kb = int(hwm[0].split()[1]) if hwm else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     out["rss_mb"] = peak_kb / 1024
+    print(json.dumps(out))
+
+
+def area_worker(path: str, spacing: float) -> None:
+    """``plan_area`` on the field in ``path`` (npz as :func:`worker`'s), timed per stage."""
+    from boustro.mission import estimate_work, plan_area
+    from boustro.mission import region_certified as rc
+
+    data = np.load(path)
+    shell = data["shell"]
+    holes = [data[k] for k in sorted(data.files) if k.startswith("hole_")]
+    plan_area(data["warm_shell"], 10.0, crs=None, holes=[data["warm_hole"]])
+    stages: dict[str, float] = {}
+
+    def timed(name, f):
+        def g(*a, **k):
+            t = time.process_time()
+            try:
+                return f(*a, **k)
+            finally:
+                stages[name] = stages.get(name, 0.0) + time.process_time() - t
+
+        return g
+
+    for name in STAGES:
+        setattr(rc, name, timed(name, getattr(rc, name)))
+    est = estimate_work(shell, spacing, crs=None, holes=holes)
+    t0, w0 = time.process_time(), time.perf_counter()
+    m = plan_area(shell, spacing, crs=None, holes=holes)
+    out = {"cpu": time.process_time() - t0, "wall": time.perf_counter() - w0}
+    out.update(stages=stages, estimate=est.seconds, lanes=m.plan.stats.n_transects)
+    out["gap"] = m.optimum.info.get("gap", m.optimum.gap)
+    out["converged"] = bool(m.optimum.info.get("converged"))
+    out["cells"] = len(m.plan.cells)
+    out["covered"] = m.coverage.covered_share if m.coverage is not None else None
+    out["path_length"] = m.plan.stats.path_length
+    hwm = [line for line in open("/proc/self/status") if line.startswith("VmHWM:")]
+    out["rss_mb"] = int(hwm[0].split()[1]) / 1024
     print(json.dumps(out))
 
 
@@ -127,24 +187,34 @@ def _cell(res: dict | None, timeout: float) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--part", choices=("vertices", "spacing", "cover"), default="vertices")
+    ap.add_argument(
+        "--part",
+        choices=("vertices", "spacing", "cover", "area", "area-spacing"),
+        default="vertices",
+    )
     ap.add_argument("--vertices", type=int, nargs="+", help="sizes (parts vertices, cover)")
     ap.add_argument("--quick", action="store_true", help="50, 200, 500 vertices only")
-    ap.add_argument("--baseline", default=BASELINE, help="commit of the code compared against")
+    ap.add_argument("--baseline", help="commit compared against (default: BASELINE, AREA_BASELINE)")
     ap.add_argument("--no-baseline", action="store_true")
     ap.add_argument("--timeout", type=float, default=15.0, help="seconds a baseline run may take")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     ap.add_argument("--spacing", type=float, default=10.0, help="metres (part vertices)")
     args = ap.parse_args()
     if args.worker:
-        worker(args.worker, args.spacing, args.part)
+        if args.part.startswith("area"):
+            area_worker(args.worker, args.spacing)
+        else:
+            worker(args.worker, args.spacing, args.part)
         return
     sys.path.insert(0, str(ROOT / "src"))
+    if args.part.startswith("area"):
+        area_main(args)
+        return
     load = os.getloadavg()[0]
     print(f"# scale benchmark, {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC, load {load:.1f}")
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
-        base = None if args.no_baseline else _baseline_src(args.baseline, tmp)
+        base = None if args.no_baseline else _baseline_src(args.baseline or BASELINE, tmp)
         if args.part in ("vertices", "cover"):
             sizes = QUICK_VERTICES if args.quick else VERTICES
             if args.part == "cover":
@@ -178,6 +248,82 @@ def main() -> None:
                 f"| {n} | {h} | {s:.3g} | {lanes} | {_cell(new, 600)} | {base_cell} | {ratio} |",
                 flush=True,
             )
+
+
+def _area_cell(res: dict | None, timeout: float) -> str:
+    if res is None:
+        return f"> {timeout:g} s"
+    cert = "certified" if res["converged"] else f"gap {res['gap']:.3g}"
+    return f"{res['cpu']:.2f} s, {res['rss_mb']:.0f} MB, {cert}"
+
+
+def _exponents(sizes: list[int], runs: list[dict]) -> dict[str, float]:
+    """The growth exponent of every stage (and the total): slope of log CPU on log n."""
+    out = {}
+    names = ["cpu"] + [s for s in STAGES if all(s in r["stages"] for r in runs)]
+    for name in names:
+        t = np.array([r["cpu"] if name == "cpu" else r["stages"][name] for r in runs])
+        if len(sizes) >= 2 and np.all(t > 0):
+            out[name] = float(np.polyfit(np.log(sizes), np.log(t), 1)[0])
+    return out
+
+
+def area_main(args: argparse.Namespace) -> None:
+    """Parts ``area`` and ``area-spacing``: plan_area end to end, this tree beside the
+    baseline, then each stage's CPU and growth exponent (this tree)."""
+    from boustro.geometry.traced import traced_field
+
+    load = os.getloadavg()[0]
+    print(f"# plan_area at scale, {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC, load {load:.1f}")
+    with tempfile.TemporaryDirectory() as tmp_name:
+        tmp = Path(tmp_name)
+        base = None if args.no_baseline else _baseline_src(args.baseline or AREA_BASELINE, tmp)
+        if args.part == "area":
+            sizes = tuple(args.vertices or (QUICK_VERTICES if args.quick else VERTICES))
+            rows = [(n, h, args.spacing) for h in HOLES for n in sizes]
+        else:
+            diameter = traced_field(2000, 10).diameter
+            rows = [(2000, 10, diameter / f) for f in SPACING_FRACTIONS]
+        head = "| vertices | holes | spacing (m) | lanes | estimate | this tree | baseline |"
+        print(head + " speed-up |")
+        print("|---:|---:|---:|---:|---:|---|---|---:|")
+        warm = _field_file(tmp, 60, 1)  # numba compiles (and caches) each tree's kernels once
+        for src in [ROOT / "src"] + ([base] if base is not None else []):
+            _run(src, warm, 10.0, timeout=1800.0, part=args.part)
+        done: list[tuple[int, int, float, dict]] = []
+        gave_up: set[int] = set()
+        for n, h, s in rows:
+            field = _field_file(tmp, n, h)
+            new = _run(ROOT / "src", field, s, timeout=600.0, part=args.part)
+            old = None
+            tried = base is not None and h not in gave_up
+            if tried:
+                old = _run(base, field, s, timeout=args.timeout, part=args.part)
+                if old is None:
+                    gave_up.add(h)
+            ratio = "" if old is None or new is None else f"{old['cpu'] / new['cpu']:.1f}x"
+            lanes = "" if new is None else new["lanes"]
+            est = "" if new is None else f"{new['estimate']:.2g} s"
+            base_cell = _area_cell(old, args.timeout) if tried else "-"
+            print(
+                f"| {n} | {h} | {s:.3g} | {lanes} | {est} | {_area_cell(new, 600)} | "
+                f"{base_cell} | {ratio} |",
+                flush=True,
+            )
+            if new is not None:
+                done.append((n, h, s, new))
+        print()
+        print("| vertices | holes | spacing | " + " | ".join(STAGES) + " |")
+        print("|---:|---:|---:|" + "---:|" * len(STAGES))
+        for n, h, s, r in done:
+            cells = " | ".join(f"{r['stages'].get(name, 0.0):.3f}" for name in STAGES)
+            print(f"| {n} | {h} | {s:.3g} | {cells} |")
+        if args.part == "area":
+            for h in HOLES:
+                runs = [(n, r) for n, hh, _, r in done if hh == h]
+                exps = _exponents([n for n, _ in runs], [r for _, r in runs])
+                said = ", ".join(f"{k} {v:.2f}" for k, v in exps.items())
+                print(f"growth exponents (CPU ~ n^k), {h} holes: {said}")
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from .plan.cell_trace import _interval_minus
 from .plan.cells import (
     _TOL,
     Decomposition,
@@ -9,7 +10,6 @@ from .plan.cells import (
     _check_float,
     _crossings,
     _frame,
-    _interval_minus,
     _links,
     _ring_area,
     _straighten,

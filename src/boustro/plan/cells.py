@@ -15,6 +15,7 @@ from ..errors import InvalidParameterError, InvalidPolygonError
 from ..geometry import Polygon
 from ..geometry.region import Region, as_region, points_in_ring
 from .cell_merge import _merge_narrow
+from .cell_trace import _Members, _ring_indices, _UnionFind
 
 __all__ = [
     "Decomposition",
@@ -170,43 +171,6 @@ def trapezoids(
 
 
 # -- cells ------------------------------------------------------------------------------------
-class _UnionFind:
-    def __init__(self, n: int) -> None:
-        self.parent = list(range(n))
-
-    def find(self, i: int) -> int:
-        while self.parent[i] != i:
-            self.parent[i] = self.parent[self.parent[i]]
-            i = self.parent[i]
-        return i
-
-    def union(self, i: int, j: int) -> int:
-        ri, rj = self.find(i), self.find(j)
-        self.parent[rj] = ri
-        return ri
-
-
-def _interval_minus(
-    a: list[tuple[float, float]], b: list[tuple[float, float]], tol: float
-) -> list[tuple[float, float]]:
-    out = []
-    for lo, hi in a:
-        pieces = [(lo, hi)]
-        for g0, g1 in b:
-            nxt = []
-            for x0, x1 in pieces:
-                if g1 <= x0 or g0 >= x1:
-                    nxt.append((x0, x1))
-                    continue
-                if g0 > x0:
-                    nxt.append((x0, g0))
-                if g1 < x1:
-                    nxt.append((g1, x1))
-            pieces = nxt
-        out += [(x0, x1) for x0, x1 in pieces if x1 - x0 > tol]
-    return out
-
-
 def _straighten(ring: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
     """Drop the vertices where a traced ring goes straight on (many: every slab line crossing
     an edge makes one), all at once: those within ``tol`` of the line through their
@@ -239,62 +203,11 @@ def trace_region(tr: Trapezoids, members: ArrayLike, diameter: float) -> Region:
     """
     idx = np.asarray(members, dtype=np.int64)
     tol = _TOL * diameter
-    segs: list[tuple[float, float, float, float]] = []  # (c0, t0, c1, t1), union on the left
-    for i in idx:
-        segs.append((tr.a[i], tr.te_a[i], tr.b[i], tr.te_b[i]))
-        segs.append((tr.b[i], tr.tx_b[i], tr.a[i], tr.tx_a[i]))
-    by_b: dict[float, list[tuple[float, float]]] = {}
-    by_a: dict[float, list[tuple[float, float]]] = {}
-    for i in idx:
-        by_b.setdefault(float(tr.b[i]), []).append((float(tr.te_b[i]), float(tr.tx_b[i])))
-        by_a.setdefault(float(tr.a[i]), []).append((float(tr.te_a[i]), float(tr.tx_a[i])))
-    for line in set(by_a) | set(by_b):
-        left, right = by_b.get(line, []), by_a.get(line, [])
-        segs += [(line, lo, line, hi) for lo, hi in _interval_minus(left, right, tol)]
-        segs += [(line, hi, line, lo) for lo, hi in _interval_minus(right, left, tol)]
-    seg = np.array(segs, dtype=np.float64).reshape(-1, 4)
-    seg = seg[np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) > tol]
-    ends = np.concatenate([seg[:, :2], seg[:, 2:]])
-    # Cluster end points that differ by rounding only: snap to a grid, then join grid cells
-    # that are neighbours (a cluster straddling a grid line).
-    snap = 0.1 * tol  # below the gap between distinct slab lines (> tol)
-    key = np.floor(ends / snap).astype(np.int64)
-    _, label = np.unique(key, axis=0, return_inverse=True)
-    label = label.ravel()
-    cells: dict[tuple[int, int], int] = {}
-    for (kx, ky), raw in zip(map(tuple, key), label, strict=True):
-        cells.setdefault((int(kx), int(ky)), int(raw))
-    uf = _UnionFind(int(label.max()) + 1 if len(label) else 0)
-    first = np.zeros(len(uf.parent), dtype=np.int64)
-    first[label[::-1]] = np.arange(len(label))[::-1]
-    for (kx, ky), lab in cells.items():
-        for dx in (-1, 0, 1):
-            for dy in (-1, 0, 1):
-                other = cells.get((kx + dx, ky + dy))
-                if other is not None and other != lab:
-                    a, b = ends[first[lab]], ends[first[other]]
-                    if np.max(np.abs(a - b)) <= snap:
-                        uf.union(int(lab), int(other))
-    label = np.array([uf.find(int(x)) for x in label])
-    m = len(seg)
-    start, stop = label[:m], label[m:]
-    outgoing: dict[int, list[int]] = {}
-    for k in range(m):
-        outgoing.setdefault(int(start[k]), []).append(k)
-    used = np.zeros(m, dtype=bool)
+    m = _Members(tr.a[idx], tr.b[idx], tr.te_a[idx], tr.te_b[idx], tr.tx_a[idx], tr.tx_b[idx])
+    seg, ring_indices = _ring_indices(m, tol)
     rings = []
-    for k0 in range(m):
-        if used[k0]:
-            continue
-        ring, k = [], k0
-        while not used[k]:
-            used[k] = True
-            ring.append(seg[k, :2])
-            nxt = [j for j in outgoing.get(int(stop[k]), []) if not used[j]]
-            if not nxt:
-                break
-            k = nxt[0]
-        cs, ts = np.array([p[0] for p in ring]), np.array([p[1] for p in ring])
+    for ring in ring_indices:
+        cs, ts = seg[ring, 0], seg[ring, 1]
         arr = _straighten(tr.point(cs, ts), tol)
         if len(arr) >= 3 and abs(_ring_area(arr)) > tol * diameter:
             rings.append(arr)
@@ -336,23 +249,37 @@ class Decomposition:
 
 
 def _links(tr: Trapezoids, tol: float) -> list[tuple[float, int, int, bool]]:
-    """Trapezoids touching across slab lines: ``(overlap, lower, upper, one-to-one)``."""
-    out = []
-    by_slab: dict[int, NDArray[np.int64]] = {}
-    for s in np.unique(tr.slab):
-        by_slab[int(s)] = np.flatnonzero(tr.slab == s)
-    for s, lower in by_slab.items():
-        upper = by_slab.get(s + 1)
-        if upper is None or tr.b[lower[0]] != tr.a[upper[0]]:
-            continue
-        lo = np.maximum(tr.te_b[lower][:, None], tr.te_a[upper][None])
-        hi = np.minimum(tr.tx_b[lower][:, None], tr.tx_a[upper][None])
-        overlap = hi - lo
-        touching = overlap > tol
-        for i, j in zip(*np.nonzero(touching), strict=True):
-            single = bool(touching[i].sum() == 1 and touching[:, j].sum() == 1)
-            out.append((float(overlap[i, j]), int(lower[i]), int(upper[j]), single))
-    return out
+    """Trapezoids touching across slab lines: ``(overlap, lower, upper, one-to-one)``, ordered
+    by the lower trapezoid, then the upper one.
+
+    A sweep: the trapezoids of a slab are ordered along the lines, so the upper trapezoids
+    that may overlap a lower one are a run of the next slab, found by ``searchsorted`` on
+    ``(slab, t)`` keys (complex numbers sort lexicographically; the run is widened by two each
+    side against rounding), then tested with the dense code's arithmetic. ``O(Q log Q +
+    candidates)`` instead of a ``(lower, upper)`` matrix per slab in a Python loop."""
+    q = len(tr.a)
+    if q == 0:
+        return []
+    slab = tr.slab
+    n_slab = int(slab.max()) + 1
+    bounds = np.searchsorted(slab, np.arange(n_slab + 2))  # trapezoids of slab s: [b[s], b[s+1])
+    up_lo, up_hi = bounds[np.minimum(slab + 1, n_slab)], bounds[np.minimum(slab + 2, n_slab + 1)]
+    key_te, key_tx = slab + 1j * tr.te_a, slab + 1j * tr.tx_a
+    j0 = np.searchsorted(key_tx, (slab + 1) + 1j * tr.te_b, side="right") - 2
+    j1 = np.searchsorted(key_te, (slab + 1) + 1j * tr.tx_b, side="left") + 2
+    j0, j1 = np.maximum(j0, up_lo), np.minimum(j1, up_hi)
+    cnt = np.maximum(j1 - j0, 0)
+    lower = np.repeat(np.arange(q), cnt)
+    upper = j0[lower] + np.arange(len(lower)) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    lo = np.maximum(tr.te_b[lower], tr.te_a[upper])
+    hi = np.minimum(tr.tx_b[lower], tr.tx_a[upper])
+    overlap = hi - lo
+    touching = overlap > tol
+    lower, upper, overlap = lower[touching], upper[touching], overlap[touching]
+    single = (np.bincount(lower, minlength=q)[lower] == 1) & (
+        np.bincount(upper, minlength=q)[upper] == 1
+    )
+    return list(zip(overlap.tolist(), lower.tolist(), upper.tolist(), single.tolist(), strict=True))
 
 
 def _membership(tr: Trapezoids, roots: list[int]) -> NDArray[np.int64]:
@@ -378,6 +305,29 @@ def _shared_lengths(
             shared_m[ci, cj] += overlap
             shared_m[cj, ci] += overlap
     return shared_m
+
+
+def _extents(
+    tr: Trapezoids, roots: list[int]
+) -> tuple[dict[int, int], dict[int, int], dict[int, float], dict[int, float]]:
+    """Per root: its top and bottom slab and its extent ``[lo, hi]`` across the lines."""
+    r = np.asarray(roots, dtype=np.int64)
+    u, inv = np.unique(r, return_inverse=True)
+    inv = inv.ravel()
+    top = np.full(len(u), np.iinfo(np.int64).min)
+    bottom = np.full(len(u), np.iinfo(np.int64).max)
+    lo, hi = np.full(len(u), np.inf), np.full(len(u), -np.inf)
+    np.maximum.at(top, inv, tr.slab)
+    np.minimum.at(bottom, inv, tr.slab)
+    np.minimum.at(lo, inv, tr.a)
+    np.maximum.at(hi, inv, tr.b)
+    keys = u.tolist()
+    return (
+        dict(zip(keys, top.tolist(), strict=True)),
+        dict(zip(keys, bottom.tolist(), strict=True)),
+        dict(zip(keys, lo.tolist(), strict=True)),
+        dict(zip(keys, hi.tolist(), strict=True)),
+    )
 
 
 def decompose(
@@ -417,16 +367,7 @@ def decompose(
             uf.union(i, j)
         else:
             stacked.append((overlap, i, j))
-    lo_c: dict[int, float] = {}
-    hi_c: dict[int, float] = {}
-    top: dict[int, int] = {}
-    bottom: dict[int, int] = {}
-    for i in range(q):
-        rt, sl = uf.find(i), int(tr.slab[i])
-        top[rt] = max(top.get(rt, sl), sl)
-        bottom[rt] = min(bottom.get(rt, sl), sl)
-        lo_c[rt] = min(lo_c.get(rt, math.inf), float(tr.a[i]))
-        hi_c[rt] = max(hi_c.get(rt, -math.inf), float(tr.b[i]))
+    top, bottom, lo_c, hi_c = _extents(tr, [uf.find(i) for i in range(q)])
 
     def join(ri: int, rj: int) -> None:
         new = uf.union(ri, rj)
