@@ -25,6 +25,7 @@ from ..cover.sandwich import Sandwich
 from ..cover.search import SIMPLIFY_EDGES, SIMPLIFY_SPACING
 from ..region_grid import evaluate_region_grid
 from ..result import OptimizeResult
+from .region_chains import near_margin
 from .region_kernel import region_bounds, region_values, ring_starts
 from .search import DEFAULT_TOL, SEED_ANGLES, _check, _check_angles, _Search, _weights, solve
 
@@ -57,6 +58,7 @@ class _RegionSearch(_Search):
         self.xy = self.real[0]
         self.radius = float(np.hypot(self.v[:, 0], self.v[:, 1]).max())
         self.tiny = TINY * max(self.radius, 1e-300)
+        self.margin = near_margin(rings, self.tiny)
         simplify = len(self.xy) > SIMPLIFY_EDGES
         self.sandwich = Sandwich(region, SIMPLIFY_SPACING * spacing if simplify else 0.0)
         self.levels: dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
@@ -76,7 +78,8 @@ class _RegionSearch(_Search):
             inner, outer = self.level(float(r))
             out[sel] = region_bounds(
                 inner, outer, self.real, boxes.theta[sel], boxes.delta[sel], boxes.d[sel],
-                eps[sel] * (1 + 1e-9) + 1e-12, self.s, self.a, self.b, self.tiny)  # fmt: skip
+                eps[sel] * (1 + 1e-9) + 1e-12, self.s, self.a, self.b, self.tiny,
+                boxes.eta[sel] * (1 + 1e-9) + 1e-12, self.margin)  # fmt: skip
         self.bounded += len(radius)
         return out
 

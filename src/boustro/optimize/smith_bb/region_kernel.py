@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 from ..._jit import jit, jit_globals
 from . import kernel
 from .kernel import _sup_w, lines_range
+from .region_chains import chain_bound, prepare
 
 __all__ = ["region_bounds", "region_values", "ring_starts"]
 
@@ -223,7 +224,8 @@ def _line_segments(oa, ob, o0, o1, pa, pb, p0, p1, owner, mask, g, lo, hi, n):
     return n, g, splits
 
 
-def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, b, tiny, pos):
+def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
+           margin, pos):  # fmt: skip
     ost, oa, ob = _intervals(out_xy, cs, sn, d, s, k0, nb)
     ist, pa, pb = _intervals(in_xy, cs, sn, d, s, k0, nb)
     top = 0.0
@@ -242,6 +244,8 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, 
     hi = np.empty(size)
     w = np.ones(size)
     n_fixed, total_gaps, gfree = 0, 0, 0.0
+    unc = np.empty(nb, dtype=np.int64)
+    n_unc = 0
     for q in range(nb):
         if not _owners(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], tiny, owner):
             return crude
@@ -259,6 +263,8 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, 
                 n_fixed)  # fmt: skip
             continue
         extra[q] = u - r
+        unc[n_unc] = q
+        n_unc += 1
         gaps[q] = held - r
         total_gaps += held - r
         # the longest gap on the line: between pieces, or a component's ends and its pieces
@@ -269,9 +275,12 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, 
                     gfree = max(gfree, pa[p] - left)
                     left = pb[p]
             gfree = max(gfree, ob[o] - left)
+    # the chain bound (segment ends tied to the chains, .region_chains) where it applies
+    tied = chain_bound(real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, unc, n_unc, lo, hi,
+                       n_fixed, a, b, tiny, margin)  # fmt: skip
     if total_gaps > 30 or (1 << total_gaps) > MAX_CHOICES:
-        return _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_fixed,
-                        gfree, a, b, pos)  # fmt: skip
+        return min(tied, _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w,
+                                  n_fixed, gfree, a, b, pos))  # fmt: skip
     best = -np.inf
     for mask in range(1 << total_gaps):
         n, g, free, ok = n_fixed, 0, 0, True
@@ -297,7 +306,7 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, 
             w[n] = float(f)
             best = max(best, _sup_w(lo, hi, w, n + 1, order, a, b, pos))
         w[n] = 1.0
-    return best
+    return min(tied, best)
 
 
 def _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n, gfree, a, b, pos):
@@ -345,13 +354,14 @@ def _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n, gfr
     return best
 
 
-def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, b, tiny, slack):
+def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
+            margin, slack):  # fmt: skip
     m = cs.shape[0]
     out = np.empty(m)
     pos = np.empty(2 * (in_xy.shape[0] + 4) * nb + 8)
     for i in range(m):
-        v = _bound(in_xy, out_xy, real_xy, rings, cs[i], sn[i], sdelta[i], d[i], s, eps[i], k0,
-                   nb, a, b, tiny, pos)  # fmt: skip
+        v = _bound(in_xy, out_xy, real_xy, rings, cs[i], sn[i], sdelta[i], eta[i], d[i], s,
+                   eps[i], k0, nb, a, b, tiny, margin, pos)  # fmt: skip
         out[i] = v + slack
     return out
 
@@ -362,8 +372,9 @@ def _compiled() -> tuple[Any, Any]:
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _bounds, _values
     kernel._compiled()  # _sup_w's own helpers (kernel's _g) compiled where it looks them up
+    prepare()  # and chain_bound's, in .region_chains
     helpers = ("_first_line", "_intervals", "_chain_counts", "_sup_w", "_owners",
-               "_line_segments", "_relaxed", "_bound")  # fmt: skip
+               "_line_segments", "_relaxed", "chain_bound", "_bound")  # fmt: skip
     jit_globals(globals(), helpers)
     return jit(_bounds), jit(_values)
 
@@ -387,18 +398,25 @@ def region_bounds(
     a: float,
     b: float,
     tiny: float,
+    eta: NDArray[np.float64] | None = None,
+    margin: float = -1.0,
 ) -> NDArray[np.float64]:
     """``(m,)`` an upper bound of Eq. 1 over the segments of every rigid image of the region
-    ``real`` (:func:`ring_starts`) moved by at most ``eps[i]`` (rotation at most ``delta[i]``)
-    that lies between the edge sets ``inner`` and ``outer``, seen by the lines of layout ``i``."""
+    ``real`` (:func:`ring_starts`) moved by at most ``eps[i]`` (rotation at most ``delta[i]``,
+    shift across the lines at most ``eta[i]``, default ``eps[i]``) that lies between the edge
+    sets ``inner`` and ``outer``, seen by the lines of layout ``i``. ``margin``: how near a
+    vertex a line passes where it cuts a segment of length at most ``tiny``
+    (:func:`.region_chains.near_margin`; negative: unknown)."""
     k0, nb = lines_range(outer, spacing)
     th = np.ascontiguousarray(theta, dtype=np.float64)
     sdelta = np.sin(np.minimum(np.asarray(delta, dtype=np.float64), math.pi / 2))
+    eta = eps if eta is None else np.minimum(eta, eps)
     fn = _compiled()[0]
     return fn(np.ascontiguousarray(inner), np.ascontiguousarray(outer), real[0], real[1],
-              np.cos(th), np.sin(th), sdelta, np.ascontiguousarray(d, dtype=np.float64),
+              np.cos(th), np.sin(th), sdelta, np.ascontiguousarray(eta, dtype=np.float64),
+              np.ascontiguousarray(d, dtype=np.float64),
               float(spacing), np.ascontiguousarray(eps, dtype=np.float64), k0, nb, float(a),
-              float(b), float(tiny), BOUND_SLACK)  # fmt: skip
+              float(b), float(tiny), float(margin), BOUND_SLACK)  # fmt: skip
 
 
 def region_values(

@@ -1,0 +1,356 @@
+"""The chain bound of a region's box: segment ends tied to the boundary chains (numba).
+
+:mod:`.region_kernel` bounds each line's segments by the components of the outer set ``O`` and
+the pieces of the inner set ``I``. Where a line runs within ``eps`` of a reflex vertex, a hole's
+vertex or an edge along the line, a component holds two pieces that may be one segment or two,
+and a free segment may lie in a gap; that bound takes the options with independent lengths (a
+segment to the component's end AND a free segment in the same gap), so boxes across such an
+event never close. This bound ties the segment ends to the chains they lie on instead
+(docs/global_optimum.md, section 10, "The chain bound"):
+
+* the real boundary is cut into chains that stay monotone across the lines for every angle of
+  the box (as :func:`.region_kernel._chain_counts`); a rigidly moved chain crosses a line at
+  most once (the half-open rule), and every crossing of the moved boundary with the line is a
+  crossing of one chain;
+* every point moves by at most ``eps``, so chain ``k``'s crossing with line ``c`` lies in
+  ``X_k``: the along-line range of the chain's points within ``eps`` of the line, grown by
+  ``eps``; the chain crosses surely if its across-range shrunk by ``eps`` holds the line
+  (strictly), may cross if the range grown by ``eps`` does, never otherwise;
+* the crossings, sorted, pair into the segments (even count: closed rings). For each subset
+  of the uncertain chains of the right parity, the ``j``-th smallest crossing lies between the
+  ``j``-th smallest low and high ends of the ``X``, so segment ``j`` (crossings ``2j``,
+  ``2j + 1``) has a length in ``[LO[2j+1] - HI[2j], HI[2j+1] - LO[2j]]``; each crossing is an
+  end of one segment only, so the lengths are independent within the option;
+* a segment whose length may be at most ``tiny`` may go uncounted: both variants are options.
+
+The bound is the largest exact maximum (:func:`.kernel._sup_w`) over every combination of the
+uncertain lines' options with the sure lines' segments; it applies to boxes with at most
+:data:`MAX_LINES` uncertain lines, :data:`MAX_NEAR` vertices near a line and
+:data:`MAX_COMBOS` combinations (``inf`` otherwise: the caller keeps its own bound).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..._jit import jit_globals
+from . import kernel
+from .kernel import _sup_w
+
+__all__ = ["MAX_COMBOS", "MAX_LINES", "MAX_NEAR", "chain_bound", "near_margin", "prepare"]
+
+#: Most uncertain lines (``u > r``) of a box for the chain bound.
+MAX_LINES = 8
+#: Most vertices within ``eps`` of one line (``2^k`` sides).
+MAX_NEAR = 5
+#: Most combinations of the lines' options evaluated per box.
+MAX_COMBOS = 64
+#: Most options of one line (subsets of the right parity, times the uncounted variants).
+MAX_OPTIONS = 32
+#: Added to each crossing range (rounding of the projections, normalised frame of radius 1).
+X_SLACK = 1e-12
+#: Added to each condition of :func:`_feasible` (rounding; normalised frame).
+FEASIBLE_SLACK = 1e-14
+#: Largest :func:`near_margin` used (a sharper or thinner region: ``-1``, every segment that
+#: may be that short may also be uncounted).
+MARGIN_CAP = 1e-7
+
+
+def _chains(xy, rings, cs, sn, sdelta, ci, cf):
+    """The chains of the real rings: ``ci[k] = (first edge, end edge, class, end vertex)``
+    (a vertex is the index of the edge it starts), ``cf[k] = (low, high)`` of their
+    across-coordinate ``h``; class ``+-1``: monotone for every angle of the box, 0: one edge
+    that may turn parallel to the lines. Returns their count."""
+    n = 0
+    for r in range(rings.shape[0] - 1):
+        i = rings[r]
+        while i < rings[r + 1]:
+            h1 = -sn * xy[i, 0] + cs * xy[i, 1]
+            h2 = -sn * xy[i, 2] + cs * xy[i, 3]
+            ln = math.hypot(xy[i, 2] - xy[i, 0], xy[i, 3] - xy[i, 1])
+            cls = 0
+            if abs(h2 - h1) > ln * sdelta * (1.0 + 1e-9) + 1e-15:
+                cls = 1 if h2 > h1 else -1
+            lo_h, hi_h = min(h1, h2), max(h1, h2)
+            j = i + 1
+            while cls != 0 and j < rings[r + 1]:
+                g1 = -sn * xy[j, 0] + cs * xy[j, 1]
+                g2 = -sn * xy[j, 2] + cs * xy[j, 3]
+                lj = math.hypot(xy[j, 2] - xy[j, 0], xy[j, 3] - xy[j, 1])
+                cj = 0
+                if abs(g2 - g1) > lj * sdelta * (1.0 + 1e-9) + 1e-15:
+                    cj = 1 if g2 > g1 else -1
+                if cj != cls:
+                    break
+                lo_h, hi_h = min(lo_h, g2), max(hi_h, g2)
+                j += 1
+            ci[n, 0], ci[n, 1], ci[n, 2] = i, j, cls
+            ci[n, 3] = j if j < rings[r + 1] else rings[r]
+            cf[n, 0], cf[n, 1] = lo_h, hi_h
+            n += 1
+            i = j
+    return n
+
+
+def _crossing_range(xy, i0, i1, cs, sn, c, eps):
+    """``(xa, xb)``: where along line ``c`` a chain of edges ``i0:i1`` moved by at most ``eps``
+    can cross it (its points within ``eps`` of the line, grown by ``eps``); ``xa > xb``: none
+    found (rounding at the strip's edge)."""
+    xa, xb = np.inf, -np.inf
+    for i in range(i0, i1):
+        h1 = -sn * xy[i, 0] + cs * xy[i, 1]
+        h2 = -sn * xy[i, 2] + cs * xy[i, 3]
+        if max(h1, h2) < c - eps or min(h1, h2) > c + eps:
+            continue
+        ua, ub = 0.0, 1.0
+        if h1 != h2:
+            ua = (c - eps - h1) / (h2 - h1)
+            ub = (c + eps - h1) / (h2 - h1)
+            if ua > ub:
+                ua, ub = ub, ua
+            ua, ub = max(ua, 0.0), min(ub, 1.0)
+        t1 = cs * xy[i, 0] + sn * xy[i, 1]
+        t2 = cs * xy[i, 2] + sn * xy[i, 3]
+        ta = t1 + ua * (t2 - t1)
+        tb = t1 + ub * (t2 - t1)
+        xa = min(xa, ta, tb)
+        xb = max(xb, ta, tb)
+    return xa - eps - X_SLACK, xb + eps + X_SLACK
+
+
+def _feasible(ct, cr, cup, n, su, eta):
+    """Whether some motion of the box, ``u = sin(rotation)`` in ``[-su, su]`` and shift
+    ``eta' `` in ``[-eta, eta]``, meets the ``n`` conditions ``eta' >= cr - ct u`` (``cup``
+    False) or ``eta' <= cr - ct u`` (``cup`` True): every lower bound of ``eta'`` below every
+    upper one, pair by pair an interval of ``u``."""
+    ulo, uhi = -su, su
+    for i in range(n + 1):  # lower bounds (the last: the box's -eta)
+        if i < n and cup[i]:
+            continue
+        li = cr[i] if i < n else -eta
+        ti = ct[i] if i < n else 0.0
+        for j in range(n + 1):  # upper bounds (the last: the box's eta)
+            if j < n and not cup[j]:
+                continue
+            uj = cr[j] if j < n else eta
+            tj = ct[j] if j < n else 0.0
+            k = tj - ti
+            rhs = uj - li + FEASIBLE_SLACK
+            if k > 0.0:
+                uhi = min(uhi, rhs / k)
+            elif k < 0.0:
+                ulo = max(ulo, rhs / k)
+            elif rhs < 0.0:
+                return False
+            if ulo > uhi:
+                return False
+    return True
+
+
+def _side(xy, v, cs, sn, c, near, nn, mask):
+    """Whether vertex ``v`` lies on the line or below it (``h' <= c'``): its bit in ``mask``
+    if it is one of the ``near`` vertices, else its side at the box centre."""
+    for g in range(nn):
+        if near[g] == v:
+            return ((mask >> g) & 1) == 1
+    return -sn * xy[v, 0] + cs * xy[v, 1] <= c
+
+
+def _line_options(xy, ci, cf, nch, cs, sn, su, cd, eta, c, eps, tiny, margin, opt, olo, ohi,
+                  oc, ct, cr, cup):  # fmt: skip
+    """Append line ``c``'s options: every side of the line for each vertex within ``eps`` of
+    it that some motion of the box allows, with the segments that the chains then form
+    (``opt[p] = (first segment, end, first condition, end)``, segments ``olo/ohi``, conditions
+    ``ct, cr, cup`` as :func:`_feasible`'s). ``oc = [options, segments, conditions]`` is
+    advanced; returns the most segments of an option, ``-1`` if too many. ``margin >= 0``: a
+    segment of length at most ``tiny`` needs a vertex within ``margin`` of the line (so the
+    vertices within ``eps + margin`` are near and their conditions widened by ``margin``);
+    ``margin < 0``: any segment that may be that short may also be uncounted."""
+    reach = eps + max(margin, 0.0)
+    near = np.empty(MAX_NEAR, dtype=np.int64)
+    nh = np.empty(MAX_NEAR)
+    nt = np.empty(MAX_NEAR)
+    rel = np.empty(nch, dtype=np.int64)
+    xa = np.empty(nch)
+    xb = np.empty(nch)
+    nn, nrel = 0, 0
+    for k in range(nch):
+        if not (cf[k, 0] - eps <= c <= cf[k, 1] + eps):
+            continue
+        a0, b0 = _crossing_range(xy, ci[k, 0], ci[k, 1], cs, sn, c, eps)
+        if a0 > b0:
+            return -1
+        rel[nrel], xa[nrel], xb[nrel] = k, a0, b0
+        nrel += 1
+        for v in (ci[k, 0], ci[k, 3]):
+            hv = -sn * xy[v, 0] + cs * xy[v, 1]
+            if abs(hv - c) <= reach:
+                seen = False
+                for g in range(nn):
+                    seen = seen or near[g] == v
+                if not seen:
+                    if nn >= MAX_NEAR:
+                        return -1
+                    near[nn], nh[nn] = v, hv
+                    nt[nn] = cs * xy[v, 0] + sn * xy[v, 1]
+                    nn += 1
+    lo_s = np.empty(nrel)
+    hi_s = np.empty(nrel)
+    first, most = oc[0], 0
+    for mask in range(1 << nn):
+        n0 = oc[2]
+        for g in range(nn):  # side 1 (h' <= c'): eta' >= h cos - c - t u; side 0: <=
+            up = ((mask >> g) & 1) == 0
+            hc = min(nh[g], nh[g] * cd) if not up else max(nh[g], nh[g] * cd)
+            wide = max(margin, 0.0) if up else -max(margin, 0.0)
+            ct[n0 + g], cr[n0 + g], cup[n0 + g] = nt[g], hc - c + wide, up
+        if not _feasible(ct[n0:], cr[n0:], cup[n0:], nn, su, eta):
+            continue
+        m = 0
+        for r in range(nrel):
+            k = rel[r]
+            if _side(xy, ci[k, 0], cs, sn, c, near, nn, mask) != _side(
+                xy, ci[k, 3], cs, sn, c, near, nn, mask
+            ):
+                lo_s[m], hi_s[m] = xa[r], xb[r]
+                m += 1
+        if m % 2 == 1:
+            return -1  # a ring crossed an odd number of times (cannot happen)
+        lo_s[:m] = np.sort(lo_s[:m])
+        hi_s[:m] = np.sort(hi_s[:m])
+        optional = 0
+        for j in range(m // 2):
+            if margin < 0.0 and lo_s[2 * j + 1] - hi_s[2 * j] <= tiny:
+                optional += 1
+        if optional > 3 or oc[0] - first + (1 << optional) > MAX_OPTIONS:
+            return -1
+        oc[2] += nn
+        for variant in range(1 << optional):
+            p = oc[0]
+            opt[p, 0], opt[p, 2], opt[p, 3] = oc[1], n0, n0 + nn
+            bit = 0
+            for j in range(m // 2):
+                slo = lo_s[2 * j + 1] - hi_s[2 * j]
+                if margin < 0.0 and slo <= tiny:
+                    bit += 1
+                    if (variant >> (bit - 1)) & 1:
+                        continue  # this variant leaves the segment uncounted
+                olo[oc[1]] = max(slo, 0.0)
+                ohi[oc[1]] = max(hi_s[2 * j + 1] - lo_s[2 * j], 0.0)
+                oc[1] += 1
+            opt[p, 1] = oc[1]
+            most = max(most, oc[1] - opt[p, 0])
+            oc[0] += 1
+    return most
+
+
+def chain_bound(xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, lines, nlines, lo, hi, n_fixed,
+                a, b, tiny, margin):  # fmt: skip
+    """The chain bound (module doc) of a box (rotation at most ``asin(sdelta)``, shift at most
+    ``eta``) whose lines ``k0 + lines[:nlines]`` are uncertain and whose sure lines have the
+    segment intervals ``lo/hi[:n_fixed]``; ``inf`` where it does not apply; ``margin`` as
+    :func:`_line_options`'s."""
+    if nlines == 0 or nlines > MAX_LINES:
+        return np.inf
+    ne = xy.shape[0]
+    ci = np.empty((ne, 4), dtype=np.int64)
+    cf = np.empty((ne, 2))
+    nch = _chains(xy, rings, cs, sn, sdelta, ci, cf)
+    cap = MAX_OPTIONS * nlines
+    opt = np.zeros((cap, 4), dtype=np.int64)
+    olo = np.empty(cap * (nch // 2 + 1))
+    ohi = np.empty(cap * (nch // 2 + 1))
+    ncap = (1 << MAX_NEAR) * MAX_NEAR * nlines
+    ct = np.empty(ncap + MAX_NEAR)
+    cr = np.empty(ncap + MAX_NEAR)
+    cup = np.zeros(ncap + MAX_NEAR, dtype=np.bool_)
+    oc = np.zeros(3, dtype=np.int64)
+    lstart = np.zeros(nlines + 1, dtype=np.int64)
+    combos, width, cd = 1, n_fixed, math.sqrt(max(1.0 - sdelta * sdelta, 0.0))
+    for q in range(nlines):
+        c = d + (k0 + lines[q]) * s
+        most = _line_options(xy, ci, cf, nch, cs, sn, sdelta, cd, eta, c, eps, tiny, margin, opt,
+                             olo, ohi, oc, ct, cr, cup)  # fmt: skip
+        if most < 0:
+            return np.inf
+        lstart[q + 1] = oc[0]
+        combos *= oc[0] - lstart[q]
+        width += most
+        if combos > MAX_COMBOS:
+            return np.inf
+    if combos == 0:
+        return -np.inf  # no motion of the box is left: it holds no layout
+    sl = np.empty(width)
+    sh = np.empty(width)
+    sl[:n_fixed] = lo[:n_fixed]
+    sh[:n_fixed] = hi[:n_fixed]
+    w = np.ones(width)
+    pos = np.empty(2 * width)
+    nc = MAX_NEAR * nlines
+    kt = np.empty(nc)
+    kr = np.empty(nc)
+    ku = np.zeros(nc, dtype=np.bool_)
+    pick = np.zeros(nlines, dtype=np.int64)
+    best = -np.inf
+    for _ in range(combos):
+        n, m = n_fixed, 0
+        for q in range(nlines):
+            p = lstart[q] + pick[q]
+            for g in range(opt[p, 0], opt[p, 1]):
+                sl[n], sh[n] = olo[g], ohi[g]
+                n += 1
+            for g in range(opt[p, 2], opt[p, 3]):
+                kt[m], kr[m], ku[m] = ct[g], cr[g], cup[g]
+                m += 1
+        if n > 0 and _feasible(kt, kr, ku, m, sdelta, eta):
+            for g in range(n):
+                pos[2 * g] = sl[g]
+                pos[2 * g + 1] = sh[g]
+            order = np.argsort(pos[: 2 * n])
+            best = max(best, _sup_w(sl, sh, w, n, order, a, b, pos))
+        for q in range(nlines):  # the next combination (mixed radix)
+            pick[q] += 1
+            if pick[q] < lstart[q + 1] - lstart[q]:
+                break
+            pick[q] = 0
+    return best
+
+
+def near_margin(rings: list[NDArray[np.float64]], tiny: float) -> float:
+    """How near a vertex a line must pass to cut a segment of length at most ``tiny`` from the
+    region of closed ``rings`` (normalised frame), or ``-1`` if that is not known small
+    (:data:`MARGIN_CAP`).
+
+    The segment's ends lie on two edges within ``tiny`` of each other. Two edges that share no
+    vertex are farther apart than the region's minimum clearance (GEOS: the least distance of a
+    vertex to an edge not incident to it); if that exceeds ``tiny`` the two edges meet at a
+    vertex ``v``, with an angle ``phi`` between them, and both ends lie within
+    ``tiny / f`` of ``v`` (``f = sin phi`` if ``phi`` is acute, else 1), so the line passes
+    within ``tiny / f`` of ``v``."""
+    import shapely
+
+    poly = shapely.Polygon(rings[0], rings[1:])
+    if not shapely.minimum_clearance(poly) > 2.0 * tiny:
+        return -1.0
+    f = 1.0
+    for r in rings:
+        back = np.roll(r, 1, axis=0) - r
+        ahead = np.roll(r, -1, axis=0) - r
+        cross = np.abs(back[:, 0] * ahead[:, 1] - back[:, 1] * ahead[:, 0])
+        dot = (back * ahead).sum(axis=1)
+        norm = np.hypot(back[:, 0], back[:, 1]) * np.hypot(ahead[:, 0], ahead[:, 1])
+        sines = np.where(dot > 0.0, cross / np.maximum(norm, 1e-300), 1.0)
+        f = min(f, float(sines.min()))
+    margin = 2.0 * tiny / max(f, 1e-300)
+    return margin if margin <= MARGIN_CAP else -1.0
+
+
+def prepare() -> None:
+    """Swap this module's helpers for their numba versions (before a caller compiles)."""
+    kernel._compiled()
+    jit_globals(
+        globals(), ("_chains", "_crossing_range", "_feasible", "_side", "_line_options", "_sup_w")
+    )
