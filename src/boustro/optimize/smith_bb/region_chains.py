@@ -52,8 +52,12 @@ MAX_COMBOS = 64
 MAX_OPTIONS = 32
 #: Added to each crossing range (rounding of the projections, normalised frame of radius 1).
 X_SLACK = 1e-12
-#: Added to each condition of :func:`_feasible` (rounding; normalised frame).
-FEASIBLE_SLACK = 1e-14
+#: A combination of sides is taken as possible only if it holds with this much room
+#: (normalised frame, about 1e-9 m on a 100 m field): where lines pass exactly through several
+#: aligned vertices at once (a rectilinear area at a multiple of its spacing), a combination
+#: that no real motion gives can still hold on a set narrower than float rounding (1e-16);
+#: such layouts are rounding artefacts (robust scoring ignores them at 1e-9, region.py).
+DEGENERATE = 1e-11
 #: Largest :func:`near_margin` used (a sharper or thinner region: ``-1``, every segment that
 #: may be that short may also be uncounted).
 MARGIN_CAP = 1e-7
@@ -138,7 +142,7 @@ def _feasible(ct, cr, cup, n, su, eta):
             uj = cr[j] if j < n else eta
             tj = ct[j] if j < n else 0.0
             k = tj - ti
-            rhs = uj - li + FEASIBLE_SLACK
+            rhs = uj - li
             if k > 0.0:
                 uhi = min(uhi, rhs / k)
             elif k < 0.0:
@@ -170,6 +174,9 @@ def _line_options(xy, ci, cf, nch, cs, sn, su, cd, eta, c, eps, tiny, margin, op
     vertices within ``eps + margin`` are near and their conditions widened by ``margin``);
     ``margin < 0``: any segment that may be that short may also be uncounted."""
     reach = eps + max(margin, 0.0)
+    # a vertex's condition is widened by ``margin`` (on the line's other side by at most that
+    # it cuts only an uncounted segment) and narrowed by half of DEGENERATE
+    wide = max(margin, 0.0) - 0.5 * DEGENERATE
     near = np.empty(MAX_NEAR, dtype=np.int64)
     nh = np.empty(MAX_NEAR)
     nt = np.empty(MAX_NEAR)
@@ -205,8 +212,7 @@ def _line_options(xy, ci, cf, nch, cs, sn, su, cd, eta, c, eps, tiny, margin, op
         for g in range(nn):  # side 1 (h' <= c'): eta' >= h cos - c - t u; side 0: <=
             up = ((mask >> g) & 1) == 0
             hc = min(nh[g], nh[g] * cd) if not up else max(nh[g], nh[g] * cd)
-            wide = max(margin, 0.0) if up else -max(margin, 0.0)
-            ct[n0 + g], cr[n0 + g], cup[n0 + g] = nt[g], hc - c + wide, up
+            ct[n0 + g], cr[n0 + g], cup[n0 + g] = nt[g], hc - c + (wide if up else -wide), up
         if not _feasible(ct[n0:], cr[n0:], cup[n0:], nn, su, eta):
             continue
         m = 0

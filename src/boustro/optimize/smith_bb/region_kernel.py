@@ -46,6 +46,9 @@ __all__ = ["region_bounds", "region_values", "ring_starts"]
 
 #: Most split choices enumerated per box (2^gaps), beyond it the crude bound ``a max|o| + b``.
 MAX_CHOICES = 8
+#: A sure line's segment whose length interval is wider than this many ``eps`` (the sandwich
+#: gives about 4 to 8) is left to the chain bound (:mod:`.region_chains`).
+LOOSE = 16.0
 #: Added to every box bound (rounding of the closed forms).
 BOUND_SLACK = 1e-10
 
@@ -244,8 +247,10 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb
     hi = np.empty(size)
     w = np.ones(size)
     n_fixed, total_gaps, gfree = 0, 0, 0.0
-    unc = np.empty(nb, dtype=np.int64)
-    n_unc = 0
+    unc = np.empty(nb, dtype=np.int64)  # the lines left to the chain bound
+    clo = np.empty(size)  # and the segments of the others (a sure line's, if tight)
+    chi = np.empty(size)
+    n_unc, n_sure = 0, 0
     for q in range(nb):
         if not _owners(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], tiny, owner):
             return crude
@@ -258,9 +263,20 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb
                     prev_o = owner[p]
         u = cnt[q] // 2
         if u <= r:  # one segment per component holding pieces
+            n0 = n_fixed
             n_fixed, _, _ = _line_segments(
                 oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], owner, 0, 0, lo, hi,
                 n_fixed)  # fmt: skip
+            loose = False
+            for j in range(n0, n_fixed):
+                loose = loose or hi[j] - lo[j] > LOOSE * eps
+            if loose:  # e.g. a line along an edge: the chains may fix its segments
+                unc[n_unc] = q
+                n_unc += 1
+            else:
+                for j in range(n0, n_fixed):
+                    clo[n_sure], chi[n_sure] = lo[j], hi[j]
+                    n_sure += 1
             continue
         extra[q] = u - r
         unc[n_unc] = q
@@ -276,8 +292,8 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb
                     left = pb[p]
             gfree = max(gfree, ob[o] - left)
     # the chain bound (segment ends tied to the chains, .region_chains) where it applies
-    tied = chain_bound(real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, unc, n_unc, lo, hi,
-                       n_fixed, a, b, tiny, margin)  # fmt: skip
+    tied = chain_bound(real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, unc, n_unc, clo, chi,
+                       n_sure, a, b, tiny, margin)  # fmt: skip
     if total_gaps > 30 or (1 << total_gaps) > MAX_CHOICES:
         return min(tied, _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w,
                                   n_fixed, gfree, a, b, pos))  # fmt: skip
