@@ -47,9 +47,12 @@ MAX_LINES = 8
 #: Most vertices within ``eps`` of one line (``2^k`` sides).
 MAX_NEAR = 5
 #: Most combinations of the lines' options evaluated per box.
-MAX_COMBOS = 64
-#: Most options of one line (subsets of the right parity, times the uncounted variants).
-MAX_OPTIONS = 32
+MAX_COMBOS = 4096
+#: Most options of one line (sides of its near vertices, pieces of an edge along it, uncounted
+#: variants).
+MAX_OPTIONS = 160
+#: Pieces of an edge along a line (the crossing's position on it, tied to the box's motion).
+SPLIT = 32
 #: Added to each crossing range (rounding of the projections, normalised frame of radius 1).
 X_SLACK = 1e-12
 #: A combination of sides is taken as possible only if it holds with this much room
@@ -163,93 +166,152 @@ def _side(xy, v, cs, sn, c, near, nn, mask):
     return -sn * xy[v, 0] + cs * xy[v, 1] <= c
 
 
-def _line_options(xy, ci, cf, nch, cs, sn, su, cd, eta, c, eps, tiny, margin, opt, olo, ohi,
-                  oc, ct, cr, cup):  # fmt: skip
-    """Append line ``c``'s options: every side of the line for each vertex within ``eps`` of
-    it that some motion of the box allows, with the segments that the chains then form
-    (``opt[p] = (first segment, end, first condition, end)``, segments ``olo/ohi``, conditions
-    ``ct, cr, cup`` as :func:`_feasible`'s). ``oc = [options, segments, conditions]`` is
-    advanced; returns the most segments of an option, ``-1`` if too many. ``margin >= 0``: a
-    segment of length at most ``tiny`` needs a vertex within ``margin`` of the line (so the
-    vertices within ``eps + margin`` are near and their conditions widened by ``margin``);
-    ``margin < 0``: any segment that may be that short may also be uncounted."""
-    reach = eps + max(margin, 0.0)
-    # a vertex's condition is widened by ``margin`` (on the line's other side by at most that
-    # it cuts only an uncounted segment) and narrowed by half of DEGENERATE
-    wide = max(margin, 0.0) - 0.5 * DEGENERATE
-    near = np.empty(MAX_NEAR, dtype=np.int64)
-    nh = np.empty(MAX_NEAR)
-    nt = np.empty(MAX_NEAR)
-    rel = np.empty(nch, dtype=np.int64)
-    xa = np.empty(nch)
-    xb = np.empty(nch)
+def _collect(xy, ci, cf, nch, cs, sn, c, eps, reach, rel, xa, xb, near, nh, nt):
+    """The chains that may cross line ``c`` (``rel``, their crossing ranges ``xa, xb``) and
+    their ends within ``reach`` of it (``near``, with ``h, t`` in ``nh, nt``): ``(chains,
+    near vertices)``, ``-1`` near vertices if too many (or rounding)."""
     nn, nrel = 0, 0
     for k in range(nch):
         if not (cf[k, 0] - eps <= c <= cf[k, 1] + eps):
             continue
         a0, b0 = _crossing_range(xy, ci[k, 0], ci[k, 1], cs, sn, c, eps)
         if a0 > b0:
-            return -1
+            return nrel, -1
         rel[nrel], xa[nrel], xb[nrel] = k, a0, b0
         nrel += 1
         for v in (ci[k, 0], ci[k, 3]):
             hv = -sn * xy[v, 0] + cs * xy[v, 1]
-            if abs(hv - c) <= reach:
-                seen = False
-                for g in range(nn):
-                    seen = seen or near[g] == v
-                if not seen:
-                    if nn >= MAX_NEAR:
-                        return -1
-                    near[nn], nh[nn] = v, hv
-                    nt[nn] = cs * xy[v, 0] + sn * xy[v, 1]
-                    nn += 1
-    lo_s = np.empty(nrel)
-    hi_s = np.empty(nrel)
+            if abs(hv - c) <= reach and _near_index(near, nn, v) < 0:
+                if nn >= MAX_NEAR:
+                    return nrel, -1
+                near[nn], nh[nn] = v, hv
+                nt[nn] = cs * xy[v, 0] + sn * xy[v, 1]
+                nn += 1
+    return nrel, nn
+
+
+def _near_index(near, nn, v):
+    """The index of vertex ``v`` among the ``nn`` near ones, ``-1`` if not near."""
+    for g in range(nn):
+        if near[g] == v:
+            return g
+    return -1
+
+
+def _condition(ct, cr, cup, g, h, t, c, cd, below, wide):
+    """Condition ``g`` (:func:`_feasible`'s form): a point ``(h, t)`` on the line or below it
+    (``below``: ``h' <= c'``, i.e. ``eta' >= h cos - c - t u``) or above, widened by ``wide``."""
+    if below:
+        ct[g], cr[g], cup[g] = t, min(h, h * cd) - c - wide, False
+    else:
+        ct[g], cr[g], cup[g] = t, max(h, h * cd) - c + wide, True
+
+
+def _emit(lo_s, hi_s, m, tiny, margin, opt, olo, ohi, oc, c0, c1, first):
+    """Append the option of crossings ``lo_s/hi_s[:m]`` (sorted here) and conditions
+    ``c0:c1`` (and its variants with uncounted short segments when ``margin < 0``). Returns
+    its most segments, ``-1`` if the line has too many options."""
+    lo_s[:m] = np.sort(lo_s[:m])
+    hi_s[:m] = np.sort(hi_s[:m])
+    optional = 0
+    for j in range(m // 2):
+        if margin < 0.0 and lo_s[2 * j + 1] - hi_s[2 * j] <= tiny:
+            optional += 1
+    if optional > 3 or oc[0] - first + (1 << optional) > MAX_OPTIONS:
+        return -1
+    most = 0
+    for variant in range(1 << optional):
+        p = oc[0]
+        opt[p, 0], opt[p, 2], opt[p, 3] = oc[1], c0, c1
+        bit = 0
+        for j in range(m // 2):
+            slo = lo_s[2 * j + 1] - hi_s[2 * j]
+            if margin < 0.0 and slo <= tiny:
+                bit += 1
+                if (variant >> (bit - 1)) & 1:
+                    continue  # this variant leaves the segment uncounted
+            olo[oc[1]] = max(slo, 0.0)
+            ohi[oc[1]] = max(hi_s[2 * j + 1] - lo_s[2 * j], 0.0)
+            oc[1] += 1
+        opt[p, 1] = oc[1]
+        most = max(most, oc[1] - opt[p, 0])
+        oc[0] += 1
+    return most
+
+
+def _line_options(xy, ci, cf, nch, cs, sn, su, cd, eta, c, eps, tiny, margin, opt, olo, ohi,
+                  oc, ct, cr, cup):  # fmt: skip
+    """Append line ``c``'s options: every side of the line for each vertex within ``eps`` of
+    it that some motion of the box allows, with the segments that the chains then form
+    (``opt[p] = (first segment, end, first condition, end)``, segments ``olo/ohi``, conditions
+    ``ct, cr, cup`` as :func:`_feasible`'s). An edge along the line (both ends near, crossed)
+    is cut into :data:`SPLIT` pieces, one option per piece holding the crossing (the piece's
+    ends on the edge's ends' sides). ``oc = [options, segments, conditions]`` is advanced;
+    returns the most segments of an option, ``-1`` if too many. ``margin >= 0``: a segment of
+    length at most ``tiny`` needs a vertex within ``margin`` of the line (so the vertices
+    within ``eps + margin`` are near and their conditions widened by ``margin``); ``margin <
+    0``: any segment that may be that short may also be uncounted."""
+    # a vertex's condition is widened by ``margin`` (on the line's other side by at most that
+    # it cuts only an uncounted segment) and narrowed by half of DEGENERATE
+    wide = max(margin, 0.0) - 0.5 * DEGENERATE
+    near = np.empty(MAX_NEAR, dtype=np.int64)
+    nh, nt = np.empty(MAX_NEAR), np.empty(MAX_NEAR)
+    rel = np.empty(nch, dtype=np.int64)
+    xa, xb = np.empty(nch), np.empty(nch)
+    nrel, nn = _collect(xy, ci, cf, nch, cs, sn, c, eps, eps + max(margin, 0.0), rel, xa, xb,
+                        near, nh, nt)  # fmt: skip
+    if nn < 0:
+        return -1
+    lo_b, hi_b = np.empty(nrel), np.empty(nrel)
+    lo_s, hi_s = np.empty(nrel), np.empty(nrel)
     first, most = oc[0], 0
     for mask in range(1 << nn):
         n0 = oc[2]
-        for g in range(nn):  # side 1 (h' <= c'): eta' >= h cos - c - t u; side 0: <=
-            up = ((mask >> g) & 1) == 0
-            hc = min(nh[g], nh[g] * cd) if not up else max(nh[g], nh[g] * cd)
-            ct[n0 + g], cr[n0 + g], cup[n0 + g] = nt[g], hc - c + (wide if up else -wide), up
+        for g in range(nn):
+            _condition(ct, cr, cup, n0 + g, nh[g], nt[g], c, cd, (mask >> g) & 1 == 1, wide)
         if not _feasible(ct[n0:], cr[n0:], cup[n0:], nn, su, eta):
             continue
-        m = 0
+        oc[2] += nn
+        m, edge, spot, below = 0, -1, -1, False
         for r in range(nrel):
             k = rel[r]
-            if _side(xy, ci[k, 0], cs, sn, c, near, nn, mask) != _side(
-                xy, ci[k, 3], cs, sn, c, near, nn, mask
-            ):
-                lo_s[m], hi_s[m] = xa[r], xb[r]
+            s0 = _side(xy, ci[k, 0], cs, sn, c, near, nn, mask)
+            if s0 != _side(xy, ci[k, 3], cs, sn, c, near, nn, mask):
+                if (edge < 0 and ci[k, 2] == 0 and _near_index(near, nn, ci[k, 0]) >= 0
+                        and _near_index(near, nn, ci[k, 3]) >= 0):  # fmt: skip
+                    edge, spot, below = ci[k, 0], m, s0
+                lo_b[m], hi_b[m] = xa[r], xb[r]
                 m += 1
         if m % 2 == 1:
             return -1  # a ring crossed an odd number of times (cannot happen)
-        lo_s[:m] = np.sort(lo_s[:m])
-        hi_s[:m] = np.sort(hi_s[:m])
-        optional = 0
-        for j in range(m // 2):
-            if margin < 0.0 and lo_s[2 * j + 1] - hi_s[2 * j] <= tiny:
-                optional += 1
-        if optional > 3 or oc[0] - first + (1 << optional) > MAX_OPTIONS:
-            return -1
-        oc[2] += nn
-        for variant in range(1 << optional):
-            p = oc[0]
-            opt[p, 0], opt[p, 2], opt[p, 3] = oc[1], n0, n0 + nn
-            bit = 0
-            for j in range(m // 2):
-                slo = lo_s[2 * j + 1] - hi_s[2 * j]
-                if margin < 0.0 and slo <= tiny:
-                    bit += 1
-                    if (variant >> (bit - 1)) & 1:
-                        continue  # this variant leaves the segment uncounted
-                olo[oc[1]] = max(slo, 0.0)
-                ohi[oc[1]] = max(hi_s[2 * j + 1] - lo_s[2 * j], 0.0)
-                oc[1] += 1
-            opt[p, 1] = oc[1]
-            most = max(most, oc[1] - opt[p, 0])
-            oc[0] += 1
+        for j in range(SPLIT if edge >= 0 else 1):
+            lo_s[:m], hi_s[:m] = lo_b[:m], hi_b[:m]
+            c0 = oc[2]
+            c1 = c0
+            if edge >= 0:  # the crossing on piece j of the edge
+                c1 = c0 + nn
+                ct[c0:c1], cr[c0:c1] = ct[n0 : n0 + nn], cr[n0 : n0 + nn]
+                cup[c0:c1] = cup[n0 : n0 + nn]
+                ta, tb = np.inf, -np.inf
+                for e in (j, j + 1):
+                    lam = e / SPLIT
+                    px = xy[edge, 0] + lam * (xy[edge, 2] - xy[edge, 0])
+                    py = xy[edge, 1] + lam * (xy[edge, 3] - xy[edge, 1])
+                    tp = cs * px + sn * py
+                    ta, tb = min(ta, tp), max(tb, tp)
+                    if 0 < e < SPLIT:  # the piece's start on the edge start's side, its end not
+                        _condition(ct, cr, cup, c1, -sn * px + cs * py, tp, c, cd,
+                                   below if e == j else not below, wide)  # fmt: skip
+                        c1 += 1
+                if not _feasible(ct[c0:], cr[c0:], cup[c0:], c1 - c0, su, eta):
+                    continue
+                lo_s[spot], hi_s[spot] = ta - eps - X_SLACK, tb + eps + X_SLACK
+                oc[2] = c1
+            got = _emit(lo_s, hi_s, m, tiny, margin, opt, olo, ohi, oc, c0 if edge >= 0 else n0,
+                        c1 if edge >= 0 else n0 + nn, first)  # fmt: skip
+            if got < 0:
+                return -1
+            most = max(most, got)
     return most
 
 
@@ -269,10 +331,10 @@ def chain_bound(xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, lines, nlines, lo
     opt = np.zeros((cap, 4), dtype=np.int64)
     olo = np.empty(cap * (nch // 2 + 1))
     ohi = np.empty(cap * (nch // 2 + 1))
-    ncap = (1 << MAX_NEAR) * MAX_NEAR * nlines
-    ct = np.empty(ncap + MAX_NEAR)
-    cr = np.empty(ncap + MAX_NEAR)
-    cup = np.zeros(ncap + MAX_NEAR, dtype=np.bool_)
+    ncap = nlines * ((1 << MAX_NEAR) * MAX_NEAR + MAX_OPTIONS * (MAX_NEAR + 2)) + MAX_NEAR + 2
+    ct = np.empty(ncap)
+    cr = np.empty(ncap)
+    cup = np.zeros(ncap, dtype=np.bool_)
     oc = np.zeros(3, dtype=np.int64)
     lstart = np.zeros(nlines + 1, dtype=np.int64)
     combos, width, cd = 1, n_fixed, math.sqrt(max(1.0 - sdelta * sdelta, 0.0))
@@ -295,7 +357,7 @@ def chain_bound(xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, lines, nlines, lo
     sh[:n_fixed] = hi[:n_fixed]
     w = np.ones(width)
     pos = np.empty(2 * width)
-    nc = MAX_NEAR * nlines
+    nc = (MAX_NEAR + 2) * nlines
     kt = np.empty(nc)
     kr = np.empty(nc)
     ku = np.zeros(nc, dtype=np.bool_)
@@ -357,6 +419,6 @@ def near_margin(rings: list[NDArray[np.float64]], tiny: float) -> float:
 def prepare() -> None:
     """Swap this module's helpers for their numba versions (before a caller compiles)."""
     kernel._compiled()
-    jit_globals(
-        globals(), ("_chains", "_crossing_range", "_feasible", "_side", "_line_options", "_sup_w")
-    )
+    helpers = ("_chains", "_crossing_range", "_feasible", "_side", "_near_index", "_collect",
+               "_condition", "_emit", "_line_options", "_sup_w")  # fmt: skip
+    jit_globals(globals(), helpers)
