@@ -61,9 +61,10 @@ X_SLACK = 1e-12
 #: that no real motion gives can still hold on a set narrower than float rounding (1e-16);
 #: such layouts are rounding artefacts (robust scoring ignores them at 1e-9, region.py).
 DEGENERATE = 1e-11
-#: Largest :func:`near_margin` used (a sharper or thinner region: ``-1``, every segment that
-#: may be that short may also be uncounted).
-MARGIN_CAP = 1e-7
+#: Largest :func:`near_margin` of a region whose short segments need no variants (the layouts
+#: that cut them put a vertex within ``DEGENERATE / 2`` of a line); a sharper or thinner
+#: region: ``-1``, every segment that may be at most ``tiny`` long may also be uncounted.
+MARGIN_CAP = 0.5 * DEGENERATE
 
 
 def _chains(xy, rings, cs, sn, sdelta, ci, cf):
@@ -207,26 +208,32 @@ def _condition(ct, cr, cup, g, h, t, c, cd, below, wide):
         ct[g], cr[g], cup[g] = t, max(h, h * cd) - c + wide, True
 
 
-def _emit(lo_s, hi_s, m, tiny, margin, opt, olo, ohi, oc, c0, c1, first):
+def _emit(lo_s, hi_s, m, tiny, low, drop, opt, olo, ohi, oc, c0, c1, first):
     """Append the option of crossings ``lo_s/hi_s[:m]`` (sorted here) and conditions
-    ``c0:c1`` (and its variants with uncounted short segments when ``margin < 0``). Returns
-    its most segments, ``-1`` if the line has too many options."""
+    ``c0:c1``, in the variants in which ``low`` to ``drop`` segments that may be at most
+    ``tiny`` long are uncounted. Returns its most segments, ``-1`` if the line has too many
+    options."""
     lo_s[:m] = np.sort(lo_s[:m])
     hi_s[:m] = np.sort(hi_s[:m])
     optional = 0
     for j in range(m // 2):
-        if margin < 0.0 and lo_s[2 * j + 1] - hi_s[2 * j] <= tiny:
+        if lo_s[2 * j + 1] - hi_s[2 * j] <= tiny:
             optional += 1
     if optional > 3 or oc[0] - first + (1 << optional) > MAX_OPTIONS:
         return -1
     most = 0
     for variant in range(1 << optional):
+        dropped = 0
+        for j in range(optional):
+            dropped += (variant >> j) & 1
+        if dropped > drop or dropped < low:
+            continue
         p = oc[0]
         opt[p, 0], opt[p, 2], opt[p, 3] = oc[1], c0, c1
         bit = 0
         for j in range(m // 2):
             slo = lo_s[2 * j + 1] - hi_s[2 * j]
-            if margin < 0.0 and slo <= tiny:
+            if slo <= tiny:
                 bit += 1
                 if (variant >> (bit - 1)) & 1:
                     continue  # this variant leaves the segment uncounted
@@ -248,18 +255,15 @@ def _line_options(xy, ci, cf, nch, cs, sn, su, cd, eta, c, eps, tiny, margin, op
     is cut into :data:`SPLIT` pieces, one option per piece holding the crossing (the piece's
     ends on the edge's ends' sides). ``oc = [options, segments, conditions]`` is advanced;
     returns the most segments of an option, ``-1`` if too many. ``margin >= 0``: a segment of
-    length at most ``tiny`` needs a vertex within ``margin`` of the line (so the vertices
-    within ``eps + margin`` are near and their conditions widened by ``margin``); ``margin <
-    0``: any segment that may be that short may also be uncounted."""
-    # a vertex's condition is widened by ``margin`` (on the line's other side by at most that
-    # it cuts only an uncounted segment) and narrowed by half of DEGENERATE
-    wide = max(margin, 0.0) - 0.5 * DEGENERATE
+    length at most ``tiny`` puts a vertex within ``margin <= DEGENERATE / 2`` of the line, a
+    layout the bound leaves out (module doc); ``margin < 0``: any segment that may be that
+    short may be uncounted."""
+    wide = -0.5 * DEGENERATE  # each condition must hold with this much room
     near = np.empty(MAX_NEAR, dtype=np.int64)
     nh, nt = np.empty(MAX_NEAR), np.empty(MAX_NEAR)
     rel = np.empty(nch, dtype=np.int64)
     xa, xb = np.empty(nch), np.empty(nch)
-    nrel, nn = _collect(xy, ci, cf, nch, cs, sn, c, eps, eps + max(margin, 0.0), rel, xa, xb,
-                        near, nh, nt)  # fmt: skip
+    nrel, nn = _collect(xy, ci, cf, nch, cs, sn, c, eps, eps, rel, xa, xb, near, nh, nt)
     if nn < 0:
         return -1
     lo_b, hi_b = np.empty(nrel), np.empty(nrel)
@@ -284,6 +288,7 @@ def _line_options(xy, ci, cf, nch, cs, sn, su, cd, eta, c, eps, tiny, margin, op
                 m += 1
         if m % 2 == 1:
             return -1  # a ring crossed an odd number of times (cannot happen)
+        drop = m // 2 if margin < 0.0 else 0
         for j in range(SPLIT if edge >= 0 else 1):
             lo_s[:m], hi_s[:m] = lo_b[:m], hi_b[:m]
             c0 = oc[2]
@@ -301,14 +306,15 @@ def _line_options(xy, ci, cf, nch, cs, sn, su, cd, eta, c, eps, tiny, margin, op
                     ta, tb = min(ta, tp), max(tb, tp)
                     if 0 < e < SPLIT:  # the piece's start on the edge start's side, its end not
                         _condition(ct, cr, cup, c1, -sn * px + cs * py, tp, c, cd,
-                                   below if e == j else not below, wide)  # fmt: skip
+                                   below if e == j else not below, 0.0)  # fmt: skip
                         c1 += 1
                 if not _feasible(ct[c0:], cr[c0:], cup[c0:], c1 - c0, su, eta):
                     continue
                 lo_s[spot], hi_s[spot] = ta - eps - X_SLACK, tb + eps + X_SLACK
                 oc[2] = c1
-            got = _emit(lo_s, hi_s, m, tiny, margin, opt, olo, ohi, oc, c0 if edge >= 0 else n0,
-                        c1 if edge >= 0 else n0 + nn, first)  # fmt: skip
+            if edge < 0:
+                c0, c1 = n0, n0 + nn
+            got = _emit(lo_s, hi_s, m, tiny, 0, drop, opt, olo, ohi, oc, c0, c1, first)
             if got < 0:
                 return -1
             most = max(most, got)
