@@ -68,6 +68,8 @@ class _RegionSearch(_Search):
         self.polished: set[tuple[float, float]] = set()
         self.bounded = 0
         self.evaluations = 0
+        self.tol = -math.inf  # the search's (set by smith_bb_region): a box bounded at most
+        # best + tol is discarded, its bound need not be the tightest
 
     def bounds(self, boxes: Boxes) -> NDArray[np.float64]:
         eps = box_radius(boxes, self.radius)
@@ -79,7 +81,7 @@ class _RegionSearch(_Search):
             out[sel] = region_bounds(
                 inner, outer, self.real, boxes.theta[sel], boxes.delta[sel], boxes.d[sel],
                 eps[sel] * (1 + 1e-9) + 1e-12, self.s, self.a, self.b, self.tiny,
-                boxes.eta[sel] * (1 + 1e-9) + 1e-12, self.margin)  # fmt: skip
+                boxes.eta[sel] * (1 + 1e-9) + 1e-12, self.margin, self.best + self.tol)  # fmt: skip
         self.bounded += len(radius)
         return out
 
@@ -207,6 +209,7 @@ def smith_bb_region(
     max_work = _check("max_work", max_work, 0.0)
     n_angles = _check_angles(n_angles)
     search = _RegionSearch(r, spacing, a, b)
+    search.tol = tol
     boxes = initial_boxes(search.s, search.radius, n_angles)
     for angle, offset in incumbents:
         theta, d = float(angle), float(offset) / search.frame.scale

@@ -228,7 +228,7 @@ def _line_segments(oa, ob, o0, o1, pa, pb, p0, p1, owner, mask, g, lo, hi, n):
 
 
 def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
-           margin, pos):  # fmt: skip
+           margin, cut, pos):  # fmt: skip
     ost, oa, ob = _intervals(out_xy, cs, sn, d, s, k0, nb)
     ist, pa, pb = _intervals(in_xy, cs, sn, d, s, k0, nb)
     top = 0.0
@@ -291,12 +291,22 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb
                     gfree = max(gfree, pa[p] - left)
                     left = pb[p]
             gfree = max(gfree, ob[o] - left)
-    # the chain bound (segment ends tied to the chains, .region_chains) where it applies
-    tied = chain_bound(real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, unc, n_unc, clo, chi,
-                       n_sure, a, b, tiny, margin)  # fmt: skip
     if total_gaps > 30 or (1 << total_gaps) > MAX_CHOICES:
-        return min(tied, _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w,
-                                  n_fixed, gfree, a, b, pos))  # fmt: skip
+        old = _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_fixed,
+                       gfree, a, b, pos)  # fmt: skip
+    else:
+        old = _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, lo, hi,
+                          w, n_fixed, a, b, pos)  # fmt: skip
+    if old <= cut:  # the box is discarded anyway
+        return old
+    # the chain bound (segment ends tied to the chains, .region_chains) where it applies
+    return min(old, chain_bound(real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, unc, n_unc,
+                                clo, chi, n_sure, a, b, tiny, margin))  # fmt: skip
+
+
+def _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, lo, hi, w, n_fixed,
+                a, b, pos):  # fmt: skip
+    """The bound with every choice of splits on the uncertain lines (module doc)."""
     best = -np.inf
     for mask in range(1 << total_gaps):
         n, g, free, ok = n_fixed, 0, 0, True
@@ -322,7 +332,7 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb
             w[n] = float(f)
             best = max(best, _sup_w(lo, hi, w, n + 1, order, a, b, pos))
         w[n] = 1.0
-    return min(tied, best)
+    return best
 
 
 def _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n, gfree, a, b, pos):
@@ -371,13 +381,13 @@ def _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n, gfr
 
 
 def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
-            margin, slack):  # fmt: skip
+            margin, cut, slack):  # fmt: skip
     m = cs.shape[0]
     out = np.empty(m)
     pos = np.empty(2 * (in_xy.shape[0] + 4) * nb + 8)
     for i in range(m):
         v = _bound(in_xy, out_xy, real_xy, rings, cs[i], sn[i], sdelta[i], eta[i], d[i], s,
-                   eps[i], k0, nb, a, b, tiny, margin, pos)  # fmt: skip
+                   eps[i], k0, nb, a, b, tiny, margin, cut - 2.0 * slack, pos)  # fmt: skip
         out[i] = v + slack
     return out
 
@@ -390,7 +400,7 @@ def _compiled() -> tuple[Any, Any]:
     kernel._compiled()  # _sup_w's own helpers (kernel's _g) compiled where it looks them up
     prepare()  # and chain_bound's, in .region_chains
     helpers = ("_first_line", "_intervals", "_chain_counts", "_sup_w", "_owners",
-               "_line_segments", "_relaxed", "chain_bound", "_bound")  # fmt: skip
+               "_line_segments", "_relaxed", "_enumerated", "chain_bound", "_bound")  # fmt: skip
     jit_globals(globals(), helpers)
     return jit(_bounds), jit(_values)
 
@@ -416,13 +426,15 @@ def region_bounds(
     tiny: float,
     eta: NDArray[np.float64] | None = None,
     margin: float = -1.0,
+    cut: float = math.inf,
 ) -> NDArray[np.float64]:
     """``(m,)`` an upper bound of Eq. 1 over the segments of every rigid image of the region
     ``real`` (:func:`ring_starts`) moved by at most ``eps[i]`` (rotation at most ``delta[i]``,
     shift across the lines at most ``eta[i]``, default ``eps[i]``) that lies between the edge
     sets ``inner`` and ``outer``, seen by the lines of layout ``i``. ``margin``: how near a
     vertex a line passes where it cuts a segment of length at most ``tiny``
-    (:func:`.region_chains.near_margin`; negative: unknown)."""
+    (:func:`.region_chains.near_margin`; negative: unknown). A box whose first bound is at most
+    ``cut`` (it will be discarded) skips the chain bound."""
     k0, nb = lines_range(outer, spacing)
     th = np.ascontiguousarray(theta, dtype=np.float64)
     sdelta = np.sin(np.minimum(np.asarray(delta, dtype=np.float64), math.pi / 2))
@@ -432,7 +444,7 @@ def region_bounds(
               np.cos(th), np.sin(th), sdelta, np.ascontiguousarray(eta, dtype=np.float64),
               np.ascontiguousarray(d, dtype=np.float64),
               float(spacing), np.ascontiguousarray(eps, dtype=np.float64), k0, nb, float(a),
-              float(b), float(tiny), float(margin), BOUND_SLACK)  # fmt: skip
+              float(b), float(tiny), float(margin), float(cut), BOUND_SLACK)  # fmt: skip
 
 
 def region_values(
