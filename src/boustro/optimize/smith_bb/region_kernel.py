@@ -297,7 +297,9 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb
     else:
         old = _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, lo, hi,
                           w, n_fixed, a, b, pos)  # fmt: skip
-    if old <= cut:  # the box is discarded anyway
+    if cut == np.inf:  # the chain bound alone (tests)
+        old = np.inf
+    elif old <= cut:  # the box is discarded anyway
         return old
     # the chain bound (segment ends tied to the chains, .region_chains) where it applies
     return min(old, chain_bound(real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, unc, n_unc,
@@ -434,7 +436,8 @@ def region_bounds(
     sets ``inner`` and ``outer``, seen by the lines of layout ``i``. ``margin``: how near a
     vertex a line passes where it cuts a segment of length at most ``tiny``
     (:func:`.region_chains.near_margin`; negative: unknown). A box whose first bound is at most
-    ``cut`` (it will be discarded) skips the chain bound."""
+    ``cut`` (it will be discarded) skips the chain bound; ``cut = inf``: the chain bound alone
+    (``inf`` where it does not apply; for tests)."""
     k0, nb = lines_range(outer, spacing)
     th = np.ascontiguousarray(theta, dtype=np.float64)
     sdelta = np.sin(np.minimum(np.asarray(delta, dtype=np.float64), math.pi / 2))
