@@ -26,7 +26,7 @@ event never close. This bound ties the segment ends to the chains they lie on in
 The bound is the largest exact maximum (:func:`.kernel._sup_w`) over every combination of the
 uncertain lines' options with the sure lines' segments; it applies to boxes with at most
 :data:`MAX_LINES` uncertain lines, :data:`MAX_NEAR` vertices near a line and
-:data:`MAX_COMBOS` combinations (``inf`` otherwise: the caller keeps its own bound).
+:data:`MAX_COMBOS` feasibility checks of combinations (``inf`` otherwise: the caller keeps its own bound).
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ __all__ = ["MAX_COMBOS", "MAX_LINES", "MAX_NEAR", "chain_bound", "near_margin", 
 MAX_LINES = 8
 #: Most vertices within ``eps`` of one line (``2^k`` sides).
 MAX_NEAR = 5
-#: Most combinations of the lines' options evaluated per box.
+#: Most feasibility checks of (partial) combinations of the lines' options per box.
 MAX_COMBOS = 4096
 #: Most options of one line (sides of its near vertices, pieces of an edge along it, uncounted
 #: variants).
@@ -343,7 +343,7 @@ def chain_bound(xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, lines, nlines, lo
     cup = np.zeros(ncap, dtype=np.bool_)
     oc = np.zeros(3, dtype=np.int64)
     lstart = np.zeros(nlines + 1, dtype=np.int64)
-    combos, width, cd = 1, n_fixed, math.sqrt(max(1.0 - sdelta * sdelta, 0.0))
+    width, cd = n_fixed, math.sqrt(max(1.0 - sdelta * sdelta, 0.0))
     for q in range(nlines):
         c = d + (k0 + lines[q]) * s
         most = _line_options(xy, ci, cf, nch, cs, sn, sdelta, cd, eta, c, eps, tiny, margin, opt,
@@ -351,12 +351,18 @@ def chain_bound(xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, lines, nlines, lo
         if most < 0:
             return np.inf
         lstart[q + 1] = oc[0]
-        combos *= oc[0] - lstart[q]
+        if oc[0] == lstart[q]:
+            return -np.inf  # no motion of the box is left: it holds no layout
         width += most
-        if combos > MAX_COMBOS:
-            return np.inf
-    if combos == 0:
-        return -np.inf  # no motion of the box is left: it holds no layout
+    return _combine(opt, olo, ohi, ct, cr, cup, lstart, nlines, lo, hi, n_fixed, width, sdelta,
+                    eta, a, b)  # fmt: skip
+
+
+def _combine(opt, olo, ohi, ct, cr, cup, lstart, nlines, lo, hi, n_fixed, width, su, eta, a,
+             b):  # fmt: skip
+    """The largest exact maximum over the combinations of the lines' options that some motion
+    of the box allows, found depth first (a partial combination no motion allows is cut);
+    ``inf`` after :data:`MAX_COMBOS` feasibility checks."""
     sl = np.empty(width)
     sh = np.empty(width)
     sl[:n_fixed] = lo[:n_fixed]
@@ -367,29 +373,41 @@ def chain_bound(xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, lines, nlines, lo
     kt = np.empty(nc)
     kr = np.empty(nc)
     ku = np.zeros(nc, dtype=np.bool_)
-    pick = np.zeros(nlines, dtype=np.int64)
-    best = -np.inf
-    for _ in range(combos):
-        n, m = n_fixed, 0
+    pick = np.full(nlines, -1, dtype=np.int64)
+    mstart = np.zeros(nlines + 1, dtype=np.int64)
+    best, level, checks = -np.inf, 0, 0
+    while level >= 0:
+        pick[level] += 1
+        if pick[level] >= lstart[level + 1] - lstart[level]:
+            pick[level] = -1
+            level -= 1
+            continue
+        p = lstart[level] + pick[level]
+        m = mstart[level]
+        for g in range(opt[p, 2], opt[p, 3]):
+            kt[m], kr[m], ku[m] = ct[g], cr[g], cup[g]
+            m += 1
+        checks += 1
+        if checks > MAX_COMBOS:
+            return np.inf
+        if not _feasible(kt, kr, ku, m, su, eta):
+            continue
+        if level + 1 < nlines:
+            mstart[level + 1] = m
+            level += 1
+            continue
+        n = n_fixed
         for q in range(nlines):
             p = lstart[q] + pick[q]
             for g in range(opt[p, 0], opt[p, 1]):
                 sl[n], sh[n] = olo[g], ohi[g]
                 n += 1
-            for g in range(opt[p, 2], opt[p, 3]):
-                kt[m], kr[m], ku[m] = ct[g], cr[g], cup[g]
-                m += 1
-        if n > 0 and _feasible(kt, kr, ku, m, sdelta, eta):
+        if n > 0:
             for g in range(n):
                 pos[2 * g] = sl[g]
                 pos[2 * g + 1] = sh[g]
             order = np.argsort(pos[: 2 * n])
             best = max(best, _sup_w(sl, sh, w, n, order, a, b, pos))
-        for q in range(nlines):  # the next combination (mixed radix)
-            pick[q] += 1
-            if pick[q] < lstart[q + 1] - lstart[q]:
-                break
-            pick[q] = 0
     return best
 
 
@@ -426,5 +444,5 @@ def prepare() -> None:
     """Swap this module's helpers for their numba versions (before a caller compiles)."""
     kernel._compiled()
     helpers = ("_chains", "_crossing_range", "_feasible", "_side", "_near_index", "_collect",
-               "_condition", "_emit", "_line_options", "_sup_w")  # fmt: skip
+               "_condition", "_emit", "_line_options", "_combine", "_sup_w")  # fmt: skip
     jit_globals(globals(), helpers)
