@@ -5,28 +5,38 @@ the pieces of the inner set ``I``. Where a line runs within ``eps`` of a reflex 
 vertex or an edge along the line, a component holds two pieces that may be one segment or two,
 and a free segment may lie in a gap; that bound takes the options with independent lengths (a
 segment to the component's end AND a free segment in the same gap), so boxes across such an
-event never close. This bound ties the segment ends to the chains they lie on instead
-(docs/global_optimum.md, section 10, "The chain bound"):
+event never close. This bound ties the segment ends to the chains they lie on and the lines'
+options to one motion of the box (docs/global_optimum.md, section 10, "The chain bound"):
 
 * the real boundary is cut into chains that stay monotone across the lines for every angle of
-  the box (as :func:`.region_kernel._chain_counts`); a rigidly moved chain crosses a line at
-  most once (the half-open rule), and every crossing of the moved boundary with the line is a
-  crossing of one chain;
-* every point moves by at most ``eps``, so chain ``k``'s crossing with line ``c`` lies in
-  ``X_k``: the along-line range of the chain's points within ``eps`` of the line, grown by
-  ``eps``; the chain crosses surely if its across-range shrunk by ``eps`` holds the line
-  (strictly), may cross if the range grown by ``eps`` does, never otherwise;
-* the crossings, sorted, pair into the segments (even count: closed rings). For each subset
-  of the uncertain chains of the right parity, the ``j``-th smallest crossing lies between the
-  ``j``-th smallest low and high ends of the ``X``, so segment ``j`` (crossings ``2j``,
-  ``2j + 1``) has a length in ``[LO[2j+1] - HI[2j], HI[2j+1] - LO[2j]]``; each crossing is an
-  end of one segment only, so the lengths are independent within the option;
-* a segment whose length may be at most ``tiny`` may go uncounted: both variants are options.
+  the box (as :func:`.region_kernel._chain_counts`); a moved chain crosses a line (half-open
+  rule) exactly when its two end vertices lie on different sides of it;
+* every point moves by at most ``eps``: a vertex farther than ``eps`` from the line keeps its
+  side; the side of each of the (at most :data:`MAX_NEAR`) near ones is enumerated. Chain
+  ``k``'s crossing lies in ``X_k``, the along-line range of its points within ``eps`` of the
+  line grown by ``eps``; the crossings, sorted, pair into the segments, and the ``j``-th
+  smallest crossing lies between the ``j``-th smallest low and high ends of the ``X``, so
+  segment ``j`` has a length in ``[LO[2j+1] - HI[2j], HI[2j+1] - LO[2j]]``;
+* a motion of the box is a rotation by ``alpha`` (``|alpha| <= delta``) and a shift ``eta'``
+  (``|eta'| <= eta``); a vertex ``(h, t)`` is below line ``c`` when ``h cos(alpha) - t
+  sin(alpha) <= c + eta'``: linear in ``(sin(alpha), eta')`` up to ``h (1 - cos(alpha))``, which
+  is taken at its worst. A combination of sides (over all the box's uncertain lines) is kept
+  only if some motion meets all its conditions (:func:`_feasible`, a two-variable check);
+* an edge along a line (both ends near, crossed) is cut into :data:`SPLIT` pieces, one option
+  per piece holding the crossing (its ends on the edge's ends' sides): the crossing positions
+  of lines along parallel edges move together;
+* each vertex condition must hold with :data:`DEGENERATE` / 2 of room: the bound leaves out the
+  layouts at which a vertex lies that near a line (where vertices align exactly, a combination
+  that no open set of motions gives holds on a set of zero width; the exact value there is a
+  limit that robust scoring, at 1e-9, never reports). A segment of at most ``tiny`` (uncounted
+  by the evaluator) puts a vertex within :func:`near_margin` of the line, at most that room, so
+  only a sharper or thinner region needs the uncounted variants.
 
-The bound is the largest exact maximum (:func:`.kernel._sup_w`) over every combination of the
-uncertain lines' options with the sure lines' segments; it applies to boxes with at most
-:data:`MAX_LINES` uncertain lines, :data:`MAX_NEAR` vertices near a line and
-:data:`MAX_COMBOS` feasibility checks of combinations (``inf`` otherwise: the caller keeps its own bound).
+The bound is the largest exact maximum (:func:`.kernel._sup_w`) over the feasible
+combinations of the uncertain lines' options with the sure lines' segments, found depth
+first; it applies to boxes with at most :data:`MAX_LINES` uncertain lines, :data:`MAX_NEAR`
+vertices near a line and :data:`MAX_COMBOS` feasibility checks (``inf`` otherwise: the caller
+keeps its own bound).
 """
 
 from __future__ import annotations
