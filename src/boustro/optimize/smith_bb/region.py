@@ -110,11 +110,11 @@ class _RegionSearch(_Search):
 
 
 #: Work budget of a region's search (as :data:`~boustro.optimize.smith_bb.search.MAX_WORK`),
-#: a tenth of the convex one's: a region's box costs more, and where the bound stalls (lines
-#: along an edge beside a reflex corner or a hole: docs/global_optimum.md, section 10) more work
-#: does not close the gap. Measured (2026-11-27, load 4): the L-shape, the square with a hole and
-#: a slanted L at 10 m stop at the same gaps (2.3e-3, 3.2e-2, 7.2e-3) with 1e7 (0.16-0.20 s) as
-#: with 1e8 (0.36-1.64 s); 10 random concave areas with holes converge in 0.06-0.20 s with either.
+#: a tenth of the convex one's: a region's box costs more, and where the bound still stalls
+#: (more than 8 lines along edges at once, a comb; docs/global_optimum.md, section 10, "The
+#: chain bound") more work does not close the gap. Measured (2026-11-27, load 7): the L, the U
+#: (10 m, 1 m) and the pond L converge within it (0.1-0.5 s), the 40 m square ring at 7 m ends at
+#: a gap of 1.05e-4 (converges with 2e7); random concave areas with holes in 0.05-0.2 s.
 REGION_MAX_WORK = 1e7
 
 
