@@ -89,9 +89,10 @@ def main() -> None:
     for name, new in runs["new"].items():
         base = runs["base"][name]
         cpu = min(base["cpu"], runs["base2"][name]["cpu"])
-        print(f"{name:<16} {base['gap']:>9.2e} {new['gap']:>9.2e} "
-              f"{str(base['converged'])[0] + '->' + str(new['converged'])[0]:>10} {cpu:>7.3f} "
-              f"{new['cpu']:>7.3f} {new['cpu'] / cpu:>6.2f} {base['boxes']:>6}/{new['boxes']:<6}")  # fmt: skip
+        conv = str(base["converged"])[0] + "->" + str(new["converged"])[0]
+        print(f"{name:<16} {base['gap']:>9.2e} {new['gap']:>9.2e} {conv:>10} {cpu:>7.3f} "
+              f"{new['cpu']:>7.3f} {new['cpu'] / cpu:>6.2f} "
+              f"{base['boxes']:>6}/{new['boxes']:<6}")  # fmt: skip
 
 
 if __name__ == "__main__":
