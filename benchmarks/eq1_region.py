@@ -13,8 +13,8 @@ Rows:
   in a subprocess for its peak memory (the grid took 2 min 28 s and 5.8 GB there, issue 21;
   ``--grid-big`` runs it here too).
 
-The first call compiles the numba kernels (about 10 s in a cold process, cached on disk after);
-it is made before any timing.
+The first call compiles the numba kernels (about 25 s of CPU in a cold process with the chain
+bound, cached on disk after); it is made before any timing.
 
     python benchmarks/eq1_region.py [--data /path/to/Fields2Cover/data] [--random 10]
 """

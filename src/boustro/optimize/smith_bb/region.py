@@ -25,6 +25,7 @@ from ..cover.sandwich import Sandwich
 from ..cover.search import SIMPLIFY_EDGES, SIMPLIFY_SPACING
 from ..region_grid import evaluate_region_grid
 from ..result import OptimizeResult
+from .region_chains import near_margin
 from .region_kernel import region_bounds, region_values, ring_starts
 from .search import DEFAULT_TOL, SEED_ANGLES, _check, _check_angles, _Search, _weights, solve
 
@@ -57,6 +58,7 @@ class _RegionSearch(_Search):
         self.xy = self.real[0]
         self.radius = float(np.hypot(self.v[:, 0], self.v[:, 1]).max())
         self.tiny = TINY * max(self.radius, 1e-300)
+        self.margin = near_margin(rings, self.tiny)
         simplify = len(self.xy) > SIMPLIFY_EDGES
         self.sandwich = Sandwich(region, SIMPLIFY_SPACING * spacing if simplify else 0.0)
         self.levels: dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
@@ -66,6 +68,8 @@ class _RegionSearch(_Search):
         self.polished: set[tuple[float, float]] = set()
         self.bounded = 0
         self.evaluations = 0
+        self.tol = -math.inf  # the search's (set by smith_bb_region): a box bounded at most
+        # best + tol is discarded, its bound need not be the tightest
 
     def bounds(self, boxes: Boxes) -> NDArray[np.float64]:
         eps = box_radius(boxes, self.radius)
@@ -76,7 +80,8 @@ class _RegionSearch(_Search):
             inner, outer = self.level(float(r))
             out[sel] = region_bounds(
                 inner, outer, self.real, boxes.theta[sel], boxes.delta[sel], boxes.d[sel],
-                eps[sel] * (1 + 1e-9) + 1e-12, self.s, self.a, self.b, self.tiny)  # fmt: skip
+                eps[sel] * (1 + 1e-9) + 1e-12, self.s, self.a, self.b, self.tiny,
+                boxes.eta[sel] * (1 + 1e-9) + 1e-12, self.margin, self.best + self.tol)  # fmt: skip
         self.bounded += len(radius)
         return out
 
@@ -105,11 +110,11 @@ class _RegionSearch(_Search):
 
 
 #: Work budget of a region's search (as :data:`~boustro.optimize.smith_bb.search.MAX_WORK`),
-#: a tenth of the convex one's: a region's box costs more, and where the bound stalls (lines
-#: along an edge beside a reflex corner or a hole: docs/global_optimum.md, section 10) more work
-#: does not close the gap. Measured (2026-11-27, load 4): the L-shape, the square with a hole and
-#: a slanted L at 10 m stop at the same gaps (2.3e-3, 3.2e-2, 7.2e-3) with 1e7 (0.16-0.20 s) as
-#: with 1e8 (0.36-1.64 s); 10 random concave areas with holes converge in 0.06-0.20 s with either.
+#: a tenth of the convex one's: a region's box costs more, and where the bound still stalls
+#: (more than 8 lines along edges at once, a comb; docs/global_optimum.md, section 10, "The
+#: chain bound") more work does not close the gap. Measured (2026-11-27, load 7): the L, the U
+#: (10 m, 1 m) and the pond L converge within it (0.1-0.5 s), the 40 m square ring at 7 m ends at
+#: a gap of 1.05e-4 (converges with 2e7); random concave areas with holes in 0.05-0.2 s.
 REGION_MAX_WORK = 1e7
 
 
@@ -204,6 +209,7 @@ def smith_bb_region(
     max_work = _check("max_work", max_work, 0.0)
     n_angles = _check_angles(n_angles)
     search = _RegionSearch(r, spacing, a, b)
+    search.tol = tol
     boxes = initial_boxes(search.s, search.radius, n_angles)
     for angle, offset in incumbents:
         theta, d = float(angle), float(offset) / search.frame.scale

@@ -40,11 +40,15 @@ from numpy.typing import NDArray
 from ..._jit import jit, jit_globals
 from . import kernel
 from .kernel import _sup_w, lines_range
+from .region_chains import chain_bound, prepare
 
 __all__ = ["region_bounds", "region_values", "ring_starts"]
 
 #: Most split choices enumerated per box (2^gaps), beyond it the crude bound ``a max|o| + b``.
 MAX_CHOICES = 8
+#: A sure line's segment whose length interval is wider than this many ``eps`` (the sandwich
+#: gives about 4 to 8) is left to the chain bound (:mod:`.region_chains`).
+LOOSE = 16.0
 #: Added to every box bound (rounding of the closed forms).
 BOUND_SLACK = 1e-10
 
@@ -223,7 +227,8 @@ def _line_segments(oa, ob, o0, o1, pa, pb, p0, p1, owner, mask, g, lo, hi, n):
     return n, g, splits
 
 
-def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, b, tiny, pos):
+def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
+           margin, cut, pos):  # fmt: skip
     ost, oa, ob = _intervals(out_xy, cs, sn, d, s, k0, nb)
     ist, pa, pb = _intervals(in_xy, cs, sn, d, s, k0, nb)
     top = 0.0
@@ -242,6 +247,10 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, 
     hi = np.empty(size)
     w = np.ones(size)
     n_fixed, total_gaps, gfree = 0, 0, 0.0
+    unc = np.empty(nb, dtype=np.int64)  # the lines left to the chain bound
+    clo = np.empty(size)  # and the segments of the others (a sure line's, if tight)
+    chi = np.empty(size)
+    n_unc, n_sure = 0, 0
     for q in range(nb):
         if not _owners(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], tiny, owner):
             return crude
@@ -254,11 +263,24 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, 
                     prev_o = owner[p]
         u = cnt[q] // 2
         if u <= r:  # one segment per component holding pieces
+            n0 = n_fixed
             n_fixed, _, _ = _line_segments(
                 oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], owner, 0, 0, lo, hi,
                 n_fixed)  # fmt: skip
+            loose = False
+            for j in range(n0, n_fixed):
+                loose = loose or hi[j] - lo[j] > LOOSE * eps
+            if loose:  # e.g. a line along an edge: the chains may fix its segments
+                unc[n_unc] = q
+                n_unc += 1
+            else:
+                for j in range(n0, n_fixed):
+                    clo[n_sure], chi[n_sure] = lo[j], hi[j]
+                    n_sure += 1
             continue
         extra[q] = u - r
+        unc[n_unc] = q
+        n_unc += 1
         gaps[q] = held - r
         total_gaps += held - r
         # the longest gap on the line: between pieces, or a component's ends and its pieces
@@ -270,8 +292,23 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, 
                     left = pb[p]
             gfree = max(gfree, ob[o] - left)
     if total_gaps > 30 or (1 << total_gaps) > MAX_CHOICES:
-        return _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_fixed,
-                        gfree, a, b, pos)  # fmt: skip
+        old = _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_fixed,
+                       gfree, a, b, pos)  # fmt: skip
+    else:
+        old = _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, lo, hi,
+                          w, n_fixed, a, b, pos)  # fmt: skip
+    if cut == np.inf:  # the chain bound alone (tests)
+        old = np.inf
+    elif old <= cut:  # the box is discarded anyway
+        return old
+    # the chain bound (segment ends tied to the chains, .region_chains) where it applies
+    return min(old, chain_bound(real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, unc, n_unc,
+                                clo, chi, n_sure, a, b, tiny, margin))  # fmt: skip
+
+
+def _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, lo, hi, w, n_fixed,
+                a, b, pos):  # fmt: skip
+    """The bound with every choice of splits on the uncertain lines (module doc)."""
     best = -np.inf
     for mask in range(1 << total_gaps):
         n, g, free, ok = n_fixed, 0, 0, True
@@ -345,13 +382,14 @@ def _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n, gfr
     return best
 
 
-def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, a, b, tiny, slack):
+def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
+            margin, cut, slack):  # fmt: skip
     m = cs.shape[0]
     out = np.empty(m)
     pos = np.empty(2 * (in_xy.shape[0] + 4) * nb + 8)
     for i in range(m):
-        v = _bound(in_xy, out_xy, real_xy, rings, cs[i], sn[i], sdelta[i], d[i], s, eps[i], k0,
-                   nb, a, b, tiny, pos)  # fmt: skip
+        v = _bound(in_xy, out_xy, real_xy, rings, cs[i], sn[i], sdelta[i], eta[i], d[i], s,
+                   eps[i], k0, nb, a, b, tiny, margin, cut - 2.0 * slack, pos)  # fmt: skip
         out[i] = v + slack
     return out
 
@@ -362,8 +400,9 @@ def _compiled() -> tuple[Any, Any]:
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _bounds, _values
     kernel._compiled()  # _sup_w's own helpers (kernel's _g) compiled where it looks them up
+    prepare()  # and chain_bound's, in .region_chains
     helpers = ("_first_line", "_intervals", "_chain_counts", "_sup_w", "_owners",
-               "_line_segments", "_relaxed", "_bound")  # fmt: skip
+               "_line_segments", "_relaxed", "_enumerated", "chain_bound", "_bound")  # fmt: skip
     jit_globals(globals(), helpers)
     return jit(_bounds), jit(_values)
 
@@ -387,18 +426,28 @@ def region_bounds(
     a: float,
     b: float,
     tiny: float,
+    eta: NDArray[np.float64] | None = None,
+    margin: float = -1.0,
+    cut: float = math.inf,
 ) -> NDArray[np.float64]:
     """``(m,)`` an upper bound of Eq. 1 over the segments of every rigid image of the region
-    ``real`` (:func:`ring_starts`) moved by at most ``eps[i]`` (rotation at most ``delta[i]``)
-    that lies between the edge sets ``inner`` and ``outer``, seen by the lines of layout ``i``."""
+    ``real`` (:func:`ring_starts`) moved by at most ``eps[i]`` (rotation at most ``delta[i]``,
+    shift across the lines at most ``eta[i]``, default ``eps[i]``) that lies between the edge
+    sets ``inner`` and ``outer``, seen by the lines of layout ``i``. ``margin``: how near a
+    vertex a line passes where it cuts a segment of length at most ``tiny``
+    (:func:`.region_chains.near_margin`; negative: unknown). A box whose first bound is at most
+    ``cut`` (it will be discarded) skips the chain bound; ``cut = inf``: the chain bound alone
+    (``inf`` where it does not apply; for tests)."""
     k0, nb = lines_range(outer, spacing)
     th = np.ascontiguousarray(theta, dtype=np.float64)
     sdelta = np.sin(np.minimum(np.asarray(delta, dtype=np.float64), math.pi / 2))
+    eta = eps if eta is None else np.minimum(eta, eps)
     fn = _compiled()[0]
     return fn(np.ascontiguousarray(inner), np.ascontiguousarray(outer), real[0], real[1],
-              np.cos(th), np.sin(th), sdelta, np.ascontiguousarray(d, dtype=np.float64),
+              np.cos(th), np.sin(th), sdelta, np.ascontiguousarray(eta, dtype=np.float64),
+              np.ascontiguousarray(d, dtype=np.float64),
               float(spacing), np.ascontiguousarray(eps, dtype=np.float64), k0, nb, float(a),
-              float(b), float(tiny), BOUND_SLACK)  # fmt: skip
+              float(b), float(tiny), float(margin), float(cut), BOUND_SLACK)  # fmt: skip
 
 
 def region_values(
