@@ -16,6 +16,7 @@ import numpy as np
 from .kernel_bounds import _NCH, _chains_one, _kink_one, _runs_piece, _second_one
 from .kernel_pieces import (
     _LAM,
+    _NMO,
     _TOTAL,
     _VALUE,
     _argmax,
@@ -41,6 +42,11 @@ __all__: list[str] = []
 _SKIP_MARGIN = 1e-9
 
 
+#: Floats of the structures :func:`_evaluate` keeps from its first pass for its second (about
+#: 2 MB): the intervals it will bound again are not recomputed.
+_KEEP_FLOATS = 1 << 18
+
+
 def _evaluate(
     v: np.ndarray,
     s: float,
@@ -60,23 +66,41 @@ def _evaluate(
     The second-order bound of an angle is the largest over its pieces; the pieces are bounded
     from the highest cheap bound down, and those whose cheap bound falls below the best so far
     by more than :data:`_SKIP_MARGIN` are skipped (they cannot be the largest: the same
-    bound, the same order, less work)."""
+    bound, the same order, less work).
+
+    The first pass keeps the structure of the intervals whose cheap bound is above the
+    threshold as it stands then (a superset of those the second pass bounds, up to
+    :data:`_KEEP_FLOATS` of them), so the second pass reads it instead of computing it again:
+    the same functions of the same inputs, so the same numbers."""
     n = v.shape[0]
     n_j = n - 1
-    h, t, x, tu, td, pc, fam, rn, mo, cc, work, iwork = _structure_scratch(n)
+    per = 21 * n + 12 * n * n_j
+    cap = min(min(batch, len(lo)), _KEEP_FLOATS // per)
+    # slot ``cap`` is the scratch of the intervals that are not kept
+    k_h, k_x = np.empty((cap + 1, n)), np.empty((cap + 1, n))
+    k_tu, k_td = np.empty((cap + 1, n)), np.empty((cap + 1, n))
+    k_pc, k_fam = np.empty((cap + 1, n, 5)), np.empty((cap + 1, n, 2), dtype=np.int64)
+    k_rn, k_mo = np.empty((cap + 1, n, n_j, 8)), np.empty((cap + 1, n, _NMO))
+    k_cc, k_qp = np.empty((cap + 1, n, n_j, 4)), np.empty((cap + 1, n))
+    slot = np.empty(min(batch, len(lo)), dtype=np.int64)
+    t, work, iwork = np.empty(n), np.empty((4, n)), np.empty((2, n), dtype=np.int64)
     drift, curv = np.empty((n, n_j)), np.empty((n, n_j))
     d0, d1 = np.empty((2, n, n_j)), np.empty(n_j)
     chain, edges, trig = np.empty((n_j, 2, _NCH)), np.empty((n_j, 2, 6)), np.empty(6)
-    pb, f1s, f2s, qp = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    pb, f1s, f2s = np.empty(n), np.empty(n), np.empty(n)
     porder = np.empty(n, dtype=np.int64)
     scratch = np.empty((16, 4))
     bound = np.empty(len(lo))
     for start in range(0, len(lo), batch):
         stop = min(start + batch, len(lo))
         gmax = -np.inf
+        used = 0
         for m in range(start, stop):
             mid = 0.5 * (lo[m] + hi[m])
             half = 0.5 * (hi[m] - lo[m])
+            k = used if used < cap else cap
+            h, x, tu, td, pc = k_h[k], k_x[k], k_tu[k], k_td[k], k_pc[k]
+            fam, rn, mo, cc, qp = k_fam[k], k_rn[k], k_mo[k], k_cc[k], k_qp[k]
             _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
             _pieces_one(rn, a, b, mo, cc)
             ip = _argmax(mo[:, _VALUE])
@@ -85,14 +109,25 @@ def _evaluate(
             gmax = g[m] if m == start else _nmax(gmax, g[m])
             bound[m] = _quick_one(x, tu, td, rn, mo, half, a, b, work, qp)
             order[m] = 1.0
+            slot[m - start] = -1
+            now = gmax if gmax > threshold else threshold
+            if k < cap and not (bound[m] + BOUND_SLACK <= now):  # may be bounded again
+                slot[m - start] = k
+                used += 1
         thr = gmax if gmax > threshold else threshold  # Python's max(threshold, gmax)
         for m in range(start, stop):
             if bound[m] + BOUND_SLACK > thr:
                 mid = 0.5 * (lo[m] + hi[m])
                 half = 0.5 * (hi[m] - lo[m])
-                _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
-                _pieces_one(rn, a, b, mo, cc)
-                _quick_one(x, tu, td, rn, mo, half, a, b, work, qp)
+                k = slot[m - start]
+                kept = k >= 0
+                k = k if kept else cap
+                h, x, tu, td, pc = k_h[k], k_x[k], k_tu[k], k_td[k], k_pc[k]
+                fam, rn, mo, cc, qp = k_fam[k], k_rn[k], k_mo[k], k_cc[k], k_qp[k]
+                if not kept:
+                    _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
+                    _pieces_one(rn, a, b, mo, cc)
+                    _quick_one(x, tu, td, rn, mo, half, a, b, work, qp)
                 _chains_one(s, mid, half, x, tu, td, chain, edges, d1, trig)
                 _order_desc(qp, porder)
                 best = -np.inf
