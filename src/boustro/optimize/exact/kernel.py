@@ -23,8 +23,9 @@ from numpy.typing import NDArray
 
 from ..._jit import LOCK, fresh_cache, jit_cached, jit_globals
 from ...models import MAX_CANDIDATES, grid_size
-from . import kernel_bounds, kernel_exact, kernel_pieces, kernel_search
-from .kernel_exact import _exact_grid, _finish
+from . import kernel_bounds, kernel_check, kernel_exact, kernel_pieces, kernel_search
+from .kernel_check import _finish
+from .kernel_exact import _exact_grid
 from .kernel_search import _pieces_at, _search
 from .structure import Array
 
@@ -48,6 +49,7 @@ _HELPERS = {
     ),
     kernel_bounds: "_mu_ratio _parallel_edge _parallel_one _ends_one",
     kernel_exact: "_angle_setup _layout_value _halfplanes_into _top_pieces _check_into",
+    kernel_check: "_chains_at _screen_angle _screened_check",
     kernel_search: "_max_into",
 }
 _STAGES = {
@@ -64,7 +66,7 @@ class Compiled(NamedTuple):
     exact_grid: Any  # .kernel_exact._exact_grid
     search: Any  # .kernel_search._search
     pieces_at: Any  # .kernel_search._pieces_at
-    finish: Any  # .kernel_exact._finish
+    finish: Any  # .kernel_check._finish
     cached: bool  # numba's on-disk cache holds them (else they compile in every process)
 
 
@@ -123,7 +125,7 @@ def compiled() -> Compiled | None:
     # Helpers first: the functions call them by their module-level names, which from here on
     # are compiled functions (numba resolves those names when it compiles a caller); a helper
     # imported by name into another kernel module is swapped there too.
-    homes = (kernel_pieces, kernel_bounds, kernel_exact, kernel_search)
+    homes = (kernel_pieces, kernel_bounds, kernel_check, kernel_exact, kernel_search)
     with LOCK:
         for table in (_HELPERS, _STAGES):
             for module, names in table.items():
@@ -270,7 +272,7 @@ def finish_smith_compiled(
     check: bool = True,
 ) -> Array | None:
     """The certified optimiser's work after its search in one compiled call
-    (:func:`.kernel_exact._finish`): ``(fitness, angle, offset, check angle, check offset,
+    (:func:`.kernel_check._finish`): ``(fitness, angle, offset, check angle, check offset,
     check fitness)`` of the best layout near the closed-form optimum at ``thetas`` and of the
     spot check, normalised frame, as :func:`.smith._attained` and :func:`.smith._spot_check`
     give them, then a flag: 0 done, 1 the caller must compute them (too many lines for the

@@ -50,8 +50,8 @@ def event_angles(vertices: ArrayLike, spacing: float) -> Array:
     # The multiples m of each pair with |m s / dist| <= 1 (the float test, on the range
     # |m| <= floor(dist / s) + 1 that holds them): the arc cosines of those alone, not of every
     # pair against every multiple of the widest pair (the same numbers, about a tenth of them).
-    top = np.floor(dist / spacing) + 1.0
-    top = np.where(np.isfinite(top), top, 0.0).astype(np.int64)
+    reach = np.floor(dist / spacing) + 1.0
+    top: NDArray[np.int64] = np.where(np.isfinite(reach), reach, 0.0).astype(np.int64)
     counts = 2 * top + 1
     pair = np.repeat(np.arange(len(dist)), counts)
     first = np.cumsum(counts) - counts
