@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from .kernel_bounds import _NCH, _chains_one, _kink_one, _runs_piece, _second_one
+from .kernel_events import _event_merge
 from .kernel_pieces import (
     _LAM,
     _NMO,
@@ -172,7 +173,9 @@ def _max_into(current: float, values: np.ndarray, mask: np.ndarray) -> float:
 def _search(
     v: np.ndarray,
     s: float,
-    edges: np.ndarray,
+    alpha: np.ndarray,
+    pair: np.ndarray,
+    acos: np.ndarray,
     a: float,
     b: float,
     tol: float,
@@ -182,8 +185,13 @@ def _search(
     max_children: int,
     out: np.ndarray,
 ) -> None:
-    """:func:`.search._branch_and_bound` with :func:`_evaluate`, step for step. Writes ``out``:
-    theta, lo, hi, offset, value, upper bound, evaluations, rounds, converged (1.0 or 0.0)."""
+    """:func:`.search._branch_and_bound` with :func:`_evaluate`, step for step, over the
+    event angles of :func:`.kernel_events._event_merge` (``alpha, pair, acos``: the pairs'
+    angles, the multiples' pairs and arc cosines). Writes ``out``: theta, lo, hi, offset,
+    value, upper bound, evaluations, rounds, converged (1.0 or 0.0), number of intervals
+    between events."""
+    edges = _event_merge(alpha, pair, acos)
+    out[9] = len(edges) - 1
     lo, hi = edges[:-1].copy(), edges[1:].copy()
     m = len(lo)
     g, d, ub, order = np.empty(m), np.empty(m), np.empty(m), np.empty(m)

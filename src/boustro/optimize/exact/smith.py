@@ -38,7 +38,7 @@ from .search import (
     _check_tol,
     _Search,
 )
-from .structure import Array, _check_work, _structure, event_angles
+from .structure import Array, _check_work, _structure
 
 __all__ = ["best_offset", "global_optimum"]
 
@@ -328,10 +328,9 @@ def _search_smith(
     """The branch and bound over the angle: one compiled call (:mod:`.kernel_search`) if
     ``fast``, else the numpy evaluation of the intervals in :func:`_branch_and_bound` (the same
     search)."""
-    edges = event_angles(v, s)
     out = None
     if fast:
-        out = search_smith_compiled(v, s, edges, a, b, tol, cap, _BATCH, _MIN_WIDTH, _MAX_CHILDREN)
+        out = search_smith_compiled(v, s, a, b, tol, cap, _BATCH, _MIN_WIDTH, _MAX_CHILDREN)
     if out is None:
 
         def evaluate(lo: Array, hi: Array, threshold: float) -> tuple[Array, Array, Array, Array]:
@@ -340,9 +339,7 @@ def _search_smith(
         return _branch_and_bound(v, s, evaluate, tol, cap)
     theta, lo, hi, offset, value, upper = (float(x) for x in out[:6])
     evaluations, rounds, converged = int(out[6]), int(out[7]), bool(out[8])
-    return _Search(
-        theta, lo, hi, offset, value, upper, evaluations, rounds, len(edges) - 1, converged
-    )
+    return _Search(theta, lo, hi, offset, value, upper, evaluations, rounds, int(out[9]), converged)
 
 
 class _Answer(NamedTuple):
