@@ -59,7 +59,7 @@ _HELPERS = {
     kernel_exact: "_angle_setup _layout_value _halfplanes_into _top_pieces _check_into",
     kernel_check: "_chains_at _screen_angle _screened_check",
     kernel_events: "_event_merge",
-    kernel_search: "_max_into",
+    kernel_search: "_max_into _second_bound",
 }
 _STAGES = {
     kernel_pieces: "_structure_one _pieces_one _quick_one",

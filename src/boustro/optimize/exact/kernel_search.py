@@ -43,6 +43,67 @@ __all__: list[str] = []
 _SKIP_MARGIN = 1e-9
 
 
+def _second_bound(
+    v: np.ndarray,
+    s: float,
+    mid: float,
+    half: float,
+    h: np.ndarray,
+    x: np.ndarray,
+    tu: np.ndarray,
+    td: np.ndarray,
+    pc: np.ndarray,
+    fam: np.ndarray,
+    rn: np.ndarray,
+    mo: np.ndarray,
+    cc: np.ndarray,
+    qp: np.ndarray,
+    a: float,
+    b: float,
+    chain: np.ndarray,
+    edges: np.ndarray,
+    d1: np.ndarray,
+    trig: np.ndarray,
+    porder: np.ndarray,
+    pb: np.ndarray,
+    f1s: np.ndarray,
+    f2s: np.ndarray,
+    drift: np.ndarray,
+    curv: np.ndarray,
+    d0: np.ndarray,
+    scratch: np.ndarray,
+) -> tuple[float, float]:
+    """The second-order bound of the interval ``mid +- half`` and its order, from its
+    structure, pieces and cheap bounds ``qp`` (the rest scratch): the largest over the pieces,
+    bounded from the highest cheap bound down, skipping those below the best so far by more
+    than :data:`_SKIP_MARGIN`."""
+    n = v.shape[0]
+    _chains_one(s, mid, half, x, tu, td, chain, edges, d1, trig)
+    _order_desc(qp, porder)
+    best = -np.inf
+    for k in range(n):
+        p = porder[k]
+        q = qp[p]
+        if k > 0 and q < 1e90 and q + _SKIP_MARGIN * max(1.0, abs(q)) < best:
+            pb[p] = -np.inf  # below the best: not the angle's bound
+            f1s[p], f2s[p] = 0.0, 0.0
+            continue
+        _runs_piece(
+            p, v, s, mid, half, h, x, pc, fam, rn, chain, edges, trig, drift, curv, d0, scratch
+        )
+        total = mo[p, _TOTAL]
+        f1 = _weighted_row(rn[p, :, 0], drift[p], total, a, b)
+        second = _second_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
+        kink = _kink_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
+        f2 = _nmin(second, kink)
+        excess = _nmax(_nmin(f1, f2), 0.0)
+        pb[p] = mo[p, _VALUE] + excess if total > 0 else -np.inf
+        f1s[p], f2s[p] = f1, f2
+        best = pb[p] if k == 0 else _nmax(best, pb[p])
+    top = _argmax(pb)
+    return pb[top], (2.0 if f2s[top] < f1s[top] else 1.0)
+
+
 #: Floats of the structures :func:`_evaluate` keeps from its first pass for its second (about
 #: 2 MB): the intervals it will bound again are not recomputed.
 _KEEP_FLOATS = 1 << 18
@@ -129,32 +190,10 @@ def _evaluate(
                     _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
                     _pieces_one(rn, a, b, mo, cc)
                     _quick_one(x, tu, td, rn, mo, half, a, b, work, qp)
-                _chains_one(s, mid, half, x, tu, td, chain, edges, d1, trig)
-                _order_desc(qp, porder)
-                best = -np.inf
-                for k in range(n):
-                    p = porder[k]
-                    q = qp[p]
-                    if k > 0 and q < 1e90 and q + _SKIP_MARGIN * max(1.0, abs(q)) < best:
-                        pb[p] = -np.inf  # below the best: not the angle's bound
-                        f1s[p], f2s[p] = 0.0, 0.0
-                        continue
-                    _runs_piece(
-                        p, v, s, mid, half, h, x, pc, fam, rn, chain, edges, trig, drift, curv,
-                        d0, scratch
-                    )  # fmt: skip
-                    total = mo[p, _TOTAL]
-                    f1 = _weighted_row(rn[p, :, 0], drift[p], total, a, b)
-                    second = _second_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
-                    kink = _kink_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
-                    f2 = _nmin(second, kink)
-                    excess = _nmax(_nmin(f1, f2), 0.0)
-                    pb[p] = mo[p, _VALUE] + excess if total > 0 else -np.inf
-                    f1s[p], f2s[p] = f1, f2
-                    best = pb[p] if k == 0 else _nmax(best, pb[p])
-                top = _argmax(pb)
-                bound[m] = pb[top]
-                order[m] = 2.0 if f2s[top] < f1s[top] else 1.0
+                bound[m], order[m] = _second_bound(
+                    v, s, mid, half, h, x, tu, td, pc, fam, rn, mo, cc, qp, a, b, chain, edges,
+                    d1, trig, porder, pb, f1s, f2s, drift, curv, d0, scratch
+                )  # fmt: skip
             ub[m] = bound[m] + BOUND_SLACK
 
 
