@@ -1,4 +1,4 @@
-"""The certified optimiser's work after its search in one compiled call (kernel_exact._finish)
+"""The certified optimiser's work after its search in one compiled call (kernel_check._finish)
 against the Python code it replaces, and the option checks' kept signatures (issue 21)."""
 
 from __future__ import annotations
@@ -47,8 +47,11 @@ def finish(v, s, angles, a, b):
 
 @pytest.mark.parametrize("weights", [(0.5, 0.5), (0.9, 0.1), (0.0, 1.0)])
 def test_finish_is_the_python_scoring_bit_for_bit(weights):
-    """The candidates' best layout and the spot check's, against _attained and _spot_check
-    with the same compiled pieces and scores: the same numbers, not only to rounding."""
+    """The candidates' best layout against _attained with the same compiled pieces and
+    scores: the same numbers, not only to rounding; the spot check's best layout against
+    _spot_check's, screened (kernel_check): its value to rounding, and the exact model's
+    value of the layout it names the same (tests/test_exact_check.py: bit for bit where the
+    screen hands the grid to the exact model)."""
     a, b = weights
     rng = np.random.default_rng(4)
     for polygon, spacing in cases(8, 24):
@@ -61,7 +64,10 @@ def test_finish_is_the_python_scoring_bit_for_bit(weights):
             done = finish(v, s, angles, a, b)
             score = _Scorer(polygon, v, s, a, b, True)
             assert tuple(done[:3]) == _attained(score, v, s, angles, a, b)
-            assert tuple(done[3:6]) == _spot_check(score, v, s)
+            check = _spot_check(score, v, s)
+            assert done[5] == pytest.approx(check[2], abs=1e-14)
+            named = score.grid(np.array([done[3]]), np.array([done[4]]))[0, 0]
+            assert named == pytest.approx(check[2], abs=1e-14)
 
 
 def test_finish_agrees_with_the_torch_model():

@@ -20,6 +20,9 @@ __all__: list[str] = []
 
 log = logging.getLogger("boustro")
 
+#: The default objective (frozen: one instance serves every call).
+_EQ1 = SmithFitness()
+
 
 @register_method("global")
 def _global(
@@ -31,7 +34,7 @@ def _global(
     ``"boustro"`` logger and ``info["note"]`` saying so."""
     # the rule of every method (its checks; the exact solvers build no half-plane tensors)
     _checked(polygon, spacing, fitness, "the global optimiser")
-    solver = exact_solver(SmithFitness() if fitness is None else fitness)
+    solver = exact_solver(_EQ1 if fitness is None else fitness)
     if solver is None:
         note = (
             f"no exact optimiser for the {type(fitness).__name__} objective "

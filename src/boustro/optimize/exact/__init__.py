@@ -49,6 +49,17 @@ def exact_solver(objective: Any) -> ExactSolver | None:
     'fewest_transects_optimum'
     """
     solver = EXACT.get(type(objective))
-    if solver is None or objective_sense(objective) != objective_sense(type(objective)()):
+    if solver is None or objective_sense(objective) != _default_sense(type(objective)):
         return None
     return solver
+
+
+_SENSES: dict[type, str] = {}
+
+
+def _default_sense(kind: type) -> str:
+    """The sense of a default instance of the objective type ``kind`` (its exact solver's),
+    kept per type."""
+    if kind not in _SENSES:
+        _SENSES[kind] = objective_sense(kind())
+    return _SENSES[kind]

@@ -23,8 +23,17 @@ from numpy.typing import NDArray
 
 from ..._jit import LOCK, fresh_cache, jit_cached, jit_globals
 from ...models import MAX_CANDIDATES, grid_size
-from . import kernel_bounds, kernel_exact, kernel_pieces, kernel_search
-from .kernel_exact import _exact_grid, _finish
+from . import (
+    kernel_bounds,
+    kernel_check,
+    kernel_events,
+    kernel_exact,
+    kernel_pieces,
+    kernel_search,
+)
+from .kernel_check import _finish
+from .kernel_events import _event_terms
+from .kernel_exact import _exact_grid
 from .kernel_search import _pieces_at, _search
 from .structure import Array
 
@@ -48,7 +57,9 @@ _HELPERS = {
     ),
     kernel_bounds: "_mu_ratio _parallel_edge _parallel_one _ends_one",
     kernel_exact: "_angle_setup _layout_value _halfplanes_into _top_pieces _check_into",
-    kernel_search: "_max_into",
+    kernel_check: "_chains_at _screen_angle _screened_check",
+    kernel_events: "_event_merge",
+    kernel_search: "_max_into _second_bound",
 }
 _STAGES = {
     kernel_pieces: "_structure_one _pieces_one _quick_one",
@@ -64,7 +75,8 @@ class Compiled(NamedTuple):
     exact_grid: Any  # .kernel_exact._exact_grid
     search: Any  # .kernel_search._search
     pieces_at: Any  # .kernel_search._pieces_at
-    finish: Any  # .kernel_exact._finish
+    finish: Any  # .kernel_check._finish
+    event_terms: Any  # .kernel_events._event_terms
     cached: bool  # numba's on-disk cache holds them (else they compile in every process)
 
 
@@ -123,7 +135,7 @@ def compiled() -> Compiled | None:
     # Helpers first: the functions call them by their module-level names, which from here on
     # are compiled functions (numba resolves those names when it compiles a caller); a helper
     # imported by name into another kernel module is swapped there too.
-    homes = (kernel_pieces, kernel_bounds, kernel_exact, kernel_search)
+    homes = (kernel_pieces, kernel_bounds, kernel_check, kernel_events, kernel_exact, kernel_search)
     with LOCK:
         for table in (_HELPERS, _STAGES):
             for module, names in table.items():
@@ -135,11 +147,11 @@ def compiled() -> Compiled | None:
                             setattr(other, name, fn)
                     if name in globals():
                         globals()[name] = fn
-    (grid, c1), (search, c2), (pieces, c3), (finish, c4) = (
-        jit_cached(f, **options) for f in (_exact_grid, _search, _pieces_at, _finish)
+    (grid, c1), (search, c2), (pieces, c3), (finish, c4), (terms, c5) = (
+        jit_cached(f, **options) for f in (_exact_grid, _search, _pieces_at, _finish, _event_terms)
     )
-    on_disk = c1 and c2 and c3 and c4  # the same folder as the helpers
-    return Compiled(kernel_search._evaluate, grid, search, pieces, finish, on_disk)
+    on_disk = c1 and c2 and c3 and c4 and c5  # the same folder as the helpers
+    return Compiled(kernel_search._evaluate, grid, search, pieces, finish, terms, on_disk)
 
 
 def evaluate_smith_compiled(
@@ -214,7 +226,6 @@ def exact_smith_compiled(
 def search_smith_compiled(
     v: Array,
     s: float,
-    edges: Array,
     a: float,
     b: float,
     tol: float,
@@ -224,16 +235,24 @@ def search_smith_compiled(
     max_children: int,
 ) -> Array | None:
     """The whole branch and bound (:func:`.search._branch_and_bound` of
-    :func:`.bounds._evaluate_smith`) in one compiled call: ``(theta, lo, hi, offset, value,
-    upper_bound, evaluations, rounds, converged)``; ``None`` without the compiled kernel."""
+    :func:`.bounds._evaluate_smith` over :func:`.structure.event_angles`) in one compiled
+    call, the event angles' loops compiled (:mod:`.kernel_events`: the same angles, bit for
+    bit): ``(theta, lo, hi, offset, value, upper_bound, evaluations, rounds, converged,
+    intervals between events)``; ``None`` without the compiled kernel."""
     kernels = compiled()
     if kernels is None:
         return None
-    out = np.empty(9)
+    v = np.ascontiguousarray(v, dtype=np.float64)
+    dx, dy, pair, ratio = kernels.event_terms(v, float(s))
+    # numpy's own arc tangents and arc cosines: the numbers of structure.event_angles
+    alpha, acos = np.arctan2(-dx, dy), np.arccos(ratio)
+    out = np.empty(10)
     kernels.search(
-        np.ascontiguousarray(v, dtype=np.float64),
+        v,
         float(s),
-        np.ascontiguousarray(edges, dtype=np.float64),
+        alpha,
+        pair,
+        acos,
         float(a),
         float(b),
         float(tol),
@@ -270,7 +289,7 @@ def finish_smith_compiled(
     check: bool = True,
 ) -> Array | None:
     """The certified optimiser's work after its search in one compiled call
-    (:func:`.kernel_exact._finish`): ``(fitness, angle, offset, check angle, check offset,
+    (:func:`.kernel_check._finish`): ``(fitness, angle, offset, check angle, check offset,
     check fitness)`` of the best layout near the closed-form optimum at ``thetas`` and of the
     spot check, normalised frame, as :func:`.smith._attained` and :func:`.smith._spot_check`
     give them, then a flag: 0 done, 1 the caller must compute them (too many lines for the

@@ -18,8 +18,6 @@ import math
 
 import numpy as np
 
-from .kernel_pieces import _LAM, _VALUE, _pieces_one, _structure_one, _structure_scratch
-
 __all__: list[str] = []
 
 
@@ -184,87 +182,6 @@ def _top_pieces(value: np.ndarray, top: np.ndarray) -> int:
         if value[top[k]] == value[top[k + 1]]:
             return -1
     return kept
-
-
-_ETAS = (0.0, 1e-9, 1e-6, 1e-3)
-
-
-def _finish(
-    v: np.ndarray,
-    s: float,
-    thetas: np.ndarray,
-    a: float,
-    b: float,
-    max_candidates: float,
-    check_angles: np.ndarray,
-    check_offsets: np.ndarray,
-    tops: np.ndarray,
-    check: bool,
-    out: np.ndarray,
-) -> None:
-    """What :func:`.smith.global_optimum` does after its search, in one call: the best layout
-    near the closed-form optimum (:func:`.smith._attained` at ``thetas``) and the spot check's
-    best layout (:func:`.smith._spot_check` on ``check_angles x check_offsets``), scored by
-    the exact model with the polygon's half-planes (:func:`_halfplanes_into`), the same
-    operations in the same order. ``tops (R, 4)``: at each angle the number of pieces and the
-    pieces whose maximisers are candidates (the largest values first: numpy's
-    ``argsort(-value)`` keeps them), or ``tops[0, 0] = -1`` to find them here, except at a
-    tie; ``check``: whether to do the spot check (first). ``out (7,)``: fitness, angle,
-    offset; the check's angle, offset, fitness; then 0, or 1 where the caller must do it all
-    itself (too many lines for the model), or 2 where it must give ``tops`` (two pieces'
-    values tie: their order is numpy's sort's; the spot check is done)."""
-    n = v.shape[0]
-    out[6] = 1.0
-    normals, boffs = np.empty((n, 2)), np.empty(n)
-    radius = _halfplanes_into(v, normals, boffs)
-    if 2 * radius / s > max_candidates:
-        return  # grid_size refuses it: the caller raises its error
-    m = int(np.ceil(radius / s)) + 1
-    k_count = 2 * m
-    h, t, x, tu, td, pc, fam, rn, mo, cc, work, iwork = _structure_scratch(n)
-    top = np.empty(4, dtype=np.int64)
-    lanes = np.empty((3, max(k_count, n)))
-    across, along, lengths = lanes[0], lanes[1], lanes[2]
-    if check:
-        _check_into(v, normals, boffs, radius, s, k_count, m, a, b, check_angles, check_offsets,
-                    lanes, out)  # fmt: skip
-    best, best_theta, best_d = -np.inf, thetas[0], 0.0
-    for row in range(len(thetas)):
-        theta = thetas[row]
-        _structure_one(v, s, theta, h, t, x, tu, td, pc, fam, rn, work, iwork)
-        _pieces_one(rn, a, b, mo, cc)
-        if tops[0, 0] < 0:
-            kept = _top_pieces(mo[:, _VALUE], top)
-            if kept < 0:
-                out[6] = 2.0
-                return
-        else:
-            kept = tops[row, 0]
-            top[:3] = tops[row, 1:]
-        if kept == 0:
-            continue
-        h_lo, h_hi = _angle_setup(normals, v, theta, across, along)
-        row_best, row_d = -np.inf, 0.0
-        first = True
-        for k in range(kept):
-            p = top[k]
-            lam = mo[p, _LAM]
-            for eta in _ETAS:
-                lam_p = eta if eta > lam else lam  # Python's min(max(lam, eta), 1 - eta)
-                upper = 1.0 - eta
-                lam_p = upper if upper < lam_p else lam_p
-                offset = pc[p, 0] + lam_p * pc[p, 1]
-                val = _layout_value(
-                    across, along, boffs, h_lo, h_hi, radius, s, k_count, m, offset, a, b,
-                    lengths,
-                )  # fmt: skip
-                if first or val > row_best:  # np.argmax: the first largest
-                    row_best, row_d = val, offset
-                    first = False
-        if row_best > best:
-            best, best_theta, best_d = row_best, theta, row_d
-    out[0], out[1], out[2] = best, best_theta, best_d
-    out[6] = 0.0
 
 
 def _check_into(

@@ -14,8 +14,10 @@ from __future__ import annotations
 import numpy as np
 
 from .kernel_bounds import _NCH, _chains_one, _kink_one, _runs_piece, _second_one
+from .kernel_events import _event_merge
 from .kernel_pieces import (
     _LAM,
+    _NMO,
     _TOTAL,
     _VALUE,
     _argmax,
@@ -41,6 +43,72 @@ __all__: list[str] = []
 _SKIP_MARGIN = 1e-9
 
 
+def _second_bound(
+    v: np.ndarray,
+    s: float,
+    mid: float,
+    half: float,
+    h: np.ndarray,
+    x: np.ndarray,
+    tu: np.ndarray,
+    td: np.ndarray,
+    pc: np.ndarray,
+    fam: np.ndarray,
+    rn: np.ndarray,
+    mo: np.ndarray,
+    cc: np.ndarray,
+    qp: np.ndarray,
+    a: float,
+    b: float,
+    chain: np.ndarray,
+    edges: np.ndarray,
+    d1: np.ndarray,
+    trig: np.ndarray,
+    porder: np.ndarray,
+    pb: np.ndarray,
+    f1s: np.ndarray,
+    f2s: np.ndarray,
+    drift: np.ndarray,
+    curv: np.ndarray,
+    d0: np.ndarray,
+    scratch: np.ndarray,
+) -> tuple[float, float]:
+    """The second-order bound of the interval ``mid +- half`` and its order, from its
+    structure, pieces and cheap bounds ``qp`` (the rest scratch): the largest over the pieces,
+    bounded from the highest cheap bound down, skipping those below the best so far by more
+    than :data:`_SKIP_MARGIN`."""
+    n = v.shape[0]
+    _chains_one(s, mid, half, x, tu, td, chain, edges, d1, trig)
+    _order_desc(qp, porder)
+    best = -np.inf
+    for k in range(n):
+        p = porder[k]
+        q = qp[p]
+        if k > 0 and q < 1e90 and q + _SKIP_MARGIN * max(1.0, abs(q)) < best:
+            pb[p] = -np.inf  # below the best: not the angle's bound
+            f1s[p], f2s[p] = 0.0, 0.0
+            continue
+        _runs_piece(
+            p, v, s, mid, half, h, x, pc, fam, rn, chain, edges, trig, drift, curv, d0, scratch
+        )
+        total = mo[p, _TOTAL]
+        f1 = _weighted_row(rn[p, :, 0], drift[p], total, a, b)
+        second = _second_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
+        kink = _kink_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
+        f2 = _nmin(second, kink)
+        excess = _nmax(_nmin(f1, f2), 0.0)
+        pb[p] = mo[p, _VALUE] + excess if total > 0 else -np.inf
+        f1s[p], f2s[p] = f1, f2
+        best = pb[p] if k == 0 else _nmax(best, pb[p])
+    top = _argmax(pb)
+    return pb[top], (2.0 if f2s[top] < f1s[top] else 1.0)
+
+
+#: Floats of the structures :func:`_evaluate` keeps from its first pass for its second (about
+#: 2 MB): the intervals it will bound again are not recomputed.
+_KEEP_FLOATS = 1 << 18
+
+
 def _evaluate(
     v: np.ndarray,
     s: float,
@@ -60,23 +128,41 @@ def _evaluate(
     The second-order bound of an angle is the largest over its pieces; the pieces are bounded
     from the highest cheap bound down, and those whose cheap bound falls below the best so far
     by more than :data:`_SKIP_MARGIN` are skipped (they cannot be the largest: the same
-    bound, the same order, less work)."""
+    bound, the same order, less work).
+
+    The first pass keeps the structure of the intervals whose cheap bound is above the
+    threshold as it stands then (a superset of those the second pass bounds, up to
+    :data:`_KEEP_FLOATS` of them), so the second pass reads it instead of computing it again:
+    the same functions of the same inputs, so the same numbers."""
     n = v.shape[0]
     n_j = n - 1
-    h, t, x, tu, td, pc, fam, rn, mo, cc, work, iwork = _structure_scratch(n)
+    per = 21 * n + 12 * n * n_j
+    cap = min(min(batch, len(lo)), _KEEP_FLOATS // per)
+    # slot ``cap`` is the scratch of the intervals that are not kept
+    k_h, k_x = np.empty((cap + 1, n)), np.empty((cap + 1, n))
+    k_tu, k_td = np.empty((cap + 1, n)), np.empty((cap + 1, n))
+    k_pc, k_fam = np.empty((cap + 1, n, 5)), np.empty((cap + 1, n, 2), dtype=np.int64)
+    k_rn, k_mo = np.empty((cap + 1, n, n_j, 8)), np.empty((cap + 1, n, _NMO))
+    k_cc, k_qp = np.empty((cap + 1, n, n_j, 4)), np.empty((cap + 1, n))
+    slot = np.empty(min(batch, len(lo)), dtype=np.int64)
+    t, work, iwork = np.empty(n), np.empty((4, n)), np.empty((2, n), dtype=np.int64)
     drift, curv = np.empty((n, n_j)), np.empty((n, n_j))
     d0, d1 = np.empty((2, n, n_j)), np.empty(n_j)
     chain, edges, trig = np.empty((n_j, 2, _NCH)), np.empty((n_j, 2, 6)), np.empty(6)
-    pb, f1s, f2s, qp = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    pb, f1s, f2s = np.empty(n), np.empty(n), np.empty(n)
     porder = np.empty(n, dtype=np.int64)
     scratch = np.empty((16, 4))
     bound = np.empty(len(lo))
     for start in range(0, len(lo), batch):
         stop = min(start + batch, len(lo))
         gmax = -np.inf
+        used = 0
         for m in range(start, stop):
             mid = 0.5 * (lo[m] + hi[m])
             half = 0.5 * (hi[m] - lo[m])
+            k = used if used < cap else cap
+            h, x, tu, td, pc = k_h[k], k_x[k], k_tu[k], k_td[k], k_pc[k]
+            fam, rn, mo, cc, qp = k_fam[k], k_rn[k], k_mo[k], k_cc[k], k_qp[k]
             _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
             _pieces_one(rn, a, b, mo, cc)
             ip = _argmax(mo[:, _VALUE])
@@ -85,40 +171,29 @@ def _evaluate(
             gmax = g[m] if m == start else _nmax(gmax, g[m])
             bound[m] = _quick_one(x, tu, td, rn, mo, half, a, b, work, qp)
             order[m] = 1.0
+            slot[m - start] = -1
+            now = gmax if gmax > threshold else threshold
+            if k < cap and not (bound[m] + BOUND_SLACK <= now):  # may be bounded again
+                slot[m - start] = k
+                used += 1
         thr = gmax if gmax > threshold else threshold  # Python's max(threshold, gmax)
         for m in range(start, stop):
             if bound[m] + BOUND_SLACK > thr:
                 mid = 0.5 * (lo[m] + hi[m])
                 half = 0.5 * (hi[m] - lo[m])
-                _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
-                _pieces_one(rn, a, b, mo, cc)
-                _quick_one(x, tu, td, rn, mo, half, a, b, work, qp)
-                _chains_one(s, mid, half, x, tu, td, chain, edges, d1, trig)
-                _order_desc(qp, porder)
-                best = -np.inf
-                for k in range(n):
-                    p = porder[k]
-                    q = qp[p]
-                    if k > 0 and q < 1e90 and q + _SKIP_MARGIN * max(1.0, abs(q)) < best:
-                        pb[p] = -np.inf  # below the best: not the angle's bound
-                        f1s[p], f2s[p] = 0.0, 0.0
-                        continue
-                    _runs_piece(
-                        p, v, s, mid, half, h, x, pc, fam, rn, chain, edges, trig, drift, curv,
-                        d0, scratch
-                    )  # fmt: skip
-                    total = mo[p, _TOTAL]
-                    f1 = _weighted_row(rn[p, :, 0], drift[p], total, a, b)
-                    second = _second_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
-                    kink = _kink_one(p, rn, mo, cc, curv, d0, d1, half, a, b)
-                    f2 = _nmin(second, kink)
-                    excess = _nmax(_nmin(f1, f2), 0.0)
-                    pb[p] = mo[p, _VALUE] + excess if total > 0 else -np.inf
-                    f1s[p], f2s[p] = f1, f2
-                    best = pb[p] if k == 0 else _nmax(best, pb[p])
-                top = _argmax(pb)
-                bound[m] = pb[top]
-                order[m] = 2.0 if f2s[top] < f1s[top] else 1.0
+                k = slot[m - start]
+                kept = k >= 0
+                k = k if kept else cap
+                h, x, tu, td, pc = k_h[k], k_x[k], k_tu[k], k_td[k], k_pc[k]
+                fam, rn, mo, cc, qp = k_fam[k], k_rn[k], k_mo[k], k_cc[k], k_qp[k]
+                if not kept:
+                    _structure_one(v, s, mid, h, t, x, tu, td, pc, fam, rn, work, iwork)
+                    _pieces_one(rn, a, b, mo, cc)
+                    _quick_one(x, tu, td, rn, mo, half, a, b, work, qp)
+                bound[m], order[m] = _second_bound(
+                    v, s, mid, half, h, x, tu, td, pc, fam, rn, mo, cc, qp, a, b, chain, edges,
+                    d1, trig, porder, pb, f1s, f2s, drift, curv, d0, scratch
+                )  # fmt: skip
             ub[m] = bound[m] + BOUND_SLACK
 
 
@@ -137,7 +212,9 @@ def _max_into(current: float, values: np.ndarray, mask: np.ndarray) -> float:
 def _search(
     v: np.ndarray,
     s: float,
-    edges: np.ndarray,
+    alpha: np.ndarray,
+    pair: np.ndarray,
+    acos: np.ndarray,
     a: float,
     b: float,
     tol: float,
@@ -147,8 +224,13 @@ def _search(
     max_children: int,
     out: np.ndarray,
 ) -> None:
-    """:func:`.search._branch_and_bound` with :func:`_evaluate`, step for step. Writes ``out``:
-    theta, lo, hi, offset, value, upper bound, evaluations, rounds, converged (1.0 or 0.0)."""
+    """:func:`.search._branch_and_bound` with :func:`_evaluate`, step for step, over the
+    event angles of :func:`.kernel_events._event_merge` (``alpha, pair, acos``: the pairs'
+    angles, the multiples' pairs and arc cosines). Writes ``out``: theta, lo, hi, offset,
+    value, upper bound, evaluations, rounds, converged (1.0 or 0.0), number of intervals
+    between events."""
+    edges = _event_merge(alpha, pair, acos)
+    out[9] = len(edges) - 1
     lo, hi = edges[:-1].copy(), edges[1:].copy()
     m = len(lo)
     g, d, ub, order = np.empty(m), np.empty(m), np.empty(m), np.empty(m)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from functools import cached_property
+from functools import cache, cached_property
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -38,7 +38,7 @@ from .search import (
     _check_tol,
     _Search,
 )
-from .structure import Array, _check_work, _structure, event_angles
+from .structure import Array, _check_work, _structure
 
 __all__ = ["best_offset", "global_optimum"]
 
@@ -52,8 +52,17 @@ def _weights(a: float, b: float, fitness: SmithFitness | None) -> tuple[float, f
                 "shortest_path_optimum for the other objectives"
             )
         return float(fitness.a), float(fitness.b)
+    if type(a) is float and type(b) is float:  # exact types: hashable, cached
+        return _checked_weights(a, b)
     SmithFitness(a=a, b=b)  # validates a, b >= 0 and finite
     return float(a), float(b)
+
+
+@cache
+def _checked_weights(a: float, b: float) -> tuple[float, float]:
+    """``(a, b)`` validated as :class:`SmithFitness` does (once per pair of floats)."""
+    SmithFitness(a=a, b=b)
+    return a, b
 
 
 class _Scorer:
@@ -275,9 +284,7 @@ def global_optimum(
         done = finish_smith_compiled(v, s_n, angles, a, b, *check_grid) if fast else None
         if done is not None and done[6] == 2.0:  # tied pieces: numpy orders them
             tops = _candidate_pieces(v, s_n, angles, a, b)
-            again = finish_smith_compiled(v, s_n, angles, a, b, *check_grid, tops, False)
-            assert again is not None
-            done[:3], done[6] = again[:3], again[6]  # the spot check was done
+            done = finish_smith_compiled(v, s_n, angles, a, b, *check_grid, tops)
         if done is None or done[6] != 0.0:
             value, theta, d = _attained(score, v, s_n, angles, a, b)
             check = _spot_check(score, v, s_n)
@@ -321,10 +328,9 @@ def _search_smith(
     """The branch and bound over the angle: one compiled call (:mod:`.kernel_search`) if
     ``fast``, else the numpy evaluation of the intervals in :func:`_branch_and_bound` (the same
     search)."""
-    edges = event_angles(v, s)
     out = None
     if fast:
-        out = search_smith_compiled(v, s, edges, a, b, tol, cap, _BATCH, _MIN_WIDTH, _MAX_CHILDREN)
+        out = search_smith_compiled(v, s, a, b, tol, cap, _BATCH, _MIN_WIDTH, _MAX_CHILDREN)
     if out is None:
 
         def evaluate(lo: Array, hi: Array, threshold: float) -> tuple[Array, Array, Array, Array]:
@@ -333,9 +339,7 @@ def _search_smith(
         return _branch_and_bound(v, s, evaluate, tol, cap)
     theta, lo, hi, offset, value, upper = (float(x) for x in out[:6])
     evaluations, rounds, converged = int(out[6]), int(out[7]), bool(out[8])
-    return _Search(
-        theta, lo, hi, offset, value, upper, evaluations, rounds, len(edges) - 1, converged
-    )
+    return _Search(theta, lo, hi, offset, value, upper, evaluations, rounds, int(out[9]), converged)
 
 
 class _Answer(NamedTuple):
@@ -393,18 +397,24 @@ def _reconcile(
 
 
 _CHECK_ANGLES = np.arange(90) * (math.pi / 90)
-_CHECK_STEPS = np.arange(9)
+_CHECK_STEPS = np.arange(9.0)  # the same numbers as integers times a float
 
 
 def _check_grid(v: Array, s: float) -> tuple[Array, Array]:
     """The spot check's angles (90 angles, every edge's direction and its normal) and offsets
     (9, 0 included), normalised frame (``v``: the polygon's vertices in it)."""
-    edges = np.roll(v, -1, axis=0) - v
-    edge_angles = np.mod(np.arctan2(edges[:, 1], edges[:, 0]), math.pi)
-    angles = np.concatenate(
-        [_CHECK_ANGLES, edge_angles, np.mod(edge_angles + math.pi / 2, math.pi)]
-    )
-    return angles, (_CHECK_STEPS * (s / 9)).astype(np.float64, copy=False)
+    n, k = len(v), len(_CHECK_ANGLES)
+    edges = np.empty_like(v)  # np.roll(v, -1, axis=0) - v, without np.roll's overheads
+    np.subtract(v[1:], v[:-1], out=edges[:-1])
+    np.subtract(v[0], v[-1], out=edges[-1])
+    angles = np.empty(k + 2 * n)
+    angles[:k] = _CHECK_ANGLES
+    edge_angles = angles[k : k + n]
+    np.mod(np.arctan2(edges[:, 1], edges[:, 0]), math.pi, out=edge_angles)
+    normal_angles = angles[k + n :]
+    np.add(edge_angles, math.pi / 2, out=normal_angles)
+    np.mod(normal_angles, math.pi, out=normal_angles)
+    return angles, _CHECK_STEPS * (s / 9)
 
 
 def _spot_check(score: _Scorer, v: Array, s: float) -> tuple[float, float, float]:

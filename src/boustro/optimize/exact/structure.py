@@ -46,13 +46,21 @@ def event_angles(vertices: ArrayLike, spacing: float) -> Array:
     dx, dy = delta[:, 0], delta[:, 1]
     dist = np.hypot(dx, dy)
     # n(theta) . delta = -sin(theta) dx + cos(theta) dy = dist * cos(theta - alpha)
-    alpha = np.arctan2(-dx, dy)[:, None]
-    m_max = int(np.floor(dist.max() / spacing)) if len(dist) else 0
-    m = np.arange(-m_max, m_max + 1, dtype=np.float64)
-    ratio = m[None, :] * spacing / dist[:, None]
+    alpha = np.arctan2(-dx, dy)
+    # The multiples m of each pair with |m s / dist| <= 1 (the float test, on the range
+    # |m| <= floor(dist / s) + 1 that holds them): the arc cosines of those alone, not of every
+    # pair against every multiple of the widest pair (the same numbers, about a tenth of them).
+    reach = np.floor(dist / spacing) + 1.0
+    top: NDArray[np.int64] = np.where(np.isfinite(reach), reach, 0.0).astype(np.int64)
+    counts = 2 * top + 1
+    pair = np.repeat(np.arange(len(dist)), counts)
+    first = np.cumsum(counts) - counts
+    m = (np.arange(len(pair)) - first[pair] - top[pair]).astype(np.float64)
+    ratio = m * spacing / dist[pair]
     ok = np.abs(ratio) <= 1.0
-    acos = np.arccos(np.clip(ratio, -1.0, 1.0))
-    cand = np.concatenate([(alpha + acos)[ok], (alpha - acos)[ok], [0.0]])
+    acos = np.arccos(ratio[ok])
+    base = alpha[pair[ok]]
+    cand = np.concatenate([base + acos, base - acos, [0.0]])
     cand = np.sort(np.mod(cand, math.pi))
     keep = np.empty(len(cand), dtype=bool)
     keep[0] = True
