@@ -4,8 +4,10 @@ Plans convex areas (Valtr's random polygons) and concave ones (a three-lobed sta
 traced-like noise) of 10..2000 vertices at spacings giving about 10..150 lanes across, planar,
 through :func:`boustro.mission.plan_area`, and prints for each case the estimate's features
 (:func:`boustro.mission.estimate_work`: lanes, vertices), the estimated and the measured time.
-With ``--fit`` it fits the coefficients of the model in :mod:`boustro.mission.estimate`
-(least squares on the logarithm of the time) and prints them and the error.
+Times are CPU (``time.process_time``). ``--objective time`` (``--keep-inside``) measures the
+plan-level objective's rows (the cover search). With ``--fit`` it fits the coefficients of the
+model in :mod:`boustro.mission.estimate` (least squares on the logarithm of the time) and
+prints them and the error.
 
     python benchmarks/estimate.py [--sizes 10,50,200,1000,2000] [--lanes 10,40,150] [--fit]
 """
@@ -37,13 +39,14 @@ def convex(n: int, seed: int = 0) -> np.ndarray:
     return random_convex_polygon(np.random.default_rng(seed), n).vertices * 1000.0
 
 
-def measure(kind: str, n: int, lanes: int) -> dict:
+def measure(kind: str, n: int, lanes: int, **objective) -> dict:
+    """``objective``: ``speed``, ``turn_time``, ``keep_inside`` (a plan-level objective)."""
     ring = convex(n) if kind == "convex" else star(n)
     spacing = 1000.0 / lanes
-    est = estimate_work(ring, spacing, crs=None)
-    t0 = time.perf_counter()
-    plan_area(ring, spacing, crs=None, check_coverage=False, force=True)
-    seconds = time.perf_counter() - t0
+    est = estimate_work(ring, spacing, crs=None, **objective)
+    t0 = time.process_time()
+    plan_area(ring, spacing, crs=None, check_coverage=False, force=True, **objective)
+    seconds = time.process_time() - t0
     return {
         "shape": kind,
         "vertices": n,
@@ -52,6 +55,7 @@ def measure(kind: str, n: int, lanes: int) -> dict:
         "work": est.work,
         "estimated_s": round(est.seconds, 3),
         "measured_s": round(seconds, 3),
+        "keep_inside": bool(objective.get("keep_inside")),
     }
 
 
@@ -91,6 +95,13 @@ def main() -> None:
     ap.add_argument("--fit", action="store_true")
     ap.add_argument("--rows", help="fit and compare the JSON rows of an earlier run's output")
     ap.add_argument(
+        "--objective",
+        choices=("default", "time"),
+        default="default",
+        help="time: --speed 5 --turn-time 10 (the cover search's rows)",
+    )
+    ap.add_argument("--keep-inside", action="store_true", help="with --objective time")
+    ap.add_argument(
         "--max-product", type=float, default=1e5, help="skip cases with vertices x lanes above"
     )
     args = ap.parse_args()
@@ -102,14 +113,17 @@ def main() -> None:
         report(rows, fit(rows) if args.fit else COST_MODEL)
         return
     rows = []
-    plan_area(convex(10), 100.0, crs=None)  # warm up (imports, compiled kernels)
-    plan_area(star(50), 100.0, crs=None)
+    objective: dict = {}
+    if args.objective == "time":
+        objective = dict(speed=5.0, turn_time=10.0, keep_inside=args.keep_inside)
+    plan_area(convex(10), 100.0, crs=None, **objective)  # warm up (imports, kernels)
+    plan_area(star(50), 100.0, crs=None, **objective)
     for kind in ("convex", "concave"):
         for n in map(int, args.sizes.split(",")):
             for lanes in map(int, args.lanes.split(",")):
                 if n * lanes > args.max_product:
                     continue
-                row = measure(kind, n, lanes)
+                row = measure(kind, n, lanes, **objective)
                 rows.append(row)
                 print(json.dumps(row), flush=True)
     report(rows, fit(rows) if args.fit else COST_MODEL)

@@ -17,12 +17,14 @@ from boustro.io import embedded_field
 from boustro.mission import WorkEstimate, estimate_work, plan_area
 from boustro.mission.estimate import (
     COST_MODEL,
+    KEEP_INSIDE_FACTOR,
     MAX_LANES,
     MAX_SECONDS,
     estimate_seconds,
     refusals,
 )
 from boustro.models import MAX_TRANSECTS
+from boustro.objectives import FewestTransects
 
 from .conftest import run_cli
 
@@ -108,8 +110,38 @@ def test_a_concave_area_is_estimated_by_the_certified_searchs_row():
     )
 
 
+def test_a_plan_level_objective_is_estimated_by_the_cover_searchs_rows():
+    """Review: issue 21's field with --speed was estimated 3.2 s (the Eq. 1 row) and took 27 s;
+    the time objective (and fewest-transects on a concave area) has its own rows, and
+    keep-inside multiplies them (its plans carry boundary passes)."""
+    ring = [(0, 0), (60, 0), (60, 20), (25, 20), (25, 50), (0, 50)]
+    square = [(0, 0), (60, 0), (60, 40), (0, 40)]
+    concave = estimate_work(ring, 4.0, crs=None, speed=5.0, turn_time=10.0)
+    convex = estimate_work(square, 4.0, crs=None, speed=5.0)
+    assert (concave.kind, convex.kind) == ("cover-region", "cover") and concave.concave
+    inside = estimate_work(ring, 4.0, crs=None, speed=5.0, keep_inside=True)
+    assert inside.seconds == pytest.approx(concave.seconds * KEEP_INSIDE_FACTOR)
+    fewest = estimate_work(ring, 4.0, crs=None, fitness=FewestTransects())
+    assert fewest.kind == "cover-region"
+    assert estimate_work(square, 4.0, crs=None, fitness=FewestTransects()).kind == "certified"
+
+
+def test_plan_area_says_the_cover_searchs_estimate(monkeypatch):
+    seen = []
+    real = pipeline.check_work
+
+    def spy(frame, method=None, force=False, **kw):
+        est = real(frame, method, force, **kw)
+        seen.append(est.kind)
+        return est
+
+    monkeypatch.setattr(pipeline, "check_work", spy)
+    plan_area(U_SHAPE, 15.0, crs=None, speed=5.0, turn_time=10.0, decompose=False)
+    assert seen == ["cover-region"]
+
+
 def test_the_model_grows_with_vertices_and_lanes():
-    for kind in ("convex", "concave", "region-certified"):
+    for kind in ("convex", "concave", "region-certified", "cover", "cover-region"):
         small = estimate_seconds(kind, 50, 20)
         assert estimate_seconds(kind, 2000, 20) > small < estimate_seconds(kind, 50, 2000)
     a, b = COST_MODEL["certified"]

@@ -24,6 +24,7 @@ if TYPE_CHECKING:
 __all__ = [
     "COST_MODEL",
     "FIELD_AREA_KM2",
+    "KEEP_INSIDE_FACTOR",
     "MAX_AREA_KM2",
     "MAX_LANES",
     "MAX_SECONDS",
@@ -76,7 +77,22 @@ COST_MODEL: dict[str, tuple[float, ...]] = {
     "convex": (0.05, 0.329, 0.61, 8.94e-5, 1.72),
     "concave": (0.05, 2.03e-5, 2.02, 7.67e-5, 1.34),
     "region-certified": (0.26, 6e-5, 2.02, 8.9e-5, 1.34),
+    "cover": (0.3, 0.00708, 1.0, 6.36e-5, 1.40),
+    "cover-region": (0.5, 0.448, 0.521, 1.14e-6, 2.06),
 }
+#: ``"cover"`` and ``"cover-region"``: a plan-level objective (mission time, fewest transects
+#: on a concave area) planned by the certified cover search over flown plans
+#: (:mod:`boustro.mission.cover`; on a concave area or one with holes also the decomposed
+#: alternative, :mod:`boustro.mission.decomposed`). Fitted on CPU seconds of
+#: ``benchmarks/estimate.py --objective time --fit`` (2026-11-27, load 5-7, 5 m/s, 10 s a
+#: turn): ``"cover-region"`` on 14 stars of 10-2000 vertices and 9-91 lanes, estimate /
+#: measured 0.47-1.58; ``"cover"`` (``beta`` held at 1) on 16 convex polygons of 10-2000
+#: vertices and 10-300 lanes, 0.16-6.6, median 1.12 (its measured times are irregular: a
+#: 1000-vertex polygon took 0.37 s at 10 lanes and 10.2 s at 40). With ``keep_inside`` every
+#: plan the search evaluates carries its boundary passes: the estimate is multiplied by
+#: :data:`KEEP_INSIDE_FACTOR` (measured 4.3-21x on two convex polygons and two stars of 50
+#: and 200 vertices).
+KEEP_INSIDE_FACTOR = 10.0
 
 #: Above this many (hull) vertices the certified optimiser's work is over its limit whatever
 #: the spacing (at least ``n^3 (n - 1)``), so :func:`global_work` is not computed.
@@ -91,13 +107,13 @@ class WorkEstimate(NamedTuple):
     holes: int
     area_km2: float  #: ground area, km^2
     kind: str  #: the row of :data:`COST_MODEL`: "certified", "certified-bb", "convex",
-    #: "concave" (the grid), "region-certified"
+    #: "concave" (the grid), "region-certified", "cover", "cover-region"
     work: float  #: the certified optimiser's work (0 unless ``kind == "certified"``)
     seconds: float  #: estimated planning time on a machine like the calibration's
 
     @property
     def concave(self) -> bool:
-        return self.kind in ("concave", "region-certified")
+        return self.kind in ("concave", "region-certified", "cover-region")
 
     def describe(self) -> str:
         """``"planning ~N lanes over V vertices, estimated T s"``."""
@@ -116,13 +132,19 @@ def estimate_seconds(kind: str, vertices: int, lanes: float, work: float = 0.0) 
     return a + c1 * max(lanes, 1.0) ** beta + c2 * max(vertices, 3) ** alpha
 
 
-def frame_estimate(frame: Frame, method: str | None = None) -> WorkEstimate:
-    """The estimate for a projected area (step 1 of :func:`plan_area`) and ``method``."""
+def frame_estimate(
+    frame: Frame, method: str | None = None, *, cover: bool = False, keep_inside: bool = False
+) -> WorkEstimate:
+    """The estimate for a projected area (step 1 of :func:`plan_area`) and ``method``; with
+    ``cover``, for a plan-level objective (the cover search: mission time, fewest transects
+    on a concave area), with ``keep_inside`` as :func:`plan_area`'s."""
     s_plan = frame.sensor.spacing * frame.proj.scale_min
     lanes = frame.surveyed.diameter / s_plan  # the hull's diameter: its widest extent
     vertices = len(frame.ring) + sum(len(h) for h in frame.holes)
     kind, work = ("concave" if frame.region is not None else "convex"), 0.0
-    if kind == "concave" and method in (None, DEFAULT_METHOD, SCALE_METHOD):
+    if cover:
+        kind = "cover-region" if kind == "concave" else "cover"
+    elif kind == "concave" and method in (None, DEFAULT_METHOD, SCALE_METHOD):
         kind = "region-certified"  # mission.region_certified (Eq. 1; the grid otherwise)
     elif kind == "convex" and method == SCALE_METHOD:
         kind = "certified-bb"
@@ -139,7 +161,8 @@ def frame_estimate(frame: Frame, method: str | None = None) -> WorkEstimate:
         area_km2=float(frame.ground_area) / 1e6,
         kind=kind,
         work=float(work),
-        seconds=estimate_seconds(kind, vertices, lanes, work),
+        seconds=estimate_seconds(kind, vertices, lanes, work)
+        * (KEEP_INSIDE_FACTOR if keep_inside and cover else 1.0),
     )
 
 
@@ -176,12 +199,19 @@ def refusals(est: WorkEstimate) -> list[str]:
     return why
 
 
-def check_work(frame: Frame, method: str | None = None, force: bool = False) -> WorkEstimate:
+def check_work(
+    frame: Frame,
+    method: str | None = None,
+    force: bool = False,
+    *,
+    cover: bool = False,
+    keep_inside: bool = False,
+) -> WorkEstimate:
     """The estimate for ``frame``; unless ``force``, :class:`TooMuchWorkError` when it is
     absurd (:func:`refusals`), in one line that names the numbers and the usual cause. Beyond
     the hard limit (:data:`~boustro._validate.MAX_TRANSECTS` lanes) it is refused even with
     ``force``, in the words of that limit, with the cause."""
-    est = frame_estimate(frame, method)
+    est = frame_estimate(frame, method, cover=cover, keep_inside=keep_inside)
     where = frame.area.source or "area"
     spacing = frame.sensor.spacing
     if est.lanes > MAX_TRANSECTS:

@@ -192,7 +192,12 @@ def plan_area(
         method = None
     if frame.region is None and method is not None:
         resolve_method(method)  # an unknown method: its error before the estimate
-    estimate = check_work(frame, method, force=bool(force))
+    if fitness is None and speed is not None:
+        fitness = MissionTime()
+    cost = cover_cost(fitness, frame, speed, turn_time, turnaround)
+    estimate = check_work(
+        frame, method, force=bool(force), cover=cost is not None, keep_inside=bool(keep_inside)
+    )
     show = _say(estimate, progress)
     settings: dict[str, Any] = dict(
         method=method,
@@ -207,9 +212,6 @@ def plan_area(
         progress=show,
         keep_inside=_check_flag("keep_inside", keep_inside),
     )
-    if fitness is None and speed is not None:
-        fitness = settings["fitness"] = MissionTime()
-    cost = cover_cost(fitness, frame, speed, turn_time, turnaround)
     if cost is not None:
         finish = None
         if field is not None or vehicle is not None:  # the costs of what is flown
@@ -405,9 +407,14 @@ def estimate_work(
     hull_tolerance: float = DEFAULT_HULL_TOLERANCE,
     decompose: bool | None = None,
     method: str | None = None,
+    fitness: Any | None = None,
+    speed: float | None = None,
+    turn_time: float = 0.0,
+    keep_inside: bool = False,
 ) -> WorkEstimate:
     """What :func:`plan_area` would take for this area: lanes, vertices, holes, area and the
-    estimated time (the arguments as :func:`plan_area`'s). Never refuses (see ``force``).
+    estimated time (the arguments as :func:`plan_area`'s: ``fitness``, ``speed`` and
+    ``keep_inside`` choose the row of a plan-level objective). Never refuses (see ``force``).
 
     Example:
         >>> from boustro.io import embedded_field
@@ -417,7 +424,11 @@ def estimate_work(
     """
     area = as_area(area, crs, holes)
     sensor = Sensor(*sensor_spacing(spacing))
-    return frame_estimate(project(area, sensor, hull_tolerance, decompose, None), method)
+    frame = project(area, sensor, hull_tolerance, decompose, None)
+    if fitness is None and speed is not None:
+        fitness = MissionTime()
+    cover = cover_cost(fitness, frame, speed, turn_time, 0.0) is not None
+    return frame_estimate(frame, method, cover=cover, keep_inside=keep_inside)
 
 
 def _check_fixed_angle(

@@ -25,7 +25,7 @@ from ..io.crs import Projection
 from ..io.formats import FORMATS, format_for, render
 from ..io.formats._fields import render_fields, safe_name
 from ..io.repair import check_area, repair_area
-from ..mission import Mission, estimate_work, plan_area
+from ..mission import Mission, WorkEstimate, estimate_work, plan_area
 from .limits import MAX_FIELDS, MAX_SECONDS, RequestTooLargeError, check_epsg, count_vertices
 from .options import PlanOptions, parse_options
 from .recent import RecentPlans
@@ -107,16 +107,17 @@ def _valid(area: Area, repair: bool) -> Area:
     return repair_area(area)[0]
 
 
+def _estimate(area: Area, opts: PlanOptions) -> WorkEstimate:
+    """The estimate before planning of ``area`` with the request's options."""
+    kw = opts.kwargs
+    names = ("hull_tolerance", "decompose", "method", "fitness", "speed", "turn_time")
+    return estimate_work(area, opts.spacing, **{k: kw[k] for k in names})
+
+
 def _plan_one(area: Area, opts: PlanOptions) -> Mission:
     area = _valid(area, opts.repair)
     kw = opts.kwargs
-    estimate = estimate_work(
-        area,
-        opts.spacing,
-        hull_tolerance=kw["hull_tolerance"],
-        decompose=kw["decompose"],
-        method=kw["method"],
-    )
+    estimate = _estimate(area, opts)
     if estimate.seconds > MAX_SECONDS:
         raise RequestTooLargeError(
             f"{estimate.describe()}: over this server's limit of {MAX_SECONDS:g} s per plan; "
@@ -219,14 +220,7 @@ def estimate_request(body: Any) -> dict[str, Any]:
     opts = parse_options(body.get("options"))
     out = []
     for area in request_areas(body.get("area"), opts):
-        kw = opts.kwargs
-        est = estimate_work(
-            area,
-            opts.spacing,
-            hull_tolerance=kw["hull_tolerance"],
-            decompose=kw["decompose"],
-            method=kw["method"],
-        )
+        est = _estimate(area, opts)
         out.append({"name": area.name, "seconds": est.seconds, "text": est.describe()})
     return {"fields": out, "limit_seconds": MAX_SECONDS}
 
