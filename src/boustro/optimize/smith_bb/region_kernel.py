@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from ..._jit import jit, jit_globals
 from . import kernel
 from .kernel import _sup_w, lines_range
-from .region_chains import chain_bound, prepare
+from .region_chains import _chains, chain_bound, prepare
 
 __all__ = ["region_bounds", "region_values", "ring_starts"]
 
@@ -136,40 +136,22 @@ def _values(xy, cs, sn, d, s, k0, nb, a, b, tiny):
 
 def _chain_counts(xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, cnt):
     """``cnt[b]``: h-monotone chains of the real rings (or single edges that may turn parallel
-    to the lines) whose h-range grown by ``eps`` holds line ``k0 + b``: at least the crossings
-    of every moved region's boundary with the line (the half-open rule crosses a monotone chain
-    at most once, a straight edge at most once, an edge along the line never)."""
+    to the lines; :func:`.region_chains._chains`) whose h-range grown by ``eps`` holds line
+    ``k0 + b``: at least the crossings of every moved region's boundary with the line (the
+    half-open rule crosses a monotone chain at most once, a straight edge at most once, an edge
+    along the line never)."""
     for q in range(nb):
         cnt[q] = 0
-    for r in range(rings.shape[0] - 1):
-        i = rings[r]
-        while i < rings[r + 1]:
-            h1 = -sn * xy[i, 0] + cs * xy[i, 1]
-            h2 = -sn * xy[i, 2] + cs * xy[i, 3]
-            ln = math.hypot(xy[i, 2] - xy[i, 0], xy[i, 3] - xy[i, 1])
-            cls = 0
-            if abs(h2 - h1) > ln * sdelta * (1.0 + 1e-9) + 1e-15:
-                cls = 1 if h2 > h1 else -1
-            lo_h, hi_h = min(h1, h2), max(h1, h2)
-            j = i + 1
-            while cls != 0 and j < rings[r + 1]:
-                g1 = -sn * xy[j, 0] + cs * xy[j, 1]
-                g2 = -sn * xy[j, 2] + cs * xy[j, 3]
-                lj = math.hypot(xy[j, 2] - xy[j, 0], xy[j, 3] - xy[j, 1])
-                cj = 0
-                if abs(g2 - g1) > lj * sdelta * (1.0 + 1e-9) + 1e-15:
-                    cj = 1 if g2 > g1 else -1
-                if cj != cls:
-                    break
-                lo_h, hi_h = min(lo_h, g2), max(hi_h, g2)
-                j += 1
-            ka = max(math.floor((lo_h - eps - d) / s), k0)
-            kb = min(math.ceil((hi_h + eps - d) / s), k0 + nb - 1)
-            for k in range(ka, kb + 1):
-                c = d + k * s
-                if lo_h - eps <= c <= hi_h + eps:
-                    cnt[k - k0] += 1
-            i = j
+    ci = np.empty((xy.shape[0], 4), dtype=np.int64)
+    cf = np.empty((xy.shape[0], 2))
+    for m in range(_chains(xy, rings, cs, sn, sdelta, ci, cf)):
+        lo_h, hi_h = cf[m, 0], cf[m, 1]
+        ka = max(math.floor((lo_h - eps - d) / s), k0)
+        kb = min(math.ceil((hi_h + eps - d) / s), k0 + nb - 1)
+        for k in range(ka, kb + 1):
+            c = d + k * s
+            if lo_h - eps <= c <= hi_h + eps:
+                cnt[k - k0] += 1
 
 
 def _owners(oa, ob, o0, o1, pa, pb, p0, p1, tiny, owner):
@@ -401,7 +383,7 @@ def _compiled() -> tuple[Any, Any]:
         return _bounds, _values
     kernel._compiled()  # _sup_w's own helpers (kernel's _g) compiled where it looks them up
     prepare()  # and chain_bound's, in .region_chains
-    helpers = ("_first_line", "_intervals", "_chain_counts", "_sup_w", "_owners",
+    helpers = ("_first_line", "_intervals", "_chains", "_chain_counts", "_sup_w", "_owners",
                "_line_segments", "_relaxed", "_enumerated", "chain_bound", "_bound")  # fmt: skip
     jit_globals(globals(), helpers)
     return jit(_bounds), jit(_values)
