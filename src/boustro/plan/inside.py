@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -53,6 +54,8 @@ __all__ = [
 #: Patches (short passes over corners and thin parts) placed at most; more means the area has
 #: thousands of slivers narrower than a spacing, and what is left is reported as not covered.
 MAX_PATCHES = 5000
+#: Passes whose bands :func:`_band` keeps (a few hundred kilobytes each at most).
+BAND_CACHE = 256
 
 
 def shapely_area(area: Region | Polygon | ArrayLike) -> Any:
@@ -205,8 +208,8 @@ def boundary_passes(
     def cover(lines: list[NDArray[np.float64]], rest: Any) -> Any:
         if not lines:
             return rest
-        geoms = [shapely.LineString(line) for line in lines]
-        band = shapely.union_all(shapely.buffer(geoms, inner, quad_segs=64))
+        keys = [np.ascontiguousarray(line, dtype=np.float64) for line in lines]
+        band = shapely.union_all([_band(k.tobytes(), len(k), inner) for k in keys])
         return shapely.difference(rest, band)
 
     residual = cover(passes, residual)
@@ -223,6 +226,18 @@ def boundary_passes(
         pieces = _pieces(residual, eps)
     rest = _attach(passes, patches, target, spacing)
     return [_dedupe(p, tol) for p in passes + rest], float(sum(p.area for p in pieces))
+
+
+@lru_cache(maxsize=BAND_CACHE)
+def _band(line: bytes, n: int, reach: float) -> Any:
+    """The band of a pass (a polyline of ``n`` points, as bytes) ``reach`` either side, as
+    :mod:`boustro.plan.coverage` measures it (``quad_segs=64``). Cached: the plans a search
+    evaluates share most of their contour passes, and buffering them is most of a plan's
+    cost."""
+    import shapely
+
+    pts = np.frombuffer(line, dtype=np.float64).reshape(n, 2)
+    return shapely.buffer(shapely.LineString(pts), reach, quad_segs=64)
 
 
 def _dedupe(line: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
