@@ -222,8 +222,9 @@ def _sort_keys(key, p0, p1):
         key[j + 1] = k
 
 
-def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):
-    """Per band: the chords of the holes on the band's centre line, sorted (lo, hi, hole id)."""
+def _crossings(h1, h2, t1, t2, hole, d, s, k0, nb):
+    """Per band: where the line ``d + k s`` crosses the holes' edges (the half-open rule
+    ``h <= line``), sorted ``(t, hole id)``: consecutive pairs are the holes' chords."""
     e = h1.shape[0]
     n_x = np.zeros(nb, dtype=np.int64)
     for i in range(e):
@@ -258,6 +259,37 @@ def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb):
     for b in range(nb):
         _sort_pairs(xt, xh, xstart[b], xstart[b + 1])
     return xstart, xt, xh
+
+
+def _overlaps(lo, hi, xt, p0, p1):
+    """Whether ``[lo, hi]`` overlaps (by more than a point) a chord ``xt[p0:p1]`` (pairs)."""
+    for q in range(p0, p1 - 1, 2):
+        if min(hi, xt[q + 1]) > max(lo, xt[q]):
+            return True
+    return False
+
+
+def _hole_chords(h1, h2, t1, t2, hole, d, s, k0, nb, tau):
+    """Per band: the chords of the holes on the band's centre line, sorted ``(lo, hi, hole
+    id)`` pairs, each kept only where the lines ``tau`` either side cross the hole too (as the
+    planner cuts a lane, :func:`boustro.plan.lanes._cut_holes`): a line along a hole's edge,
+    or through its extreme vertex, gets no chord there."""
+    c0, ct, ch = _crossings(h1, h2, t1, t2, hole, d, s, k0, nb)
+    l0, lt, _lh = _crossings(h1, h2, t1, t2, hole, d - tau, s, k0, nb)
+    u0, ut, _uh = _crossings(h1, h2, t1, t2, hole, d + tau, s, k0, nb)
+    xstart = np.zeros(nb + 1, dtype=np.int64)
+    xt = np.empty(ct.shape[0])
+    xh = np.empty(ct.shape[0], dtype=np.int64)
+    n = 0
+    for b in range(nb):
+        for q in range(c0[b], c0[b + 1] - 1, 2):
+            lo, hi = ct[q], ct[q + 1]
+            if _overlaps(lo, hi, lt, l0[b], l0[b + 1]) and _overlaps(lo, hi, ut, u0[b], u0[b + 1]):
+                xt[n], xt[n + 1] = lo, hi
+                xh[n], xh[n + 1] = ch[q], ch[q]
+                n += 2
+        xstart[b + 1] = n
+    return xstart, xt[:n], xh[:n]
 
 
 def _minus(lo, hi, n, glo, ghi, tol, out_lo, out_hi):
@@ -325,8 +357,12 @@ def _leaf(
     if delta >= 0:
         _rigid_cuts(hxy, hstart, cs, sn, d, s, ox, oy, k0, nb, delta, eta,
                     i_start, i_m, i_lo, i_hi, tol, rigid)  # fmt: skip
-    gi_start, gi_t, _gi_h = _hole_chords(ih1, ih2, it1, it2, inner_hole, d, s, k0, nb)
-    go_start, go_t, go_h = _hole_chords(oh1, oh2, ot1, ot2, outer_hole, d, s, k0, nb)
+    # chords where the lines tau either side cross the hole too (the planner's rule, with its
+    # 1e-7 spacings): the inner set's tau within its holes' margin over the real ones (the
+    # sandwich's pad, tol), the outer set's beyond the planner's (fewer chords: a lower bound)
+    tau_out = 1.5e-7 * max(s, tol)
+    gi_start, gi_t, _gi_h = _hole_chords(ih1, ih2, it1, it2, inner_hole, d, s, k0, nb, tol / 2)
+    go_start, go_t, go_h = _hole_chords(oh1, oh2, ot1, ot2, outer_hole, d, s, k0, nb, tau_out)
     # scratch for the pieces of one band (no arrays allocated per band)
     room = 1
     for b in range(nb):
@@ -460,7 +496,8 @@ def _compiled() -> Any:
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _all
     jit_globals(globals(), ("_project", "_sort_pairs", "_sort_keys", "_band_intervals",
-                            "_hole_chords", "_minus", "_rigid_cuts", "_leaf"))  # fmt: skip
+                            "_crossings", "_overlaps", "_hole_chords", "_minus", "_rigid_cuts",
+                            "_leaf"))  # fmt: skip
     return jit(_all)
 
 
