@@ -77,6 +77,18 @@ DEGENERATE = 1e-11
 MARGIN_CAP = 0.5 * DEGENERATE
 
 
+def _edge_class(xy, i, cs, sn, sdelta):
+    """``(class, h1, h2)`` of edge ``i``: its ends' across-coordinates ``h`` and ``+-1`` where
+    ``h`` rises (falls) along it for every angle of the box, 0 where it may turn parallel."""
+    h1 = -sn * xy[i, 0] + cs * xy[i, 1]
+    h2 = -sn * xy[i, 2] + cs * xy[i, 3]
+    ln = math.hypot(xy[i, 2] - xy[i, 0], xy[i, 3] - xy[i, 1])
+    cls = 0
+    if abs(h2 - h1) > ln * sdelta * (1.0 + 1e-9) + 1e-15:
+        cls = 1 if h2 > h1 else -1
+    return cls, h1, h2
+
+
 def _chains(xy, rings, cs, sn, sdelta, ci, cf):
     """The chains of the real rings: ``ci[k] = (first edge, end edge, class, end vertex)``
     (a vertex is the index of the edge it starts), ``cf[k] = (low, high)`` of their
@@ -86,21 +98,11 @@ def _chains(xy, rings, cs, sn, sdelta, ci, cf):
     for r in range(rings.shape[0] - 1):
         i = rings[r]
         while i < rings[r + 1]:
-            h1 = -sn * xy[i, 0] + cs * xy[i, 1]
-            h2 = -sn * xy[i, 2] + cs * xy[i, 3]
-            ln = math.hypot(xy[i, 2] - xy[i, 0], xy[i, 3] - xy[i, 1])
-            cls = 0
-            if abs(h2 - h1) > ln * sdelta * (1.0 + 1e-9) + 1e-15:
-                cls = 1 if h2 > h1 else -1
+            cls, h1, h2 = _edge_class(xy, i, cs, sn, sdelta)
             lo_h, hi_h = min(h1, h2), max(h1, h2)
             j = i + 1
             while cls != 0 and j < rings[r + 1]:
-                g1 = -sn * xy[j, 0] + cs * xy[j, 1]
-                g2 = -sn * xy[j, 2] + cs * xy[j, 3]
-                lj = math.hypot(xy[j, 2] - xy[j, 0], xy[j, 3] - xy[j, 1])
-                cj = 0
-                if abs(g2 - g1) > lj * sdelta * (1.0 + 1e-9) + 1e-15:
-                    cj = 1 if g2 > g1 else -1
+                cj, _g1, g2 = _edge_class(xy, j, cs, sn, sdelta)
                 if cj != cls:
                     break
                 lo_h, hi_h = min(lo_h, g2), max(hi_h, g2)
@@ -453,6 +455,7 @@ def near_margin(rings: list[NDArray[np.float64]], tiny: float) -> float:
 def prepare() -> None:
     """Swap this module's helpers for their numba versions (before a caller compiles)."""
     kernel._compiled()
-    helpers = ("_chains", "_crossing_range", "_feasible", "_side", "_near_index", "_collect",
-               "_condition", "_emit", "_line_options", "_combine", "_sup_w")  # fmt: skip
+    helpers = ("_edge_class", "_chains", "_crossing_range", "_feasible", "_side",
+               "_near_index", "_collect", "_condition", "_emit", "_line_options", "_combine",
+               "_sup_w")  # fmt: skip
     jit_globals(globals(), helpers)
