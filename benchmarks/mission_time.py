@@ -10,13 +10,16 @@ Spacing 10 m, 5 m/s, 10 s per turn. For each field:
 * ``eq1``: the same with ``fitness=SmithFitness()``: the paper's fitness (today's default plan);
 * ``brute``: the baseline (b) of the issue: every whole degree, lanes centred on the area
   (the first half a spacing inside its extreme, as Fields2Cover's swaths), the
-  coverage-guaranteed lanes flown by the same planner, the fastest angle kept.
+  coverage-guaranteed lanes flown by the same planner, the fastest angle kept;
+* ``keep-inside`` (with ``--keep-inside``): the time objective with ``keep_inside=True`` (lanes
+  end inside, moves follow the inside, boundary passes), its ratio to the same brute force
+  (whose path leaves the area).
 
 Printed per set: the median and worst ratio of mission time to the brute force's (measured in
 the same run), the share certified, the median gap, lanes, coverage (shapely, the original
 boundary), path outside the area, and planning CPU time (``time.process_time``).
 
-    python benchmarks/mission_time.py --data /path/to/Fields2Cover/data [--random 100]
+    python benchmarks/mission_time.py --data F2C/data [--random 100] [--keep-inside]
 """
 
 from __future__ import annotations
@@ -75,6 +78,7 @@ def _row(area, crs, **kw):
     return {
         "time": m.stats.duration,
         "lanes": s["n_transects"],
+        "turns": m.stats.n_turns,
         "covered": s.get("covered_share", float("nan")),
         "outside": s.get("outside_length_m", 0.0),
         "certified": bool(s.get("certified")),
@@ -89,21 +93,36 @@ def main() -> None:
     ap.add_argument("--data", help="Fields2Cover's data/ folder")
     ap.add_argument("--random", type=int, default=20, help="random concave areas (default 20)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument(
+        "--keep-inside",
+        action="store_true",
+        help="also plan each field with the time objective and --keep-inside",
+    )
     args = ap.parse_args()
     rows = []
     for name, area, crs in _fields(args.data, args.random, args.seed):
         timed = _row(area, crs)
         eq1 = _row(area, crs, fitness=SmithFitness())
         brute, brute_cpu = _brute_centred(area, crs)
-        rows.append((name, timed, eq1, brute, brute_cpu))
+        inside = _row(area, crs, keep_inside=True) if args.keep_inside else None
+        rows.append((name, timed, eq1, brute, brute_cpu, inside))
         print(
             f"{name:24s} time {timed['time']:8.1f} s ({timed['method']}, certified "
-            f"{timed['certified']}, gap {timed['gap']:.2f} s, {timed['cpu']:.2f} s CPU) | eq1 "
+            f"{timed['certified']}, gap {timed['gap']:.2f} s, {timed['cpu']:.2f} s CPU, "
+            f"{timed['lanes']} lanes, {timed['turns']} turns) | eq1 "
             f"{eq1['time']:8.1f} | brute {brute:8.1f} ({brute_cpu:.1f} s CPU) | time/brute "
             f"{timed['time'] / brute:.4f} covered {timed['covered']:.6f} outside "
             f"{timed['outside']:.0f} m",
             flush=True,
         )
+        if inside is not None:
+            print(
+                f"{'':24s} keep-inside {inside['time']:8.1f} s (certified {inside['certified']}, "
+                f"gap {inside['gap']:.2f} s, {inside['cpu']:.2f} s CPU, {inside['lanes']} lanes, "
+                f"{inside['turns']} turns) | /brute {inside['time'] / brute:.4f} covered "
+                f"{inside['covered']:.6f} outside {inside['outside']:.2f} m",
+                flush=True,
+            )
     _summary(rows)
 
 
@@ -148,6 +167,23 @@ def _summary(rows) -> None:
             f"{statistics.median(r[1]['cpu'] for r in sel):.2f} s, max "
             f"{max(r[1]['cpu'] for r in sel):.2f} s"
         )
+        ins = [r for r in sel if r[5] is not None]
+        if ins:
+            k_ratio = [r[5]["time"] / r[3] for r in ins]
+            print(
+                f"  --keep-inside / brute force (which leaves the area): median "
+                f"{statistics.median(k_ratio):.4f}, worst {max(k_ratio):.4f}; certified "
+                f"{sum(r[5]['certified'] for r in ins)}/{len(ins)}, median gap "
+                f"{statistics.median(_rel_gap(r[5]) for r in ins) * 100:.2f}%, coverage min "
+                f"{min(r[5]['covered'] for r in ins):.6f}, outside max "
+                f"{max(r[5]['outside'] for r in ins):.3f} m, planning CPU median "
+                f"{statistics.median(r[5]['cpu'] for r in ins):.2f} s, max "
+                f"{max(r[5]['cpu'] for r in ins):.2f} s"
+            )
+
+
+def _rel_gap(row) -> float:
+    return row["gap"] / row["time"] if row["gap"] == row["gap"] else float("inf")
 
 
 def _median_gap(sel) -> float:
