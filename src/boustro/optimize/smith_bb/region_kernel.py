@@ -319,11 +319,31 @@ def _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, l
     return best
 
 
+def _proper_extent(oa, ob, o0, o1, p0, p1, pa, pb, owner):
+    """The longest a group of a split O-component can be on one line: a group of a component
+    that splits leaves out its first or its last piece, so it lies within the component's start
+    and its last piece's start, or its first piece's end and the component's end (0 if no
+    component of ``o0:o1`` holds two pieces)."""
+    out = 0.0
+    for o in range(o0, o1):
+        first, last = -1, -1
+        for p in range(p0, p1):
+            if owner[p] == o:
+                if first < 0:
+                    first = p
+                last = p
+        if last > first >= 0:
+            out = max(out, pa[last] - oa[o], ob[o] - pb[first])
+    return out
+
+
 def _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n, gfree, a, b, pos):
     """The bound without enumerating the splits (too many): on each uncertain line one
     segment per component holding pieces, of length between its shortest piece and ``|o|``
     (whichever group holds that piece), up to ``min(extra, gaps)`` split segments of length
-    between the shortest and the longest of those, and up to ``extra`` free ones in
+    between the shortest piece and the longest group of a split component
+    (:func:`_proper_extent`: a group of a split component leaves out its first or its last
+    piece, so it is not the whole component), and up to ``extra`` free ones in
     ``[0, G]``; Eq. 1 is convex in the two shares, so only their extreme counts are tried."""
     splits, free, smin, smax = 0, 0, np.inf, 0.0
     for q in range(nb):
@@ -345,10 +365,12 @@ def _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n, gfr
                 lo[n - 1] = min(lo[n - 1], pb[p] - pa[p])
             if gaps[q] > 0:
                 smin = min(smin, pb[p] - pa[p])
-                smax = max(smax, ob[o] - oa[o])
+        if gaps[q] > 0:
+            smax = max(smax, _proper_extent(oa, ob, ost[q], ost[q + 1], ist[q], ist[q + 1], pa,
+                                            pb, owner))  # fmt: skip
     if splits == 0:
         smin, smax = 0.0, 0.0
-    lo[n], hi[n], lo[n + 1], hi[n + 1] = smin, smax, 0.0, gfree
+    lo[n], hi[n], lo[n + 1], hi[n + 1] = smin, max(smax, smin), 0.0, gfree
     for q in range(n + 2):
         pos[2 * q] = lo[q]
         pos[2 * q + 1] = hi[q]
@@ -384,7 +406,8 @@ def _compiled() -> tuple[Any, Any]:
     kernel._compiled()  # _sup_w's own helpers (kernel's _g) compiled where it looks them up
     prepare()  # and chain_bound's, in .region_chains
     helpers = ("_first_line", "_intervals", "_chains", "_chain_counts", "_sup_w", "_owners",
-               "_line_segments", "_relaxed", "_enumerated", "chain_bound", "_bound")  # fmt: skip
+               "_line_segments", "_proper_extent", "_relaxed", "_enumerated", "chain_bound",
+               "_bound")  # fmt: skip
     jit_globals(globals(), helpers)
     return jit(_bounds), jit(_values)
 
