@@ -24,7 +24,8 @@ mean linearly and the variance concavely (``(1 - t) V + t (1 - t) (m - y)^2``), 
 convex in ``t`` and the best count of free segments is none or all of them.
 
 Eq. 1 is concave in the lengths for a fixed count: each choice is maximised exactly
-(:func:`_sup_w`, the convex kernel's closed form with multiplicities), the bound is the largest.
+(:func:`_sup_w`, the convex kernel's closed form with multiplicities), the bound is the largest;
+beyond :data:`MAX_CHOICES` choices they are pooled and branched (:mod:`.region_splits`).
 """
 
 from __future__ import annotations
@@ -38,13 +39,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._jit import jit, jit_globals
-from . import kernel
+from . import kernel, region_splits
 from .kernel import _sup_w, lines_range
 from .region_chains import _chains, chain_bound, prepare
+from .region_splits import NODES, split_bound
 
 __all__ = ["region_bounds", "region_values", "ring_starts"]
 
-#: Most split choices enumerated per box (2^gaps), beyond it the crude bound ``a max|o| + b``.
+#: Most split choices enumerated per box (2^gaps), beyond it :func:`.region_splits.split_bound`.
 MAX_CHOICES = 8
 #: A sure line's segment whose length interval is wider than this many ``eps`` (the sandwich
 #: gives about 4 to 8) is left to the chain bound (:mod:`.region_chains`).
@@ -273,9 +275,9 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb
                     gfree = max(gfree, pa[p] - left)
                     left = pb[p]
             gfree = max(gfree, ob[o] - left)
-    if total_gaps > 30 or (1 << total_gaps) > MAX_CHOICES:
-        old = _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_fixed,
-                       gfree, a, b, pos)  # fmt: skip
+    if total_gaps > 30 or (1 << total_gaps) > MAX_CHOICES:  # branched (.region_splits)
+        old = split_bound(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_fixed,
+                          gfree, a, b, pos, cut, NODES)  # fmt: skip
     else:
         old = _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, lo, hi,
                           w, n_fixed, a, b, pos)  # fmt: skip
@@ -319,51 +321,6 @@ def _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, l
     return best
 
 
-def _relaxed(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n, gfree, a, b, pos):
-    """The bound without enumerating the splits (too many): on each uncertain line one
-    segment per component holding pieces, of length between its shortest piece and ``|o|``
-    (whichever group holds that piece), up to ``min(extra, gaps)`` split segments of length
-    between the shortest and the longest of those, and up to ``extra`` free ones in
-    ``[0, G]``; Eq. 1 is convex in the two shares, so only their extreme counts are tried."""
-    splits, free, smin, smax = 0, 0, np.inf, 0.0
-    for q in range(nb):
-        if extra[q] == 0:
-            continue
-        splits += min(extra[q], gaps[q])
-        free += extra[q]
-        prev_o = -1
-        for p in range(ist[q], ist[q + 1]):
-            o = owner[p]
-            if o < 0:
-                continue
-            if o != prev_o:
-                lo[n] = pb[p] - pa[p]
-                hi[n] = ob[o] - oa[o]
-                n += 1
-                prev_o = o
-            else:
-                lo[n - 1] = min(lo[n - 1], pb[p] - pa[p])
-            if gaps[q] > 0:
-                smin = min(smin, pb[p] - pa[p])
-                smax = max(smax, ob[o] - oa[o])
-    if splits == 0:
-        smin, smax = 0.0, 0.0
-    lo[n], hi[n], lo[n + 1], hi[n + 1] = smin, smax, 0.0, gfree
-    for q in range(n + 2):
-        pos[2 * q] = lo[q]
-        pos[2 * q + 1] = hi[q]
-    order = np.argsort(pos[: 2 * (n + 2)])
-    best = -np.inf
-    for ns in (0, splits):
-        for nf in (0, free):
-            w[n] = float(ns)
-            w[n + 1] = float(nf)
-            best = max(best, _sup_w(lo, hi, w, n + 2, order, a, b, pos))
-    w[n] = 1.0
-    w[n + 1] = 1.0
-    return best
-
-
 def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
             margin, cut, slack):  # fmt: skip
     m = cs.shape[0]
@@ -383,8 +340,10 @@ def _compiled() -> tuple[Any, Any]:
         return _bounds, _values
     kernel._compiled()  # _sup_w's own helpers (kernel's _g) compiled where it looks them up
     prepare()  # and chain_bound's, in .region_chains
+    region_splits.prepare()  # and split_bound's
     helpers = ("_first_line", "_intervals", "_chains", "_chain_counts", "_sup_w", "_owners",
-               "_line_segments", "_relaxed", "_enumerated", "chain_bound", "_bound")  # fmt: skip
+               "_line_segments", "_enumerated", "chain_bound",
+               "split_bound", "_bound")  # fmt: skip
     jit_globals(globals(), helpers)
     return jit(_bounds), jit(_values)
 

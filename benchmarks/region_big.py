@@ -1,0 +1,74 @@
+"""Benchmark (issue 21): how far the certified per-segment Eq. 1 (``smith_bb_region``) is from
+certifying the 2000-vertex traced field with 10 holes (``traced_field(2000, 10)``, 10 m): gap,
+upper bound, fitness, boxes and CPU (``time.process_time``) against the work budget, for this
+tree and a baseline tree (``--baseline``: a ``src`` folder), each in its own subprocess,
+interleaved (base, new, base again: the lesser CPU of the two base runs), the first compiling
+call excluded and timed apart. Targets of issue 21: certified (gap <= 1e-4) in 5 s.
+
+    git archive 1158b53 src | tar -x -C /tmp/base   # the tree before
+    PYTHONPATH=src python benchmarks/region_big.py --baseline /tmp/base/src [--budgets 1e7 4e7]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+
+def _worker(budgets: list[float], n: int, holes: int, spacing: float) -> None:
+    from boustro.geometry.traced import traced_field
+    from boustro.optimize.smith_bb.region import smith_bb_region
+
+    region = traced_field(n, holes)
+    t = time.process_time()
+    smith_bb_region(region, spacing, max_work=1e5)  # compile / load the kernels
+    print(json.dumps({"first": time.process_time() - t}), flush=True)
+    for budget in budgets:
+        t = time.process_time()
+        res = smith_bb_region(region, spacing, max_work=budget)
+        row = {"budget": budget, "cpu": time.process_time() - t, "gap": res.gap,
+               "upper": res.upper_bound, "fitness": res.fitness, "boxes": res.info["boxes"],
+               "converged": res.info["converged"]}  # fmt: skip
+        print(json.dumps(row), flush=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--baseline", default="/work/main/src", help="src folder of the baseline")
+    ap.add_argument("--budgets", type=float, nargs="+", default=[1e7, 2e7, 4e7, 8e7])
+    ap.add_argument("--vertices", type=int, default=2000)
+    ap.add_argument("--holes", type=int, default=10)
+    ap.add_argument("--spacing", type=float, default=10.0)
+    ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.worker:
+        _worker(args.budgets, args.vertices, args.holes, args.spacing)
+        return
+    here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src")
+    cmd = [sys.executable, os.path.abspath(__file__), "--worker", "--vertices",
+           str(args.vertices), "--holes", str(args.holes), "--spacing", str(args.spacing),
+           "--budgets", *map(str, args.budgets)]  # fmt: skip
+    print(f"load: {os.getloadavg()}")
+    runs: dict[str, list[dict]] = {}
+    for label, src in (("base", args.baseline), ("new", here), ("base2", args.baseline)):
+        env = dict(os.environ, PYTHONPATH=os.path.abspath(src))
+        out = subprocess.run(cmd, capture_output=True, text=True, check=True, env=env).stdout
+        runs[label] = [json.loads(line) for line in out.splitlines()]
+    print(f"first call (compile or load): base {runs['base'][0]['first']:.2f} s, "
+          f"new {runs['new'][0]['first']:.2f} s")  # fmt: skip
+    print(f"{'budget':>8} {'base gap':>9} {'new gap':>9} {'base ub':>8} {'new ub':>8} "
+          f"{'base fit':>9} {'new fit':>9} {'base s':>7} {'new s':>7} {'boxes':>13}")  # fmt: skip
+    for base, base2, new in zip(runs["base"][1:], runs["base2"][1:], runs["new"][1:], strict=True):
+        cpu = min(base["cpu"], base2["cpu"])
+        print(f"{new['budget']:>8.0e} {base['gap']:>9.4f} {new['gap']:>9.4f} "
+              f"{base['upper']:>8.4f} {new['upper']:>8.4f} {base['fitness']:>9.5f} "
+              f"{new['fitness']:>9.5f} {cpu:>7.2f} {new['cpu']:>7.2f} "
+              f"{base['boxes']:>6}/{new['boxes']:<6}")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
