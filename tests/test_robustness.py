@@ -424,3 +424,24 @@ def test_kml_names_lanes_and_hole_passes_apart():
     roles = mission.plan.role()
     assert names.count("Transect") == roles.count("lane") > 0
     assert names.count("Hole pass") == roles.count("hole") > 0
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["plan", "--spacing", "0"],
+        ["plan", "--spacing", "nan"],
+        ["plan", "--spacing", "5", "--camera", "dji-phantom-4-pro"],
+        ["plna"],
+        ["batch"],
+        ["optimize", "--method", "nope"],
+        ["score", "--angle", "x"],
+    ],
+)
+def test_an_argument_refused_by_argparse_is_one_line(capsys, argv):
+    # QA: argparse printed its usage block (17 lines for plan) before the line saying what was
+    # wrong; the README promises one line and exit status 2 for bad input
+    code, out, err, refused = _run(capsys, *argv)
+    assert refused and out == ""
+    line = _one_line_error(code, err)
+    assert "--help" in line and "usage:" not in err
