@@ -363,6 +363,17 @@ def test_cli_batch_missions_and_other_formats(fields, tmp_path, capsys):
     assert sorted(rows["mission"]) == files
 
 
+def test_cli_a_directory_of_fields_is_one_line_saying_so(tmp_path, capsys):
+    # QA: `boustro batch folder/` said "folder: no such file" of a folder that exists
+    folder = tmp_path / "fields"
+    folder.mkdir()
+    _write(folder / "a.gpkg", [shapely.box(0, 0, 100, 100)], ["a"], [10.0])
+    assert main(["batch", str(folder), "--out", str(tmp_path / "o.gpkg"), "--spacing", "10"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "is a directory, not a vector file" in err, err
+    assert "no such file" not in err and not (tmp_path / "o.gpkg").exists()
+
+
 def test_cli_bad_input_is_one_line(tmp_path, capsys):
     assert main(["batch", str(tmp_path / "missing.gpkg"), "--out", str(tmp_path / "o.gpkg"),
                  "--spacing", "10"]) == 2  # fmt: skip

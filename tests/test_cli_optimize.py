@@ -6,6 +6,7 @@ import pytest
 
 from boustro.cli import main
 from boustro.optimize import METHODS, exact_fitness
+from boustro.optimize.smith_bb import DEFAULT_TOL
 from boustro.scoring import as_polygon
 
 from .conftest import run_cli
@@ -204,3 +205,13 @@ def test_learned_method(capsys):
         data = json.loads(capsys.readouterr().out)
         assert code == 0 and data["method"] == "learned"
         assert 0.25 <= data["fitness"] <= 1.0
+
+
+def test_tol_help_names_the_default_of_each_certified_method(capsys):
+    # QA: the help said "global: ... (default 1e-6)" while --tol also sets certified-bb's gap,
+    # whose default is smith_bb.DEFAULT_TOL
+    with pytest.raises(SystemExit):
+        main(["optimize", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "global and certified-bb" in text
+    assert f"{DEFAULT_TOL:g} for certified-bb" in text and "1e-6 for global" in text

@@ -152,7 +152,10 @@ def _write(tmp_path, name, text):
     ("setup", "extra", "match"),
     [
         (None, ["missing.geojson", "--spacing", "10"], "no such file"),
-        ("empty.geojson", ["--spacing", "10"], "malformed JSON"),
+        # QA: an empty file said "malformed JSON at line 1 column 1" (KML: "malformed XML")
+        ("empty.geojson", ["--spacing", "10"], "the file is empty"),
+        ("empty.kml", ["--spacing", "10"], "the file is empty"),
+        ("bad.geojson", ["--spacing", "10"], "malformed JSON at line 1 column 2"),
         ("nopoly.geojson", ["--spacing", "10"], "holds no Polygon"),
         ("lat.json", ["--spacing", "10"], "latitude 95 at vertex 1 is outside"),
         ("anti.json", ["--spacing", "10"], "crosses the antimeridian"),
@@ -174,6 +177,8 @@ def test_bad_inputs_write_nothing(capsys, tmp_path, setup, extra, match):
     ring = [[6.0, 51.0], [6.01, 51.0], [6.01, 51.01], [6.0, 51.01]]
     files = {
         "empty.geojson": "",
+        "empty.kml": " \n",
+        "bad.geojson": "{not json",
         "nopoly.geojson": json.dumps({"type": "FeatureCollection", "features": []}),
         "lat.json": json.dumps([[6.0, 51.0], [6.01, 95.0], [6.0, 51.01]]),
         "anti.json": json.dumps([[179.99, 0], [-179.99, 0], [-179.99, 0.01], [179.99, 0.01]]),

@@ -108,6 +108,10 @@ def test_human_output(capsys):
     [
         (None, ["--spacing", "1"], "no such file"),
         ("{not json", ["--spacing", "1"], "malformed JSON"),
+        # QA: a KML, WKT or empty file said "malformed JSON at line 1 column 1"
+        ("POLYGON ((0 0, 1 0, 0 1, 0 0))", ["--spacing", "1"], "not JSON: a planar polygon"),
+        ("<kml></kml>", ["--spacing", "1"], "boustro plan"),
+        ("", ["--spacing", "1"], "the file is empty"),
         ('[[0, 0], ["a", 1], [1, 1]]', ["--spacing", "1"], "two numbers"),
         ('{"type": "Point", "coordinates": [0, 0]}', ["--spacing", "1"], "Polygon"),
         (

@@ -135,6 +135,24 @@ def test_wkt_multipolygon_and_geometry_collection(tmp_path):
     np.testing.assert_allclose(areas[2].ring, [(40, 0), (50, 0), (45, 9)])
 
 
+def test_a_geometry_collection_with_one_polygon_reads_as_its_polygon(tmp_path):
+    # QA: a GEOMETRYCOLLECTION holding one polygon (and a point) was refused ("expected a WKT
+    # POLYGON or MULTIPOLYGON, got GEOMETRYCOLLECTION"), and read_area refused any collection
+    path = tmp_path / "gc.wkt"
+    path.write_text("GEOMETRYCOLLECTION (POINT (1 1), POLYGON ((0 0, 10 0, 10 10, 0 10, 0 0)))")
+    (area,) = read_areas(path, crs="planar")
+    assert area.name == "gc" and area.crs == "planar"
+    np.testing.assert_allclose(area.ring, [(0, 0), (10, 0), (10, 10), (0, 10)])
+    np.testing.assert_array_equal(read_area(path, crs="planar").ring, area.ring)
+    path.write_text(
+        "GEOMETRYCOLLECTION (POLYGON ((0 0, 10 0, 10 10, 0 0)), POLYGON ((20 0, 30 0, 25 9, 20 0)))"
+    )
+    np.testing.assert_allclose(read_area(path, crs="planar").ring, [(0, 0), (10, 0), (10, 10)])
+    path.write_text("GEOMETRYCOLLECTION (POINT (1 1))")
+    with pytest.raises(PolygonFileError, match="no polygon in the GEOMETRYCOLLECTION"):
+        read_areas(path)
+
+
 def test_one_field_reads_as_read_area(tmp_path):
     path = tmp_path / "one.geojson"
     path.write_text(json.dumps(_feature({}, [NORTH], id="x")))

@@ -137,6 +137,18 @@ def test_boustro_plan_a_geopackage_end_to_end(capsys, tmp_path):
     assert result[0]["holes"] == 1
 
 
+def test_a_geopackage_under_another_extension_plans_without_gdal_warnings(capsys, tmp_path):
+    # QA: a .gpkg renamed .json was planned, but pyogrio's RuntimeWarning about the
+    # "non conformant file extension" (GDAL's) reached stderr as a multi-line Python warning
+    path = _write(tmp_path / "fields.gpkg", FIELDS[:1])
+    renamed = tmp_path / "fields.json"
+    path.rename(renamed)
+    code, out, err = run_cli(capsys, "plan", renamed, "--spacing", "20", "--json")
+    assert code == 0, err
+    assert json.loads(out)["name"] == "north"
+    assert "Warning" not in err and "GDAL" not in err, err
+
+
 # -- hostile CRS, missing pyogrio, corrupt files ------------------------------------------------
 @pytest.fixture
 def gdal_never_opens(monkeypatch):

@@ -3,13 +3,16 @@ exhausted memory or a silently wrong file. Cases found by adversarial review."""
 
 from __future__ import annotations
 
+import argparse
 import json
 import logging
 import math
+import sys
 
 import numpy as np
 import pytest
 
+from boustro.cli import reproduce as reproduce_cli
 from boustro.errors import InvalidParameterError, InvalidPolygonError, PolygonFileError
 from boustro.formats import _xml_text
 from boustro.geometry import Polygon, halfplanes
@@ -424,3 +427,32 @@ def test_kml_names_lanes_and_hole_passes_apart():
     roles = mission.plan.role()
     assert names.count("Transect") == roles.count("lane") > 0
     assert names.count("Hole pass") == roles.count("hole") > 0
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["plan", "--spacing", "0"],
+        ["plan", "--spacing", "nan"],
+        ["plan", "--spacing", "5", "--camera", "dji-phantom-4-pro"],
+        ["plna"],
+        ["batch"],
+        ["optimize", "--method", "nope"],
+        ["score", "--angle", "x"],
+    ],
+)
+def test_an_argument_refused_by_argparse_is_one_line(capsys, argv):
+    # QA: argparse printed its usage block (17 lines for plan) before the line saying what was
+    # wrong; the README promises one line and exit status 2 for bad input
+    code, out, err, refused = _run(capsys, *argv)
+    assert refused and out == ""
+    line = _one_line_error(code, err)
+    assert "--help" in line and "usage:" not in err
+
+
+def test_reproduce_shows_bars_only_on_a_terminal(monkeypatch):
+    # QA: `boustro reproduce > log 2>&1` wrote tqdm frames into the log (the other commands
+    # show their bars only when stderr is a terminal)
+    for tty, quiet, shown in ((True, False, True), (False, False, False), (True, True, False)):
+        monkeypatch.setattr(sys.stderr, "isatty", lambda tty=tty: tty)
+        assert reproduce_cli._show_progress(argparse.Namespace(quiet=quiet)) is shown

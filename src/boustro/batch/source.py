@@ -113,6 +113,11 @@ def read_source(
     """
     name = os.fspath(path)
     where = name
+    if os.path.isdir(name):
+        raise PolygonFileError(
+            f"{where}: is a directory, not a vector file: give one file of fields (e.g. a "
+            "GeoPackage; merge a folder of Shapefiles into one first)"
+        )
     if not os.path.isfile(name):
         raise PolygonFileError(f"{where}: no such file")
     pyogrio = _pyogrio("a batch's fields")

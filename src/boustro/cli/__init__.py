@@ -12,6 +12,7 @@ import importlib
 import logging
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from .._version import __version__
 from ..errors import BoustroError
@@ -22,8 +23,19 @@ __all__ = ["build_parser", "main"]
 SUBCOMMANDS = ("score", "optimize", "plan", "batch", "serve", "train", "reproduce")
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose refusal is one line on stderr, exit status 2, as every other
+    error of the command line (argparse prints its whole usage block first; for ``plan`` that
+    is 17 lines before the one that says what is wrong). Subcommands' parsers are of this class
+    too (argparse makes them of their parent's)."""
+
+    def error(self, message: str) -> NoReturn:
+        text = " ".join(message.split())
+        self.exit(2, f"{self.prog}: error: {text} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="boustro",
         description="Plan and optimise boustrophedon (lawnmower) coverage paths over polygons.",
         epilog="Run 'boustro COMMAND --help' for the options of a command.",

@@ -152,7 +152,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--tol",
         type=positive_float,
         default=None,
-        help="global: the optimality gap to certify (default 1e-6)",
+        help=(
+            "global and certified-bb: the optimality gap to certify (default 1e-6 for "
+            f"global, {DEFAULT_TOL:g} for certified-bb)"
+        ),
     )
     p.add_argument(
         "--plot",

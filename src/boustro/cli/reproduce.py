@@ -166,9 +166,15 @@ def _load() -> str:
         return "n/a"
 
 
+def _show_progress(args: argparse.Namespace) -> bool:
+    """Progress bars on stderr when it is a terminal and ``-q`` was not given, as the other
+    commands show theirs (a log file or a pipe gets no bar frames)."""
+    return not getattr(args, "quiet", False) and sys.stderr.isatty()
+
+
 def run(args: argparse.Namespace) -> int:
     parts = PARTS if args.part == "all" else (args.part,)
-    progress = not getattr(args, "quiet", False)
+    progress = _show_progress(args)
     os.makedirs(args.out, exist_ok=True)
     previous_threads = torch.get_num_threads()
     torch.set_num_threads(args.threads)

@@ -77,13 +77,20 @@ def area_from_text(
     from the first character when ``None``: ``<`` XML, ``{`` or ``[`` JSON, else WKT)."""
     if kind is None:
         kind = _sniff(text)
+    if kind in ("json", "kml", "wkt") and not text.strip():
+        raise PolygonFileError(f"{where}: the file is empty: no polygon in it")
     if kind == "json":
         return area_from_json(parse_json(text, where), where, crs)
     if kind == "kml":
         return area_from_kml(text, where, crs)
     if kind == "wkt":
-        if not text.strip():
-            raise PolygonFileError(f"{where}: the file is empty: no polygon in it")
+        head = _WKT_HEAD.match(text)
+        if head and (head.group(2) or "").upper() == "GEOMETRYCOLLECTION":
+            # its polygons (other geometries left out), as read_areas reads them; the first
+            fields = fields_from_text(text, where, crs, "wkt")
+            if not fields:
+                raise PolygonFileError(f"{where}: no polygon in the GEOMETRYCOLLECTION")
+            return fields[0][1]
         return area_from_wkt(text, where, crs)
     raise PolygonFileError(f"{where}: unknown area format {kind!r}; expected json, kml or wkt")
 

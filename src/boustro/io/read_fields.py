@@ -182,6 +182,8 @@ def fields_from_text(text: str, where: str, crs: str | None, kind: str) -> list[
     """Every polygon of a file's content as ``(name or "", area)``, in file order; ``kind`` is
     ``json``, ``kml`` or ``wkt``. An empty list or a single field: the caller reads the file
     as one area (:func:`boustro.io.read.area_from_text`, its errors and its naming)."""
+    if not text.strip():  # an empty file: area_from_text says so
+        return []
     if kind == "json":
         try:
             data = json.loads(text)

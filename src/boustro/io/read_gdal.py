@@ -14,9 +14,11 @@ pyogrio and shapely are imported on use.
 
 from __future__ import annotations
 
+import logging
 import os
 import sqlite3
 import tempfile
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +31,8 @@ from .file_crs import MAX_WKT_CHARS, crs_from_file
 from .read_zip import shapefile_members
 
 __all__ = ["NAME_COLUMNS", "gdal_fields", "zipped_shapefile_fields"]
+
+log = logging.getLogger("boustro")
 
 #: The columns that name a feature, first found first.
 NAME_COLUMNS = ("name", "Name", "NAME", "id", "ID", "Id")
@@ -156,11 +160,14 @@ def gdal_fields(path: str, where: str, crs: str | None, what: str) -> list[tuple
         if crs is None:
             _check_gpkg(path, where)
     try:
-        layers = pyogrio.list_layers(path)
-        out = []
-        for name, _kind in layers:
-            here = where if len(layers) == 1 else f"{where}: layer {name}"
-            out += _layer_fields(pyogrio, path, str(name), here, crs)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            layers = pyogrio.list_layers(path)
+            out = []
+            for name, _kind in layers:
+                here = where if len(layers) == 1 else f"{where}: layer {name}"
+                out += _layer_fields(pyogrio, path, str(name), here, crs)
+        _log_gdal_warnings(caught, where)
     except pyogrio.errors.DataSourceError as exc:
         raise PolygonFileError(f"{where}: GDAL cannot read it: {_one_line(exc)}") from None
     except (pyogrio.errors.DataLayerError, pyogrio.errors.FieldError) as exc:
@@ -184,6 +191,19 @@ def zipped_shapefile_fields(
         for ext, blob in members.items():
             Path(tmp, "area" + ext).write_bytes(blob)
         return gdal_fields(os.path.join(tmp, "area.shp"), where, crs, "a zipped Shapefile")
+
+
+def _log_gdal_warnings(caught: list[warnings.WarningMessage], where: str) -> None:
+    """GDAL's warnings (pyogrio's RuntimeWarnings) as one line each on the log, once each;
+    the one about a file whose extension does not match its format is left out: boustro
+    recognises a file by its signature, whatever its name."""
+    seen = set()
+    for w in caught:
+        text = _one_line(w.message) if isinstance(w.message, Warning) else str(w.message)
+        if "non conformant file extension" in text or text in seen:
+            continue
+        seen.add(text)
+        log.warning("%s: GDAL: %s", where, text)
 
 
 def _is_sqlite(path: str) -> bool:

@@ -152,6 +152,13 @@ def read_polygon(path: str | os.PathLike[str]) -> Polygon:
         raise PolygonFileError(f"{name}: no such file") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise PolygonFileError(f"{name}: cannot read: {exc}") from None
+    if not text.strip():
+        raise PolygonFileError(f"{name}: the file is empty: no polygon in it")
+    if text.strip()[:1] not in ("{", "["):  # KML, WKT, ...: say what is read here
+        raise PolygonFileError(
+            f"{name}: not JSON: a planar polygon is read from a JSON list of [x, y] pairs or "
+            "GeoJSON (the other area formats, KML, WKT, GML, ..., through boustro plan)"
+        )
     return polygon_from_json(parse_json(text, name), name)
 
 
