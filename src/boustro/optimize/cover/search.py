@@ -59,6 +59,8 @@ RESOLVE_EPS = 1e-3
 POLISH_PLANS = 32
 #: Offsets planned at the best angle after the search of a routed plan.
 REFINE_OFFSETS = 8
+#: Whether a routed tour's moves are also bounded by the 1-tree of its lanes' ends.
+TOUR_BOUND = True
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 EDGE_OFFSETS = 64
@@ -95,6 +97,7 @@ class CoverSearch:
         self.tol = 1e-9 * region.diameter
         # the lane-ends bound on a routed tour's moves (not with boundary or headland passes)
         self.ends = not self.boustrophedon and not keep_inside and cost.fixed == 0
+        self.tour = TOUR_BOUND  # the 1-tree bound on the moves (optimize/cover/one_tree.py)
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
@@ -127,6 +130,11 @@ class CoverSearch:
         grow = grow + 2 * self.tol
         return hole_boxes(self.hole_xy, self.hole_start, theta, d, self.origin, grow)
 
+    def _tour_below(self) -> float | None:
+        """Where the 1-tree bound is computed: layouts whose other bounds are below the best
+        plan (the others are discarded anyway); ``None`` without the lane-ends bounds."""
+        return self.best[0] if self.ends and self.tour else None
+
     def k_range(self, eps: float) -> tuple[int, int]:
         far = self.radius + eps + self.reach
         return math.floor(-far / self.s) - 1, math.ceil(far / self.s) + 1
@@ -151,7 +159,7 @@ class CoverSearch:
         ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
         out = lower_bounds(
             st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
-            runins=self.n_holes == 0,
+            runins=self.n_holes == 0, tour_below=None if span_only else self._tour_below(),
         )  # fmt: skip
         if span_only:
             return out
@@ -192,7 +200,7 @@ class CoverSearch:
             self.work += int(sel.sum()) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
-                runins=self.n_holes == 0,
+                runins=self.n_holes == 0, tour_below=self._tour_below(),
             )  # fmt: skip
         self.bound_evaluations += len(eps)
         return out
