@@ -94,7 +94,7 @@ def _ranges(st, la, turnaround):
     lo, hi, v = np.empty(m), np.empty(m), np.empty(m)
     n = one_tree_module._lane_ends(
         st.count[la], st.out_lo[la], st.in_lo[la], st.in_hi[la], st.out_hi[la],
-        st.first_hi[la], st.last_lo[la], st.pieces[la], SPACING, turnaround, lo, hi, v,
+        st.first_hi[la], st.last_lo[la], st.pieces[la], 0, SPACING, turnaround, lo, hi, v,
     )  # fmt: skip
     return n, lo, hi, v
 
@@ -155,3 +155,44 @@ def test_one_tree_never_exceeds_the_shortest_path_over_the_lanes(turnaround):
         ratios.append(tree[la] / brute)
     assert len(ratios) >= 8
     assert np.mean(ratios) >= 0.9
+
+
+def test_a_moves_detour_past_a_wall_is_never_longer_than_the_routed_move():
+    """The walls inside a random area's holes (the exact level: the holes themselves), in the
+    frames of random layouts: for random pairs of ranges on the lines and points in them, the
+    router's connecting move (the planner's, around the holes) is never shorter than the
+    kernel's lower bound between the ranges, which exceeds the straight distance for some."""
+    from boustro.optimize.cover.walls import hole_walls, walls_in_frames
+    from boustro.plan.routing import Router
+
+    region = _scaled(random_regions(71, 1, n_holes=(2, 2))[0], 120.0)
+    search = CoverSearch(region, SPACING, SPACING / 2, CoverCost.time(5.0, 10.0), None, False)
+    walls = hole_walls(search.sandwich.exact.outer)
+    assert len(walls) >= 4
+    router = Router(region, reach=SPACING / 2)
+    rng = np.random.default_rng(5)
+    theta = rng.uniform(0, math.pi, 6)
+    frames = walls_in_frames(walls, theta, np.zeros(6), search.origin)
+    longer = 0
+    for la in range(6):
+        cs, sn = math.cos(theta[la]), math.sin(theta[la])
+        for _ in range(60):
+            ka, kb = rng.integers(-6, 7, 2)
+            ranges = np.sort(rng.uniform(-70, 70, (2, 2)), axis=1)
+            ranges[:, 1] = np.minimum(ranges[:, 1], ranges[:, 0] + rng.uniform(0, 8, 2))
+            (la_, ha), (lb, hb) = ranges
+            va, vb = ka * SPACING, kb * SPACING
+            lower = math.hypot(va - vb, max(max(la_, lb) - min(ha, hb), 0.0))
+            for w in range(len(walls)):
+                lower = max(lower, one_tree_module._detour(la_, ha, va, lb, hb, vb, frames[la], w))
+            ua, ub = rng.uniform(la_, ha), rng.uniform(lb, hb)
+            p = search.origin + np.array([cs * ua - sn * va, sn * ua + cs * va])
+            q = search.origin + np.array([cs * ub - sn * vb, sn * ub + cs * vb])
+            if not (region.contains(p) and region.contains(q)):
+                continue
+            route = router.path(p, q)
+            if not route.found:
+                continue
+            assert route.length >= lower - 1e-9
+            longer += lower > math.hypot(va - vb, max(max(la_, lb) - min(ha, hb), 0.0)) + 1e-6
+    assert longer >= 5

@@ -53,6 +53,7 @@ def lower_bounds(
     ends: HoleBoxes | None = None,
     runins: bool = True,
     tour_below: float | None = None,
+    walls: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every plan of the layouts' grids over any area
     between ``level``'s inner and outer sets.
@@ -72,7 +73,7 @@ def lower_bounds(
     routed tour without boundary or headland passes) the moves and extra lanes are also at least
     :func:`~.ends.lane_end_bound` and :func:`~.piece_ends.piece_end_bound`, and the largest
     is taken; with ``tour_below`` too, where that bound is below it, the 1-tree bound
-    (:func:`~.one_tree.one_tree_bound`). ``runins=False`` (an
+    (:func:`~.one_tree.one_tree_bound`, its moves past ``walls``). ``runins=False`` (an
     area with holes: the planner cuts a run-in or run-out that would enter a hole) counts no
     run-ins or run-outs in the lanes' length.
     """
@@ -103,7 +104,7 @@ def lower_bounds(
         move_cost = np.maximum(move_cost, piece_end_bound(st, spacing, cost))
         out = cost.per_length * fixed + move_cost + cost.per_turn * turns + cost.fixed
         if tour_below is not None:  # the tour's structure, where it may matter
-            tree = one_tree_bound(st, spacing, cost, todo=out < tour_below)
+            tree = one_tree_bound(st, spacing, cost, todo=out < tour_below, walls=walls)
             out = out + np.maximum(tree - move_cost, 0.0)
         return out
     length = st.length.sum(axis=1) + runs + moves + perimeter

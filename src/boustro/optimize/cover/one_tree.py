@@ -49,7 +49,7 @@ MAX_LANES = 160
 ONE_TREE_STEPS = 40
 
 
-def _lane_ends(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, s, t, lo, hi, v):
+def _lane_ends(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi, v):
     """Fill the end ranges ``[lo, hi]`` (along the lines) and ``v`` (across) of every counted
     lane of one layout, ends ``2i`` (start) and ``2i + 1`` (end) of lane ``i``; the lanes."""
     n = 0
@@ -70,19 +70,61 @@ def _lane_ends(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, s
                 lo[2 * n + 1], hi[2 * n + 1] = first_hi[k], pieces[k, 0] + t
             else:
                 lo[2 * n + 1], hi[2 * n + 1] = max(first_hi[k], pieces[k, 1]), pieces[k, 3] + t
-            v[2 * n] = v[2 * n + 1] = k * s
+            v[2 * n] = v[2 * n + 1] = (k0 + k) * s
             n += 1
     return n
 
 
-def _distances(lo, hi, v, n_ends, dist):
-    """Least distance between every two ends' ranges (``dist``, ``n_ends`` square)."""
+def _orient(ax, ay, bx, by, cx, cy):
+    """Twice the signed area of ``a, b, c``."""
+    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+
+
+def _crosses(ax, ay, bx, by, cx, cy, dx, dy):
+    """Whether the segments ``ab`` and ``cd`` cross properly (at one interior point of each)."""
+    o1 = _orient(ax, ay, bx, by, cx, cy)
+    o2 = _orient(ax, ay, bx, by, dx, dy)
+    o3 = _orient(cx, cy, dx, dy, ax, ay)
+    o4 = _orient(cx, cy, dx, dy, bx, by)
+    return o1 * o2 < 0.0 and o3 * o4 < 0.0
+
+
+def _to_range(px, py, lo, hi, v):
+    """Distance from ``(px, py)`` to the segment ``[lo, hi] x {v}``."""
+    g = max(max(lo - px, px - hi), 0.0)
+    dv = py - v
+    return math.sqrt(g * g + dv * dv)
+
+
+def _detour(la, ha, va, lb, hb, vb, walls, w):
+    """A lower bound on a path from range ``a`` to range ``b`` that crosses no wall: where
+    wall ``w`` crosses both sides ``(la, va)-(lb, vb)`` and ``(ha, va)-(hb, vb)`` of the hull of
+    the two ranges, every segment between them crosses it, and the path passes one of its ends
+    (the shortest path past a segment); 0 otherwise."""
+    x1, y1, x2, y2 = walls[w, 0], walls[w, 1], walls[w, 2], walls[w, 3]
+    if max(y1, y2) <= min(va, vb) or min(y1, y2) >= max(va, vb):
+        return 0.0
+    if not _crosses(la, va, lb, vb, x1, y1, x2, y2):
+        return 0.0
+    if not _crosses(ha, va, hb, vb, x1, y1, x2, y2):
+        return 0.0
+    d1 = _to_range(x1, y1, la, ha, va) + _to_range(x1, y1, lb, hb, vb)
+    d2 = _to_range(x2, y2, la, ha, va) + _to_range(x2, y2, lb, hb, vb)
+    return min(d1, d2)
+
+
+def _distances(lo, hi, v, n_ends, walls, dist):
+    """Least distance between every two ends' ranges (``dist``, ``n_ends`` square), past the
+    walls (the largest detour of one wall)."""
     for a in range(n_ends):
         dist[a, a] = 0.0
         for b in range(a + 1, n_ends):
             g = max(max(lo[a], lo[b]) - min(hi[a], hi[b]), 0.0)
             dv = v[a] - v[b]
-            dist[a, b] = dist[b, a] = math.sqrt(dv * dv + g * g)
+            best = math.sqrt(dv * dv + g * g)
+            for w in range(walls.shape[0]):
+                best = max(best, _detour(lo[a], hi[a], v[a], lo[b], hi[b], v[b], walls, w))
+            dist[a, b] = dist[b, a] = best
 
 
 def _one_tree(dist, pi, n, deg, key, near, done):
@@ -131,7 +173,9 @@ def _one_tree(dist, pi, n, deg, key, near, done):
     return total
 
 
-def _bounds(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, todo, s, t, steps):
+def _bounds(
+    count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, todo, walls, k0, s, t, steps
+):
     """Per layout (where ``todo``): the best 1-tree bound on the moves, in plan units."""
     n_layouts = count.shape[0]
     big = 0
@@ -148,10 +192,10 @@ def _bounds(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, todo
         if not todo[la]:
             continue
         n = _lane_ends(count[la], out_lo[la], in_lo[la], in_hi[la], out_hi[la], first_hi[la],
-                       last_lo[la], pieces[la], s, t, lo, hi, v)  # fmt: skip
+                       last_lo[la], pieces[la], k0, s, t, lo, hi, v)  # fmt: skip
         if n < 2:
             continue
-        _distances(lo, hi, v, 2 * n, dist)
+        _distances(lo, hi, v, 2 * n, walls[la], dist)
         for e in range(2 * n):
             pi[e] = 0.0
         best = 0.0  # the moves are never negative
@@ -162,7 +206,7 @@ def _bounds(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, todo
                 best, stall = val, 0
             else:
                 stall += 1
-                if stall >= 4:
+                if stall >= 3:
                     lam *= 0.5
                     stall = 0
             norm = 0.0
@@ -170,7 +214,7 @@ def _bounds(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, todo
                 norm += (deg[e] - 2) * (deg[e] - 2)
             if norm == 0.0:
                 break  # the 1-tree is a tour: the bound is its cost
-            step = lam * 0.05 * max(best, s) / norm
+            step = lam * 0.2 * max(best, s) / norm
             for e in range(2 * n):
                 pi[e] += step * (deg[e] - 2)
         out[la] = max(best, 0.0)
@@ -182,7 +226,10 @@ def _compiled() -> Any:
     """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _bounds
-    jit_globals(globals(), ("_lane_ends", "_distances", "_one_tree"))
+    jit_globals(
+        globals(),
+        ("_orient", "_crosses", "_to_range", "_detour", "_lane_ends", "_distances", "_one_tree"),
+    )
     return jit(_bounds)
 
 
@@ -192,15 +239,19 @@ def one_tree_bound(
     cost: CoverCost,
     todo: NDArray[np.bool_] | None = None,
     steps: int = ONE_TREE_STEPS,
+    walls: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound, in cost units, on ``per_length`` times the connecting moves plus
     the extra lanes' flown length of every plan of each layout's sandwich (module docstring);
-    0 where not ``todo`` or with more than :data:`MAX_LANES` counted lanes."""
+    0 where not ``todo`` or with more than :data:`MAX_LANES` counted lanes. ``walls`` ``(L, W,
+    4)``: segments no move crosses, in each layout's frame (:func:`~.walls.walls_in_frames`)."""
     n_layouts = st.count.shape[0]
     lanes = st.count.sum(axis=1)
     ok = lanes <= MAX_LANES if todo is None else todo & (lanes <= MAX_LANES)
     if cost.per_length <= 0 or not ok.any():
         return np.zeros(n_layouts)
+    if walls is None:
+        walls = np.zeros((n_layouts, 0, 4))
     cols = np.nonzero((st.count >= 1).any(axis=0))[0]
     c0, c1 = int(cols[0]), int(cols[-1]) + 1
 
@@ -210,6 +261,7 @@ def one_tree_bound(
     moves = _compiled()(
         crop(st.count), crop(st.out_lo), crop(st.in_lo), crop(st.in_hi), crop(st.out_hi),
         crop(st.first_hi), crop(st.last_lo), crop(st.pieces), np.ascontiguousarray(ok),
-        float(spacing), float(cost.turnaround), int(steps),
+        np.ascontiguousarray(walls, dtype=np.float64), int(st.k0 + c0), float(spacing),
+        float(cost.turnaround), int(steps),
     )  # fmt: skip
     return cost.per_length * moves

@@ -22,7 +22,8 @@ from .boxes import Boxes as _Boxes
 from .boxes import box_radius, initial_boxes, level_radius, split_boxes
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
-from .sandwich import Sandwich
+from .sandwich import Level, Sandwich
+from .walls import hole_walls, walls_in_frames
 
 __all__ = ["CoverSearch", "centred_offsets", "cover_optimum"]
 
@@ -98,6 +99,7 @@ class CoverSearch:
         # the lane-ends bound on a routed tour's moves (not with boundary or headland passes)
         self.ends = not self.boustrophedon and not keep_inside and cost.fixed == 0
         self.tour = TOUR_BOUND  # the 1-tree bound on the moves (optimize/cover/one_tree.py)
+        self.wall_cache: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
@@ -135,6 +137,18 @@ class CoverSearch:
         plan (the others are discarded anyway); ``None`` without the lane-ends bounds."""
         return self.best[0] if self.ends and self.tour else None
 
+    def _walls(
+        self, lv: Level, theta: NDArray[np.float64], d: NDArray[np.float64]
+    ) -> NDArray[np.float64] | None:
+        """The walls inside ``lv``'s outer holes in the layouts' frames (optimize/cover/walls.py),
+        where the 1-tree bound is computed."""
+        if self._tour_below() is None or not self.n_holes:
+            return None
+        key = id(lv.outer.xy)  # the levels are cached: their arrays live as long as the search
+        if key not in self.wall_cache:
+            self.wall_cache[key] = (lv.outer.xy, hole_walls(lv.outer))
+        return walls_in_frames(self.wall_cache[key][1], theta, d, self.origin)
+
     def k_range(self, eps: float) -> tuple[int, int]:
         far = self.radius + eps + self.reach
         return math.floor(-far / self.s) - 1, math.ceil(far / self.s) + 1
@@ -160,6 +174,7 @@ class CoverSearch:
         out = lower_bounds(
             st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
             runins=self.n_holes == 0, tour_below=None if span_only else self._tour_below(),
+            walls=None if span_only else self._walls(lv, boxes.theta, boxes.d),
         )  # fmt: skip
         if span_only:
             return out
@@ -201,6 +216,7 @@ class CoverSearch:
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
                 runins=self.n_holes == 0, tour_below=self._tour_below(),
+                walls=self._walls(lv, boxes.theta[sel], boxes.d[sel]),
             )  # fmt: skip
         self.bound_evaluations += len(eps)
         return out
