@@ -104,7 +104,10 @@ def lower_bounds(
         move_cost = np.maximum(move_cost, piece_end_bound(st, spacing, cost))
         out = cost.per_length * fixed + move_cost + cost.per_turn * turns + cost.fixed
         if tour_below is not None:  # the tour's structure, where it may matter
-            tree = one_tree_bound(st, spacing, cost, todo=out < tour_below, walls=walls)
+            enough = tour_below - (out - move_cost)  # the moves' cost that rules the layout out
+            tree = one_tree_bound(
+                st, spacing, cost, todo=out < tour_below, walls=walls, enough=enough
+            )
             out = out + np.maximum(tree - move_cost, 0.0)
         return out
     length = st.length.sum(axis=1) + runs + moves + perimeter

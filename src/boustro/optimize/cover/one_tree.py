@@ -174,9 +174,11 @@ def _one_tree(dist, pi, n, deg, key, near, done):
 
 
 def _bounds(
-    count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, todo, walls, k0, s, t, steps
+    count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, todo, enough, walls, k0, s, t,
+    steps,
 ):
-    """Per layout (where ``todo``): the best 1-tree bound on the moves, in plan units."""
+    """Per layout (where ``todo``): the best 1-tree bound on the moves, in plan units (the
+    steps stop once it reaches ``enough``)."""
     n_layouts = count.shape[0]
     big = 0
     for la in range(n_layouts):
@@ -204,6 +206,8 @@ def _bounds(
             val = _one_tree(dist, pi, n, deg, key, near, done)
             if val > best * (1.0 + 1e-9):
                 best, stall = val, 0
+                if best >= enough[la]:
+                    break
             else:
                 stall += 1
                 if stall >= 3:
@@ -240,11 +244,13 @@ def one_tree_bound(
     todo: NDArray[np.bool_] | None = None,
     steps: int = ONE_TREE_STEPS,
     walls: NDArray[np.float64] | None = None,
+    enough: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound, in cost units, on ``per_length`` times the connecting moves plus
     the extra lanes' flown length of every plan of each layout's sandwich (module docstring);
     0 where not ``todo`` or with more than :data:`MAX_LANES` counted lanes. ``walls`` ``(L, W,
-    4)``: segments no move crosses, in each layout's frame (:func:`~.walls.walls_in_frames`)."""
+    4)``: segments no move crosses, in each layout's frame (:func:`~.walls.walls_in_frames`);
+    ``enough`` ``(L,)`` (cost units): a layout's steps stop once its bound reaches it."""
     n_layouts = st.count.shape[0]
     lanes = st.count.sum(axis=1)
     ok = lanes <= MAX_LANES if todo is None else todo & (lanes <= MAX_LANES)
@@ -252,6 +258,7 @@ def one_tree_bound(
         return np.zeros(n_layouts)
     if walls is None:
         walls = np.zeros((n_layouts, 0, 4))
+    stop = np.full(n_layouts, np.inf) if enough is None else enough / cost.per_length
     cols = np.nonzero((st.count >= 1).any(axis=0))[0]
     c0, c1 = int(cols[0]), int(cols[-1]) + 1
 
@@ -261,7 +268,7 @@ def one_tree_bound(
     moves = _compiled()(
         crop(st.count), crop(st.out_lo), crop(st.in_lo), crop(st.in_hi), crop(st.out_hi),
         crop(st.first_hi), crop(st.last_lo), crop(st.pieces), np.ascontiguousarray(ok),
-        np.ascontiguousarray(walls, dtype=np.float64), int(st.k0 + c0), float(spacing),
+        np.ascontiguousarray(stop, dtype=np.float64), np.ascontiguousarray(walls, dtype=np.float64), int(st.k0 + c0), float(spacing),
         float(cost.turnaround), int(steps),
     )  # fmt: skip
     return cost.per_length * moves
