@@ -174,7 +174,20 @@ def _one_tree(dist, pi, n, deg, key, near, done):
 
 
 def _bounds(
-    count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, todo, enough, walls, k0, s, t,
+    count,
+    out_lo,
+    in_lo,
+    in_hi,
+    out_hi,
+    first_hi,
+    last_lo,
+    pieces,
+    todo,
+    enough,
+    walls,
+    k0,
+    s,
+    t,
     steps,
 ):
     """Per layout (where ``todo``): the best 1-tree bound on the moves, in plan units (the
@@ -268,7 +281,7 @@ def one_tree_bound(
     moves = _compiled()(
         crop(st.count), crop(st.out_lo), crop(st.in_lo), crop(st.in_hi), crop(st.out_hi),
         crop(st.first_hi), crop(st.last_lo), crop(st.pieces), np.ascontiguousarray(ok),
-        np.ascontiguousarray(stop, dtype=np.float64), np.ascontiguousarray(walls, dtype=np.float64), int(st.k0 + c0), float(spacing),
-        float(cost.turnaround), int(steps),
+        np.ascontiguousarray(stop, dtype=np.float64), np.ascontiguousarray(walls, dtype=np.float64),
+        int(st.k0 + c0), float(spacing), float(cost.turnaround), int(steps),
     )  # fmt: skip
     return cost.per_length * moves
