@@ -60,8 +60,14 @@ RESOLVE_EPS = 1e-3
 POLISH_PLANS = 32
 #: Offsets planned at the best angle after the search of a routed plan.
 REFINE_OFFSETS = 8
-#: Whether a routed tour's moves are also bounded by the 1-tree of its lanes' ends.
+#: Whether a routed tour's moves are also bounded by the 1-tree of its lanes' ends (on areas
+#: with holes of at most :data:`SIMPLIFY_EDGES` edges: without holes it adds 2-3x the CPU for a
+#: few tenths of a percent of gap on Fields2Cover's fields, and a 100-vertex traced field's
+#: budget-limited search came out worse).
 TOUR_BOUND = True
+#: The largest box radius (in spacings) whose boxes get the 1-tree bound: wider boxes give
+#: their lanes' ends wide ranges, where it adds little, and are halved anyway.
+TOUR_EPS = 0.25
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 EDGE_OFFSETS = 64
@@ -98,7 +104,9 @@ class CoverSearch:
         self.tol = 1e-9 * region.diameter
         # the lane-ends bound on a routed tour's moves (not with boundary or headland passes)
         self.ends = not self.boustrophedon and not keep_inside and cost.fixed == 0
-        self.tour = TOUR_BOUND  # the 1-tree bound on the moves (optimize/cover/one_tree.py)
+        # the 1-tree bound on the moves (optimize/cover/one_tree.py): areas with holes, whose
+        # tours join chains of lanes split by a hole, and unsimplified sandwiches
+        self.tour = TOUR_BOUND and self.n_holes > 0 and not simplify
         self.wall_cache: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
@@ -108,6 +116,7 @@ class CoverSearch:
         self.seen: set[tuple[float, float]] = set()
         self.model_min = math.inf  # the lowest model value at a layout seen
         self.points: list[NDArray[Any]] = []  # (value, theta, d) of every layout modelled
+        self.ranks: NDArray[np.float64] = np.zeros(0)  # the last point values, for the plans
 
     def work_spent(self, n_boxes: int) -> float:
         """The work after the next round of ``n_boxes`` boxes (8 layouts each at most: four
@@ -132,17 +141,20 @@ class CoverSearch:
         grow = grow + 2 * self.tol
         return hole_boxes(self.hole_xy, self.hole_start, theta, d, self.origin, grow)
 
-    def _tour_below(self) -> float | None:
+    def _tour_below(self, eps: float = 0.0) -> float | None:
         """Where the 1-tree bound is computed: layouts whose other bounds are below the best
-        plan (the others are discarded anyway); ``None`` without the lane-ends bounds."""
-        return self.best[0] if self.ends and self.tour else None
+        plan (the others are discarded anyway), in boxes of radius ``eps`` at most
+        :data:`TOUR_EPS` spacings; ``None`` without the lane-ends bounds."""
+        if not (self.ends and self.tour) or eps > TOUR_EPS * self.s:
+            return None
+        return self.best[0]
 
     def _walls(
-        self, lv: Level, theta: NDArray[np.float64], d: NDArray[np.float64]
+        self, lv: Level, theta: NDArray[np.float64], d: NDArray[np.float64], eps: float = 0.0
     ) -> NDArray[np.float64] | None:
         """The walls inside ``lv``'s outer holes in the layouts' frames (optimize/cover/walls.py),
         where the 1-tree bound is computed."""
-        if self._tour_below() is None or not self.n_holes:
+        if self._tour_below(eps) is None or not self.n_holes:
             return None
         key = id(lv.outer.xy)  # the levels are cached: their arrays live as long as the search
         if key not in self.wall_cache:
@@ -173,13 +185,23 @@ class CoverSearch:
         ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
         out = lower_bounds(
             st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
-            runins=self.n_holes == 0, tour_below=None if span_only else self._tour_below(),
-            walls=None if span_only else self._walls(lv, boxes.theta, boxes.d),
+            runins=self.n_holes == 0,
         )  # fmt: skip
         if span_only:
             return out
+        # the real plans are chosen by the model without the 1-tree, as before it (a routed
+        # tour's cost is noisy between layouts: this ranking found the plans of 1158b53 again)
+        self.ranks = out
+        if self._tour_below() is not None:
+            out = lower_bounds(
+                st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
+                runins=self.n_holes == 0, tour_below=self._tour_below(),
+                walls=self._walls(lv, boxes.theta, boxes.d),
+            )  # fmt: skip
+            if self.evaluate is None:  # the model is the plan
+                self.ranks = out
         self.model_min = min(self.model_min, float(out.min(initial=math.inf)))
-        self.points.append(np.stack([out, boxes.theta, boxes.d]))
+        self.points.append(np.stack([self.ranks, boxes.theta, boxes.d]))
         return out
 
     def plan_value(self, boxes: _Boxes, i: int, points: NDArray[np.float64]) -> float:
@@ -215,8 +237,8 @@ class CoverSearch:
             self.work += int(sel.sum()) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
-                runins=self.n_holes == 0, tour_below=self._tour_below(),
-                walls=self._walls(lv, boxes.theta[sel], boxes.d[sel]),
+                runins=self.n_holes == 0, tour_below=self._tour_below(float(r)),
+                walls=self._walls(lv, boxes.theta[sel], boxes.d[sel], float(r)),
             )  # fmt: skip
         self.bound_evaluations += len(eps)
         return out
@@ -230,7 +252,8 @@ class CoverSearch:
         for a in _edge_angles(self.region, EDGE_PLANS):
             d = (np.arange(EDGE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / EDGE_OFFSETS)
             boxes = _Boxes(np.full(len(d), a), np.zeros(len(d)), d, np.zeros(len(d)))
-            self.try_plans(boxes, self.point_values(boxes), limit=1)
+            self.point_values(boxes)
+            self.try_plans(boxes, self.ranks, limit=1)
             if self.ends and self.evaluate is not None and self.sandwich.tolerance <= 0:
                 self.try_plans(boxes, self.point_values(boxes, span_only=True), limit=1)
 
@@ -255,7 +278,8 @@ class CoverSearch:
         angles = np.radians(bins[pick].astype(np.float64))
         centred = centred_offsets(self.region, angles, self.s, self.reach)
         boxes = _Boxes(angles, np.zeros(len(pick)), centred, np.zeros(len(pick)))
-        self.try_plans(boxes, self.point_values(boxes), limit=len(pick))
+        self.point_values(boxes)
+        self.try_plans(boxes, self.ranks, limit=len(pick))
 
     def refine_offsets(self) -> None:
         """Plan :data:`REFINE_OFFSETS` more offsets at the best angle: a routed plan's moves
@@ -263,8 +287,8 @@ class CoverSearch:
         theta = self.best[1]
         d = (np.arange(REFINE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / REFINE_OFFSETS)
         boxes = _Boxes(np.full(len(d), theta), np.zeros(len(d)), d, np.zeros(len(d)))
-        points = self.point_values(boxes)
-        self.try_plans(boxes, points, limit=REFINE_OFFSETS)
+        self.point_values(boxes)
+        self.try_plans(boxes, self.ranks, limit=REFINE_OFFSETS)
 
     def try_plans(
         self,
@@ -357,7 +381,7 @@ def _branch_and_bound(
         rounds += 1
         bounds = search.box_bounds(boxes)
         points = search.point_values(boxes)
-        search.try_plans(boxes, points, first=rounds == 1)
+        search.try_plans(boxes, search.ranks, first=rounds == 1)
         best = search.best[0]
         # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
         # model at the box's centre, so halving cannot raise it further than the model
