@@ -23,7 +23,7 @@ from .boxes import box_radius, initial_boxes, level_radius, split_boxes
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
 from .sandwich import Level, Sandwich
-from .walls import hole_walls, walls_in_frames
+from .walls import WallCache
 
 __all__ = ["CoverSearch", "centred_offsets", "cover_optimum"]
 
@@ -60,10 +60,8 @@ RESOLVE_EPS = 1e-3
 POLISH_PLANS = 32
 #: Offsets planned at the best angle after the search of a routed plan.
 REFINE_OFFSETS = 8
-#: Whether a routed tour's moves are also bounded by the 1-tree of its lanes' ends (on areas
-#: with holes of at most :data:`SIMPLIFY_EDGES` edges: without holes it adds 2-3x the CPU for a
-#: few tenths of a percent of gap on Fields2Cover's fields, and a 100-vertex traced field's
-#: budget-limited search came out worse).
+#: Whether a routed tour's moves are also bounded by the 1-tree of its lanes' ends, on areas
+#: with holes of at most :data:`SIMPLIFY_EDGES` edges (docs/mission_time.md, "The tour's 1-tree").
 TOUR_BOUND = True
 #: The largest box radius (in spacings) whose boxes get the 1-tree bound: wider boxes give
 #: their lanes' ends wide ranges, where it adds little, and are halved anyway.
@@ -104,10 +102,9 @@ class CoverSearch:
         self.tol = 1e-9 * region.diameter
         # the lane-ends bound on a routed tour's moves (not with boundary or headland passes)
         self.ends = not self.boustrophedon and not keep_inside and cost.fixed == 0
-        # the 1-tree bound on the moves (optimize/cover/one_tree.py): areas with holes, whose
-        # tours join chains of lanes split by a hole, and unsimplified sandwiches
+        # the 1-tree bound on the moves (optimize/cover/one_tree.py)
         self.tour = TOUR_BOUND and self.n_holes > 0 and not simplify
-        self.wall_cache: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
+        self.walls = WallCache()
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
@@ -152,14 +149,11 @@ class CoverSearch:
     def _walls(
         self, lv: Level, theta: NDArray[np.float64], d: NDArray[np.float64], eps: float = 0.0
     ) -> NDArray[np.float64] | None:
-        """The walls inside ``lv``'s outer holes in the layouts' frames (optimize/cover/walls.py),
-        where the 1-tree bound is computed."""
-        if self._tour_below(eps) is None or not self.n_holes:
+        """The walls inside ``lv``'s outer holes in the layouts' frames, where the 1-tree bound
+        is computed."""
+        if self._tour_below(eps) is None:
             return None
-        key = id(lv.outer.xy)  # the levels are cached: their arrays live as long as the search
-        if key not in self.wall_cache:
-            self.wall_cache[key] = (lv.outer.xy, hole_walls(lv.outer))
-        return walls_in_frames(self.wall_cache[key][1], theta, d, self.origin)
+        return self.walls.frames(lv.outer, theta, d, self.origin)
 
     def k_range(self, eps: float) -> tuple[int, int]:
         far = self.radius + eps + self.reach

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from .bands import EdgeSet
 
-__all__ = ["WALLS_PER_RING", "hole_walls", "walls_in_frames"]
+__all__ = ["WALLS_PER_RING", "WallCache", "hole_walls", "walls_in_frames"]
 
 #: The longest segments kept per hole ring.
 WALLS_PER_RING = 6
@@ -84,3 +84,25 @@ def walls_in_frames(
         out[:, :, 2 * e] = cs * x + sn * y
         out[:, :, 2 * e + 1] = -sn * x + cs * y - d[:, None]
     return out
+
+
+class WallCache:
+    """The walls of each sandwich level (:func:`hole_walls` of its outer set), computed once per
+    level of a search: the levels are cached, so their arrays (the keys, by identity, kept
+    alive here) live as long as the search."""
+
+    def __init__(self) -> None:
+        self._walls: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
+
+    def frames(
+        self,
+        outer: EdgeSet,
+        theta: NDArray[np.float64],
+        d: NDArray[np.float64],
+        origin: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """:func:`walls_in_frames` of the walls of the level whose outer set is ``outer``."""
+        key = id(outer.xy)
+        if key not in self._walls:
+            self._walls[key] = (outer.xy, hole_walls(outer))
+        return walls_in_frames(self._walls[key][1], theta, d, origin)
