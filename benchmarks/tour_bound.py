@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-BASELINE = "8882b43"  # main when this work started (issue 16 item 2, second round)
+BASELINE = "1158b53"  # main before the tour's 1-tree (issue 16 item 2, third round)
 
 
 def worker(data: str | None, n_random: int) -> None:

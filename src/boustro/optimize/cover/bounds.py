@@ -8,6 +8,7 @@ from numpy.typing import NDArray
 from .bands import BandStats
 from .cost import CoverCost
 from .ends import HoleBoxes, lane_end_bound
+from .one_tree import one_tree_bound
 from .piece_ends import piece_end_bound
 from .sandwich import Level
 
@@ -51,6 +52,8 @@ def lower_bounds(
     boustrophedon: bool,
     ends: HoleBoxes | None = None,
     runins: bool = True,
+    tour_below: float | None = None,
+    walls: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every plan of the layouts' grids over any area
     between ``level``'s inner and outer sets.
@@ -69,7 +72,8 @@ def lower_bounds(
     the ranges of its two ends. With ``ends`` (the holes' boxes, :func:`~.ends.hole_boxes`; a
     routed tour without boundary or headland passes) the moves and extra lanes are also at least
     :func:`~.ends.lane_end_bound` and :func:`~.piece_ends.piece_end_bound`, and the largest
-    is taken. ``runins=False`` (an
+    is taken; with ``tour_below`` too, where that bound is below it, the 1-tree bound
+    (:func:`~.one_tree.one_tree_bound`, its moves past ``walls``). ``runins=False`` (an
     area with holes: the planner cuts a run-in or run-out that would enter a hole) counts no
     run-ins or run-outs in the lanes' length.
     """
@@ -98,6 +102,13 @@ def lower_bounds(
         fixed = st.length.sum(axis=1) + runs + perimeter
         move_cost = np.maximum(cost.per_length * moves, lane_end_bound(st, spacing, cost, ends))
         move_cost = np.maximum(move_cost, piece_end_bound(st, spacing, cost))
-        return cost.per_length * fixed + move_cost + cost.per_turn * turns + cost.fixed
+        out = cost.per_length * fixed + move_cost + cost.per_turn * turns + cost.fixed
+        if tour_below is not None:  # the tour's structure, where it may matter
+            enough = tour_below - (out - move_cost)  # the moves' cost that rules the layout out
+            tree = one_tree_bound(
+                st, spacing, cost, todo=out < tour_below, walls=walls, enough=enough
+            )
+            out = out + np.maximum(tree - move_cost, 0.0)
+        return out
     length = st.length.sum(axis=1) + runs + moves + perimeter
     return cost.per_length * length + cost.per_turn * turns + cost.fixed

@@ -22,7 +22,8 @@ from .boxes import Boxes as _Boxes
 from .boxes import box_radius, initial_boxes, level_radius, split_boxes
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
-from .sandwich import Sandwich
+from .sandwich import Level, Sandwich
+from .walls import WallCache
 
 __all__ = ["CoverSearch", "centred_offsets", "cover_optimum"]
 
@@ -59,6 +60,12 @@ RESOLVE_EPS = 1e-3
 POLISH_PLANS = 32
 #: Offsets planned at the best angle after the search of a routed plan.
 REFINE_OFFSETS = 8
+#: Whether a routed tour's moves are also bounded by the 1-tree of its lanes' ends, on areas
+#: with holes of at most :data:`SIMPLIFY_EDGES` edges (docs/mission_time.md, "The tour's 1-tree").
+TOUR_BOUND = True
+#: The largest box radius (in spacings) whose boxes get the 1-tree bound: wider boxes give
+#: their lanes' ends wide ranges, where it adds little, and are halved anyway.
+TOUR_EPS = 0.25
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 EDGE_OFFSETS = 64
@@ -95,6 +102,9 @@ class CoverSearch:
         self.tol = 1e-9 * region.diameter
         # the lane-ends bound on a routed tour's moves (not with boundary or headland passes)
         self.ends = not self.boustrophedon and not keep_inside and cost.fixed == 0
+        # the 1-tree bound on the moves (optimize/cover/one_tree.py)
+        self.tour = TOUR_BOUND and self.n_holes > 0 and not simplify
+        self.walls = WallCache()
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
@@ -103,6 +113,7 @@ class CoverSearch:
         self.seen: set[tuple[float, float]] = set()
         self.model_min = math.inf  # the lowest model value at a layout seen
         self.points: list[NDArray[Any]] = []  # (value, theta, d) of every layout modelled
+        self.ranks: NDArray[np.float64] = np.zeros(0)  # the last point values, for the plans
 
     def work_spent(self, n_boxes: int) -> float:
         """The work after the next round of ``n_boxes`` boxes (8 layouts each at most: four
@@ -126,6 +137,23 @@ class CoverSearch:
             return None
         grow = grow + 2 * self.tol
         return hole_boxes(self.hole_xy, self.hole_start, theta, d, self.origin, grow)
+
+    def _tour_below(self, eps: float = 0.0) -> float | None:
+        """Where the 1-tree bound is computed: layouts whose other bounds are below the best
+        plan (the others are discarded anyway), in boxes of radius ``eps`` at most
+        :data:`TOUR_EPS` spacings; ``None`` without the lane-ends bounds."""
+        if not (self.ends and self.tour) or eps > TOUR_EPS * self.s:
+            return None
+        return self.best[0]
+
+    def _walls(
+        self, lv: Level, theta: NDArray[np.float64], d: NDArray[np.float64], eps: float = 0.0
+    ) -> NDArray[np.float64] | None:
+        """The walls inside ``lv``'s outer holes in the layouts' frames, where the 1-tree bound
+        is computed."""
+        if self._tour_below(eps) is None:
+            return None
+        return self.walls.frames(lv.outer, theta, d, self.origin)
 
     def k_range(self, eps: float) -> tuple[int, int]:
         far = self.radius + eps + self.reach
@@ -155,8 +183,19 @@ class CoverSearch:
         )  # fmt: skip
         if span_only:
             return out
+        # the real plans are chosen by the model without the 1-tree, as before it (a routed
+        # tour's cost is noisy between layouts: this ranking found the plans of 1158b53 again)
+        self.ranks = out
+        if self._tour_below() is not None:
+            out = lower_bounds(
+                st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
+                runins=self.n_holes == 0, tour_below=self._tour_below(),
+                walls=self._walls(lv, boxes.theta, boxes.d),
+            )  # fmt: skip
+            if self.evaluate is None:  # the model is the plan
+                self.ranks = out
         self.model_min = min(self.model_min, float(out.min(initial=math.inf)))
-        self.points.append(np.stack([out, boxes.theta, boxes.d]))
+        self.points.append(np.stack([self.ranks, boxes.theta, boxes.d]))
         return out
 
     def plan_value(self, boxes: _Boxes, i: int, points: NDArray[np.float64]) -> float:
@@ -192,7 +231,8 @@ class CoverSearch:
             self.work += int(sel.sum()) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
-                runins=self.n_holes == 0,
+                runins=self.n_holes == 0, tour_below=self._tour_below(float(r)),
+                walls=self._walls(lv, boxes.theta[sel], boxes.d[sel], float(r)),
             )  # fmt: skip
         self.bound_evaluations += len(eps)
         return out
@@ -206,7 +246,8 @@ class CoverSearch:
         for a in _edge_angles(self.region, EDGE_PLANS):
             d = (np.arange(EDGE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / EDGE_OFFSETS)
             boxes = _Boxes(np.full(len(d), a), np.zeros(len(d)), d, np.zeros(len(d)))
-            self.try_plans(boxes, self.point_values(boxes), limit=1)
+            self.point_values(boxes)
+            self.try_plans(boxes, self.ranks, limit=1)
             if self.ends and self.evaluate is not None and self.sandwich.tolerance <= 0:
                 self.try_plans(boxes, self.point_values(boxes, span_only=True), limit=1)
 
@@ -231,7 +272,8 @@ class CoverSearch:
         angles = np.radians(bins[pick].astype(np.float64))
         centred = centred_offsets(self.region, angles, self.s, self.reach)
         boxes = _Boxes(angles, np.zeros(len(pick)), centred, np.zeros(len(pick)))
-        self.try_plans(boxes, self.point_values(boxes), limit=len(pick))
+        self.point_values(boxes)
+        self.try_plans(boxes, self.ranks, limit=len(pick))
 
     def refine_offsets(self) -> None:
         """Plan :data:`REFINE_OFFSETS` more offsets at the best angle: a routed plan's moves
@@ -239,8 +281,8 @@ class CoverSearch:
         theta = self.best[1]
         d = (np.arange(REFINE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / REFINE_OFFSETS)
         boxes = _Boxes(np.full(len(d), theta), np.zeros(len(d)), d, np.zeros(len(d)))
-        points = self.point_values(boxes)
-        self.try_plans(boxes, points, limit=REFINE_OFFSETS)
+        self.point_values(boxes)
+        self.try_plans(boxes, self.ranks, limit=REFINE_OFFSETS)
 
     def try_plans(
         self,
@@ -333,7 +375,7 @@ def _branch_and_bound(
         rounds += 1
         bounds = search.box_bounds(boxes)
         points = search.point_values(boxes)
-        search.try_plans(boxes, points, first=rounds == 1)
+        search.try_plans(boxes, search.ranks, first=rounds == 1)
         best = search.best[0]
         # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
         # model at the box's centre, so halving cannot raise it further than the model

@@ -1,0 +1,287 @@
+"""A lower bound on a routed tour's connecting moves that sees the tour's structure: the
+Held-Karp 1-tree bound with Lagrangian multipliers over the counted lanes' ends
+(docs/mission_time.md, "The tour's 1-tree").
+
+Per layout of the centre grid and line ``k`` (the area moves, not the grid) the band statistics
+give ``count_k`` lanes every area ``S`` of the box has, each holding one inner piece, with the
+ranges of their ends: the first lane starts in ``[A_k - t, a_k]`` and the last ends in ``[b_k,
+B_k + t]``; with ``count_k >= 2`` the first lane ends in ``[first_hi_k, P1_k + t]``, the last
+starts in ``[PL_k - t, last_lo_k]``, and every lane between (inside the outer pieces from the
+second to the one before the last, ``[P2_k, Q1_k]``) starts in ``[P2_k - t, min(last_lo_k,
+Q1_k)]`` and ends in ``[max(first_hi_k, P2_k), Q1_k + t]`` (``P1, P2, PL, Q1``:
+:attr:`BandStats.pieces`; ``t`` the run-in). Two ends on lines ``j, k`` are at least
+``sqrt(((j - k) s)^2 + g^2)`` apart, ``g`` the gap between their ranges: a connecting move is
+never shorter.
+
+**The relaxation.** Contract every hole pass (a closed loop entered and left at one point
+``x``: ``|e - x| + |x - f| >= |e - f|``) and every extra lane (a lane holding no inner piece,
+flown from ``x`` to ``y``: ``|e - f| <= |e - x| + |x - y| + |y - f|``; its flown length is in
+the plan's cost and in no other term of the bound). What remains is a path over the counted
+lanes whose moves are at most ``moves + the extra lanes' flown length``. Close it with a dummy
+node joined to every end at cost 0: a Hamiltonian cycle over the ends and the dummy that holds
+every lane as an edge. Every such cycle is a 1-tree (a spanning tree of the ends holding every
+lane, plus two edges of the dummy); with multipliers ``pi`` on the ends, ``L(pi) = min 1-tree
+under costs c_ij + pi_i + pi_j - 2 sum(pi)`` is at most the cycle's cost for every ``pi``
+(Held and Karp 1970). The spanning tree that must hold the lanes is the lanes plus a minimum
+spanning tree of the lanes contracted (Prim, the cost between two lanes the least over their
+four pairs of ends). ``pi`` is improved by subgradient steps; the best ``L`` is kept.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+from importlib.util import find_spec
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..._jit import jit, jit_globals
+from .bands import BandStats
+from .cost import CoverCost
+
+__all__ = ["MAX_LANES", "ONE_TREE_STEPS", "one_tree_bound"]
+
+#: Layouts with more counted lanes than this are not bounded (``O(lanes^2)`` per step).
+MAX_LANES = 160
+#: Subgradient steps per layout.
+ONE_TREE_STEPS = 40
+
+
+def _lane_ends(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi, v):
+    """Fill the end ranges ``[lo, hi]`` (along the lines) and ``v`` (across) of every counted
+    lane of one layout, ends ``2i`` (start) and ``2i + 1`` (end) of lane ``i``; the lanes."""
+    n = 0
+    for k in range(count.shape[0]):
+        c = count[k]
+        if c < 1:
+            continue
+        for i in range(c):
+            if i == 0:
+                lo[2 * n], hi[2 * n] = out_lo[k] - t, in_lo[k]
+            elif i == c - 1:
+                lo[2 * n], hi[2 * n] = pieces[k, 2] - t, last_lo[k]
+            else:
+                lo[2 * n], hi[2 * n] = pieces[k, 1] - t, min(last_lo[k], pieces[k, 3])
+            if i == c - 1:
+                lo[2 * n + 1], hi[2 * n + 1] = in_hi[k], out_hi[k] + t
+            elif i == 0:
+                lo[2 * n + 1], hi[2 * n + 1] = first_hi[k], pieces[k, 0] + t
+            else:
+                lo[2 * n + 1], hi[2 * n + 1] = max(first_hi[k], pieces[k, 1]), pieces[k, 3] + t
+            v[2 * n] = v[2 * n + 1] = (k0 + k) * s
+            n += 1
+    return n
+
+
+def _orient(ax, ay, bx, by, cx, cy):
+    """Twice the signed area of ``a, b, c``."""
+    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+
+
+def _crosses(ax, ay, bx, by, cx, cy, dx, dy):
+    """Whether the segments ``ab`` and ``cd`` cross properly (at one interior point of each)."""
+    o1 = _orient(ax, ay, bx, by, cx, cy)
+    o2 = _orient(ax, ay, bx, by, dx, dy)
+    o3 = _orient(cx, cy, dx, dy, ax, ay)
+    o4 = _orient(cx, cy, dx, dy, bx, by)
+    return o1 * o2 < 0.0 and o3 * o4 < 0.0
+
+
+def _to_range(px, py, lo, hi, v):
+    """Distance from ``(px, py)`` to the segment ``[lo, hi] x {v}``."""
+    g = max(max(lo - px, px - hi), 0.0)
+    dv = py - v
+    return math.sqrt(g * g + dv * dv)
+
+
+def _detour(la, ha, va, lb, hb, vb, walls, w):
+    """A lower bound on a path from range ``a`` to range ``b`` that crosses no wall: where
+    wall ``w`` crosses both sides ``(la, va)-(lb, vb)`` and ``(ha, va)-(hb, vb)`` of the hull of
+    the two ranges, every segment between them crosses it, and the path passes one of its ends
+    (the shortest path past a segment); 0 otherwise."""
+    x1, y1, x2, y2 = walls[w, 0], walls[w, 1], walls[w, 2], walls[w, 3]
+    if max(y1, y2) <= min(va, vb) or min(y1, y2) >= max(va, vb):
+        return 0.0
+    if not _crosses(la, va, lb, vb, x1, y1, x2, y2):
+        return 0.0
+    if not _crosses(ha, va, hb, vb, x1, y1, x2, y2):
+        return 0.0
+    d1 = _to_range(x1, y1, la, ha, va) + _to_range(x1, y1, lb, hb, vb)
+    d2 = _to_range(x2, y2, la, ha, va) + _to_range(x2, y2, lb, hb, vb)
+    return min(d1, d2)
+
+
+def _distances(lo, hi, v, n_ends, walls, dist):
+    """Least distance between every two ends' ranges (``dist``, ``n_ends`` square), past the
+    walls (the largest detour of one wall)."""
+    for a in range(n_ends):
+        dist[a, a] = 0.0
+        for b in range(a + 1, n_ends):
+            g = max(max(lo[a], lo[b]) - min(hi[a], hi[b]), 0.0)
+            dv = v[a] - v[b]
+            best = math.sqrt(dv * dv + g * g)
+            for w in range(walls.shape[0]):
+                best = max(best, _detour(lo[a], hi[a], v[a], lo[b], hi[b], v[b], walls, w))
+            dist[a, b] = dist[b, a] = best
+
+
+def _one_tree(dist, pi, n, deg, key, near, done):
+    """The 1-tree's cost under ``pi`` minus ``2 sum(pi)``; its ends' degrees in ``deg``."""
+    m = 2 * n
+    for e in range(m):
+        deg[e] = 1  # the lane
+    total = 0.0
+    for a in range(n):
+        key[a] = math.inf
+        done[a] = False
+    key[0] = 0.0
+    near[0] = -1
+    for _ in range(n):
+        a, best = -1, math.inf
+        for b in range(n):
+            if not done[b] and key[b] < best:
+                a, best = b, key[b]
+        done[a] = True
+        if near[a] >= 0:
+            total += best
+            deg[near[a] // 4] += 1  # the tree end (packed: tree end * 4 + pair)
+            deg[2 * a + near[a] % 2] += 1
+        for b in range(n):
+            if done[b]:
+                continue
+            for ea in range(2):
+                for eb in range(2):
+                    c = dist[2 * a + ea, 2 * b + eb] + pi[2 * a + ea] + pi[2 * b + eb]
+                    if c < key[b]:
+                        key[b] = c
+                        near[b] = (2 * a + ea) * 4 + eb
+    # the dummy: its two cheapest edges (cost pi of the end)
+    i1, i2 = -1, -1
+    for e in range(m):
+        if i1 < 0 or pi[e] < pi[i1]:
+            i1, i2 = e, i1
+        elif i2 < 0 or pi[e] < pi[i2]:
+            i2 = e
+    total += pi[i1] + (pi[i2] if i2 >= 0 else 0.0)
+    deg[i1] += 1
+    if i2 >= 0:
+        deg[i2] += 1
+    for e in range(m):
+        total -= pi[e]  # forced lanes add sum(pi); minus 2 sum(pi)
+    return total
+
+
+def _bounds(
+    count,
+    out_lo,
+    in_lo,
+    in_hi,
+    out_hi,
+    first_hi,
+    last_lo,
+    pieces,
+    todo,
+    enough,
+    walls,
+    k0,
+    s,
+    t,
+    steps,
+):
+    """Per layout (where ``todo``): the best 1-tree bound on the moves, in plan units (the
+    steps stop once it reaches ``enough``)."""
+    n_layouts = count.shape[0]
+    big = 0
+    for la in range(n_layouts):
+        big = max(big, int(count[la].sum()))
+    m = 2 * big
+    lo, hi, v = np.empty(m), np.empty(m), np.empty(m)
+    dist = np.empty((m, m))
+    pi, deg = np.empty(m), np.empty(m, dtype=np.int64)
+    key, near = np.empty(big), np.empty(big, dtype=np.int64)
+    done = np.empty(big, dtype=np.bool_)
+    out = np.zeros(n_layouts)
+    for la in range(n_layouts):
+        if not todo[la]:
+            continue
+        n = _lane_ends(count[la], out_lo[la], in_lo[la], in_hi[la], out_hi[la], first_hi[la],
+                       last_lo[la], pieces[la], k0, s, t, lo, hi, v)  # fmt: skip
+        if n < 2:
+            continue
+        _distances(lo, hi, v, 2 * n, walls[la], dist)
+        for e in range(2 * n):
+            pi[e] = 0.0
+        best = 0.0  # the moves are never negative
+        lam, stall = 1.0, 0
+        for _ in range(steps):
+            val = _one_tree(dist, pi, n, deg, key, near, done)
+            if val > best * (1.0 + 1e-9):
+                best, stall = val, 0
+                if best >= enough[la]:
+                    break
+            else:
+                stall += 1
+                if stall >= 3:
+                    lam *= 0.5
+                    stall = 0
+            norm = 0.0
+            for e in range(2 * n):
+                norm += (deg[e] - 2) * (deg[e] - 2)
+            if norm == 0.0:
+                break  # the 1-tree is a tour: the bound is its cost
+            step = lam * 0.2 * max(best, s) / norm
+            for e in range(2 * n):
+                pi[e] += step * (deg[e] - 2)
+        out[la] = max(best, 0.0)
+    return out
+
+
+@cache
+def _compiled() -> Any:
+    """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
+        return _bounds
+    jit_globals(
+        globals(),
+        ("_orient", "_crosses", "_to_range", "_detour", "_lane_ends", "_distances", "_one_tree"),
+    )
+    return jit(_bounds)
+
+
+def one_tree_bound(
+    st: BandStats,
+    spacing: float,
+    cost: CoverCost,
+    todo: NDArray[np.bool_] | None = None,
+    steps: int = ONE_TREE_STEPS,
+    walls: NDArray[np.float64] | None = None,
+    enough: NDArray[np.float64] | None = None,
+) -> NDArray[np.float64]:
+    """``(L,)`` a lower bound, in cost units, on ``per_length`` times the connecting moves plus
+    the extra lanes' flown length of every plan of each layout's sandwich (module docstring);
+    0 where not ``todo`` or with more than :data:`MAX_LANES` counted lanes. ``walls`` ``(L, W,
+    4)``: segments no move crosses, in each layout's frame (:func:`~.walls.walls_in_frames`);
+    ``enough`` ``(L,)`` (cost units): a layout's steps stop once its bound reaches it."""
+    n_layouts = st.count.shape[0]
+    lanes = st.count.sum(axis=1)
+    ok = lanes <= MAX_LANES if todo is None else todo & (lanes <= MAX_LANES)
+    if cost.per_length <= 0 or not ok.any():
+        return np.zeros(n_layouts)
+    if walls is None:
+        walls = np.zeros((n_layouts, 0, 4))
+    stop = np.full(n_layouts, np.inf) if enough is None else enough / cost.per_length
+    cols = np.nonzero((st.count >= 1).any(axis=0))[0]
+    c0, c1 = int(cols[0]), int(cols[-1]) + 1
+
+    def crop(a: NDArray[Any]) -> NDArray[Any]:
+        return np.ascontiguousarray(a[:, c0:c1])
+
+    moves = _compiled()(
+        crop(st.count), crop(st.out_lo), crop(st.in_lo), crop(st.in_hi), crop(st.out_hi),
+        crop(st.first_hi), crop(st.last_lo), crop(st.pieces), np.ascontiguousarray(ok),
+        np.ascontiguousarray(stop, dtype=np.float64), np.ascontiguousarray(walls, dtype=np.float64),
+        int(st.k0 + c0), float(spacing), float(cost.turnaround), int(steps),
+    )  # fmt: skip
+    return cost.per_length * moves

@@ -1,0 +1,108 @@
+"""Walls inside the holes: segments that no connecting move of any plan of a box crosses
+(docs/mission_time.md, "The tour's 1-tree").
+
+Every area ``S`` of a box is the area moved rigidly, its points by at most ``eps``, so each of
+its holes holds the original hole eroded by ``eps``, and the sandwich's outer set's holes (the
+area dilated with mitred joins) lie inside those erosions. A segment inside such a hole ring
+(closed) is inside every ``S``'s hole. A connecting move (routed around the holes), a lane (cut
+at the holes), a run-in (cut where it would enter one), a vehicle's driven turn (replaced by a
+routed move where it would enter one) and a pass around a hole never enter a hole, so they never
+cross such a wall: crossing it at a point of the hole's interior enters the hole, and at a
+point of its boundary too (a simple ring lies on the far side there).
+
+The walls of a ring are its edges and the diagonals between its vertices that lie inside it
+(shapely), the :data:`WALLS_PER_RING` longest.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .bands import EdgeSet
+
+__all__ = ["WALLS_PER_RING", "WallCache", "hole_walls", "walls_in_frames"]
+
+#: The longest segments kept per hole ring.
+WALLS_PER_RING = 6
+
+
+def _ring_starts(es: EdgeSet) -> NDArray[np.intp]:
+    """Indices of the first edge of each ring of ``es`` (rings are consecutive edges)."""
+    xy = es.xy
+    if not len(xy):
+        return np.zeros(0, dtype=np.intp)
+    brk = np.any(xy[1:, :2] != xy[:-1, 2:], axis=1) | (es.hole[1:] != es.hole[:-1])
+    return np.concatenate([[0], np.nonzero(brk)[0] + 1]).astype(np.intp)
+
+
+def hole_walls(es: EdgeSet, per_ring: int = WALLS_PER_RING) -> NDArray[np.float64]:
+    """``(W, 4)`` walls ``x1, y1, x2, y2`` inside the hole rings of ``es`` (module docstring)."""
+    from shapely import LineString, Polygon, covered_by, prepare
+
+    starts = _ring_starts(es)
+    ends = np.append(starts[1:], len(es.xy))
+    out: list[NDArray[np.float64]] = []
+    for a, b in zip(starts, ends, strict=True):
+        if es.hole[a] < 0 or b - a < 3:
+            continue
+        ring = es.xy[a:b, :2]
+        poly: Any = Polygon(ring)
+        if not poly.is_valid or poly.area <= 0:
+            continue
+        prepare(poly)
+        i, j = np.triu_indices(len(ring), 1)
+        seg = np.concatenate([ring[i], ring[j]], axis=1)
+        length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+        order = np.argsort(-length)
+        kept = []
+        for k in order:
+            p, q = seg[k, :2], seg[k, 2:]
+            if covered_by(LineString([p, q]), poly):
+                kept.append(seg[k])
+                if len(kept) >= per_ring:
+                    break
+        out.extend(kept)
+    return np.asarray(out, dtype=np.float64).reshape(-1, 4)
+
+
+def walls_in_frames(
+    walls: NDArray[np.float64],
+    theta: NDArray[np.float64],
+    d: NDArray[np.float64],
+    origin: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """``(L, W, 4)`` the walls in each layout's frame: ``u`` along the lines, ``v`` across
+    (lines at ``v = k * spacing``, as :func:`~.bands.band_stats`), rows ``u1, v1, u2, v2``."""
+    cs, sn = np.cos(theta)[:, None], np.sin(theta)[:, None]
+    out = np.empty((len(theta), len(walls), 4))
+    for e in range(2):
+        x = walls[None, :, 2 * e] - origin[0]
+        y = walls[None, :, 2 * e + 1] - origin[1]
+        out[:, :, 2 * e] = cs * x + sn * y
+        out[:, :, 2 * e + 1] = -sn * x + cs * y - d[:, None]
+    return out
+
+
+class WallCache:
+    """The walls of each sandwich level (:func:`hole_walls` of its outer set), computed once per
+    level of a search: the levels are cached, so their arrays (the keys, by identity, kept
+    alive here) live as long as the search."""
+
+    def __init__(self) -> None:
+        self._walls: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
+
+    def frames(
+        self,
+        outer: EdgeSet,
+        theta: NDArray[np.float64],
+        d: NDArray[np.float64],
+        origin: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """:func:`walls_in_frames` of the walls of the level whose outer set is ``outer``."""
+        key = id(outer.xy)
+        if key not in self._walls:
+            self._walls[key] = (outer.xy, hole_walls(outer))
+        return walls_in_frames(self._walls[key][1], theta, d, origin)

@@ -1,0 +1,198 @@
+"""The 1-tree bound on a routed tour's moves (optimize/cover/one_tree.py): against real plans
+sampled in boxes, against a brute force over the lanes' orders, and what it adds."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+import boustro.optimize.cover.bounds as bounds_module
+import boustro.optimize.cover.one_tree as one_tree_module
+from boustro.geometry import Polygon
+from boustro.geometry.region import Region
+from boustro.optimize.cover import CoverCost, band_stats
+from boustro.optimize.cover.boxes import Boxes
+from boustro.optimize.cover.one_tree import one_tree_bound
+from boustro.optimize.cover.search import CoverSearch
+from boustro.plan import vehicle_stats
+from boustro.plan.region import plan_region
+from boustro.vehicle import Vehicle
+
+from .conftest import random_regions
+
+SPACING = 9.0
+
+
+def _scaled(region: Region, size: float) -> Region:
+    k = size / region.diameter
+    return Region(
+        Polygon(region.shell.vertices * k), [Polygon(h.vertices * k) for h in region.holes]
+    )
+
+
+def _evaluate(region, cost, turnaround, vehicle):
+    def evaluate(a, d):
+        plan = plan_region(
+            region, SPACING, decompose_area=False, angle=a, offset=d, speed=5.0,
+            turn_time=10.0, turnaround=turnaround,
+        )  # fmt: skip
+        st = vehicle_stats(plan, vehicle) if vehicle is not None else plan.stats
+        return cost.of(st.path_length, st.n_turns)
+
+    return evaluate
+
+
+def _zeros(st, *args, **kw):
+    return np.zeros(st.count.shape[0])
+
+
+@pytest.mark.parametrize("case", ["plain", "turnaround", "vehicle"])
+@pytest.mark.parametrize("index", range(3))
+def test_one_tree_bound_alone_never_exceeds_a_plan_in_the_box(case, index, monkeypatch):
+    """The box bound with the 1-tree as its only bound on the moves beyond the lines' span
+    (the lane-ends and piece-ends bounds switched off) against the real plans of layouts
+    sampled in each box; areas with 1-3 holes, a turn costing 2 to 30 s, 3 m run-ins or a
+    6 m turn radius's driven turns."""
+    monkeypatch.setattr(bounds_module, "lane_end_bound", _zeros)
+    monkeypatch.setattr(bounds_module, "piece_end_bound", _zeros)
+    region = _scaled(random_regions(53, 3, n_holes=(1, 3))[index], 170.0)
+    rng = np.random.default_rng(11 + index)
+    turnaround = 3.0 if case == "turnaround" else 0.0
+    cost = CoverCost.time(5.0, float(rng.uniform(2.0, 30.0)), turnaround=turnaround)
+    vehicle = Vehicle(turn_radius=6.0) if case == "vehicle" else None
+    evaluate = _evaluate(region, cost, turnaround, vehicle)
+    search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
+    n = 10
+    boxes = Boxes(
+        rng.uniform(0, math.pi, n),
+        rng.uniform(0, 0.02, n) * rng.integers(0, 2, n),
+        rng.uniform(0, SPACING, n),
+        rng.uniform(0, 1.5, n),
+    )
+    search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
+    box = search.box_bounds(boxes)
+    points = search.point_values(boxes, exact=True)
+    search.tour = False  # the same bounds without the 1-tree: the lines' span only
+    assert (points > search.point_values(boxes, exact=True) + 1e-6).all()
+    assert (box > search.box_bounds(boxes) + 1e-6).any()
+    for i in range(n):
+        plans = [evaluate(float(boxes.theta[i]), float(boxes.d[i]))]
+        for _ in range(3):
+            a = boxes.theta[i] + rng.uniform(-boxes.delta[i], boxes.delta[i])
+            o = boxes.d[i] + rng.uniform(-boxes.eta[i], boxes.eta[i])
+            plans.append(evaluate(float(a), float(o)))
+        assert box[i] <= min(plans) + 1e-9
+        assert points[i] <= plans[0] + 1e-9
+
+
+def _ranges(st, la, turnaround):
+    """The counted lanes' end ranges of layout ``la`` (the kernel's own helper, plain)."""
+    m = 2 * int(st.count[la].sum())
+    lo, hi, v = np.empty(m), np.empty(m), np.empty(m)
+    n = one_tree_module._lane_ends(
+        st.count[la], st.out_lo[la], st.in_lo[la], st.in_hi[la], st.out_hi[la],
+        st.first_hi[la], st.last_lo[la], st.pieces[la], 0, SPACING, turnaround, lo, hi, v,
+    )  # fmt: skip
+    return n, lo, hi, v
+
+
+def _brute_path(n, lo, hi, v):
+    """The least sum of range distances over every order and direction of the lanes."""
+
+    def dist(a, b):
+        g = max(max(lo[a], lo[b]) - min(hi[a], hi[b]), 0.0)
+        return math.hypot(v[a] - v[b], g)
+
+    best = math.inf
+    for order in itertools.permutations(range(1, n)):
+        order = (0, *order)
+        for flips in itertools.product((0, 1), repeat=n):
+            total = 0.0
+            for i in range(n - 1):
+                a = 2 * order[i] + 1 - flips[i]  # the exit of lane i
+                b = 2 * order[i + 1] + flips[i + 1]  # the entry of the next
+                total += dist(a, b)
+                if total >= best:
+                    break
+            best = min(best, total)
+    return best
+
+
+@pytest.mark.parametrize("turnaround", [0.0, 2.0])
+def test_one_tree_never_exceeds_the_shortest_path_over_the_lanes(turnaround):
+    """On boxes whose plans have 3-6 counted lanes (a small area with a hole, a wide
+    spacing), the 1-tree bound is at most the brute-force shortest path over the lanes' end
+    ranges (every order and direction), and within 10% of it on average."""
+    region = _scaled(random_regions(61, 1, n_holes=(1, 1))[0], 45.0)
+    cost = CoverCost.time(5.0, 10.0, turnaround=turnaround)
+    search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
+    rng = np.random.default_rng(3)
+    n_boxes = 24
+    boxes = Boxes(
+        rng.uniform(0, math.pi, n_boxes),
+        np.zeros(n_boxes),
+        rng.uniform(0, SPACING, n_boxes),
+        rng.uniform(0, 0.8, n_boxes),
+    )
+    eps = float(boxes.eta.max())
+    lv = search.sandwich.level(eps, 0.0)
+    st = band_stats(
+        lv.inner, lv.outer, boxes.theta, boxes.d, SPACING, SPACING / 2, search.origin,
+        search.k_range(eps + SPACING), search.n_holes, search.tol,
+        inner_reach=search._inner_reach(),
+    )  # fmt: skip
+    tree = one_tree_bound(st, SPACING, cost, steps=200) / cost.per_length
+    ratios = []
+    for la in range(n_boxes):
+        n, lo, hi, v = _ranges(st, la, turnaround)
+        if not 3 <= n <= 6:
+            continue
+        brute = _brute_path(n, lo, hi, v)
+        assert tree[la] <= brute + 1e-9
+        ratios.append(tree[la] / brute)
+    assert len(ratios) >= 8
+    assert np.mean(ratios) >= 0.9
+
+
+def test_a_moves_detour_past_a_wall_is_never_longer_than_the_routed_move():
+    """The walls inside a random area's holes (the exact level: the holes themselves), in the
+    frames of random layouts: for random pairs of ranges on the lines and points in them, the
+    router's connecting move (the planner's, around the holes) is never shorter than the
+    kernel's lower bound between the ranges, which exceeds the straight distance for some."""
+    from boustro.optimize.cover.walls import hole_walls, walls_in_frames
+    from boustro.plan.routing import Router
+
+    region = _scaled(random_regions(71, 1, n_holes=(2, 2))[0], 120.0)
+    search = CoverSearch(region, SPACING, SPACING / 2, CoverCost.time(5.0, 10.0), None, False)
+    walls = hole_walls(search.sandwich.exact.outer)
+    assert len(walls) >= 4
+    router = Router(region, reach=SPACING / 2)
+    rng = np.random.default_rng(5)
+    theta = rng.uniform(0, math.pi, 6)
+    frames = walls_in_frames(walls, theta, np.zeros(6), search.origin)
+    longer = 0
+    for la in range(6):
+        cs, sn = math.cos(theta[la]), math.sin(theta[la])
+        for _ in range(60):
+            ka, kb = rng.integers(-6, 7, 2)
+            ranges = np.sort(rng.uniform(-70, 70, (2, 2)), axis=1)
+            ranges[:, 1] = np.minimum(ranges[:, 1], ranges[:, 0] + rng.uniform(0, 8, 2))
+            (la_, ha), (lb, hb) = ranges
+            va, vb = ka * SPACING, kb * SPACING
+            lower = math.hypot(va - vb, max(max(la_, lb) - min(ha, hb), 0.0))
+            for w in range(len(walls)):
+                lower = max(lower, one_tree_module._detour(la_, ha, va, lb, hb, vb, frames[la], w))
+            ua, ub = rng.uniform(la_, ha), rng.uniform(lb, hb)
+            p = search.origin + np.array([cs * ua - sn * va, sn * ua + cs * va])
+            q = search.origin + np.array([cs * ub - sn * vb, sn * ub + cs * vb])
+            if not (region.contains(p) and region.contains(q)):
+                continue
+            route = router.path(p, q)
+            if not route.found:
+                continue
+            assert route.length >= lower - 1e-9
+            longer += lower > math.hypot(va - vb, max(max(la_, lb) - min(ha, hb), 0.0)) + 1e-6
+    assert longer >= 5
