@@ -90,6 +90,20 @@ def test_headland_covers_the_whole_field_with_a_hole(passes):
     assert len(near_pond) >= 4 * passes
 
 
+@pytest.mark.parametrize(
+    ("corridor", "passes"), [(25.0, 2), (20.0 + 5e-3, 2), (27.0, 2), (47.0, 3), (41.0, 3)]
+)
+def test_headland_covers_a_corridor_too_narrow_for_the_next_pass(corridor, passes):
+    # A hole `corridor` from two sides of the boundary: between 2k and 2k + 1 spacings wide,
+    # pass k + 1 and the inner field stop short of the corridor's middle; it used to be left
+    # uncovered (25 m at 10 m, 2 passes: 11.5 m2; a QA run: 5 mm along a hole in UTM).
+    c = corridor
+    hole = [(c, c), (c + 40, c), (c + 40, c + 30), (c, c + 30)]
+    mission = plan_area([(0, 0), (300, 0), (300, 200), (0, 200)], 10.0, crs=None,
+                        holes=[hole], headland=passes)  # fmt: skip
+    _check(mission, passes)
+
+
 def test_headland_on_a_convex_field_and_the_embedded_field():
     _check(plan_area(SQUARE, 10.0, crs=None, headland=3), 3)
     _check(plan_area(embedded_field(), 10.0, headland=2), 2)

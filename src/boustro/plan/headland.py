@@ -8,8 +8,12 @@ arcs of the buffers leave no sliver between them). Where a corner of a pass's ba
 outermost pass, a corner of the field) lies farther than ``reach`` from the pass (every convex
 corner), the pass drives into the corner and back (a *spike*, driven in reverse or turned on
 the spot: the vehicle's turn radius applies to the moves between passes, not to the passes'
-corners), so that the footprints cover the whole field; the path never leaves it.
-:func:`add_headland` appends the passes to a plan of the inner field, innermost first, each
+corners), so that the footprints cover the whole field; the path never leaves it. Where the
+field is too narrow for pass ``k + 1`` but wider than ``2k`` spacings (a corridor between a
+hole and the boundary), open passes along the contour at depth ``k * spacing`` cover the strip
+that neither pass ``k`` nor the lanes reach (:func:`_gap_passes`).
+:func:`add_headland` appends the passes to a plan of the inner field, gap passes and then the
+rings innermost first, each
 begun at its point nearest the vehicle, joined by moves inside the field. The passes'
 waypoints have the kind ``headland`` (first ``start``, last ``end``) and their edges are
 transects with the role ``"headland"``, measured like passes around holes.
@@ -176,6 +180,64 @@ def _spikes(
     return out
 
 
+def _gap_passes(
+    field: Region, spacing: float, reach: float, passes: int, rings: list[list[NDArray[np.float64]]]
+) -> list[NDArray[np.float64]]:
+    """Open passes over what the rings (with their spikes) and the inner field leave uncovered.
+
+    Pass ``k + 1`` exists only where the field is deeper than ``(k + 1/2) * spacing``: in a
+    corridor (between a hole and the boundary, or a narrow part of the field) between ``2k`` and
+    ``2k + 1`` spacings wide, neither it nor the inner field reaches the strip of depth
+    ``k * spacing .. (k + 1/2) * spacing`` between the two sides' pass ``k`` (a 25 m corridor at
+    10 m with 2 passes: a 5 m strip). Every point of such a strip lies within
+    ``depth - k * spacing < reach`` of the contour at depth ``k * spacing`` (walk towards its
+    nearest boundary point), so pieces of that contour near the strip cover it: chosen greedily
+    (most uncovered area first) until nothing is left (components under ``1e-6 spacing^2``, the
+    buffers' rounding, ignored)."""
+    import shapely
+
+    region = _shapely_region(field)
+    tiny = 1e-6 * spacing**2
+    lines = [shapely.LineString(r) for rs in rings for r in rs]
+    inner = shapely.buffer(region, -(passes - _OVERLAP) * spacing, quad_segs=_QUAD_SEGS)
+    covered = shapely.union_all([*shapely.buffer(lines, reach, quad_segs=64), inner])
+    left = _parts(shapely.difference(region, covered), tiny)
+    if left.is_empty:
+        return []
+    near = shapely.buffer(left, reach * (1 + 1e-6))
+    candidates = []
+    for k in range(1, passes):
+        contour = shapely.boundary(shapely.buffer(region, -k * spacing, quad_segs=64))
+        piece = shapely.line_merge(shapely.intersection(contour, near))
+        candidates += [g for g in getattr(piece, "geoms", [piece]) if g.geom_type == "LineString"]
+    out = []
+    while candidates and left.area > tiny:
+        gains = [
+            shapely.intersection(left, shapely.buffer(c, reach, quad_segs=64)).area
+            for c in candidates
+        ]
+        best = int(np.argmax(gains))
+        if gains[best] <= tiny:
+            break
+        c = candidates.pop(best)
+        out.append(np.asarray(c.coords))
+        left = _parts(shapely.difference(left, shapely.buffer(c, reach, quad_segs=64)), tiny)
+    return out
+
+
+def _parts(geom, tiny: float):
+    """``geom`` without its polygon parts of area at most ``tiny``."""
+    import shapely
+
+    keep = [g for g in getattr(geom, "geoms", [geom]) if g.geom_type == "Polygon" and g.area > tiny]
+    return shapely.union_all(keep) if keep else shapely.Polygon()
+
+
+def _nearer_first(line: NDArray[np.float64], near: NDArray[np.float64]) -> NDArray[np.float64]:
+    """An open pass driven from its end nearer ``near``."""
+    return line if np.linalg.norm(line[0] - near) <= np.linalg.norm(line[-1] - near) else line[::-1]
+
+
 def _dedupe(points: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
     keep = np.concatenate([[True], np.linalg.norm(np.diff(points, axis=0), axis=1) > tol])
     return points[keep]
@@ -198,6 +260,7 @@ def add_headland(inner: Plan, field: Region, passes: int, *, spacing: float, rea
     rings = [
         _spikes(_band_corners(field, spacing, k + 1), r, reach, router) for k, r in enumerate(rings)
     ]
+    gaps = _gap_passes(field, spacing, reach, passes, rings)
     points = list(inner.waypoints)
     kinds = list(inner.kinds)
     lane = [int(x) for x in inner.lane]
@@ -208,28 +271,30 @@ def add_headland(inner: Plan, field: Region, passes: int, *, spacing: float, rea
     positions = list(inner.positions)
     headland_length = 0.0
     n_rings = 0
-    for k_rings in reversed(rings):
-        for ring in k_rings:
-            ring = _rotate(ring, points[-1])
-            ti = len(transects)
-            route = router.path(points[-1], ring[0])
-            for p in route.points[1:-1]:
-                points.append(p)
-                kinds.append("via")
-                lane.append(ti)
-            for j, p in enumerate(ring):
-                points.append(p)
-                kinds.append("start" if j == 0 else "end" if j == len(ring) - 1 else "headland")
-                lane.append(ti + max(0, min(j - 1, len(ring) - 2)))
-            for a, b in itertools.pairwise(ring):
-                d = b - a
-                transects.append(np.stack([a, b]))
-                angles.append(math.atan2(d[1], d[0]))
-                roles.append("headland")
-                cells.append(-1)
-                positions.append(math.nan)
-                headland_length += float(np.linalg.norm(d))
-            n_rings += 1
+    for pts, closed in [
+        *((g, False) for g in gaps),
+        *((r, True) for rs in rings[::-1] for r in rs),
+    ]:
+        pts = _rotate(pts, points[-1]) if closed else _nearer_first(pts, points[-1])
+        ti = len(transects)
+        route = router.path(points[-1], pts[0])
+        for p in route.points[1:-1]:
+            points.append(p)
+            kinds.append("via")
+            lane.append(ti)
+        for j, p in enumerate(pts):
+            points.append(p)
+            kinds.append("start" if j == 0 else "end" if j == len(pts) - 1 else "headland")
+            lane.append(ti + max(0, min(j - 1, len(pts) - 2)))
+        for a, b in itertools.pairwise(pts):
+            d = b - a
+            transects.append(np.stack([a, b]))
+            angles.append(math.atan2(d[1], d[0]))
+            roles.append("headland")
+            cells.append(-1)
+            positions.append(math.nan)
+            headland_length += float(np.linalg.norm(d))
+        n_rings += 1
     w = np.asarray(points)
     s, scale = inner.stats, inner.ground_scale
     path_length = float(np.linalg.norm(np.diff(w, axis=0), axis=1).sum()) / scale
