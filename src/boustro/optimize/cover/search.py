@@ -22,6 +22,7 @@ from .boxes import Boxes as _Boxes
 from .boxes import box_radius, initial_boxes, level_radius, split_boxes
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
+from .inside_bound import contour_edges, keep_inside_bounds, path_floor
 from .sandwich import Sandwich
 
 __all__ = ["CoverSearch", "centred_offsets", "cover_optimum"]
@@ -83,6 +84,8 @@ class CoverSearch:
         # bound takes the lines' chords (reach 0) through the shrunk inner set
         self.keep_inside = keep_inside
         self.shrink = spacing / 2 if keep_inside else 0.0
+        self.contour = contour_edges(region, spacing, reach) if keep_inside else None
+        self.floor = path_floor(region, reach) if keep_inside else 0.0
         self.band = 0.0 if keep_inside else reach
         simplify = len(region.edges) > SIMPLIFY_EDGES
         self.sandwich = Sandwich(region, SIMPLIFY_SPACING * spacing if simplify else 0.0)
@@ -149,10 +152,13 @@ class CoverSearch:
         self.bound_evaluations += len(boxes.theta)
         self.work += len(boxes.theta) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
         ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
-        out = lower_bounds(
-            st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
-            runins=self.n_holes == 0,
-        )  # fmt: skip
+        if self.keep_inside:
+            out = self._inside(lv, st, 0.0, 0.0, boxes.theta, boxes.d, np.zeros(len(boxes.d)))
+        else:
+            out = lower_bounds(
+                st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
+                runins=self.n_holes == 0,
+            )  # fmt: skip
         if span_only:
             return out
         self.model_min = min(self.model_min, float(out.min(initial=math.inf)))
@@ -190,12 +196,40 @@ class CoverSearch:
             )  # fmt: skip
             ends = self._hole_boxes(boxes.theta[sel], boxes.d[sel], reach_out)
             self.work += int(sel.sum()) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
+            if self.keep_inside:
+                out[sel] = self._inside(
+                    lv, st, float(r), reach_out, boxes.theta[sel], boxes.d[sel], boxes.delta[sel]
+                )
+                continue
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
                 runins=self.n_holes == 0,
             )  # fmt: skip
         self.bound_evaluations += len(eps)
         return out
+
+    def _inside(
+        self,
+        lv: Any,
+        st: Any,
+        radius: float,
+        reach_out: float,
+        theta: NDArray[np.float64],
+        d: NDArray[np.float64],
+        delta: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """The keep-inside bound (:func:`~.inside_bound.keep_inside_bounds`): ``lv, st`` the
+        level shrunk by half a spacing, the level at ``radius`` not shrunk bounded here."""
+        assert self.contour is not None
+        lv0 = self.sandwich.level(radius, 0.0)
+        st0 = band_stats(
+            lv0.inner, lv0.outer, theta, d, self.s, 0.0, self.origin, self.k_range(reach_out),
+            self.n_holes, self.tol, inner_reach=0.0,
+        )  # fmt: skip
+        return keep_inside_bounds(
+            st, lv, st0, lv0, self.cost, self.s, self.contour, theta, delta,
+            runins=self.n_holes == 0, floor=self.floor,
+        )  # fmt: skip
 
     def try_edges(self) -> None:
         """Plan the best offset (by the model) along each of the longest edges' directions:
