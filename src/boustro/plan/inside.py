@@ -262,9 +262,9 @@ def boundary_passes(
     inner = reach  # as boustro.plan.coverage measures the passes (quad_segs=64)
 
     def cover(lines: list[NDArray[np.float64]], rest: Any) -> Any:
-        if not lines:
+        keys = [np.ascontiguousarray(k, dtype=np.float64) for k in _near(lines, rest, 2 * inner)]
+        if not keys:
             return rest
-        keys = [np.ascontiguousarray(line, dtype=np.float64) for line in lines]
         band = shapely.union_all([_band(k.tobytes(), len(k), inner) for k in keys])
         return shapely.difference(rest, band)
 
@@ -282,6 +282,40 @@ def boundary_passes(
         pieces = _pieces(residual, eps)
     rest = _attach(passes, patches, target, spacing)
     return [_dedupe(p, tol) for p in passes + rest], float(sum(p.area for p in pieces))
+
+
+def _near(lines: list[NDArray[np.float64]], rest: Any, far: float) -> list[NDArray[np.float64]]:
+    """The runs of segments of ``lines`` within ``far`` of ``rest``, each split where it turns
+    back on itself (a spur's tip): buffered by ``reach <= far / 2`` they cover the same part of
+    ``rest`` as the whole lines (a point of ``rest`` within ``reach`` of a pass is within
+    ``reach`` of a kept segment; the caps at a run's cut ends lie more than ``reach`` from
+    ``rest``; at a spur's tip the join of the whole line is the caps of its two halves) at a
+    fraction of the cost (a line with spurs is GEOS's worst case: most of a plan's time on a
+    traced boundary)."""
+    import shapely
+
+    if not lines or rest.is_empty:
+        return []
+    segs = np.concatenate([np.stack([line[:-1], line[1:]], axis=1) for line in lines])
+    owner = np.concatenate([np.full(len(line) - 1, i) for i, line in enumerate(lines)])
+    keep = shapely.distance(shapely.linestrings(segs), rest) <= far
+    out = []
+    for i, line in enumerate(lines):
+        flags = keep[owner == i]
+        d = np.diff(line, axis=0)
+        norm = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-300)
+        back = np.einsum("ij,ij->i", d[:-1], d[1:]) / (norm[:-1] * norm[1:]) < -1 + 1e-9
+        j = 0
+        while j < len(flags):
+            if not flags[j]:
+                j += 1
+                continue
+            k = j  # segments j..k kept, none turning back between them
+            while k + 1 < len(flags) and flags[k + 1] and not back[k]:
+                k += 1
+            out.append(line[j : k + 2])
+            j = k + 1
+    return out
 
 
 @lru_cache(maxsize=BAND_CACHE)
