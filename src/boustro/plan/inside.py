@@ -54,8 +54,9 @@ __all__ = [
 #: Patches (short passes over corners and thin parts) placed at most; more means the area has
 #: thousands of slivers narrower than a spacing, and what is left is reported as not covered.
 MAX_PATCHES = 5000
-#: Passes whose bands :func:`_band` keeps (a few hundred kilobytes each at most).
-BAND_CACHE = 256
+#: Pass pieces whose bands :func:`_band` keeps (a few kilobytes each: the pieces of a contour
+#: between its spurs recur in every plan of an area).
+BAND_CACHE = 4096
 #: Areas whose shapely geometry (:func:`_geometry`) is kept: a search plans one area (or a
 #: decomposition's few cells) hundreds of times.
 AREA_CACHE = 32
