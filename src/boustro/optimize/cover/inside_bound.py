@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...geometry.region import Region
-from .bands import BandStats
+from .bands import BandStats, band_stats
 from .bounds import lower_bounds
 from .cost import CoverCost
 from .sandwich import Level
@@ -40,6 +40,7 @@ __all__ = [
     "MIN_ANGLE",
     "ContourEdges",
     "contour_edges",
+    "inside_box_bounds",
     "keep_inside_bounds",
     "path_floor",
     "stretch_length",
@@ -214,3 +215,27 @@ def keep_inside_bounds(
         half = np.maximum(half, plain + cost.per_length * extra)
     least = cost.per_length * floor + cost.fixed
     return np.maximum(np.minimum(half, zero), least)
+
+
+def inside_box_bounds(
+    search: Any,
+    lv: Level,
+    st: BandStats,
+    radius: float,
+    reach_out: float,
+    theta: NDArray[np.float64],
+    d: NDArray[np.float64],
+    delta: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """:func:`keep_inside_bounds` for a :class:`~.search.CoverSearch` with ``keep_inside``:
+    ``lv, st`` its level at ``radius`` shrunk by half a spacing, the level not shrunk bounded
+    here (lines within ``reach_out``)."""
+    lv0 = search.sandwich.level(radius, 0.0)
+    st0 = band_stats(
+        lv0.inner, lv0.outer, theta, d, search.s, 0.0, search.origin,
+        search.k_range(reach_out), search.n_holes, search.tol, inner_reach=0.0,
+    )  # fmt: skip
+    return keep_inside_bounds(
+        st, lv, st0, lv0, search.cost, search.s, search.contour, theta, delta,
+        runins=search.n_holes == 0, floor=search.floor,
+    )  # fmt: skip

@@ -22,7 +22,7 @@ from .boxes import Boxes as _Boxes
 from .boxes import box_radius, initial_boxes, level_radius, split_boxes
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
-from .inside_bound import contour_edges, keep_inside_bounds, path_floor
+from .inside_bound import contour_edges, inside_box_bounds, path_floor
 from .sandwich import Sandwich
 
 __all__ = ["CoverSearch", "centred_offsets", "cover_optimum"]
@@ -208,28 +208,9 @@ class CoverSearch:
         self.bound_evaluations += len(eps)
         return out
 
-    def _inside(
-        self,
-        lv: Any,
-        st: Any,
-        radius: float,
-        reach_out: float,
-        theta: NDArray[np.float64],
-        d: NDArray[np.float64],
-        delta: NDArray[np.float64],
-    ) -> NDArray[np.float64]:
-        """The keep-inside bound (:func:`~.inside_bound.keep_inside_bounds`): ``lv, st`` the
-        level shrunk by half a spacing, the level at ``radius`` not shrunk bounded here."""
-        assert self.contour is not None
-        lv0 = self.sandwich.level(radius, 0.0)
-        st0 = band_stats(
-            lv0.inner, lv0.outer, theta, d, self.s, 0.0, self.origin, self.k_range(reach_out),
-            self.n_holes, self.tol, inner_reach=0.0,
-        )  # fmt: skip
-        return keep_inside_bounds(
-            st, lv, st0, lv0, self.cost, self.s, self.contour, theta, delta,
-            runins=self.n_holes == 0, floor=self.floor,
-        )  # fmt: skip
+    def _inside(self, lv: Any, st: Any, *args: Any) -> NDArray[np.float64]:
+        """The keep-inside bound (:func:`~.inside_bound.inside_box_bounds`)."""
+        return inside_box_bounds(self, lv, st, *args)
 
     def try_edges(self) -> None:
         """Plan the best offset (by the model) along each of the longest edges' directions:
