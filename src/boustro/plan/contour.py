@@ -6,12 +6,60 @@ functions."""
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["MERGE_GAP"]
+__all__ = ["MERGE_GAP", "Contour"]
+
+
+class _Ring(NamedTuple):
+    """One ring of the contour: its points ``v``, their arc lengths ``at``, its length, and
+    the samples (every quarter spacing at most) tested against the residual."""
+
+    v: NDArray[np.float64]
+    at: NDArray[np.float64]
+    total: float
+    samples: Any  # shapely points
+
+
+class Contour(NamedTuple):
+    """What :func:`_contour_passes` needs of an area that does not depend on the lanes (built
+    once per area and spacing by :func:`contour_of`): the contour's rings, the area's corners
+    and the area grown by ``tol`` (the spurs' test)."""
+
+    rings: list[_Ring]
+    corners: NDArray[np.float64]
+    corner_points: Any  # shapely points
+    first: NDArray[np.int64]  # the first occurrence of each distinct corner
+    grown: Any
+
+
+def contour_of(target: Any, half: float, tol: float) -> Contour:
+    """The contour of the shapely area ``target``: the boundary of it shrunk by ``half``,
+    without its slivers (a strip exactly a spacing wide shrinks to one), sampled."""
+    import shapely
+
+    inner = shapely.union_all(_pieces(target.buffer(-half, quad_segs=8), 1e-7 * half))
+    rings = []
+    if not inner.is_empty:
+        step = half / 2
+        for ring in shapely.get_parts(shapely.boundary(inner)):
+            v = np.asarray(ring.coords, dtype=np.float64)
+            if len(v) < 4:
+                continue
+            at = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(v, axis=0), axis=1))])
+            total = float(at[-1])
+            n = max(8, math.ceil(total / step))
+            s = np.linspace(0.0, total, n + 1)[:-1]
+            pts = np.stack([np.interp(s, at, v[:, 0]), np.interp(s, at, v[:, 1])], axis=1)
+            rings.append(_Ring(v, at, total, shapely.points(pts)))
+    corners = shapely.get_coordinates(shapely.boundary(target))
+    _, first = np.unique(corners, axis=0, return_index=True)
+    grown = target.buffer(tol, join_style="mitre")
+    shapely.prepare(grown)
+    return Contour(rings, corners, shapely.points(corners), first, grown)
 
 
 def _pieces(geometry: Any, eps: float) -> list[Any]:
@@ -36,34 +84,26 @@ def _lines(geometry: Any, tol: float) -> list[NDArray[np.float64]]:
 
 
 def _contour_passes(
-    target: Any, residual: Any, half: float, reach: float, tol: float
+    target: Any, residual: Any, half: float, reach: float, tol: float, contour: Contour
 ) -> list[NDArray[np.float64]]:
-    """The parts of the contour (the boundary of ``target`` shrunk by ``half``) within reach of
-    the uncovered ``residual``: each covers its side of the residual near the boundary (a
-    point within ``half`` of the boundary and in a disk of radius ``half`` inside the area is
-    within ``half`` of the contour). Each ring is sampled every ``half / 2``; a stretch between
-    two samples is kept when both are within ``reach`` plus the step of the residual (so every
-    needed point is kept), and kept stretches less than :data:`MERGE_GAP` spacings apart are
-    driven as one pass."""
+    """The parts of the contour (:func:`contour_of`: the boundary of ``target`` shrunk by
+    ``half``) within reach of the uncovered ``residual``: each covers its side of the residual
+    near the boundary (a point within ``half`` of the boundary and in a disk of radius ``half``
+    inside the area is within ``half`` of the contour). Each ring is sampled every ``half / 2``;
+    a stretch between two samples is kept when both are within ``reach`` plus the step of the
+    residual (so every needed point is kept), and kept stretches less than :data:`MERGE_GAP`
+    spacings apart are driven as one pass."""
     import shapely
 
-    # the shrunk area without its slivers (a strip exactly a spacing wide shrinks to one)
-    inner = shapely.union_all(_pieces(target.buffer(-half, quad_segs=8), 1e-7 * half))
-    if inner.is_empty:
+    if not contour.rings:
         return []
     shapely.prepare(residual)
-    step = half / 2
     out: list[NDArray[np.float64]] = []
-    for ring in shapely.get_parts(shapely.boundary(inner)):
-        v = np.asarray(ring.coords, dtype=np.float64)
-        if len(v) < 4:
-            continue
-        at = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(v, axis=0), axis=1))])
-        total = float(at[-1])
-        n = max(8, math.ceil(total / step))
+    for ring in contour.rings:
+        v, at, total = ring.v, ring.at, ring.total
+        n = len(ring.samples)
         s = np.linspace(0.0, total, n + 1)[:-1]
-        pts = np.stack([np.interp(s, at, v[:, 0]), np.interp(s, at, v[:, 1])], axis=1)
-        near = shapely.distance(shapely.points(pts), residual) <= reach + total / n
+        near = shapely.distance(ring.samples, residual) <= reach + total / n
         runs = _runs(near, s, total, MERGE_GAP * 2 * half)
         if runs is None:
             out.append(v)
@@ -71,11 +111,11 @@ def _contour_passes(
         for a, b in runs:
             out.append(_arc(v, at, a, b))
     out = [line for line in out if np.linalg.norm(np.diff(line, axis=0), axis=1).sum() > tol]
-    return [_corner_spurs(line, target, half, reach, tol) for line in out]
+    return [_corner_spurs(line, contour, half, reach, tol) for line in out]
 
 
 def _corner_spurs(
-    line: NDArray[np.float64], target: Any, half: float, reach: float, tol: float
+    line: NDArray[np.float64], contour: Contour, half: float, reach: float, tol: float
 ) -> NDArray[np.float64]:
     """``line`` (a contour part) with a spur into every convex corner of the area it does not
     reach: from the contour's corner ``V`` towards the area's corner ``C`` to the point ``P``
@@ -85,13 +125,10 @@ def _corner_spurs(
     patch of its own would cost a move there and back."""
     import shapely
 
-    corners = shapely.get_coordinates(shapely.boundary(target))
-    contour = shapely.LineString(line)
-    d = shapely.distance(shapely.points(corners), contour)
+    corners, first, grown = contour.corners, contour.first, contour.grown
+    d = shapely.distance(contour.corner_points, shapely.LineString(line))
     pick = (d > reach * (1 + 1e-9)) & (d < 4 * half)
-    grown = target.buffer(tol, join_style="mitre")
     spurs: dict[int, list[NDArray[np.float64]]] = {}
-    _, first = np.unique(corners, axis=0, return_index=True)
     for i in np.flatnonzero(pick)[np.isin(np.flatnonzero(pick), first)]:
         c = corners[i]
         j = int(np.argmin(np.linalg.norm(line - c, axis=1)))

@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..geometry import Polygon
 from ..geometry.region import Region, as_region
 from .cells import _frame
-from .contour import _contour_passes, _lines, _pieces
+from .contour import Contour, _contour_passes, _lines, _pieces, contour_of
 from .coverage import _aligned_boxes, _axes
 from .lanes import Lanes, _intervals_on_lines
 from .types import Plan
@@ -54,8 +54,62 @@ __all__ = [
 #: Patches (short passes over corners and thin parts) placed at most; more means the area has
 #: thousands of slivers narrower than a spacing, and what is left is reported as not covered.
 MAX_PATCHES = 5000
-#: Passes whose bands :func:`_band` keeps (a few hundred kilobytes each at most).
-BAND_CACHE = 256
+#: Pass pieces whose bands :func:`_band` keeps (a few kilobytes each: the pieces of a contour
+#: between its spurs recur in every plan of an area).
+BAND_CACHE = 4096
+#: Areas whose shapely geometry (:func:`_geometry`) is kept: a search plans one area (or a
+#: decomposition's few cells) hundreds of times.
+AREA_CACHE = 32
+
+
+class _Geometry:
+    """What a keep-inside plan needs of its area alone, built once per area and spacing (the
+    plans a search evaluates share it): the area as a prepared shapely polygon, its contour
+    (:func:`~boustro.plan.contour.contour_of`) and the area shrunk by each margin."""
+
+    def __init__(self, area: Region, spacing: float) -> None:
+        import shapely
+
+        self.target = shapely_area(area)
+        shapely.prepare(self.target)
+        self.spacing = spacing
+        self.tol = 1e-9 * area.diameter
+        self._contour: Contour | None = None
+        self._shrunk: dict[float, Any] = {}
+
+    @property
+    def contour(self) -> Contour:
+        if self._contour is None:
+            self._contour = contour_of(self.target, self.spacing / 2, self.tol)
+        return self._contour
+
+    def shrunk(self, margin: float) -> Any:
+        """The area shrunk by ``margin`` (``quad_segs=8``), prepared."""
+        import shapely
+
+        if margin not in self._shrunk:
+            inner = self.target.buffer(-margin, quad_segs=8)
+            if not inner.is_empty:
+                shapely.prepare(inner)
+            self._shrunk[margin] = inner
+        return self._shrunk[margin]
+
+
+_GEOMETRIES: dict[bytes, _Geometry] = {}
+
+
+def _geometry(area: Region, spacing: float) -> _Geometry:
+    """The :class:`_Geometry` of ``area`` at ``spacing``, from a cache of the last
+    :data:`AREA_CACHE` areas (keyed by their coordinates and the spacing)."""
+    rings = [area.shell.vertices, *(h.vertices for h in area.holes)]
+    key = b"|".join(np.ascontiguousarray(v, dtype=np.float64).tobytes() for v in rings)
+    key += np.float64(spacing).tobytes()
+    geo = _GEOMETRIES.get(key)
+    if geo is None:
+        if len(_GEOMETRIES) >= AREA_CACHE:
+            _GEOMETRIES.pop(next(iter(_GEOMETRIES)))
+        geo = _GEOMETRIES[key] = _Geometry(area, spacing)
+    return geo
 
 
 def shapely_area(area: Region | Polygon | ArrayLike) -> Any:
@@ -66,13 +120,17 @@ def shapely_area(area: Region | Polygon | ArrayLike) -> Any:
     return shapely.Polygon(r.shell.vertices, [h.vertices for h in r.holes])
 
 
-def clip_lanes(lanes: Lanes, area: Region, tol: float, margin: float = 0.0) -> Lanes:
+def clip_lanes(
+    lanes: Lanes, area: Region, tol: float, margin: float = 0.0, spacing: float | None = None
+) -> Lanes:
     """The lanes cut to their parts inside ``area`` (a lane across a bay becomes two), or with
     ``margin > 0`` inside the area shrunk by ``margin`` (shapely); parts shorter than ``tol`` are
-    dropped: what they covered is left to the boundary passes."""
+    dropped: what they covered is left to the boundary passes. ``spacing``: the plan's (the
+    area's shrunk shapes are cached per area and spacing), default twice the margin."""
     u, n = _frame(lanes.angle)
     if margin > 0:
-        rows = _shrunk_intervals(lanes, area, margin)
+        geo = _geometry(area, 2 * margin if spacing is None else spacing)
+        rows = _shrunk_intervals(lanes, geo.shrunk(margin))
     else:
         rows = _intervals_on_lines(area.edges - lanes.origin, u, n, lanes.c)
     k, c, t0, t1 = [], [], [], []
@@ -95,15 +153,14 @@ def clip_lanes(lanes: Lanes, area: Region, tol: float, margin: float = 0.0) -> L
     )
 
 
-def _shrunk_intervals(lanes: Lanes, area: Region, margin: float) -> list[list[tuple[float, float]]]:
-    """Per lane, the intervals (along it) of its line inside the area shrunk by ``margin``."""
+def _shrunk_intervals(lanes: Lanes, inner: Any) -> list[list[tuple[float, float]]]:
+    """Per lane, the intervals (along it) of its line inside ``inner`` (the area shrunk by the
+    margin, :meth:`_Geometry.shrunk`)."""
     import shapely
 
     u, _ = _frame(lanes.angle)
-    inner = shapely_area(area).buffer(-margin, quad_segs=8)
     if len(lanes.k) == 0 or inner.is_empty:
         return [[] for _ in lanes.k]
-    shapely.prepare(inner)
     parts = shapely.intersection(shapely.linestrings(lanes.segments), inner)
     rows = []
     for g in parts:
@@ -189,9 +246,10 @@ def boundary_passes(
     """
     import shapely
 
-    target = shapely_area(area)
+    geo = _geometry(area, spacing)
+    target = geo.target
     eps = 1e-7 * spacing  # slivers thinner than this are rounding
-    tol = 1e-9 * area.diameter
+    tol = geo.tol
     segments = [ls.segments for ls in lanes if len(ls.k)]
     if segments:
         angles = np.concatenate([np.full(len(ls.k), ls.angle) for ls in lanes if len(ls.k)])
@@ -201,14 +259,13 @@ def boundary_passes(
         residual = target
     if not _pieces(residual, eps):
         return [], 0.0
-    shapely.prepare(target)
-    passes = _contour_passes(target, residual, spacing / 2, reach, tol)
+    passes = _contour_passes(target, residual, spacing / 2, reach, tol, geo.contour)
     inner = reach  # as boustro.plan.coverage measures the passes (quad_segs=64)
 
     def cover(lines: list[NDArray[np.float64]], rest: Any) -> Any:
-        if not lines:
+        keys = [np.ascontiguousarray(k, dtype=np.float64) for k in _near(lines, rest, 2 * inner)]
+        if not keys:
             return rest
-        keys = [np.ascontiguousarray(line, dtype=np.float64) for line in lines]
         band = shapely.union_all([_band(k.tobytes(), len(k), inner) for k in keys])
         return shapely.difference(rest, band)
 
@@ -226,6 +283,40 @@ def boundary_passes(
         pieces = _pieces(residual, eps)
     rest = _attach(passes, patches, target, spacing)
     return [_dedupe(p, tol) for p in passes + rest], float(sum(p.area for p in pieces))
+
+
+def _near(lines: list[NDArray[np.float64]], rest: Any, far: float) -> list[NDArray[np.float64]]:
+    """The runs of segments of ``lines`` within ``far`` of ``rest``, each split where it turns
+    back on itself (a spur's tip): buffered by ``reach <= far / 2`` they cover the same part of
+    ``rest`` as the whole lines (a point of ``rest`` within ``reach`` of a pass is within
+    ``reach`` of a kept segment; the caps at a run's cut ends lie more than ``reach`` from
+    ``rest``; at a spur's tip the join of the whole line is the caps of its two halves) at a
+    fraction of the cost (a line with spurs is GEOS's worst case: most of a plan's time on a
+    traced boundary)."""
+    import shapely
+
+    if not lines or rest.is_empty:
+        return []
+    segs = np.concatenate([np.stack([line[:-1], line[1:]], axis=1) for line in lines])
+    owner = np.concatenate([np.full(len(line) - 1, i) for i, line in enumerate(lines)])
+    keep = shapely.distance(shapely.linestrings(segs), rest) <= far
+    out = []
+    for i, line in enumerate(lines):
+        flags = keep[owner == i]
+        d = np.diff(line, axis=0)
+        norm = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-300)
+        back = np.einsum("ij,ij->i", d[:-1], d[1:]) / (norm[:-1] * norm[1:]) < -1 + 1e-9
+        j = 0
+        while j < len(flags):
+            if not flags[j]:
+                j += 1
+                continue
+            k = j  # segments j..k kept, none turning back between them
+            while k + 1 < len(flags) and flags[k + 1] and not back[k]:
+                k += 1
+            out.append(line[j : k + 2])
+            j = k + 1
+    return out
 
 
 @lru_cache(maxsize=BAND_CACHE)
@@ -305,7 +396,7 @@ def inside_layout(
     tol = 1e-9 * area.diameter
     best: tuple[float, list[Lanes], list[NDArray[np.float64]], float] | None = None
     for m in MARGINS:
-        cut = [clip_lanes(ls, area, tol, m * spacing) for ls in lanes]
+        cut = [clip_lanes(ls, area, tol, m * spacing, spacing) for ls in lanes]
         passes, uncovered = boundary_passes(area, cut, spacing, reach)
         length = sum(float(np.sum(ls.t1 - ls.t0)) for ls in cut)
         length += sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)

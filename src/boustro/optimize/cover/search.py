@@ -22,6 +22,7 @@ from .boxes import Boxes as _Boxes
 from .boxes import box_radius, initial_boxes, level_radius, split_boxes
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
+from .inside_bound import contour_edges, inside_box_bounds, path_floor
 from .sandwich import Level, Sandwich
 from .walls import WallCache
 
@@ -90,6 +91,8 @@ class CoverSearch:
         # bound takes the lines' chords (reach 0) through the shrunk inner set
         self.keep_inside = keep_inside
         self.shrink = spacing / 2 if keep_inside else 0.0
+        self.contour = contour_edges(region, spacing, reach) if keep_inside else None
+        self.floor = path_floor(region, reach) if keep_inside else 0.0
         self.band = 0.0 if keep_inside else reach
         simplify = len(region.edges) > SIMPLIFY_EDGES
         self.sandwich = Sandwich(region, SIMPLIFY_SPACING * spacing if simplify else 0.0)
@@ -177,10 +180,13 @@ class CoverSearch:
         self.bound_evaluations += len(boxes.theta)
         self.work += len(boxes.theta) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
         ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
-        out = lower_bounds(
-            st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
-            runins=self.n_holes == 0,
-        )  # fmt: skip
+        if self.keep_inside:
+            out = self._inside(lv, st, 0.0, 0.0, boxes.theta, boxes.d, np.zeros(len(boxes.d)))
+        else:
+            out = lower_bounds(
+                st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
+                runins=self.n_holes == 0,
+            )  # fmt: skip
         if span_only:
             return out
         # the real plans are chosen by the model without the 1-tree, as before it (a routed
@@ -229,6 +235,11 @@ class CoverSearch:
             )  # fmt: skip
             ends = self._hole_boxes(boxes.theta[sel], boxes.d[sel], reach_out)
             self.work += int(sel.sum()) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
+            if self.keep_inside:
+                out[sel] = self._inside(
+                    lv, st, float(r), reach_out, boxes.theta[sel], boxes.d[sel], boxes.delta[sel]
+                )
+                continue
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
                 runins=self.n_holes == 0, tour_below=self._tour_below(float(r)),
@@ -236,6 +247,10 @@ class CoverSearch:
             )  # fmt: skip
         self.bound_evaluations += len(eps)
         return out
+
+    def _inside(self, lv: Any, st: Any, *args: Any) -> NDArray[np.float64]:
+        """The keep-inside bound (:func:`~.inside_bound.inside_box_bounds`)."""
+        return inside_box_bounds(self, lv, st, *args)
 
     def try_edges(self) -> None:
         """Plan the best offset (by the model) along each of the longest edges' directions:

@@ -1,0 +1,89 @@
+"""Benchmark (issue 16, item 4): the time objective with ``--keep-inside`` against a baseline
+commit, measured in the same run.
+
+Each case is planned as ``boustro plan --speed 5 --turn-time 10 --keep-inside`` would
+(:func:`boustro.mission.plan_area`), once with this tree and once with the baseline's
+``src`` (``--baseline``, e.g. a ``git archive`` of 1158b53), each in a fresh process, the two
+interleaved; the CPU time of the planning call (``time.process_time``, the machine is shared),
+the mission time, the certificate's gap, coverage (shapely, on the area itself) and the path
+outside are printed with the ratio of CPU times.
+
+Cases: a three-lobed 200-vertex star 1000 m across at 36 lanes (``benchmarks/estimate.py``'s)
+and, with ``--data``, Fields2Cover's ``test_2_cell.json`` and ``test1.xml`` fields (10 m).
+
+    git archive 1158b53 src | tar -x -C /tmp/base
+    python benchmarks/keep_inside_speed.py --baseline /tmp/base/src [--data F2C/data] [--only star]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SRC = os.path.join(os.path.dirname(HERE), "src")
+
+CHILD = r"""
+import json, os, sys, time
+sys.path.insert(0, {here!r})
+from estimate import star
+from boustro.io import read_areas
+from boustro.mission import plan_area
+case = {case!r}
+if case == "star":
+    area, spacing, kw = star(200), 1000 / 36, dict(crs=None)
+else:
+    name, index = case.split("#")
+    area, spacing, kw = read_areas(os.path.join({data!r}, name))[int(index) - 1], 10.0, {{}}
+t0 = time.process_time()
+m = plan_area(area, spacing, speed=5.0, turn_time=10.0, keep_inside=True, **kw)
+cpu = time.process_time() - t0
+s = m.summary()
+print(json.dumps(dict(cpu=cpu, time=m.stats.duration, gap=s.get("gap"),
+                      covered=s.get("covered_share"), outside=s.get("outside_length_m", 0.0),
+                      lanes=s["n_transects"], method=s["method"])))
+"""
+
+
+def _run(src: str, case: str, data: str) -> dict:
+    env = {**os.environ, "PYTHONPATH": src}
+    code = CHILD.format(here=HERE, case=case, data=data or "")
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--baseline", required=True, help="the baseline's src folder")
+    ap.add_argument("--data", help="Fields2Cover's data/ folder")
+    ap.add_argument("--only", nargs="*", help="case names (star, test_2_cell.json#1, ...)")
+    args = ap.parse_args()
+    cases = ["star"]
+    if args.data:
+        cases += ["test_2_cell.json#1", "test_2_cell.json#2", "test1.xml#1"]
+    if args.only:
+        cases = [c for c in cases if c in args.only]
+    print(
+        "| case | baseline: time s / gap s / CPU s | this tree: time s / gap s / CPU s | "
+        "covered | outside m | CPU ratio |"
+    )
+    print("|---|---|---|---:|---:|---:|")
+    for case in cases:
+        base = _run(args.baseline, case, args.data)
+        new = _run(SRC, case, args.data)
+        print(
+            f"| {case} | {base['time']:.1f} / {base['gap'] or 0:.1f} / {base['cpu']:.1f} | "
+            f"{new['time']:.1f} / {new['gap'] or 0:.1f} / {new['cpu']:.1f} | "
+            f"{100 * (new['covered'] or 0):.6f}% | {new['outside']:.3g} | "
+            f"x{new['cpu'] / base['cpu']:.2f} |",
+            flush=True,
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,241 @@
+"""The lower bound of a ``keep_inside`` plan (:mod:`boustro.plan.inside`) over a box of layouts:
+the lanes cut at the boundary, or half a spacing inside it with the boundary passes they need.
+
+The planner lays a layout's lanes one of two ways (``MARGINS``) and keeps the one whose lanes
+and passes are shorter; the tour then adds its moves. Whichever it keeps, its cost is at least
+the smaller of two bounds (docs/mission_time.md, "Keep-inside: the bound"):
+
+* **lanes cut at the boundary** (margin 0): each lane is its line's chord of the area itself,
+  so :func:`~.bounds.lower_bounds` over the sandwich's inner set *not* shrunk by half a spacing
+  holds (chords, no run-ins: they end at the boundary; no hole passes counted);
+* **lanes cut half a spacing inside** (margin 1/2): the search's keep-inside bound (chords of
+  the inner set shrunk by half a spacing), with the non-lane part of the path (moves and
+  passes) at least the largest of: the moves across the lines, the length ``P`` of the
+  contour's stretches along edges at least :data:`MIN_ANGLE` from the lanes (every such stretch
+  is a boundary pass: no lane covers the strip along its edge), and ``sqrt(A^2 + C^2)`` (``A``
+  those stretches' travel along the lanes, ``C`` the moves across them: the lengths of the
+  segments of a path are at least the length of the sum of their (along, across) vectors).
+
+The contour's stretches (:class:`ContourEdges`) are computed once per area with the planner's
+own construction (``area.buffer(-spacing / 2, quad_segs=8)`` without slivers): a rigid motion
+of the area (a box's layouts) moves them with it, so only their angle to the lanes depends on
+the layout. Shapely is imported inside the functions.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...geometry.region import Region
+from .bands import BandStats, band_stats
+from .bounds import lower_bounds
+from .cost import CoverCost
+from .sandwich import Level
+
+__all__ = [
+    "MIN_ANGLE",
+    "ContourEdges",
+    "contour_edges",
+    "inside_box_bounds",
+    "keep_inside_bounds",
+    "path_floor",
+    "stretch_length",
+]
+
+#: Edges closer than this to the lanes' direction (radians, over the whole box) are left out
+#: of ``P``: the strip the lanes leave along an edge at angle ``phi`` is ``s/2 (1 - cos phi)``
+#: deep (less the 0.5% the planner's polygonised erosion may gain at a reflex vertex), and it
+#: must stay well above the planner's sliver tolerance.
+MIN_ANGLE = 0.15
+
+
+class ContourEdges(NamedTuple):
+    """The straight stretches of the keep-inside contour (the boundary of the area shrunk by
+    half a spacing) that run along an edge of the area: per stretch its direction (radians,
+    mod pi) and the length of its *core*, the part whose feet on the edge lie at least half a
+    spacing plus a sample step from the edge's ends (0 when shorter than a sample step)."""
+
+    angle: NDArray[np.float64]
+    core: NDArray[np.float64]
+    applies: bool  # the reach is half the spacing (else nothing is counted)
+
+
+def _contour_rings(area: Region, half: float) -> list[NDArray[np.float64]]:
+    """The rings of the planner's contour (:func:`boustro.plan.contour.contour_of`): the
+    boundary of the area shrunk by ``half`` (``quad_segs=8``) without sliver parts."""
+    import shapely
+
+    target = shapely.Polygon(area.shell.vertices, [h.vertices for h in area.holes])
+    shrunk = target.buffer(-half, quad_segs=8)
+    parts = [
+        g
+        for g in shapely.get_parts(shrunk)
+        if g.geom_type == "Polygon" and not g.is_empty and not g.buffer(-1e-7 * half).is_empty
+    ]
+    inner = shapely.union_all(parts)
+    if inner.is_empty:
+        return []
+    rings = []
+    for ring in shapely.get_parts(shapely.boundary(inner)):
+        v = np.asarray(ring.coords, dtype=np.float64)
+        if len(v) >= 4:
+            rings.append(v)
+    return rings
+
+
+def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
+    """The :class:`ContourEdges` of ``area`` at ``spacing`` (plan units)."""
+    half = spacing / 2
+    applies = abs(reach - half) <= 1e-9 * spacing
+    edges = area.edges  # (N, 2, 2)
+    p0, d = edges[:, 0], edges[:, 1] - edges[:, 0]
+    length = np.hypot(d[:, 0], d[:, 1])
+    ok = length > 0
+    p0, d, length = p0[ok], d[ok], length[ok]
+    u = d / length[:, None]
+    angles, cores = [], []
+    for ring in _contour_rings(area, half) if applies else []:
+        total = float(np.linalg.norm(np.diff(ring, axis=0), axis=1).sum())
+        step = total / max(8, math.ceil(total / (half / 2)))  # the planner's sample step
+        a, b = ring[:-1], ring[1:]
+        seg = b - a
+        seg_len = np.hypot(seg[:, 0], seg[:, 1])
+        keep = seg_len > step
+        a, b, seg, seg_len = a[keep], b[keep], seg[keep], seg_len[keep]
+        if not len(a):
+            continue
+        # per (stretch, edge): parallel, both ends half a spacing from the edge's line, feet
+        cross = np.abs(seg[:, None, 0] * u[None, :, 1] - seg[:, None, 1] * u[None, :, 0])
+        parallel = cross <= 1e-9 * seg_len[:, None]
+
+        def across(p: NDArray[np.float64]) -> NDArray[np.float64]:
+            q = p[:, None, :] - p0[None]
+            return np.abs(q[..., 0] * u[None, :, 1] - q[..., 1] * u[None, :, 0])
+
+        def foot(p: NDArray[np.float64]) -> NDArray[np.float64]:
+            q = p[:, None, :] - p0[None]
+            return q[..., 0] * u[None, :, 0] + q[..., 1] * u[None, :, 1]
+
+        tol = 1e-7 * spacing
+        near = (np.abs(across(a) - half) <= tol) & (np.abs(across(b) - half) <= tol)
+        fa, fb = foot(a), foot(b)
+        lo = np.maximum(np.minimum(fa, fb), half + step)
+        hi = np.minimum(np.maximum(fa, fb), length[None] - half - step)
+        core = np.where(parallel & near, np.maximum(hi - lo, 0.0), 0.0)
+        best = core.max(axis=1)
+        best = np.where(best > step, best, 0.0)
+        angles.append(np.arctan2(seg[:, 1], seg[:, 0]) % math.pi)
+        cores.append(best)
+    if not angles:
+        return ContourEdges(np.zeros(0), np.zeros(0), applies)
+    return ContourEdges(np.concatenate(angles), np.concatenate(cores), applies)
+
+
+def path_floor(area: Region, reach: float) -> float:
+    """A length every plan covering ``area`` flies (any layout, either margin): its path is
+    connected and passes within ``reach`` of every point of the area, so its projection on the
+    line of the area's diameter covers the diameter less ``reach`` at each end (less a
+    millionth of the diameter for rounding)."""
+    import shapely
+
+    hull = np.asarray(shapely.MultiPoint(area.shell.vertices).convex_hull.exterior.coords)[:-1]
+    diff = hull[:, None, :] - hull[None, :, :]
+    diameter = float(np.sqrt((diff**2).sum(axis=2)).max())
+    return max(0.0, diameter * (1 - 1e-6) - 2 * reach)
+
+
+def stretch_length(contour: ContourEdges, theta: float) -> float:
+    """``P`` at one layout (angle ``theta``): the boundary passes the planner's lanes cut half a
+    spacing inside (margin 1/2) need at least (0 where the reach is not half the spacing)."""
+    if not contour.applies:
+        return 0.0
+    p, _ = _stretches(contour, np.array([theta]), np.zeros(1))
+    return float(p[0])
+
+
+def _stretches(
+    contour: ContourEdges, theta: NDArray[np.float64], delta: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(P, A)`` per layout: the cores of the stretches at least :data:`MIN_ANGLE` from every
+    lane angle in ``theta +- delta``, and their least travel along the lanes."""
+    if not len(contour.core):
+        z = np.zeros(len(theta))
+        return z, z
+    rel = np.abs((contour.angle[None, :] - theta[:, None] + math.pi / 2) % math.pi - math.pi / 2)
+    pick = rel - delta[:, None] >= MIN_ANGLE
+    core = np.where(pick, contour.core[None, :], 0.0)
+    along = core * np.cos(np.minimum(rel + delta[:, None], math.pi / 2))
+    return core.sum(axis=1), along.sum(axis=1)
+
+
+def _moves(st: BandStats, spacing: float) -> NDArray[np.float64]:
+    """The moves across the lines of :func:`~.bounds.lower_bounds`: ``(k_max - k_min) s``."""
+    used = st.count >= 1
+    idx = np.arange(st.count.shape[1])
+    k_max = np.where(used, idx, -1).max(axis=1)
+    k_min = np.where(used, idx, st.count.shape[1]).min(axis=1)
+    return np.where(used.any(axis=1), (k_max - k_min) * spacing, 0.0)
+
+
+def _no_holes(st: BandStats) -> BandStats:
+    return st._replace(cut=np.zeros_like(st.cut), rigid=np.zeros_like(st.rigid))
+
+
+def keep_inside_bounds(
+    st_half: BandStats,
+    level_half: Level,
+    st_zero: BandStats,
+    level_zero: Level,
+    cost: CoverCost,
+    spacing: float,
+    contour: ContourEdges,
+    theta: NDArray[np.float64],
+    delta: NDArray[np.float64],
+    *,
+    runins: bool,
+    floor: float = 0.0,
+) -> NDArray[np.float64]:
+    """``(L,)`` a lower bound on the cost of every keep-inside plan of the layouts (module
+    docstring). ``st_half``/``level_half``: the sandwich's inner set shrunk by half a spacing
+    (band 0), ``st_zero``/``level_zero`` the same radius not shrunk; ``delta`` the boxes'
+    angular half-widths (0 at a layout); ``floor``: :func:`path_floor` (plan units), a path no
+    plan of the area is shorter than."""
+    kw: dict[str, Any] = {"boustrophedon": False, "ends": None}
+    half = lower_bounds(st_half, level_half, cost, spacing, runins=runins, **kw)
+    zero = lower_bounds(_no_holes(st_zero), level_zero, cost, spacing, runins=False, **kw)
+    if contour.applies and len(contour.core):
+        p, a = _stretches(contour, theta, delta)
+        c = _moves(st_half, spacing)
+        extra = np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
+        plain = lower_bounds(_no_holes(st_half), level_half, cost, spacing, runins=runins, **kw)
+        half = np.maximum(half, plain + cost.per_length * extra)
+    least = cost.per_length * floor + cost.fixed
+    return np.maximum(np.minimum(half, zero), least)
+
+
+def inside_box_bounds(
+    search: Any,
+    lv: Level,
+    st: BandStats,
+    radius: float,
+    reach_out: float,
+    theta: NDArray[np.float64],
+    d: NDArray[np.float64],
+    delta: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """:func:`keep_inside_bounds` for a :class:`~.search.CoverSearch` with ``keep_inside``:
+    ``lv, st`` its level at ``radius`` shrunk by half a spacing, the level not shrunk bounded
+    here (lines within ``reach_out``)."""
+    lv0 = search.sandwich.level(radius, 0.0)
+    st0 = band_stats(
+        lv0.inner, lv0.outer, theta, d, search.s, 0.0, search.origin,
+        search.k_range(reach_out), search.n_holes, search.tol, inner_reach=0.0,
+    )  # fmt: skip
+    return keep_inside_bounds(
+        st, lv, st0, lv0, search.cost, search.s, search.contour, theta, delta,
+        runins=search.n_holes == 0, floor=search.floor,
+    )  # fmt: skip

@@ -1,0 +1,147 @@
+"""The keep-inside bound (optimize/cover/inside_bound.py): below every real keep-inside plan
+sampled in boxes, tighter than the chords-only bound, the contour's stretches below the passes
+the planner builds."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from boustro.geometry import Polygon
+from boustro.geometry.region import Region
+from boustro.optimize.cover import CoverCost, band_stats, lower_bounds
+from boustro.optimize.cover.boxes import Boxes
+from boustro.optimize.cover.inside_bound import contour_edges, path_floor, stretch_length
+from boustro.optimize.cover.search import CoverSearch
+from boustro.plan import inside
+from boustro.plan.lanes import region_lanes
+from boustro.plan.region import plan_region
+
+from .conftest import random_regions
+
+SPACING = 9.0
+
+
+def _areas() -> list[Region]:
+    ell = [(0, 0), (120, 0), (120, 40), (50, 40), (50, 100), (0, 100)]
+    quad = [(0, 0), (160, 10), (140, 90), (20, 120)]
+    holes = [[(70, 30), (95, 35), (85, 60)]]
+    out = [Region(ell), Region(quad), Region(quad, holes)]
+    for r in random_regions(17, 2, n_holes=(0, 2)):
+        k = 150.0 / r.diameter
+        out.append(
+            Region(Polygon(r.shell.vertices * k), [Polygon(h.vertices * k) for h in r.holes])
+        )
+    return out
+
+
+def _cost_of(region, cost, turnaround=0.0):
+    def evaluate(a, d):
+        plan = plan_region(
+            region, SPACING, decompose_area=False, angle=a, offset=d, speed=5.0,
+            turn_time=10.0, turnaround=turnaround, keep_inside=True,
+        )  # fmt: skip
+        return cost.of(plan.stats.path_length, plan.stats.n_turns)
+
+    return evaluate
+
+
+def _chords_only(search: CoverSearch, boxes: Boxes, eps: np.ndarray) -> np.ndarray:
+    """The keep-inside bound before this module: chords of the inner set shrunk by half a
+    spacing, at the same sandwich radius as :meth:`CoverSearch.box_bounds`."""
+    out = []
+    for i in range(len(boxes.theta)):
+        lv = search.sandwich.level(float(eps[i]), search.shrink)
+        st = band_stats(
+            lv.inner, lv.outer, boxes.theta[i : i + 1], boxes.d[i : i + 1], SPACING, 0.0,
+            search.origin, search.k_range(float(eps[i])), search.n_holes, search.tol,
+            inner_reach=0.0,
+        )  # fmt: skip
+        out.append(lower_bounds(st, lv, search.cost, SPACING, boustrophedon=False, runins=False)[0])
+    return np.array(out)
+
+
+@pytest.mark.parametrize("turnaround", [0.0, 3.0])
+@pytest.mark.parametrize("index", range(5))
+def test_keep_inside_box_bounds_never_exceed_a_plan_in_the_box(index, turnaround):
+    region = _areas()[index]
+    cost = CoverCost.time(5.0, 10.0, turnaround=turnaround)
+    evaluate = _cost_of(region, cost, turnaround)
+    search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False, keep_inside=True)
+    rng = np.random.default_rng(40 + index)
+    n = 8
+    boxes = Boxes(
+        rng.uniform(0, math.pi, n),
+        rng.uniform(0, 0.03, n) * rng.integers(0, 2, n),
+        rng.uniform(0, SPACING, n),
+        rng.uniform(0, 1.5, n),
+    )
+    search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
+    bounds = search.box_bounds(boxes)
+    points = search.point_values(boxes, exact=True)
+    for i in range(n):
+        plans = [evaluate(float(boxes.theta[i]), float(boxes.d[i]))]
+        for _ in range(3):
+            a = boxes.theta[i] + rng.uniform(-boxes.delta[i], boxes.delta[i])
+            o = boxes.d[i] + rng.uniform(-boxes.eta[i], boxes.eta[i])
+            plans.append(evaluate(float(a), float(o)))
+        assert bounds[i] <= min(plans) + 1e-9
+        assert points[i] <= plans[0] + 1e-9
+
+
+def test_the_bound_is_tighter_than_the_chords_alone():
+    """On straight-edged areas the contour's stretches (or the lanes cut at the boundary) lift
+    the bound at a layout above the chords-only bound, by at least 5% of the plan on average."""
+    cost = CoverCost.time(5.0, 10.0)
+    rng = np.random.default_rng(5)
+    lifts = []
+    for region in _areas()[:3]:
+        search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False, keep_inside=True)
+        evaluate = _cost_of(region, cost)
+        n = 6
+        boxes = Boxes(rng.uniform(0, math.pi, n), np.zeros(n), rng.uniform(0, SPACING, n),
+                      np.zeros(n))  # fmt: skip
+        new = search.point_values(boxes, exact=True)
+        old = _chords_only(search, boxes, np.zeros(n))
+        assert np.all(new >= old - 1e-9)
+        for i in range(n):
+            plan = evaluate(float(boxes.theta[i]), float(boxes.d[i]))
+            assert new[i] <= plan + 1e-9
+            lifts.append((new[i] - old[i]) / plan)
+    assert np.mean(lifts) > 0.05
+
+
+def test_stretches_are_below_the_planners_passes():
+    """At the margin half a spacing inside, the planner's boundary passes are at least the
+    contour's stretches along edges away from the lanes' direction."""
+    rng = np.random.default_rng(9)
+    for region in _areas():
+        edges = contour_edges(region, SPACING, SPACING / 2)
+        tol = 1e-9 * region.diameter
+        for _ in range(5):
+            angle, offset = rng.uniform(0, math.pi), rng.uniform(0, SPACING)
+            lanes = inside.clip_lanes(
+                _lanes(region, angle, offset), region, tol, SPACING / 2, SPACING
+            )
+            passes, uncovered = inside.boundary_passes(region, [lanes], SPACING, SPACING / 2)
+            assert uncovered == 0
+            length = sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)
+            assert stretch_length(edges, angle) <= length + 1e-9
+
+
+def _lanes(region, angle, offset):
+    return region_lanes(region, SPACING, angle, offset, reach=SPACING / 2, holes=region.holes)
+
+
+def test_path_floor_and_contour_edges():
+    square = Region([(0, 0), (100, 0), (100, 100), (0, 100)])
+    assert path_floor(square, 5.0) == pytest.approx(100 * math.sqrt(2) - 10, rel=1e-5)
+    edges = contour_edges(square, 10.0, 5.0)
+    # four stretches of 90 m, cores 90 - 2 (5 + step) with the step a quarter spacing at most
+    assert len(edges.core) == 4 and np.all(edges.core > 70) and np.all(edges.core < 90)
+    # lanes at 0 deg: the two vertical stretches count; at 45 deg all four
+    assert stretch_length(edges, 0.0) == pytest.approx(2 * edges.core[0], rel=1e-9)
+    assert stretch_length(edges, math.pi / 4) == pytest.approx(edges.core.sum(), rel=1e-9)
+    assert not contour_edges(square, 10.0, 6.0).applies  # overlapping swaths: nothing counted
