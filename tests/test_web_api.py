@@ -136,6 +136,22 @@ def test_options_reach_the_planner(client, embedded):
     assert np.hypot(*np.subtract(first, start)) < np.hypot(*np.subtract(far, start))
 
 
+def test_vehicle_headland_and_keep_inside_reach_the_planner(client, embedded):
+    def plan(**options):
+        body = {"area": embedded, "options": {"spacing": 10, **options}}
+        response = client.post("/api/plan", json=body)
+        assert response.status_code == 200, response.text
+        return response.json()
+
+    assert plan()["outside_length_m"] > 0
+    assert plan(keep_inside=True)["outside_length_m"] == pytest.approx(0.0, abs=1e-6)
+    tractor = plan(turn_radius=6, reverse=True, headland=1)
+    assert tractor["vehicle"]["turn_radius_m"] == 6 and tractor["vehicle"]["reverse"] is True
+    assert tractor["headland_passes"] == 1 and tractor["covered_share"] >= 1 - 1e-9
+    expected = plan_area(embedded_field(), 10.0, keep_inside=True).summary()
+    assert plan(keep_inside=True)["path_length_m"] == pytest.approx(expected["path_length_m"])
+
+
 def test_holes_and_several_fields(client):
     outer = [[5, 52], [5.004, 52], [5.004, 52.003], [5, 52.003], [5, 52]]
     hole = [[5.001, 52.001], [5.002, 52.001], [5.002, 52.002], [5.001, 52.002], [5.001, 52.001]]
@@ -393,6 +409,13 @@ def test_too_many_vertices_and_too_much_work_are_refused(client):
         ({"area": BOW_TIE, "options": {"spacing": 1, "warp": 9}}, "unknown option(s) 'warp'"),
         ({"area": BOW_TIE, "options": {"spacing": 1, "layout": "x"}}, "options.layout"),
         ({"area": BOW_TIE, "options": {"spacing": 1, "start": [1]}}, "options.start"),
+        (
+            {"area": BOW_TIE, "options": {"spacing": 1, "reverse": True}},
+            "needs options.turn_radius",
+        ),
+        ({"area": BOW_TIE, "options": {"spacing": 1, "turn_radius": 0}}, "options.turn_radius"),
+        ({"area": BOW_TIE, "options": {"spacing": 1, "headland": 1.5}}, "options.headland"),
+        ({"area": BOW_TIE, "options": {"spacing": 1, "keep_inside": 1}}, "options.keep_inside"),
         ({"area": BOW_TIE, "extra": 1}, "unknown member(s) 'extra'"),
         ([1, 2], "JSON object"),
     ],

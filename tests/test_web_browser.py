@@ -204,6 +204,26 @@ def test_a_hole_is_drawn_and_avoided(page):
     assert "lanes" in page.inner_text("#summary") and page.locator("#error").is_hidden()
 
 
+def test_keep_inside_and_a_vehicle_from_the_form(page):
+    bodies: list = []
+    page.on(
+        "request",
+        lambda r: bodies.append(r.post_data_json) if r.url.endswith("/api/plan") else None,
+    )
+    page.click("#example")
+    _wait_plan(page, 0)
+    assert "outside the area" in page.inner_text("#summary")
+    seq = page.evaluate("window.boustro.planSeq")
+    page.check("#keep_inside")
+    _wait_plan(page, seq)
+    assert bodies[-1]["options"]["keep_inside"] is True
+    assert "0.0 m of the path" in page.inner_text("#summary")
+    seq = _set(page, "#turn_radius", "6")
+    page.press("#turn_radius", "Enter")
+    _wait_plan(page, seq)
+    assert bodies[-1]["options"]["turn_radius"] == 6 and page.locator("#error").is_hidden()
+
+
 def test_a_committed_edit_is_planned_at_once_and_one_that_changes_nothing_not_at_all(page):
     plans: list[str] = []
     page.on("request", lambda r: plans.append(r.url) if r.url.endswith("/api/plan") else None)

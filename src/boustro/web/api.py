@@ -110,7 +110,15 @@ def _valid(area: Area, repair: bool) -> Area:
 def _estimate(area: Area, opts: PlanOptions) -> WorkEstimate:
     """The estimate before planning of ``area`` with the request's options."""
     kw = opts.kwargs
-    names = ("hull_tolerance", "decompose", "method", "fitness", "speed", "turn_time")
+    names = (
+        "hull_tolerance",
+        "decompose",
+        "method",
+        "fitness",
+        "speed",
+        "turn_time",
+        "keep_inside",
+    )
     return estimate_work(area, opts.spacing, **{k: kw[k] for k in names})
 
 

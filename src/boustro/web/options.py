@@ -14,7 +14,9 @@ from typing import Any
 from .. import objectives
 from ..errors import InvalidParameterError, as_number
 from ..mission import DEFAULT_HULL_TOLERANCE
+from ..plan import check_headland
 from ..sensors import Camera, Swath
+from ..vehicle import Vehicle
 from .limits import check_epsg
 
 __all__ = ["OPTIONS", "PlanOptions", "parse_options", "web_objectives"]
@@ -36,6 +38,10 @@ OPTIONS: dict[str, str] = {
     "turnaround": "run-in / run-out beyond each transect end, metres",
     "speed": "ground speed, m/s",
     "turn_time": "seconds per turn",
+    "keep_inside": "true: no part of the path leaves the area or enters a hole (boundary passes)",
+    "turn_radius": "the vehicle's turn radius, metres (its turns driven as Dubins paths)",
+    "reverse": "with turn_radius: the vehicle may reverse (Reeds-Shepp turns)",
+    "headland": "headland passes around the boundary and every hole (a whole number, default 0)",
     "altitude": "mission altitude above take-off, metres (needed by .plan and .waypoints)",
     "layout": "guaranteed (default) or chords",
     "hull_tolerance": "plan a nearly convex area on its hull within this many metres",
@@ -144,6 +150,24 @@ def _flag(options: dict[str, Any], key: str) -> bool | None:
     return value
 
 
+def _headland(options: dict[str, Any]) -> int:
+    try:
+        return check_headland(0 if options.get("headland") is None else options["headland"])
+    except InvalidParameterError as exc:
+        raise InvalidParameterError(f"options.{exc}") from None
+
+
+def _vehicle(options: dict[str, Any]) -> Vehicle | None:
+    """The vehicle of ``turn_radius`` and ``reverse`` (``None`` without a radius)."""
+    radius = _number(options, "turn_radius", 0.0, strict=True)
+    reverse = bool(_flag(options, "reverse"))
+    if radius is None:
+        if reverse:
+            raise InvalidParameterError("options.reverse needs options.turn_radius")
+        return None
+    return Vehicle(turn_radius=radius, reverse=reverse)
+
+
 def parse_options(options: Any) -> PlanOptions:
     """Check ``options`` (a JSON object) and build :class:`PlanOptions`."""
     if options is None:
@@ -177,6 +201,9 @@ def parse_options(options: Any) -> PlanOptions:
         sweep=_number(options, "sweep"),
         angle=None if angle is None else math.radians(angle),
         bearing=_number(options, "bearing"),
+        keep_inside=bool(_flag(options, "keep_inside")),
+        vehicle=_vehicle(options),
+        headland=_headland(options),
     )
     crs = check_epsg(options["crs"], "options.crs") if options.get("crs") is not None else None
     picked = options.get("field")

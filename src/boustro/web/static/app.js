@@ -188,6 +188,12 @@ function options() {
   const alt = num("altitude");
   if (alt !== null && !(mode === "camera" && o.gsd !== undefined)) o.altitude = alt;
   for (const k of ["speed", "turn_time", "turnaround"]) if (num(k) !== null) o[k] = num(k);
+  if (num("turn_radius") !== null) {
+    o.turn_radius = num("turn_radius");
+    if ($("reverse").checked) o.reverse = true;
+  }
+  if (num("headland")) o.headland = num("headland");
+  if ($("keep_inside").checked) o.keep_inside = true;
   o.layout = $("layout").value;
   if ($("decompose").value) o.decompose = $("decompose").value === "true";
   if (state.start) o.start = [state.start[1], state.start[0]];
@@ -288,6 +294,7 @@ function summary(p, fields) {
     ["lanes", `${p.n_transects} (${p.layout})`],
     ["turns", p.n_turns],
     ["path length", `${fmt(p.path_length_m, 1)} m (lanes ${fmt(p.transect_length_m, 1)} m)`],
+    ["outside the area", p.outside_length_m !== undefined ? `${fmt(p.outside_length_m, 1)} m of the path` : "—"],
     ["time", p.duration_s !== undefined ? `${fmt(p.duration_s / 60, 1)} min at ${p.speed_m_s} m/s` : "give a speed"],
     ["coverage", p.covered_share !== undefined ? `${fmt(100 * p.covered_share, 3)}% (overlap ${fmt(100 * p.overlap_share, 1)}%)` : "—"],
     ["certificate", p.certified ? `certified optimum (${p.objective}), gap ${Number(p.gap).toExponential(1)}` : (p.gap != null ? `gap ${Number(p.gap).toPrecision(3)} (${p.objective}), not within tolerance` : `not certified (${p.method})`)],
