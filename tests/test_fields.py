@@ -297,6 +297,9 @@ def test_plan_and_waypoints_and_plot_are_one_file_per_field(collection, tmp_path
 def test_file_names_are_safe_and_distinct():
     assert safe_name("../North field: 2") == "North_field_2"
     assert safe_name("///") == "field"
+    assert (
+        safe_name("日本 畑") == "日本_畑"
+    )  # letters of any script kept (QA: "Feld Lärche" was "Feld_L_rche")
     taken: set[str] = set()
     assert field_path("out/m.plan", "a/b", taken) == "out/m-a_b.plan"
     assert field_path("out/m.plan", "a b", taken) == "out/m-a_b-2.plan"

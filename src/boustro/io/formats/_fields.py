@@ -14,6 +14,7 @@ import io
 import json
 import os
 import re
+import unicodedata
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import quoteattr
@@ -120,13 +121,15 @@ def render_fields(missions: Sequence[Mission], fmt: str) -> str | None:
 
 
 def safe_name(name: str) -> str:
-    """``name`` for a file name: runs of anything but letters, digits, ``.``, ``_``, ``-``
-    become ``_`` (no path separators, no leading dot); empty gives ``field``.
+    """``name`` for a file name: runs of anything but letters, digits (of any script, NFC),
+    ``.``, ``_``, ``-`` become ``_`` (no path separators, no leading dot); empty gives ``field``.
 
     >>> safe_name("Field 3/North: wheat")
     'Field_3_North_wheat'
+    >>> safe_name("Feld Lärche ü")
+    'Feld_Lärche_ü'
     """
-    text = re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("._")
+    text = re.sub(r"[^\w.-]+", "_", unicodedata.normalize("NFC", name)).strip("._")
     return text or "field"
 
 
