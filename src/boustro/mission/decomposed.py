@@ -383,9 +383,11 @@ def plan_decomposed(
     region = frame.region
     assert region is not None
     options = _path_options(frame, turnaround, speed, turn_time)
-    searches = [_Search(frame, cost, layout, options, keep_inside, cell_finish)]
+    # the cells searched without keep_inside first (cheap plans, tight bounds): their floor
+    # screens a candidate out before the keep_inside search (dear plans, loose bounds)
+    searches = [_Search(frame, cost, layout, options, False, cell_finish)]
     if keep_inside:
-        searches.append(_Search(frame, cost, layout, options, False, cell_finish))
+        searches.append(_Search(frame, cost, layout, options, True, cell_finish))
         searches[1].models = searches[0].models  # the model does not depend on it
     candidates = _candidates(region, searches[0], sweep)
     if beat is not None:  # the model leaves out moves between cells: hopeless if above
@@ -396,8 +398,8 @@ def plan_decomposed(
     for cand in candidates[:planned]:
         for search in searches:
             optima = _cell_optima(search, cand.cells, beat)
-            if optima is None:
-                continue
+            if optima is None:  # screened out (or no lane): the other search too
+                break
             plan = plan_region(
                 region, search.s, layout=lay, cells=list(zip(cand.cells, optima, strict=True)),
                 order="auto", keep_inside=keep_inside,
