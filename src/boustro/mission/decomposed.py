@@ -334,21 +334,37 @@ def _cell_optima(
     search: _Search, cells: list[Region], beat: float | None
 ) -> list[OptimizeResult] | None:
     """The cells' certified optima, largest cell first; ``None`` when a cell has none, or when
-    (with ``beat``, the one grid's cost) the cells' lower bounds already add up to ``beat``:
-    the whole plan flies every cell's lanes, moves and turns, and more (moves between cells, a
-    turn each), so it would not win (a screen, not a bound: the solved order may interleave
-    the cells' passes)."""
+    (with ``beat``, the one grid's cost) the cells' floor already reaches ``beat``: the whole
+    plan flies every cell's lanes, moves and turns, and more (moves between cells, a turn
+    each), so it would not win (a screen, not a bound: the solved order may interleave the
+    cells' passes). The floor: the searched cells' lower bounds, a turn between consecutive
+    cells, and for the cells not searched yet the length that covers their area
+    (:func:`_area_floor`), checked before each search (a small cell's search can cost more
+    than a large one's)."""
     found: dict[int, OptimizeResult] = {}
-    floor = 0.0
-    for k in sorted(range(len(cells)), key=lambda k: -cells[k].area):
+    order = sorted(range(len(cells)), key=lambda k: -cells[k].area)
+    rest = [_area_floor(search, cells[k]) for k in order]
+    floor = search.cost.per_turn * (len(cells) - 1) + sum(rest)
+    for i, k in enumerate(order):
+        if beat is not None and floor >= beat:
+            return None
         opt = search.optimum(cells[k])
         if opt is None:
             return None
         found[k] = opt
-        floor += float(opt.info.get("lower_bound") or 0.0)
-        if beat is not None and floor >= beat:
-            return None
+        floor += max(float(opt.info.get("lower_bound") or 0.0), rest[i]) - rest[i]
+    if beat is not None and floor >= beat:
+        return None
     return [found[k] for k in range(len(cells))]
+
+
+def _area_floor(search: _Search, cell: Region) -> float:
+    """The cost of the length a path needs to cover the cell: within ``reach`` of a path of
+    length ``L`` lie at most ``2 reach L + pi reach^2`` of area."""
+    r = search.reach
+    if r <= 0:
+        return 0.0
+    return search.cost.per_length * max(0.0, cell.area - math.pi * r * r) / (2 * r)
 
 
 def plan_decomposed(
