@@ -57,7 +57,8 @@ t0 = time.process_time()
 m = plan_area(area, spacing, speed=5.0, turn_time=10.0, keep_inside=True, **kw)
 cpu = time.process_time() - t0
 s = m.summary()
-print(json.dumps(dict(cpu=cpu, decomposed=m.optimum.method.startswith("decomposed"), time=m.stats.duration, gap=s.get("gap"),
+print(json.dumps(dict(cpu=cpu, decomposed=m.optimum.method.startswith("decomposed"),
+                      time=m.stats.duration, gap=s.get("gap"),
                       covered=s.get("covered_share"), outside=s.get("outside_length_m", 0.0),
                       lanes=s["n_transects"], method=s["method"])))
 """
