@@ -13,6 +13,13 @@ candidates; the best :data:`PLANNED` whose model beats the one grid (``beat``) h
 optimised by :func:`boustro.optimize.cover.cover_optimum` on the cell as an area (its
 certificate is the cell's) and are planned with the order of the passes solved
 (:func:`boustro.plan.cell_order.solve_order`): the least flown cost is kept.
+
+With ``keep_inside`` each candidate's cells are searched without keep-inside first (cheap
+plans, tight bounds) and only then with it (plans with boundary passes, ten times dearer, loose
+bounds); both searches stop as soon as the floor of :func:`_cell_optima` (the searched cells'
+lower bounds, a turn between cells, the length covering the cells not searched yet) reaches the
+one grid's cost, and a candidate the first search drops is not searched keeping inside. On
+Fields2Cover's fields (the one grid wins) that skips every keep-inside cell search.
 """
 
 from __future__ import annotations
@@ -393,7 +400,8 @@ def plan_decomposed(
     Each cell's search costs the cell's own plan (``cell_finish``: the vehicle's turns; never
     headland passes). With ``keep_inside`` a cell alone is planned keeping inside the cell (its
     cut edges get boundary passes the whole plan does not fly), so the cells are searched both
-    with and without it and the whole plan (always keeping inside) of least flown cost is kept.
+    without and with it (in that order: a candidate the first search screens out is dropped)
+    and the whole plan (always keeping inside) of least flown cost is kept.
     """
     t0 = time.perf_counter()
     region = frame.region
