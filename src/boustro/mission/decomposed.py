@@ -15,11 +15,11 @@ certificate is the cell's) and are planned with the order of the passes solved
 (:func:`boustro.plan.cell_order.solve_order`): the least flown cost is kept.
 
 With ``keep_inside`` each candidate's cells are searched without keep-inside first (cheap
-plans, tight bounds) and only then with it (plans with boundary passes, ten times dearer, loose
-bounds); both searches stop as soon as the floor of :func:`_cell_optima` (the searched cells'
-lower bounds, a turn between cells, the length covering the cells not searched yet) reaches the
-one grid's cost, and a candidate the first search drops is not searched keeping inside. On
-Fields2Cover's fields (the one grid wins) that skips every keep-inside cell search.
+plans, tight bounds) and only then with it (plans with boundary passes, 10-30 times dearer,
+loose bounds); both searches stop as soon as the floor of :func:`_cell_optima` (the searched
+cells' lower bounds, a turn between cells, the length covering the cells not searched yet)
+reaches the one grid's cost, and a candidate the first search drops is not searched keeping
+inside. On Fields2Cover's fields (the one grid wins) that skips every keep-inside cell search.
 """
 
 from __future__ import annotations
