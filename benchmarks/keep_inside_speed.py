@@ -8,11 +8,15 @@ interleaved; the CPU time of the planning call (``time.process_time``, the machi
 the mission time, the certificate's gap, coverage (shapely, on the area itself) and the path
 outside are printed with the ratio of CPU times.
 
-Cases: a three-lobed 200-vertex star 1000 m across at 36 lanes (``benchmarks/estimate.py``'s)
-and, with ``--data``, Fields2Cover's ``test_2_cell.json`` and ``test1.xml`` fields (10 m).
+Cases: a three-lobed 200-vertex star 1000 m across at 36 lanes (``benchmarks/estimate.py``'s),
+Fields2Cover's ``test.json`` (embedded, 10 m), ``--random N`` seeded random concave areas with
+1-3 holes (``benchmarks/mission_time.py``'s, ~300 m, 10 m) and, with ``--data``, Fields2Cover's
+``test_2_cell.json`` and ``test1.xml`` fields (10 m). The plans' mission times must be equal or
+shorter (``time ratio``).
 
-    git archive 1158b53 src | tar -x -C /tmp/base
-    python benchmarks/keep_inside_speed.py --baseline /tmp/base/src [--data F2C/data] [--only star]
+    git archive 374f05c src | tar -x -C /tmp/base
+    python benchmarks/keep_inside_speed.py --baseline /tmp/base/src [--data F2C/data] \
+        [--random 6] [--only star random_0]
 """
 
 from __future__ import annotations
@@ -30,11 +34,22 @@ CHILD = r"""
 import json, os, sys, time
 sys.path.insert(0, {here!r})
 from estimate import star
-from boustro.io import read_areas
+import numpy as np
+from boustro.geometry.region import random_region
+from boustro.io import embedded_field, read_areas
 from boustro.mission import plan_area
 case = {case!r}
 if case == "star":
     area, spacing, kw = star(200), 1000 / 36, dict(crs=None)
+elif case == "test.json":
+    area, spacing, kw = embedded_field(), 10.0, {{}}
+elif case.startswith("random_"):
+    rng = np.random.default_rng(0)
+    for _ in range(int(case[7:]) + 1):
+        r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
+    k = 300.0 / r.diameter
+    area, spacing = r.shell.vertices * k, 10.0
+    kw = dict(crs=None, holes=[h.vertices * k for h in r.holes])
 else:
     name, index = case.split("#")
     area, spacing, kw = read_areas(os.path.join({data!r}, name))[int(index) - 1], 10.0, {{}}
@@ -42,7 +57,8 @@ t0 = time.process_time()
 m = plan_area(area, spacing, speed=5.0, turn_time=10.0, keep_inside=True, **kw)
 cpu = time.process_time() - t0
 s = m.summary()
-print(json.dumps(dict(cpu=cpu, time=m.stats.duration, gap=s.get("gap"),
+print(json.dumps(dict(cpu=cpu, decomposed=m.optimum.method.startswith("decomposed"),
+                      time=m.stats.duration, gap=s.get("gap"),
                       covered=s.get("covered_share"), outside=s.get("outside_length_m", 0.0),
                       lanes=s["n_transects"], method=s["method"])))
 """
@@ -61,18 +77,21 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--baseline", required=True, help="the baseline's src folder")
     ap.add_argument("--data", help="Fields2Cover's data/ folder")
+    ap.add_argument("--random", type=int, default=0, help="random areas with holes (seed 0)")
     ap.add_argument("--only", nargs="*", help="case names (star, test_2_cell.json#1, ...)")
     args = ap.parse_args()
-    cases = ["star"]
+    cases = ["star", "test.json"] + [f"random_{i}" for i in range(args.random)]
     if args.data:
         cases += ["test_2_cell.json#1", "test_2_cell.json#2", "test1.xml#1"]
     if args.only:
         cases = [c for c in cases if c in args.only]
     print(
         "| case | baseline: time s / gap s / CPU s | this tree: time s / gap s / CPU s | "
-        "covered | outside m | CPU ratio |"
+        "covered | outside m | time ratio | CPU ratio |"
     )
-    print("|---|---|---|---:|---:|---:|")
+    print("|---|---|---|---:|---:|---:|---:|")
+    for src in (args.baseline, SRC):  # numba's caches filled: no compilation timed
+        _run(src, "random_0", args.data)
     for case in cases:
         base = _run(args.baseline, case, args.data)
         new = _run(SRC, case, args.data)
@@ -80,6 +99,7 @@ def main() -> None:
             f"| {case} | {base['time']:.1f} / {base['gap'] or 0:.1f} / {base['cpu']:.1f} | "
             f"{new['time']:.1f} / {new['gap'] or 0:.1f} / {new['cpu']:.1f} | "
             f"{100 * (new['covered'] or 0):.6f}% | {new['outside']:.3g} | "
+            f"{new['time'] / base['time']:.4f}{' (cells)' if new['decomposed'] else ''} | "
             f"x{new['cpu'] / base['cpu']:.2f} |",
             flush=True,
         )

@@ -13,6 +13,13 @@ candidates; the best :data:`PLANNED` whose model beats the one grid (``beat``) h
 optimised by :func:`boustro.optimize.cover.cover_optimum` on the cell as an area (its
 certificate is the cell's) and are planned with the order of the passes solved
 (:func:`boustro.plan.cell_order.solve_order`): the least flown cost is kept.
+
+With ``keep_inside`` each candidate's cells are searched without keep-inside first (cheap
+plans, tight bounds) and only then with it (plans with boundary passes, 10-30 times dearer,
+loose bounds); both searches stop as soon as the floor of :func:`_cell_optima` (the searched
+cells' lower bounds, a turn between cells, the length covering the cells not searched yet)
+reaches the one grid's cost, and a candidate the first search drops is not searched keeping
+inside. On Fields2Cover's fields (the one grid wins) that skips every keep-inside cell search.
 """
 
 from __future__ import annotations
@@ -334,21 +341,37 @@ def _cell_optima(
     search: _Search, cells: list[Region], beat: float | None
 ) -> list[OptimizeResult] | None:
     """The cells' certified optima, largest cell first; ``None`` when a cell has none, or when
-    (with ``beat``, the one grid's cost) the cells' lower bounds already add up to ``beat``:
-    the whole plan flies every cell's lanes, moves and turns, and more (moves between cells, a
-    turn each), so it would not win (a screen, not a bound: the solved order may interleave
-    the cells' passes)."""
+    (with ``beat``, the one grid's cost) the cells' floor already reaches ``beat``: the whole
+    plan flies every cell's lanes, moves and turns, and more (moves between cells, a turn
+    each), so it would not win (a screen, not a bound: the solved order may interleave the
+    cells' passes). The floor: the searched cells' lower bounds, a turn between consecutive
+    cells, and for the cells not searched yet the length that covers their area
+    (:func:`_area_floor`), checked before each search (a small cell's search can cost more
+    than a large one's)."""
     found: dict[int, OptimizeResult] = {}
-    floor = 0.0
-    for k in sorted(range(len(cells)), key=lambda k: -cells[k].area):
+    order = sorted(range(len(cells)), key=lambda k: -cells[k].area)
+    rest = [_area_floor(search, cells[k]) for k in order]
+    floor = search.cost.per_turn * (len(cells) - 1) + sum(rest)
+    for i, k in enumerate(order):
+        if beat is not None and floor >= beat:
+            return None
         opt = search.optimum(cells[k])
         if opt is None:
             return None
         found[k] = opt
-        floor += float(opt.info.get("lower_bound") or 0.0)
-        if beat is not None and floor >= beat:
-            return None
+        floor += max(float(opt.info.get("lower_bound") or 0.0), rest[i]) - rest[i]
+    if beat is not None and floor >= beat:
+        return None
     return [found[k] for k in range(len(cells))]
+
+
+def _area_floor(search: _Search, cell: Region) -> float:
+    """The cost of the length a path needs to cover the cell: within ``reach`` of a path of
+    length ``L`` lie at most ``2 reach L + pi reach^2`` of area."""
+    r = search.reach
+    if r <= 0:
+        return 0.0
+    return search.cost.per_length * max(0.0, cell.area - math.pi * r * r) / (2 * r)
 
 
 def plan_decomposed(
@@ -377,15 +400,18 @@ def plan_decomposed(
     Each cell's search costs the cell's own plan (``cell_finish``: the vehicle's turns; never
     headland passes). With ``keep_inside`` a cell alone is planned keeping inside the cell (its
     cut edges get boundary passes the whole plan does not fly), so the cells are searched both
-    with and without it and the whole plan (always keeping inside) of least flown cost is kept.
+    without and with it (in that order: a candidate the first search screens out is dropped)
+    and the whole plan (always keeping inside) of least flown cost is kept.
     """
     t0 = time.perf_counter()
     region = frame.region
     assert region is not None
     options = _path_options(frame, turnaround, speed, turn_time)
-    searches = [_Search(frame, cost, layout, options, keep_inside, cell_finish)]
+    # the cells searched without keep_inside first (cheap plans, tight bounds): their floor
+    # screens a candidate out before the keep_inside search (dear plans, loose bounds)
+    searches = [_Search(frame, cost, layout, options, False, cell_finish)]
     if keep_inside:
-        searches.append(_Search(frame, cost, layout, options, False, cell_finish))
+        searches.append(_Search(frame, cost, layout, options, True, cell_finish))
         searches[1].models = searches[0].models  # the model does not depend on it
     candidates = _candidates(region, searches[0], sweep)
     if beat is not None:  # the model leaves out moves between cells: hopeless if above
@@ -396,8 +422,8 @@ def plan_decomposed(
     for cand in candidates[:planned]:
         for search in searches:
             optima = _cell_optima(search, cand.cells, beat)
-            if optima is None:
-                continue
+            if optima is None:  # screened out (or no lane): the other search too
+                break
             plan = plan_region(
                 region, search.s, layout=lay, cells=list(zip(cand.cells, optima, strict=True)),
                 order="auto", keep_inside=keep_inside,

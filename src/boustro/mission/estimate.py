@@ -90,9 +90,13 @@ COST_MODEL: dict[str, tuple[float, ...]] = {
 #: vertices and 10-300 lanes, 0.16-6.6, median 1.12 (its measured times are irregular: a
 #: 1000-vertex polygon took 0.37 s at 10 lanes and 10.2 s at 40). With ``keep_inside`` every
 #: plan the search evaluates carries its boundary passes: the estimate is multiplied by
-#: :data:`KEEP_INSIDE_FACTOR` (measured 4.3-21x on two convex polygons and two stars of 50
-#: and 200 vertices).
-KEEP_INSIDE_FACTOR = 10.0
+#: :data:`KEEP_INSIDE_FACTOR`, fitted on ``benchmarks/keep_inside_speed.py --random 6``
+#: (2026-11-27, load 5: CPU / the row's estimate 0.75-0.99 on Fields2Cover's three concave
+#: fields, where the decomposition is screened out, 2.3-4.3 on six random areas with holes,
+#: 3.5 on ``test.json``, 4.6 on the 200-vertex star): 2, the middle of that range, leaves the
+#: estimate within a factor 2.7 of the CPU measured (it was 10 when every cell was searched
+#: with and without keep-inside: measured 4.3-21x then).
+KEEP_INSIDE_FACTOR = 2.0
 
 #: Above this many (hull) vertices the certified optimiser's work is over its limit whatever
 #: the spacing (at least ``n^3 (n - 1)``), so :func:`global_work` is not computed.

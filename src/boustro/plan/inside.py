@@ -57,6 +57,8 @@ MAX_PATCHES = 5000
 #: Pass pieces whose bands :func:`_band` keeps (a few kilobytes each: the pieces of a contour
 #: between its spurs recur in every plan of an area).
 BAND_CACHE = 4096
+#: Unions of bands kept (:func:`_bands`).
+UNION_CACHE = 128
 #: Areas whose shapely geometry (:func:`_geometry`) is kept: a search plans one area (or a
 #: decomposition's few cells) hundreds of times.
 AREA_CACHE = 32
@@ -266,7 +268,7 @@ def boundary_passes(
         keys = [np.ascontiguousarray(k, dtype=np.float64) for k in _near(lines, rest, 2 * inner)]
         if not keys:
             return rest
-        band = shapely.union_all([_band(k.tobytes(), len(k), inner) for k in keys])
+        band = _bands(tuple((k.tobytes(), len(k)) for k in keys), inner)
         return shapely.difference(rest, band)
 
     residual = cover(passes, residual)
@@ -317,6 +319,15 @@ def _near(lines: list[NDArray[np.float64]], rest: Any, far: float) -> list[NDArr
             out.append(line[j : k + 2])
             j = k + 1
     return out
+
+
+@lru_cache(maxsize=UNION_CACHE)
+def _bands(keys: tuple[tuple[bytes, int], ...], reach: float) -> Any:
+    """The union of the passes' bands (:func:`_band`). Cached as well: the plans of a search
+    share most of their sets of contour passes, and the union is then most of a plan's cost."""
+    import shapely
+
+    return shapely.union_all([_band(line, n, reach) for line, n in keys])
 
 
 @lru_cache(maxsize=BAND_CACHE)
