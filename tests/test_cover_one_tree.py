@@ -11,9 +11,10 @@ import pytest
 
 import boustro.optimize.cover.bounds as bounds_module
 import boustro.optimize.cover.one_tree as one_tree_module
+import boustro.optimize.cover.search as search_module
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region
-from boustro.optimize.cover import CoverCost, band_stats
+from boustro.optimize.cover import CoverCost, band_stats, cover_optimum
 from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.one_tree import one_tree_bound
 from boustro.optimize.cover.search import CoverSearch
@@ -196,3 +197,39 @@ def test_a_moves_detour_past_a_wall_is_never_longer_than_the_routed_move():
             assert route.length >= lower - 1e-9
             longer += lower > math.hypot(va - vb, max(max(la_, lb) - min(ha, hb), 0.0)) + 1e-6
     assert longer >= 5
+
+
+@pytest.mark.parametrize("index", range(2))
+def test_deferred_one_trees_give_the_certificate_of_a_one_tree_at_every_box(index, monkeypatch):
+    """Boxes taken out by their other bounds get their 1-tree only after the search, and only
+    where it could lower the floor (search.DEFER_TOUR): the same plan, rounds and certificate
+    as a 1-tree at every box, with fewer boxes' 1-trees computed."""
+    region = _scaled(random_regions(71, 2, n_holes=(1, 3))[index], 260.0)
+    cost = CoverCost.time(5.0, 10.0)
+    evaluate = _evaluate(region, cost, 0.0, None)
+    deferred: list[int] = []
+    settle = CoverSearch.settle_deferred
+
+    def spy(self, lower):
+        deferred.append(sum(len(b) for _, b in self.deferred))
+        if self.deferred:  # the deferred boxes' own minimum, a 1-tree at every one of them
+            boxes = Boxes(*(np.concatenate([b[f] for b, _ in self.deferred]) for f in range(4)))
+            base = np.concatenate([v for _, v in self.deferred])
+            full = self.box_bounds(boxes, tour_below=self.best[0])
+            assert (full >= base - 1e-9).all() and (full > base + 1e-6).any()
+            got = settle(self, math.inf)
+            assert got == pytest.approx(float(full.min()), rel=1e-12)
+            self.deferred = [(boxes, base)]
+        return settle(self, lower)
+
+    monkeypatch.setattr(CoverSearch, "settle_deferred", spy)
+    runs = {}
+    for defer in (False, True):
+        monkeypatch.setattr(search_module, "DEFER_TOUR", defer)
+        runs[defer] = cover_optimum(region, SPACING, cost, evaluate, boustrophedon=False)
+    assert deferred[0] == 0 and deferred[1] > 0
+    a, b = runs[False], runs[True]
+    assert (a.angle, a.offset, a.fitness) == (b.angle, b.offset, b.fitness)
+    assert a.info["rounds"] == b.info["rounds"]
+    assert b.info["lower_bound"] == pytest.approx(a.info["lower_bound"], rel=1e-12)
+    assert b.info["lower_bound"] <= b.fitness

@@ -67,6 +67,10 @@ TOUR_BOUND = True
 #: The largest box radius (in spacings) whose boxes get the 1-tree bound: wider boxes give
 #: their lanes' ends wide ranges, where it adds little, and are halved anyway.
 TOUR_EPS = 0.25
+#: Whether a box taken out by its other bounds gets its 1-tree only after the search, and only
+#: if it could lower the certificate's floor (:meth:`CoverSearch.settle_deferred`): the same
+#: certificate for less CPU (docs/mission_time.md, "The 1-tree's CPU").
+DEFER_TOUR = True
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 EDGE_OFFSETS = 64
@@ -108,6 +112,8 @@ class CoverSearch:
         # the 1-tree bound on the moves (optimize/cover/one_tree.py)
         self.tour = TOUR_BOUND and self.n_holes > 0 and not simplify
         self.walls = WallCache()
+        self.skipped: NDArray[np.bool_] = np.zeros(0, dtype=bool)  # see box_bounds
+        self.deferred: list[tuple[_Boxes, NDArray[np.float64]]] = []  # see settle_deferred
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
@@ -214,12 +220,23 @@ class CoverSearch:
         one = _Boxes(*(a[i : i + 1] for a in boxes))
         return float(self.point_values(one, exact=True)[0])
 
-    def box_bounds(self, boxes: _Boxes) -> NDArray[np.float64]:
+    def box_bounds(
+        self,
+        boxes: _Boxes,
+        keep_at: NDArray[np.float64] | None = None,
+        tour_below: float | None = None,
+    ) -> NDArray[np.float64]:
         """A lower bound on the cost over each box: the sandwich at the radius that holds
-        every rotation by ``delta`` about the origin and shift by ``eta`` across the lines."""
+        every rotation by ``delta`` about the origin and shift by ``eta`` across the lines.
+
+        ``keep_at`` (per box): the 1-tree bound is computed only where the other bounds are
+        below it (a box at or above it is taken out anyway); the boxes where it was skipped so
+        but could still raise the bound (below the best plan) are marked in :attr:`skipped`.
+        ``tour_below``: the 1-tree's stopping value instead of the best plan."""
         eps = box_radius(boxes, self.radius)
         radius = level_radius(eps, self.top_eps)  # >= eps: a level of the sandwich
         out = np.empty(len(eps))
+        self.skipped = np.zeros(len(eps), dtype=bool)
         for r in np.unique(radius):
             sel = radius == r
             lv = self.sandwich.level(float(r), self.shrink)
@@ -240,13 +257,41 @@ class CoverSearch:
                     lv, st, float(r), reach_out, boxes.theta[sel], boxes.d[sel], boxes.delta[sel]
                 )
                 continue
+            below = self._tour_below(float(r))
+            if below is not None and tour_below is not None:
+                below = tour_below
+            skipped = np.zeros(int(sel.sum()), dtype=bool)
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
-                runins=self.n_holes == 0, tour_below=self._tour_below(float(r)),
+                runins=self.n_holes == 0, tour_below=below,
                 walls=self._walls(lv, boxes.theta[sel], boxes.d[sel], float(r)),
+                tour_keep=None if keep_at is None else keep_at[sel], tour_skipped=skipped,
             )  # fmt: skip
+            self.skipped[sel] = skipped
         self.bound_evaluations += len(eps)
         return out
+
+    def deferred_min(self) -> float:
+        """The lowest bound (without the 1-tree) of a box taken out before its 1-tree."""
+        return min((float(b.min()) for _, b in self.deferred), default=math.inf)
+
+    def settle_deferred(self, lower: float) -> float:
+        """The certificate's lower bound ``min(lower, bounds of the deferred boxes)``, each
+        deferred box's bound with its 1-tree, computed only for the boxes whose bound without
+        it is below ``lower`` (the others cannot lower the minimum), its steps stopping once
+        the box's bound reaches ``lower``: the minimum a 1-tree at every box would give."""
+        if not self.deferred:
+            return lower
+        boxes = _Boxes(*(np.concatenate([b[f] for b, _ in self.deferred]) for f in range(4)))
+        base = np.concatenate([v for _, v in self.deferred])
+        self.deferred = []
+        sel = base < lower
+        if not sel.any():
+            return lower
+        work, evaluations = self.work, self.bound_evaluations  # not the search's work
+        bounds = self.box_bounds(boxes.take(sel), tour_below=lower)
+        self.work, self.bound_evaluations = work, evaluations
+        return min(lower, float(bounds.min()))
 
     def _inside(self, lv: Any, st: Any, *args: Any) -> NDArray[np.float64]:
         """The keep-inside bound (:func:`~.inside_bound.inside_box_bounds`)."""
@@ -388,7 +433,6 @@ def _branch_and_bound(
     rounds, stopped = 0, ""
     while len(boxes.theta):
         rounds += 1
-        bounds = search.box_bounds(boxes)
         points = search.point_values(boxes)
         search.try_plans(boxes, search.ranks, first=rounds == 1)
         best = search.best[0]
@@ -398,17 +442,24 @@ def _branch_and_bound(
         # settled: the bound is above the lowest model value by a quarter of the gap between
         # it and the best plan (the certificate's gap cannot get much smaller than that gap)
         settle = model_min - SETTLE_SHARE * max(best - model_min, 0.0) - lim.rtol * abs(best)
-        keep = (
-            (bounds < best - lim.rtol * abs(best))
-            & (bounds < points - lim.resolve * abs(best))
-            & (bounds < settle)
+        keep_at = np.minimum(
+            np.minimum(best - lim.rtol * abs(best), points - lim.resolve * abs(best)), settle
         )
-        if (~keep).any():
-            floor = min(floor, float(bounds[~keep].min()))
+        # the 1-tree only where the other bounds keep the box: a box taken out without it
+        # joins the certificate's floor later (settle_deferred), with it where it matters
+        bounds = search.box_bounds(boxes, keep_at if DEFER_TOUR else None)
+        keep = bounds < keep_at
+        if search.skipped.any():
+            search.deferred.append((boxes.take(search.skipped), bounds[search.skipped]))
+        done = ~keep & ~search.skipped
+        if done.any():
+            floor = min(floor, float(bounds[done].min()))
         boxes = boxes.take(keep)
         bounds = bounds[keep]
         if progress is not None and math.isfinite(best):
-            low = min(floor, float(bounds.min()) if len(bounds) else math.inf)
+            low = min(
+                floor, search.deferred_min(), float(bounds.min()) if len(bounds) else math.inf
+            )
             progress(max(0.0, min(1.0, 1.0 - (best - low) / max(abs(best), 1e-300))))
         if not len(boxes.theta):
             break
@@ -511,7 +562,7 @@ def cover_optimum(
     value, theta, d = search.best
     if not math.isfinite(value):
         raise InvalidParameterError("no layout of this spacing has a lane over the area")
-    lower = min(floor, value)
+    lower = search.settle_deferred(min(floor, value))
     gap = max(0.0, value - lower)
     angle, offset = canonical(theta, d, s)
     return OptimizeResult(
