@@ -47,6 +47,10 @@ __all__ = ["MAX_LANES", "ONE_TREE_STEPS", "one_tree_bound"]
 MAX_LANES = 160
 #: Subgradient steps per layout.
 ONE_TREE_STEPS = 40
+#: The walls lengthen the distances between ends on lines at most this many lines apart only:
+#: the 1-tree's edges are short (on the random areas of ``benchmarks/tour_bound.py`` the
+#: bounds with 1 and with every line are the same; the walls took 40% of its CPU).
+WALL_LINES = 2
 
 
 def _lane_ends(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi, v):
@@ -113,15 +117,19 @@ def _detour(la, ha, va, lb, hb, vb, walls, w):
     return min(d1, d2)
 
 
-def _distances(lo, hi, v, n_ends, walls, dist):
+def _distances(lo, hi, v, n_ends, walls, reach, dist):
     """Least distance between every two ends' ranges (``dist``, ``n_ends`` square), past the
-    walls (the largest detour of one wall)."""
+    walls (the largest detour of one wall) for ends at most ``reach`` apart across the lines
+    (farther ends: the straight distance, also a lower bound)."""
     for a in range(n_ends):
         dist[a, a] = 0.0
         for b in range(a + 1, n_ends):
             g = max(max(lo[a], lo[b]) - min(hi[a], hi[b]), 0.0)
             dv = v[a] - v[b]
             best = math.sqrt(dv * dv + g * g)
+            if abs(dv) > reach:
+                dist[a, b] = dist[b, a] = best
+                continue
             for w in range(walls.shape[0]):
                 best = max(best, _detour(lo[a], hi[a], v[a], lo[b], hi[b], v[b], walls, w))
             dist[a, b] = dist[b, a] = best
@@ -210,7 +218,7 @@ def _bounds(
                        last_lo[la], pieces[la], k0, s, t, lo, hi, v)  # fmt: skip
         if n < 2:
             continue
-        _distances(lo, hi, v, 2 * n, walls[la], dist)
+        _distances(lo, hi, v, 2 * n, walls[la], (WALL_LINES + 0.5) * s, dist)
         for e in range(2 * n):
             pi[e] = 0.0
         best = 0.0  # the moves are never negative
