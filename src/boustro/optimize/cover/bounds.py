@@ -8,7 +8,7 @@ from numpy.typing import NDArray
 from .bands import BandStats
 from .cost import CoverCost
 from .ends import HoleBoxes, lane_end_bound
-from .one_tree import one_tree_bound
+from .one_tree import Multipliers, one_tree_bound
 from .piece_ends import piece_end_bound
 from .sandwich import Level
 
@@ -56,6 +56,7 @@ def lower_bounds(
     walls: NDArray[np.float64] | None = None,
     tour_keep: NDArray[np.float64] | None = None,
     tour_skipped: NDArray[np.bool_] | None = None,
+    multipliers: Multipliers | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every plan of the layouts' grids over any area
     between ``level``'s inner and outer sets.
@@ -78,7 +79,8 @@ def lower_bounds(
     per layout, if given), the 1-tree bound (:func:`~.one_tree.one_tree_bound`, its moves past
     ``walls``; its steps stop once the layout's bound reaches ``tour_below``); the layouts
     below ``tour_below`` but not below ``tour_keep`` are marked in ``tour_skipped`` (an output,
-    filled when given with ``tour_keep``). ``runins=False`` (an
+    filled when given with ``tour_keep``; ``multipliers``: the 1-tree's starts, kept).
+    ``runins=False`` (an
     area with holes: the planner cuts a run-in or run-out that would enter a hole) counts no
     run-ins or run-outs in the lanes' length.
     """
@@ -115,7 +117,9 @@ def lower_bounds(
                 if tour_skipped is not None:
                     tour_skipped[:] = todo & (out >= tour_keep)
                 todo &= out < tour_keep
-            tree = one_tree_bound(st, spacing, cost, todo=todo, walls=walls, enough=enough)
+            tree = one_tree_bound(
+                st, spacing, cost, todo=todo, walls=walls, enough=enough, multipliers=multipliers
+            )
             out = out + np.maximum(tree - move_cost, 0.0)
         return out
     length = st.length.sum(axis=1) + runs + moves + perimeter

@@ -32,7 +32,7 @@ from __future__ import annotations
 import math
 from functools import cache
 from importlib.util import find_spec
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,7 +41,7 @@ from ..._jit import jit, jit_globals
 from .bands import BandStats
 from .cost import CoverCost
 
-__all__ = ["MAX_LANES", "ONE_TREE_STEPS", "one_tree_bound"]
+__all__ = ["MAX_LANES", "ONE_TREE_STEPS", "Multipliers", "one_tree_bound"]
 
 #: Layouts with more counted lanes than this are not bounded (``O(lanes^2)`` per step).
 MAX_LANES = 160
@@ -53,15 +53,21 @@ ONE_TREE_STEPS = 40
 WALL_LINES = 2
 
 
-def _lane_ends(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi, v):
+def _lane_ends(
+    count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi, v, lk, ls
+):
     """Fill the end ranges ``[lo, hi]`` (along the lines) and ``v`` (across) of every counted
-    lane of one layout, ends ``2i`` (start) and ``2i + 1`` (end) of lane ``i``; the lanes."""
+    lane of one layout, ends ``2i`` (start) and ``2i + 1`` (end) of lane ``i``, and its line
+    ``lk`` and slot ``ls`` (0 the first lane of its line, 2 the last, 1 one between); the
+    lanes."""
     n = 0
     for k in range(count.shape[0]):
         c = count[k]
         if c < 1:
             continue
         for i in range(c):
+            lk[n] = k
+            ls[n] = 0 if i == 0 else (2 if i == c - 1 else 1)
             if i == 0:
                 lo[2 * n], hi[2 * n] = out_lo[k] - t, in_lo[k]
             elif i == c - 1:
@@ -197,6 +203,9 @@ def _bounds(
     s,
     t,
     steps,
+    pi0,
+    warm,
+    kofs,
 ):
     """Per layout (where ``todo``): the best 1-tree bound on the moves, in plan units (the
     steps stop once it reaches ``enough``)."""
@@ -210,23 +219,32 @@ def _bounds(
     pi, deg = np.empty(m), np.empty(m, dtype=np.int64)
     key, near = np.empty(big), np.empty(big, dtype=np.int64)
     done = np.empty(big, dtype=np.bool_)
+    lk, ls = np.empty(big, dtype=np.int64), np.empty(big, dtype=np.int64)
+    best_pi = np.empty(m)
+    width = pi0.shape[1]
     out = np.zeros(n_layouts)
     for la in range(n_layouts):
         if not todo[la]:
             continue
         n = _lane_ends(count[la], out_lo[la], in_lo[la], in_hi[la], out_hi[la], first_hi[la],
-                       last_lo[la], pieces[la], k0, s, t, lo, hi, v)  # fmt: skip
+                       last_lo[la], pieces[la], k0, s, t, lo, hi, v, lk, ls)  # fmt: skip
         if n < 2:
             continue
         _distances(lo, hi, v, 2 * n, walls[la], (WALL_LINES + 0.5) * s, dist)
-        for e in range(2 * n):
-            pi[e] = 0.0
+        for i in range(n):
+            col = lk[i] + kofs
+            inside = warm[la] and 0 <= col < width
+            for side in range(2):
+                pi[2 * i + side] = pi0[la, col, ls[i], side] if inside else 0.0
+                best_pi[2 * i + side] = pi[2 * i + side]
         best = 0.0  # the moves are never negative
         lam, stall = 1.0, 0
         for _ in range(steps):
             val = _one_tree(dist, pi, n, deg, key, near, done)
             if val > best * (1.0 + 1e-9):
                 best, stall = val, 0
+                for e in range(2 * n):
+                    best_pi[e] = pi[e]
                 if best >= enough[la]:
                     break
             else:
@@ -243,7 +261,25 @@ def _bounds(
             for e in range(2 * n):
                 pi[e] += step * (deg[e] - 2)
         out[la] = max(best, 0.0)
+        pi0[la] = 0.0  # the multipliers of the best 1-tree, for the next boxes
+        for i in range(n):
+            col = lk[i] + kofs
+            if 0 <= col < width:
+                for side in range(2):
+                    pi0[la, col, ls[i], side] = best_pi[2 * i + side]
     return out
+
+
+class Multipliers(NamedTuple):
+    """Held-Karp multipliers kept between the 1-trees of boxes (a box's halves start from
+    its own): ``values`` ``(L, W, 3, 2)`` per layout, line (absolute index ``k0 + column``), slot
+    (the first lane of the line, one between, the last) and side (start, end); ``warm`` ``(L,)``
+    where they hold a 1-tree's. :func:`one_tree_bound` starts from them where ``warm`` and
+    writes its best 1-tree's multipliers back (any start gives a valid bound)."""
+
+    values: NDArray[np.float64]
+    warm: NDArray[np.bool_]
+    k0: int
 
 
 @cache
@@ -263,15 +299,17 @@ def one_tree_bound(
     spacing: float,
     cost: CoverCost,
     todo: NDArray[np.bool_] | None = None,
-    steps: int = ONE_TREE_STEPS,
+    steps: int | None = None,
     walls: NDArray[np.float64] | None = None,
     enough: NDArray[np.float64] | None = None,
+    multipliers: Multipliers | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound, in cost units, on ``per_length`` times the connecting moves plus
     the extra lanes' flown length of every plan of each layout's sandwich (module docstring);
     0 where not ``todo`` or with more than :data:`MAX_LANES` counted lanes. ``walls`` ``(L, W,
     4)``: segments no move crosses, in each layout's frame (:func:`~.walls.walls_in_frames`);
-    ``enough`` ``(L,)`` (cost units): a layout's steps stop once its bound reaches it."""
+    ``enough`` ``(L,)`` (cost units): a layout's steps stop once its bound reaches it;
+    ``multipliers``: where to start the steps and where to keep their best (read, written)."""
     n_layouts = st.count.shape[0]
     lanes = st.count.sum(axis=1)
     ok = lanes <= MAX_LANES if todo is None else todo & (lanes <= MAX_LANES)
@@ -286,10 +324,19 @@ def one_tree_bound(
     def crop(a: NDArray[Any]) -> NDArray[Any]:
         return np.ascontiguousarray(a[:, c0:c1])
 
+    if multipliers is None:
+        pi0, warm, kofs = np.zeros((n_layouts, 1, 3, 2)), np.zeros(n_layouts, bool), -(2**40)
+    else:
+        pi0, warm = multipliers.values, multipliers.warm
+        kofs = int(st.k0 + c0) - multipliers.k0
     moves = _compiled()(
         crop(st.count), crop(st.out_lo), crop(st.in_lo), crop(st.in_hi), crop(st.out_hi),
         crop(st.first_hi), crop(st.last_lo), crop(st.pieces), np.ascontiguousarray(ok),
         np.ascontiguousarray(stop, dtype=np.float64), np.ascontiguousarray(walls, dtype=np.float64),
-        int(st.k0 + c0), float(spacing), float(cost.turnaround), int(steps),
+        int(st.k0 + c0), float(spacing), float(cost.turnaround),
+        int(ONE_TREE_STEPS if steps is None else steps), pi0,
+        np.ascontiguousarray(warm), kofs,
     )  # fmt: skip
+    if multipliers is not None:
+        multipliers.warm[ok] = True
     return cost.per_length * moves

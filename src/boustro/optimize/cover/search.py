@@ -19,10 +19,11 @@ from ..result import OptimizeResult, canonical
 from .bands import RigidBoxes, band_stats
 from .bounds import lower_bounds
 from .boxes import Boxes as _Boxes
-from .boxes import box_radius, initial_boxes, level_radius, split_boxes
+from .boxes import box_radius, initial_boxes, level_radius, split_boxes, split_parents
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
 from .inside_bound import contour_edges, inside_box_bounds, path_floor
+from .one_tree import Multipliers
 from .sandwich import Level, Sandwich
 from .walls import WallCache
 
@@ -71,6 +72,9 @@ TOUR_EPS = 0.25
 #: if it could lower the certificate's floor (:meth:`CoverSearch.settle_deferred`): the same
 #: certificate for less CPU (docs/mission_time.md, "The 1-tree's CPU").
 DEFER_TOUR = True
+#: Whether a box's 1-tree starts from its parent box's best multipliers (and its centre's
+#: from its box's), not from zero.
+WARM_TOUR = True
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 EDGE_OFFSETS = 64
@@ -113,7 +117,8 @@ class CoverSearch:
         self.tour = TOUR_BOUND and self.n_holes > 0 and not simplify
         self.walls = WallCache()
         self.skipped: NDArray[np.bool_] = np.zeros(0, dtype=bool)  # see box_bounds
-        self.deferred: list[tuple[_Boxes, NDArray[np.float64]]] = []  # see settle_deferred
+        # boxes taken out before their 1-tree, their bounds and multipliers (settle_deferred)
+        self.deferred: list[tuple[_Boxes, NDArray[np.float64], Multipliers | None]] = []
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
@@ -169,12 +174,18 @@ class CoverSearch:
         return math.floor(-far / self.s) - 1, math.ceil(far / self.s) + 1
 
     def point_values(
-        self, boxes: _Boxes, exact: bool = False, *, span_only: bool = False
+        self,
+        boxes: _Boxes,
+        exact: bool = False,
+        *,
+        span_only: bool = False,
+        multipliers: Multipliers | None = None,
     ) -> NDArray[np.float64]:
         """The bound at each box's centre with the region itself (a layout's own model); of
         the simplified region (:attr:`Sandwich.approximate`) unless ``exact``: the search only
         ranks and retires boxes by these, a plan's value is always exact. ``span_only``: the
-        moves as the lines' span only (a second ranking, not recorded)."""
+        moves as the lines' span only (a second ranking, not recorded). ``multipliers``: the
+        1-tree's starts (the boxes' own; not changed)."""
         if self.keep_inside:  # a relaxation of the plan even at one layout
             lv = self.sandwich.level(0.0, self.shrink)
         else:
@@ -203,6 +214,9 @@ class CoverSearch:
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
                 runins=self.n_holes == 0, tour_below=self._tour_below(),
                 walls=self._walls(lv, boxes.theta, boxes.d),
+                multipliers=None if multipliers is None else Multipliers(
+                    multipliers.values.copy(), multipliers.warm.copy(), multipliers.k0
+                ),
             )  # fmt: skip
             if self.evaluate is None:  # the model is the plan
                 self.ranks = out
@@ -225,6 +239,7 @@ class CoverSearch:
         boxes: _Boxes,
         keep_at: NDArray[np.float64] | None = None,
         tour_below: float | None = None,
+        multipliers: Multipliers | None = None,
     ) -> NDArray[np.float64]:
         """A lower bound on the cost over each box: the sandwich at the radius that holds
         every rotation by ``delta`` about the origin and shift by ``eta`` across the lines.
@@ -232,7 +247,8 @@ class CoverSearch:
         ``keep_at`` (per box): the 1-tree bound is computed only where the other bounds are
         below it (a box at or above it is taken out anyway); the boxes where it was skipped so
         but could still raise the bound (below the best plan) are marked in :attr:`skipped`.
-        ``tour_below``: the 1-tree's stopping value instead of the best plan."""
+        ``tour_below``: the 1-tree's stopping value instead of the best plan; ``multipliers``
+        (per box): where its steps start, and where the best ones are kept."""
         eps = box_radius(boxes, self.radius)
         radius = level_radius(eps, self.top_eps)  # >= eps: a level of the sandwich
         out = np.empty(len(eps))
@@ -261,19 +277,34 @@ class CoverSearch:
             if below is not None and tour_below is not None:
                 below = tour_below
             skipped = np.zeros(int(sel.sum()), dtype=bool)
+            mult = None
+            if multipliers is not None:
+                mult = Multipliers(multipliers.values[sel], multipliers.warm[sel], multipliers.k0)
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
                 runins=self.n_holes == 0, tour_below=below,
                 walls=self._walls(lv, boxes.theta[sel], boxes.d[sel], float(r)),
                 tour_keep=None if keep_at is None else keep_at[sel], tour_skipped=skipped,
+                multipliers=mult,
             )  # fmt: skip
             self.skipped[sel] = skipped
+            if multipliers is not None and mult is not None:
+                multipliers.values[sel], multipliers.warm[sel] = mult.values, mult.warm
         self.bound_evaluations += len(eps)
         return out
 
+    def multipliers(self, n_boxes: int) -> Multipliers | None:
+        """Cold multipliers for ``n_boxes`` boxes (:data:`WARM_TOUR`), over every line a box's
+        sandwich may reach; ``None`` without the 1-tree."""
+        if not (WARM_TOUR and self.ends and self.tour):
+            return None
+        k_lo, k_hi = self.k_range(2 * self.top_eps + self.reach + self.s)
+        values = np.zeros((n_boxes, k_hi - k_lo + 1, 3, 2))
+        return Multipliers(values, np.zeros(n_boxes, dtype=bool), k_lo)
+
     def deferred_min(self) -> float:
         """The lowest bound (without the 1-tree) of a box taken out before its 1-tree."""
-        return min((float(b.min()) for _, b in self.deferred), default=math.inf)
+        return min((float(b.min()) for _, b, _ in self.deferred), default=math.inf)
 
     def settle_deferred(self, lower: float) -> float:
         """The certificate's lower bound ``min(lower, bounds of the deferred boxes)``, each
@@ -282,14 +313,22 @@ class CoverSearch:
         the box's bound reaches ``lower``: the minimum a 1-tree at every box would give."""
         if not self.deferred:
             return lower
-        boxes = _Boxes(*(np.concatenate([b[f] for b, _ in self.deferred]) for f in range(4)))
-        base = np.concatenate([v for _, v in self.deferred])
+        boxes = _Boxes(*(np.concatenate([b[f] for b, _, _ in self.deferred]) for f in range(4)))
+        base = np.concatenate([v for _, v, _ in self.deferred])
+        mult = None
+        if all(m is not None for _, _, m in self.deferred):
+            parts = [m for _, _, m in self.deferred if m is not None]
+            mult = Multipliers(
+                np.concatenate([m.values for m in parts]),
+                np.concatenate([m.warm for m in parts]),
+                parts[0].k0,
+            )
         self.deferred = []
         sel = base < lower
         if not sel.any():
             return lower
         work, evaluations = self.work, self.bound_evaluations  # not the search's work
-        bounds = self.box_bounds(boxes.take(sel), tour_below=lower)
+        bounds = self.box_bounds(boxes.take(sel), tour_below=lower, multipliers=_take(mult, sel))
         self.work, self.bound_evaluations = work, evaluations
         return min(lower, float(bounds.min()))
 
@@ -421,6 +460,13 @@ class _Limits(NamedTuple):
     t0: float
 
 
+def _take(mult: Multipliers | None, index: NDArray[Any]) -> Multipliers | None:
+    """The multipliers of the boxes ``index`` selects (a mask or indices)."""
+    if mult is None:
+        return None
+    return Multipliers(mult.values[index], mult.warm[index], mult.k0)
+
+
 def _branch_and_bound(
     search: CoverSearch,
     boxes: _Boxes,
@@ -431,9 +477,10 @@ def _branch_and_bound(
     reached: ``(the lowest bound of a box taken out, rounds, why it stopped early or "")``."""
     floor = math.inf  # the lowest bound of a discarded box
     rounds, stopped = 0, ""
+    mult = search.multipliers(len(boxes.theta))
     while len(boxes.theta):
         rounds += 1
-        points = search.point_values(boxes)
+        points = search.point_values(boxes, multipliers=mult)
         search.try_plans(boxes, search.ranks, first=rounds == 1)
         best = search.best[0]
         # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
@@ -447,15 +494,15 @@ def _branch_and_bound(
         )
         # the 1-tree only where the other bounds keep the box: a box taken out without it
         # joins the certificate's floor later (settle_deferred), with it where it matters
-        bounds = search.box_bounds(boxes, keep_at if DEFER_TOUR else None)
+        bounds = search.box_bounds(boxes, keep_at if DEFER_TOUR else None, multipliers=mult)
         keep = bounds < keep_at
         if search.skipped.any():
-            search.deferred.append((boxes.take(search.skipped), bounds[search.skipped]))
+            skipped = search.skipped
+            search.deferred.append((boxes.take(skipped), bounds[skipped], _take(mult, skipped)))
         done = ~keep & ~search.skipped
         if done.any():
             floor = min(floor, float(bounds[done].min()))
-        boxes = boxes.take(keep)
-        bounds = bounds[keep]
+        boxes, bounds, mult = boxes.take(keep), bounds[keep], _take(mult, keep)
         if progress is not None and math.isfinite(best):
             low = min(
                 floor, search.deferred_min(), float(bounds.min()) if len(bounds) else math.inf
@@ -468,7 +515,7 @@ def _branch_and_bound(
         if fine.any():
             floor = min(floor, float(bounds[fine].min()))
             stopped = stopped or "the boxes reached the smallest radius"
-            boxes = boxes.take(~fine)
+            boxes, mult = boxes.take(~fine), _take(mult, ~fine)
             if not len(boxes.theta):
                 break
         if search.work_spent(len(boxes.theta)) > lim.max_work:
@@ -479,6 +526,7 @@ def _branch_and_bound(
             floor = min(floor, float(bounds[~fine].min()))
             stopped = f"{lim.max_seconds} s passed"
             break
+        mult = _take(mult, split_parents(boxes, search.radius))
         boxes = split_boxes(boxes, search.radius)
     return floor, rounds, stopped
 
