@@ -152,25 +152,37 @@ def _one_tree(dist, pi, n, deg, key, near, done):
         done[a] = False
     key[0] = 0.0
     near[0] = -1
-    for _ in range(n):
-        a, best = -1, math.inf
-        for b in range(n):
-            if not done[b] and key[b] < best:
-                a, best = b, key[b]
+    a, best = 0, 0.0
+    for _ in range(n):  # Prim: the next lane is chosen while the keys are updated
         done[a] = True
         if near[a] >= 0:
             total += best
             deg[near[a] // 4] += 1  # the tree end (packed: tree end * 4 + pair)
             deg[2 * a + near[a] % 2] += 1
+        r0, r1 = 2 * a, 2 * a + 1
+        p0, p1 = pi[r0], pi[r1]
+        nxt, low = -1, math.inf
         for b in range(n):
             if done[b]:
                 continue
-            for ea in range(2):
-                for eb in range(2):
-                    c = dist[2 * a + ea, 2 * b + eb] + pi[2 * a + ea] + pi[2 * b + eb]
-                    if c < key[b]:
-                        key[b] = c
-                        near[b] = (2 * a + ea) * 4 + eb
+            q0, q1 = pi[2 * b], pi[2 * b + 1]
+            kb, nb = key[b], near[b]
+            c = dist[r0, 2 * b] + p0 + q0
+            if c < kb:
+                kb, nb = c, r0 * 4
+            c = dist[r0, 2 * b + 1] + p0 + q1
+            if c < kb:
+                kb, nb = c, r0 * 4 + 1
+            c = dist[r1, 2 * b] + p1 + q0
+            if c < kb:
+                kb, nb = c, r1 * 4
+            c = dist[r1, 2 * b + 1] + p1 + q1
+            if c < kb:
+                kb, nb = c, r1 * 4 + 1
+            key[b], near[b] = kb, nb
+            if kb < low:
+                nxt, low = b, kb
+        a, best = nxt, low
     # the dummy: its two cheapest edges (cost pi of the end)
     i1, i2 = -1, -1
     for e in range(m):
