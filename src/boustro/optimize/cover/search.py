@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,7 +19,8 @@ from ..result import OptimizeResult, canonical
 from .bands import RigidBoxes, band_stats
 from .bounds import lower_bounds
 from .boxes import Boxes as _Boxes
-from .boxes import box_radius, initial_boxes, level_radius, split_boxes, split_parents
+from .boxes import box_radius, initial_boxes, level_radius
+from .branch import Limits, branch_and_bound, take_multipliers
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
 from .inside_bound import contour_edges, inside_box_bounds, path_floor
@@ -49,10 +50,6 @@ FIRST_SEPARATION = math.radians(3.0)
 #: bound took the tour's moves as the lines' span only; the lanes' ends bring the model within
 #: 1e-3 of the plans on Fields2Cover's fields.
 RESOLVE_RTOL = 1e-3
-#: A box whose bound is within this share of (best plan - lowest model) below the lowest model
-#: is retired (the certificate's gap cannot get much below that difference anyway). 0.25 before
-#: the piece-ends bound; 0.15 cut the random areas' median gap by a tenth for 4% more CPU.
-SETTLE_SHARE = 0.15
 #: Edge directions (longest edges first) whose best offsets are planned before the search,
 #: and offsets scanned at each.
 EDGE_PLANS = 12
@@ -116,6 +113,7 @@ class CoverSearch:
         # the 1-tree bound on the moves (optimize/cover/one_tree.py)
         self.tour = TOUR_BOUND and self.n_holes > 0 and not simplify
         self.walls = WallCache()
+        self.defer = DEFER_TOUR  # read by the branch and bound (optimize/cover/branch.py)
         self.skipped: NDArray[np.bool_] = np.zeros(0, dtype=bool)  # see box_bounds
         # boxes taken out before their 1-tree, their bounds and multipliers (settle_deferred)
         self.deferred: list[tuple[_Boxes, NDArray[np.float64], Multipliers | None]] = []
@@ -328,7 +326,8 @@ class CoverSearch:
         if not sel.any():
             return lower
         work, evaluations = self.work, self.bound_evaluations  # not the search's work
-        bounds = self.box_bounds(boxes.take(sel), tour_below=lower, multipliers=_take(mult, sel))
+        mult = take_multipliers(mult, sel)
+        bounds = self.box_bounds(boxes.take(sel), tour_below=lower, multipliers=mult)
         self.work, self.bound_evaluations = work, evaluations
         return min(lower, float(bounds.min()))
 
@@ -449,88 +448,6 @@ def _initial(search: CoverSearch, n_angles: int, angle: float | None) -> _Boxes:
     return initial_boxes(search.s, search.radius, n_angles, angle, FIXED_OFFSETS)
 
 
-class _Limits(NamedTuple):
-    """The tolerances and budgets of :func:`cover_optimum` (see its arguments)."""
-
-    rtol: float
-    resolve: float
-    min_eps: float
-    max_work: float
-    max_seconds: float | None
-    t0: float
-
-
-def _take(mult: Multipliers | None, index: NDArray[Any]) -> Multipliers | None:
-    """The multipliers of the boxes ``index`` selects (a mask or indices)."""
-    if mult is None:
-        return None
-    return Multipliers(mult.values[index], mult.warm[index], mult.k0)
-
-
-def _branch_and_bound(
-    search: CoverSearch,
-    boxes: _Boxes,
-    lim: _Limits,
-    progress: Callable[[float], None] | None,
-) -> tuple[float, int, str]:
-    """Bound, plan, discard or retire, and halve the boxes until none is left or a limit is
-    reached: ``(the lowest bound of a box taken out, rounds, why it stopped early or "")``."""
-    floor = math.inf  # the lowest bound of a discarded box
-    rounds, stopped = 0, ""
-    mult = search.multipliers(len(boxes.theta))
-    while len(boxes.theta):
-        rounds += 1
-        points = search.point_values(boxes, multipliers=mult)
-        search.try_plans(boxes, search.ranks, first=rounds == 1)
-        best = search.best[0]
-        # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
-        # model at the box's centre, so halving cannot raise it further than the model
-        model_min = search.model_min
-        # settled: the bound is above the lowest model value by a quarter of the gap between
-        # it and the best plan (the certificate's gap cannot get much smaller than that gap)
-        settle = model_min - SETTLE_SHARE * max(best - model_min, 0.0) - lim.rtol * abs(best)
-        keep_at = np.minimum(
-            np.minimum(best - lim.rtol * abs(best), points - lim.resolve * abs(best)), settle
-        )
-        # the 1-tree only where the other bounds keep the box: a box taken out without it
-        # joins the certificate's floor later (settle_deferred), with it where it matters
-        bounds = search.box_bounds(boxes, keep_at if DEFER_TOUR else None, multipliers=mult)
-        keep = bounds < keep_at
-        if search.skipped.any():
-            skipped = search.skipped
-            search.deferred.append((boxes.take(skipped), bounds[skipped], _take(mult, skipped)))
-        done = ~keep & ~search.skipped
-        if done.any():
-            floor = min(floor, float(bounds[done].min()))
-        boxes, bounds, mult = boxes.take(keep), bounds[keep], _take(mult, keep)
-        if progress is not None and math.isfinite(best):
-            low = min(
-                floor, search.deferred_min(), float(bounds.min()) if len(bounds) else math.inf
-            )
-            progress(max(0.0, min(1.0, 1.0 - (best - low) / max(abs(best), 1e-300))))
-        if not len(boxes.theta):
-            break
-        eps = box_radius(boxes, search.radius)
-        fine = eps <= lim.min_eps
-        if fine.any():
-            floor = min(floor, float(bounds[fine].min()))
-            stopped = stopped or "the boxes reached the smallest radius"
-            boxes, mult = boxes.take(~fine), _take(mult, ~fine)
-            if not len(boxes.theta):
-                break
-        if search.work_spent(len(boxes.theta)) > lim.max_work:
-            floor = min(floor, float(bounds[~fine].min()))
-            stopped = f"the work budget ({lim.max_work:.0e} box edges) was spent"
-            break
-        if lim.max_seconds is not None and time.perf_counter() - lim.t0 > lim.max_seconds:
-            floor = min(floor, float(bounds[~fine].min()))
-            stopped = f"{lim.max_seconds} s passed"
-            break
-        mult = _take(mult, split_parents(boxes, search.radius))
-        boxes = split_boxes(boxes, search.radius)
-    return floor, rounds, stopped
-
-
 def cover_optimum(
     region: Region | Polygon,
     spacing: float,
@@ -602,8 +519,8 @@ def cover_optimum(
         angle = float(angle) % math.pi
     boxes = _initial(search, n_angles, angle)
     search.top_eps = float(box_radius(boxes, search.radius).max())
-    limits = _Limits(rtol, resolve, min_eps, max_work, max_seconds, t0)
-    floor, rounds, stopped = _branch_and_bound(search, boxes, limits, progress)
+    limits = Limits(rtol, resolve, min_eps, max_work, max_seconds, t0)
+    floor, rounds, stopped = branch_and_bound(search, boxes, limits, progress)
     if not boustrophedon and evaluate is not None and math.isfinite(search.best[0]):
         search.polish()
         search.refine_offsets()
