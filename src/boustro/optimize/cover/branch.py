@@ -102,6 +102,7 @@ def branch_and_bound(
             floor = min(floor, float(bounds[~fine].min()))
             stopped = f"{lim.max_seconds} s passed"
             break
-        mult = take_multipliers(mult, split_parents(boxes, search.radius))
+        if mult is not None:  # the halves start from their box's multipliers
+            mult = take_multipliers(mult, split_parents(boxes, search.radius))
         boxes = split_boxes(boxes, search.radius)
     return floor, rounds, stopped
