@@ -24,7 +24,7 @@ from .branch import Limits, branch_and_bound, take_multipliers
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
 from .inside_bound import contour_edges, inside_box_bounds, path_floor
-from .one_tree import Multipliers
+from .one_tree import MAX_LANES, Multipliers
 from .sandwich import Level, Sandwich
 from .walls import WallCache
 
@@ -293,10 +293,13 @@ class CoverSearch:
 
     def multipliers(self, n_boxes: int) -> Multipliers | None:
         """Cold multipliers for ``n_boxes`` boxes (:data:`WARM_TOUR`), over every line a box's
-        sandwich may reach; ``None`` without the 1-tree."""
+        sandwich may reach; ``None`` without the 1-tree or over more than twice
+        :data:`~.one_tree.MAX_LANES` lines (the 1-tree's steps then start at 0)."""
         if not (WARM_TOUR and self.ends and self.tour):
             return None
         k_lo, k_hi = self.k_range(2 * self.top_eps + self.reach + self.s)
+        if k_hi - k_lo + 1 > 2 * MAX_LANES:  # wide areas: layouts of few lanes are rare
+            return None
         values = np.zeros((n_boxes, k_hi - k_lo + 1, 3, 2))
         return Multipliers(values, np.zeros(n_boxes, dtype=bool), k_lo)
 
