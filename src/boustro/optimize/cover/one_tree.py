@@ -199,6 +199,27 @@ def _one_tree(dist, pi, n, deg, key, near, done):
     return total
 
 
+def _load(pi0, warm, n, lk, ls, kofs, pi, best_pi):
+    """Start ``pi`` (and ``best_pi``) from one layout's kept multipliers ``pi0`` ``(W, 3, 2)``
+    where ``warm`` (lanes on lines it does not hold: 0), else at 0."""
+    for i in range(n):
+        col = lk[i] + kofs
+        inside = warm and 0 <= col < pi0.shape[0]
+        for side in range(2):
+            pi[2 * i + side] = pi0[col, ls[i], side] if inside else 0.0
+            best_pi[2 * i + side] = pi[2 * i + side]
+
+
+def _store(pi0, n, lk, ls, kofs, best_pi):
+    """Keep ``best_pi`` in one layout's ``pi0`` ``(W, 3, 2)`` (0 where no lane)."""
+    pi0[:] = 0.0
+    for i in range(n):
+        col = lk[i] + kofs
+        if 0 <= col < pi0.shape[0]:
+            for side in range(2):
+                pi0[col, ls[i], side] = best_pi[2 * i + side]
+
+
 def _bounds(
     count,
     out_lo,
@@ -233,7 +254,6 @@ def _bounds(
     done = np.empty(big, dtype=np.bool_)
     lk, ls = np.empty(big, dtype=np.int64), np.empty(big, dtype=np.int64)
     best_pi = np.empty(m)
-    width = pi0.shape[1]
     out = np.zeros(n_layouts)
     for la in range(n_layouts):
         if not todo[la]:
@@ -243,12 +263,7 @@ def _bounds(
         if n < 2:
             continue
         _distances(lo, hi, v, 2 * n, walls[la], (WALL_LINES + 0.5) * s, dist)
-        for i in range(n):
-            col = lk[i] + kofs
-            inside = warm[la] and 0 <= col < width
-            for side in range(2):
-                pi[2 * i + side] = pi0[la, col, ls[i], side] if inside else 0.0
-                best_pi[2 * i + side] = pi[2 * i + side]
+        _load(pi0[la], warm[la], n, lk, ls, kofs, pi, best_pi)
         best = 0.0  # the moves are never negative
         lam, stall = 1.0, 0
         for _ in range(steps):
@@ -273,12 +288,7 @@ def _bounds(
             for e in range(2 * n):
                 pi[e] += step * (deg[e] - 2)
         out[la] = max(best, 0.0)
-        pi0[la] = 0.0  # the multipliers of the best 1-tree, for the next boxes
-        for i in range(n):
-            col = lk[i] + kofs
-            if 0 <= col < width:
-                for side in range(2):
-                    pi0[la, col, ls[i], side] = best_pi[2 * i + side]
+        _store(pi0[la], n, lk, ls, kofs, best_pi)  # the best 1-tree's, for the next boxes
     return out
 
 
@@ -301,7 +311,17 @@ def _compiled() -> Any:
         return _bounds
     jit_globals(
         globals(),
-        ("_orient", "_crosses", "_to_range", "_detour", "_lane_ends", "_distances", "_one_tree"),
+        (
+            "_orient",
+            "_crosses",
+            "_to_range",
+            "_detour",
+            "_lane_ends",
+            "_distances",
+            "_one_tree",
+            "_load",
+            "_store",
+        ),
     )
     return jit(_bounds)
 
