@@ -11,11 +11,12 @@ import pytest
 
 import boustro.optimize.cover.bounds as bounds_module
 import boustro.optimize.cover.one_tree as one_tree_module
+import boustro.optimize.cover.search as search_module
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region
-from boustro.optimize.cover import CoverCost, band_stats
-from boustro.optimize.cover.boxes import Boxes
-from boustro.optimize.cover.one_tree import one_tree_bound
+from boustro.optimize.cover import CoverCost, band_stats, cover_optimum
+from boustro.optimize.cover.boxes import Boxes, split_boxes, split_parents
+from boustro.optimize.cover.one_tree import Multipliers, one_tree_bound
 from boustro.optimize.cover.search import CoverSearch
 from boustro.plan import vehicle_stats
 from boustro.plan.region import plan_region
@@ -95,6 +96,7 @@ def _ranges(st, la, turnaround):
     n = one_tree_module._lane_ends(
         st.count[la], st.out_lo[la], st.in_lo[la], st.in_hi[la], st.out_hi[la],
         st.first_hi[la], st.last_lo[la], st.pieces[la], 0, SPACING, turnaround, lo, hi, v,
+        np.empty(m // 2, dtype=np.int64), np.empty(m // 2, dtype=np.int64),
     )  # fmt: skip
     return n, lo, hi, v
 
@@ -196,3 +198,80 @@ def test_a_moves_detour_past_a_wall_is_never_longer_than_the_routed_move():
             assert route.length >= lower - 1e-9
             longer += lower > math.hypot(va - vb, max(max(la_, lb) - min(ha, hb), 0.0)) + 1e-6
     assert longer >= 5
+
+
+@pytest.mark.parametrize("index", range(2))
+def test_deferred_one_trees_give_the_certificate_of_a_one_tree_at_every_box(index, monkeypatch):
+    """Boxes taken out by their other bounds get their 1-tree only after the search, and only
+    where it could lower the floor (search.DEFER_TOUR): the same plan, rounds and certificate
+    as a 1-tree at every box, with fewer boxes' 1-trees computed."""
+    region = _scaled(random_regions(71, 2, n_holes=(1, 3))[index], 260.0)
+    cost = CoverCost.time(5.0, 10.0)
+    evaluate = _evaluate(region, cost, 0.0, None)
+    deferred: list[int] = []
+    settle = CoverSearch.settle_deferred
+
+    def spy(self, lower):
+        deferred.append(sum(len(b) for _, b, _ in self.deferred))
+        if self.deferred:  # the deferred boxes' own minimum, a 1-tree at every one of them
+            kept = list(self.deferred)
+            boxes = Boxes(*(np.concatenate([b[f] for b, _, _ in kept]) for f in range(4)))
+            base = np.concatenate([v for _, v, _ in kept])
+            full = self.box_bounds(boxes, tour_below=self.best[0])
+            assert (full >= base - 1e-9).all() and (full > base + 1e-6).any()
+            self.deferred = [(boxes, base, None)]
+            got = settle(self, math.inf)
+            assert got == pytest.approx(float(full.min()), rel=1e-12)
+            self.deferred = kept
+        return settle(self, lower)
+
+    monkeypatch.setattr(CoverSearch, "settle_deferred", spy)
+    runs = {}
+    for defer in (False, True):
+        monkeypatch.setattr(search_module, "WARM_TOUR", True)
+        monkeypatch.setattr(search_module, "DEFER_TOUR", defer)
+        runs[defer] = cover_optimum(region, SPACING, cost, evaluate, boustrophedon=False)
+    assert deferred[0] == 0 and deferred[1] > 0
+    a, b = runs[False], runs[True]
+    assert (a.angle, a.offset, a.fitness) == (b.angle, b.offset, b.fitness)
+    assert a.info["rounds"] == b.info["rounds"]
+    assert b.info["lower_bound"] == pytest.approx(a.info["lower_bound"], rel=1e-12)
+    assert b.info["lower_bound"] <= b.fitness
+
+
+@pytest.mark.parametrize("index", range(3))
+def test_warm_started_one_trees_stay_below_the_plans_and_rise(index, monkeypatch):
+    """Halves of boxes whose 1-trees start from their parent's best multipliers
+    (search.WARM_TOUR): still below the real plans sampled in each half, and above the cold
+    start's bounds on the whole (the steps go on where the parent's stopped)."""
+    monkeypatch.setattr(bounds_module, "lane_end_bound", _zeros)
+    monkeypatch.setattr(bounds_module, "piece_end_bound", _zeros)
+    region = _scaled(random_regions(59, 3, n_holes=(1, 3))[index], 200.0)
+    rng = np.random.default_rng(5 + index)
+    cost = CoverCost.time(5.0, float(rng.uniform(2.0, 30.0)))
+    evaluate = _evaluate(region, cost, 0.0, None)
+    search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
+    n = 8
+    parents = Boxes(
+        rng.uniform(0, math.pi, n), np.full(n, 0.004), rng.uniform(0, SPACING, n), np.full(n, 0.8)
+    )
+    search.top_eps = float((parents.delta * search.radius + parents.eta).max()) * 1.5
+    mult = search.multipliers(n)
+    assert mult is not None and not mult.warm.any()
+    search.box_bounds(parents, multipliers=mult)
+    assert mult.warm.all() and np.abs(mult.values).max() > 0
+    halves = split_boxes(parents, search.radius)
+    index_of = split_parents(parents, search.radius)
+    assert len(index_of) == len(halves.theta)
+    np.testing.assert_allclose(np.abs(halves.theta - parents.theta[index_of]), halves.delta)
+    warm = Multipliers(mult.values[index_of], mult.warm[index_of], mult.k0)
+    warm_bounds = search.box_bounds(halves, multipliers=warm)
+    cold_bounds = search.box_bounds(halves)
+    assert warm_bounds.sum() > cold_bounds.sum()
+    for i in range(len(halves.theta)):
+        plans = []
+        for _ in range(2):
+            a = halves.theta[i] + rng.uniform(-halves.delta[i], halves.delta[i])
+            o = halves.d[i] + rng.uniform(-halves.eta[i], halves.eta[i])
+            plans.append(evaluate(float(a), float(o)))
+        assert warm_bounds[i] <= min(plans) + 1e-9

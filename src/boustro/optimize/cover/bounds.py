@@ -8,7 +8,7 @@ from numpy.typing import NDArray
 from .bands import BandStats
 from .cost import CoverCost
 from .ends import HoleBoxes, lane_end_bound
-from .one_tree import one_tree_bound
+from .one_tree import Multipliers, one_tree_bound
 from .piece_ends import piece_end_bound
 from .sandwich import Level
 
@@ -54,6 +54,9 @@ def lower_bounds(
     runins: bool = True,
     tour_below: float | None = None,
     walls: NDArray[np.float64] | None = None,
+    tour_keep: NDArray[np.float64] | None = None,
+    tour_skipped: NDArray[np.bool_] | None = None,
+    multipliers: Multipliers | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every plan of the layouts' grids over any area
     between ``level``'s inner and outer sets.
@@ -72,8 +75,12 @@ def lower_bounds(
     the ranges of its two ends. With ``ends`` (the holes' boxes, :func:`~.ends.hole_boxes`; a
     routed tour without boundary or headland passes) the moves and extra lanes are also at least
     :func:`~.ends.lane_end_bound` and :func:`~.piece_ends.piece_end_bound`, and the largest
-    is taken; with ``tour_below`` too, where that bound is below it, the 1-tree bound
-    (:func:`~.one_tree.one_tree_bound`, its moves past ``walls``). ``runins=False`` (an
+    is taken; with ``tour_below`` too, where that bound is below it (and below ``tour_keep``,
+    per layout, if given), the 1-tree bound (:func:`~.one_tree.one_tree_bound`, its moves past
+    ``walls``; its steps stop once the layout's bound reaches ``tour_below``); the layouts
+    below ``tour_below`` but not below ``tour_keep`` are marked in ``tour_skipped`` (an output,
+    filled when given with ``tour_keep``; ``multipliers``: the 1-tree's starts, kept).
+    ``runins=False`` (an
     area with holes: the planner cuts a run-in or run-out that would enter a hole) counts no
     run-ins or run-outs in the lanes' length.
     """
@@ -105,8 +112,13 @@ def lower_bounds(
         out = cost.per_length * fixed + move_cost + cost.per_turn * turns + cost.fixed
         if tour_below is not None:  # the tour's structure, where it may matter
             enough = tour_below - (out - move_cost)  # the moves' cost that rules the layout out
+            todo = out < tour_below
+            if tour_keep is not None:
+                if tour_skipped is not None:
+                    tour_skipped[:] = todo & (out >= tour_keep)
+                todo &= out < tour_keep
             tree = one_tree_bound(
-                st, spacing, cost, todo=out < tour_below, walls=walls, enough=enough
+                st, spacing, cost, todo=todo, walls=walls, enough=enough, multipliers=multipliers
             )
             out = out + np.maximum(tree - move_cost, 0.0)
         return out

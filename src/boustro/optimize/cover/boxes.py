@@ -17,7 +17,14 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Boxes", "box_radius", "initial_boxes", "level_radius", "split_boxes"]
+__all__ = [
+    "Boxes",
+    "box_radius",
+    "initial_boxes",
+    "level_radius",
+    "split_boxes",
+    "split_parents",
+]
 
 
 class Boxes(NamedTuple):
@@ -45,11 +52,27 @@ def level_radius(eps: NDArray[np.float64], top: float) -> NDArray[np.float64]:
     return top * 2.0 ** (-level)
 
 
+def _halves(boxes: Boxes, radius: float) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """Which boxes are halved in angle and which in offset (:func:`split_boxes`)."""
+    rot, shift = boxes.delta * radius, boxes.eta
+    return rot >= 0.5 * shift, shift >= 0.5 * rot
+
+
+def split_parents(boxes: Boxes, radius: float) -> NDArray[np.intp]:
+    """The index in ``boxes`` of each box of :func:`split_boxes` ``(boxes, radius)``."""
+    cut_t, cut_d = _halves(boxes, radius)
+    return np.concatenate(
+        [
+            np.nonzero((cut_t | (st > 0)) & (cut_d | (sd > 0)))[0]
+            for st in (-1.0, 1.0)
+            for sd in (-1.0, 1.0)
+        ]
+    )
+
+
 def split_boxes(boxes: Boxes, radius: float) -> Boxes:
     """Halve each box along the side that contributes more to its radius (both if close)."""
-    rot, shift = boxes.delta * radius, boxes.eta
-    cut_t = rot >= 0.5 * shift
-    cut_d = shift >= 0.5 * rot
+    cut_t, cut_d = _halves(boxes, radius)
     parts = []
     for st in (-1.0, 1.0):
         for sd in (-1.0, 1.0):

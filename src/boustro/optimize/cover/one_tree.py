@@ -32,7 +32,7 @@ from __future__ import annotations
 import math
 from functools import cache
 from importlib.util import find_spec
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,23 +41,33 @@ from ..._jit import jit, jit_globals
 from .bands import BandStats
 from .cost import CoverCost
 
-__all__ = ["MAX_LANES", "ONE_TREE_STEPS", "one_tree_bound"]
+__all__ = ["MAX_LANES", "ONE_TREE_STEPS", "Multipliers", "one_tree_bound"]
 
 #: Layouts with more counted lanes than this are not bounded (``O(lanes^2)`` per step).
 MAX_LANES = 160
 #: Subgradient steps per layout.
 ONE_TREE_STEPS = 40
+#: The walls lengthen the distances between ends on lines at most this many lines apart only:
+#: the 1-tree's edges are short (on the random areas of ``benchmarks/tour_bound.py`` the
+#: bounds with 1 and with every line are the same; the walls took 40% of its CPU).
+WALL_LINES = 2
 
 
-def _lane_ends(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi, v):
+def _lane_ends(
+    count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi, v, lk, ls
+):
     """Fill the end ranges ``[lo, hi]`` (along the lines) and ``v`` (across) of every counted
-    lane of one layout, ends ``2i`` (start) and ``2i + 1`` (end) of lane ``i``; the lanes."""
+    lane of one layout, ends ``2i`` (start) and ``2i + 1`` (end) of lane ``i``, and its line
+    ``lk`` and slot ``ls`` (0 the first lane of its line, 2 the last, 1 one between); the
+    lanes."""
     n = 0
     for k in range(count.shape[0]):
         c = count[k]
         if c < 1:
             continue
         for i in range(c):
+            lk[n] = k
+            ls[n] = 0 if i == 0 else (2 if i == c - 1 else 1)
             if i == 0:
                 lo[2 * n], hi[2 * n] = out_lo[k] - t, in_lo[k]
             elif i == c - 1:
@@ -113,15 +123,19 @@ def _detour(la, ha, va, lb, hb, vb, walls, w):
     return min(d1, d2)
 
 
-def _distances(lo, hi, v, n_ends, walls, dist):
+def _distances(lo, hi, v, n_ends, walls, reach, dist):
     """Least distance between every two ends' ranges (``dist``, ``n_ends`` square), past the
-    walls (the largest detour of one wall)."""
+    walls (the largest detour of one wall) for ends at most ``reach`` apart across the lines
+    (farther ends: the straight distance, also a lower bound)."""
     for a in range(n_ends):
         dist[a, a] = 0.0
         for b in range(a + 1, n_ends):
             g = max(max(lo[a], lo[b]) - min(hi[a], hi[b]), 0.0)
             dv = v[a] - v[b]
             best = math.sqrt(dv * dv + g * g)
+            if abs(dv) > reach:
+                dist[a, b] = dist[b, a] = best
+                continue
             for w in range(walls.shape[0]):
                 best = max(best, _detour(lo[a], hi[a], v[a], lo[b], hi[b], v[b], walls, w))
             dist[a, b] = dist[b, a] = best
@@ -138,25 +152,37 @@ def _one_tree(dist, pi, n, deg, key, near, done):
         done[a] = False
     key[0] = 0.0
     near[0] = -1
-    for _ in range(n):
-        a, best = -1, math.inf
-        for b in range(n):
-            if not done[b] and key[b] < best:
-                a, best = b, key[b]
+    a, best = 0, 0.0
+    for _ in range(n):  # Prim: the next lane is chosen while the keys are updated
         done[a] = True
         if near[a] >= 0:
             total += best
             deg[near[a] // 4] += 1  # the tree end (packed: tree end * 4 + pair)
             deg[2 * a + near[a] % 2] += 1
+        r0, r1 = 2 * a, 2 * a + 1
+        p0, p1 = pi[r0], pi[r1]
+        nxt, low = -1, math.inf
         for b in range(n):
             if done[b]:
                 continue
-            for ea in range(2):
-                for eb in range(2):
-                    c = dist[2 * a + ea, 2 * b + eb] + pi[2 * a + ea] + pi[2 * b + eb]
-                    if c < key[b]:
-                        key[b] = c
-                        near[b] = (2 * a + ea) * 4 + eb
+            q0, q1 = pi[2 * b], pi[2 * b + 1]
+            kb, nb = key[b], near[b]
+            c = dist[r0, 2 * b] + p0 + q0
+            if c < kb:
+                kb, nb = c, r0 * 4
+            c = dist[r0, 2 * b + 1] + p0 + q1
+            if c < kb:
+                kb, nb = c, r0 * 4 + 1
+            c = dist[r1, 2 * b] + p1 + q0
+            if c < kb:
+                kb, nb = c, r1 * 4
+            c = dist[r1, 2 * b + 1] + p1 + q1
+            if c < kb:
+                kb, nb = c, r1 * 4 + 1
+            key[b], near[b] = kb, nb
+            if kb < low:
+                nxt, low = b, kb
+        a, best = nxt, low
     # the dummy: its two cheapest edges (cost pi of the end)
     i1, i2 = -1, -1
     for e in range(m):
@@ -171,6 +197,27 @@ def _one_tree(dist, pi, n, deg, key, near, done):
     for e in range(m):
         total -= pi[e]  # forced lanes add sum(pi); minus 2 sum(pi)
     return total
+
+
+def _load(pi0, warm, n, lk, ls, kofs, pi, best_pi):
+    """Start ``pi`` (and ``best_pi``) from one layout's kept multipliers ``pi0`` ``(W, 3, 2)``
+    where ``warm`` (lanes on lines it does not hold: 0), else at 0."""
+    for i in range(n):
+        col = lk[i] + kofs
+        inside = warm and 0 <= col < pi0.shape[0]
+        for side in range(2):
+            pi[2 * i + side] = pi0[col, ls[i], side] if inside else 0.0
+            best_pi[2 * i + side] = pi[2 * i + side]
+
+
+def _store(pi0, n, lk, ls, kofs, best_pi):
+    """Keep ``best_pi`` in one layout's ``pi0`` ``(W, 3, 2)`` (0 where no lane)."""
+    pi0[:] = 0.0
+    for i in range(n):
+        col = lk[i] + kofs
+        if 0 <= col < pi0.shape[0]:
+            for side in range(2):
+                pi0[col, ls[i], side] = best_pi[2 * i + side]
 
 
 def _bounds(
@@ -189,6 +236,9 @@ def _bounds(
     s,
     t,
     steps,
+    pi0,
+    warm,
+    kofs,
 ):
     """Per layout (where ``todo``): the best 1-tree bound on the moves, in plan units (the
     steps stop once it reaches ``enough``)."""
@@ -202,23 +252,26 @@ def _bounds(
     pi, deg = np.empty(m), np.empty(m, dtype=np.int64)
     key, near = np.empty(big), np.empty(big, dtype=np.int64)
     done = np.empty(big, dtype=np.bool_)
+    lk, ls = np.empty(big, dtype=np.int64), np.empty(big, dtype=np.int64)
+    best_pi = np.empty(m)
     out = np.zeros(n_layouts)
     for la in range(n_layouts):
         if not todo[la]:
             continue
         n = _lane_ends(count[la], out_lo[la], in_lo[la], in_hi[la], out_hi[la], first_hi[la],
-                       last_lo[la], pieces[la], k0, s, t, lo, hi, v)  # fmt: skip
+                       last_lo[la], pieces[la], k0, s, t, lo, hi, v, lk, ls)  # fmt: skip
         if n < 2:
             continue
-        _distances(lo, hi, v, 2 * n, walls[la], dist)
-        for e in range(2 * n):
-            pi[e] = 0.0
+        _distances(lo, hi, v, 2 * n, walls[la], (WALL_LINES + 0.5) * s, dist)
+        _load(pi0[la], warm[la], n, lk, ls, kofs, pi, best_pi)
         best = 0.0  # the moves are never negative
         lam, stall = 1.0, 0
         for _ in range(steps):
             val = _one_tree(dist, pi, n, deg, key, near, done)
             if val > best * (1.0 + 1e-9):
                 best, stall = val, 0
+                for e in range(2 * n):
+                    best_pi[e] = pi[e]
                 if best >= enough[la]:
                     break
             else:
@@ -235,7 +288,20 @@ def _bounds(
             for e in range(2 * n):
                 pi[e] += step * (deg[e] - 2)
         out[la] = max(best, 0.0)
+        _store(pi0[la], n, lk, ls, kofs, best_pi)  # the best 1-tree's, for the next boxes
     return out
+
+
+class Multipliers(NamedTuple):
+    """Held-Karp multipliers kept between the 1-trees of boxes (a box's halves start from
+    its own): ``values`` ``(L, W, 3, 2)`` per layout, line (absolute index ``k0 + column``), slot
+    (the first lane of the line, one between, the last) and side (start, end); ``warm`` ``(L,)``
+    where they hold a 1-tree's. :func:`one_tree_bound` starts from them where ``warm`` and
+    writes its best 1-tree's multipliers back (any start gives a valid bound)."""
+
+    values: NDArray[np.float64]
+    warm: NDArray[np.bool_]
+    k0: int
 
 
 @cache
@@ -245,7 +311,17 @@ def _compiled() -> Any:
         return _bounds
     jit_globals(
         globals(),
-        ("_orient", "_crosses", "_to_range", "_detour", "_lane_ends", "_distances", "_one_tree"),
+        (
+            "_orient",
+            "_crosses",
+            "_to_range",
+            "_detour",
+            "_lane_ends",
+            "_distances",
+            "_one_tree",
+            "_load",
+            "_store",
+        ),
     )
     return jit(_bounds)
 
@@ -255,15 +331,17 @@ def one_tree_bound(
     spacing: float,
     cost: CoverCost,
     todo: NDArray[np.bool_] | None = None,
-    steps: int = ONE_TREE_STEPS,
+    steps: int | None = None,
     walls: NDArray[np.float64] | None = None,
     enough: NDArray[np.float64] | None = None,
+    multipliers: Multipliers | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound, in cost units, on ``per_length`` times the connecting moves plus
     the extra lanes' flown length of every plan of each layout's sandwich (module docstring);
     0 where not ``todo`` or with more than :data:`MAX_LANES` counted lanes. ``walls`` ``(L, W,
     4)``: segments no move crosses, in each layout's frame (:func:`~.walls.walls_in_frames`);
-    ``enough`` ``(L,)`` (cost units): a layout's steps stop once its bound reaches it."""
+    ``enough`` ``(L,)`` (cost units): a layout's steps stop once its bound reaches it;
+    ``multipliers``: where to start the steps and where to keep their best (read, written)."""
     n_layouts = st.count.shape[0]
     lanes = st.count.sum(axis=1)
     ok = lanes <= MAX_LANES if todo is None else todo & (lanes <= MAX_LANES)
@@ -278,10 +356,19 @@ def one_tree_bound(
     def crop(a: NDArray[Any]) -> NDArray[Any]:
         return np.ascontiguousarray(a[:, c0:c1])
 
+    if multipliers is None:
+        pi0, warm, kofs = np.zeros((n_layouts, 1, 3, 2)), np.zeros(n_layouts, bool), -(2**40)
+    else:
+        pi0, warm = multipliers.values, multipliers.warm
+        kofs = int(st.k0 + c0) - multipliers.k0
     moves = _compiled()(
         crop(st.count), crop(st.out_lo), crop(st.in_lo), crop(st.in_hi), crop(st.out_hi),
         crop(st.first_hi), crop(st.last_lo), crop(st.pieces), np.ascontiguousarray(ok),
         np.ascontiguousarray(stop, dtype=np.float64), np.ascontiguousarray(walls, dtype=np.float64),
-        int(st.k0 + c0), float(spacing), float(cost.turnaround), int(steps),
+        int(st.k0 + c0), float(spacing), float(cost.turnaround),
+        int(ONE_TREE_STEPS if steps is None else steps), pi0,
+        np.ascontiguousarray(warm), kofs,
     )  # fmt: skip
+    if multipliers is not None:
+        multipliers.warm[ok] = True
     return cost.per_length * moves

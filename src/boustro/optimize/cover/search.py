@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,10 +19,12 @@ from ..result import OptimizeResult, canonical
 from .bands import RigidBoxes, band_stats
 from .bounds import lower_bounds
 from .boxes import Boxes as _Boxes
-from .boxes import box_radius, initial_boxes, level_radius, split_boxes
+from .boxes import box_radius, initial_boxes, level_radius
+from .branch import Limits, branch_and_bound, take_multipliers
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
 from .inside_bound import contour_edges, inside_box_bounds, path_floor
+from .one_tree import MAX_LANES, Multipliers
 from .sandwich import Level, Sandwich
 from .walls import WallCache
 
@@ -48,10 +50,6 @@ FIRST_SEPARATION = math.radians(3.0)
 #: bound took the tour's moves as the lines' span only; the lanes' ends bring the model within
 #: 1e-3 of the plans on Fields2Cover's fields.
 RESOLVE_RTOL = 1e-3
-#: A box whose bound is within this share of (best plan - lowest model) below the lowest model
-#: is retired (the certificate's gap cannot get much below that difference anyway). 0.25 before
-#: the piece-ends bound; 0.15 cut the random areas' median gap by a tenth for 4% more CPU.
-SETTLE_SHARE = 0.15
 #: Edge directions (longest edges first) whose best offsets are planned before the search,
 #: and offsets scanned at each.
 EDGE_PLANS = 12
@@ -67,6 +65,13 @@ TOUR_BOUND = True
 #: The largest box radius (in spacings) whose boxes get the 1-tree bound: wider boxes give
 #: their lanes' ends wide ranges, where it adds little, and are halved anyway.
 TOUR_EPS = 0.25
+#: Whether a box taken out by its other bounds gets its 1-tree only after the search, and only
+#: if it could lower the certificate's floor (:meth:`CoverSearch.settle_deferred`): the same
+#: certificate for less CPU (docs/mission_time.md, "The 1-tree's CPU").
+DEFER_TOUR = True
+#: Whether a box's 1-tree starts from its parent box's best multipliers (and its centre's
+#: from its box's), not from zero.
+WARM_TOUR = True
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 EDGE_OFFSETS = 64
@@ -108,6 +113,10 @@ class CoverSearch:
         # the 1-tree bound on the moves (optimize/cover/one_tree.py)
         self.tour = TOUR_BOUND and self.n_holes > 0 and not simplify
         self.walls = WallCache()
+        self.defer = DEFER_TOUR  # read by the branch and bound (optimize/cover/branch.py)
+        self.skipped: NDArray[np.bool_] = np.zeros(0, dtype=bool)  # see box_bounds
+        # boxes taken out before their 1-tree, their bounds and multipliers (settle_deferred)
+        self.deferred: list[tuple[_Boxes, NDArray[np.float64], Multipliers | None]] = []
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
@@ -163,12 +172,18 @@ class CoverSearch:
         return math.floor(-far / self.s) - 1, math.ceil(far / self.s) + 1
 
     def point_values(
-        self, boxes: _Boxes, exact: bool = False, *, span_only: bool = False
+        self,
+        boxes: _Boxes,
+        exact: bool = False,
+        *,
+        span_only: bool = False,
+        multipliers: Multipliers | None = None,
     ) -> NDArray[np.float64]:
         """The bound at each box's centre with the region itself (a layout's own model); of
         the simplified region (:attr:`Sandwich.approximate`) unless ``exact``: the search only
         ranks and retires boxes by these, a plan's value is always exact. ``span_only``: the
-        moves as the lines' span only (a second ranking, not recorded)."""
+        moves as the lines' span only (a second ranking, not recorded). ``multipliers``: the
+        1-tree's starts (the boxes' own; not changed)."""
         if self.keep_inside:  # a relaxation of the plan even at one layout
             lv = self.sandwich.level(0.0, self.shrink)
         else:
@@ -197,6 +212,9 @@ class CoverSearch:
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
                 runins=self.n_holes == 0, tour_below=self._tour_below(),
                 walls=self._walls(lv, boxes.theta, boxes.d),
+                multipliers=None if multipliers is None else Multipliers(
+                    multipliers.values.copy(), multipliers.warm.copy(), multipliers.k0
+                ),
             )  # fmt: skip
             if self.evaluate is None:  # the model is the plan
                 self.ranks = out
@@ -214,12 +232,25 @@ class CoverSearch:
         one = _Boxes(*(a[i : i + 1] for a in boxes))
         return float(self.point_values(one, exact=True)[0])
 
-    def box_bounds(self, boxes: _Boxes) -> NDArray[np.float64]:
+    def box_bounds(
+        self,
+        boxes: _Boxes,
+        keep_at: NDArray[np.float64] | None = None,
+        tour_below: float | None = None,
+        multipliers: Multipliers | None = None,
+    ) -> NDArray[np.float64]:
         """A lower bound on the cost over each box: the sandwich at the radius that holds
-        every rotation by ``delta`` about the origin and shift by ``eta`` across the lines."""
+        every rotation by ``delta`` about the origin and shift by ``eta`` across the lines.
+
+        ``keep_at`` (per box): the 1-tree bound is computed only where the other bounds are
+        below it (a box at or above it is taken out anyway); the boxes where it was skipped so
+        but could still raise the bound (below the best plan) are marked in :attr:`skipped`.
+        ``tour_below``: the 1-tree's stopping value instead of the best plan; ``multipliers``
+        (per box): where its steps start, and where the best ones are kept."""
         eps = box_radius(boxes, self.radius)
         radius = level_radius(eps, self.top_eps)  # >= eps: a level of the sandwich
         out = np.empty(len(eps))
+        self.skipped = np.zeros(len(eps), dtype=bool)
         for r in np.unique(radius):
             sel = radius == r
             lv = self.sandwich.level(float(r), self.shrink)
@@ -240,13 +271,68 @@ class CoverSearch:
                     lv, st, float(r), reach_out, boxes.theta[sel], boxes.d[sel], boxes.delta[sel]
                 )
                 continue
+            below = self._tour_below(float(r))
+            if below is not None and tour_below is not None:
+                below = tour_below
+            skipped = np.zeros(int(sel.sum()), dtype=bool)
+            mult = None
+            if multipliers is not None:
+                mult = Multipliers(multipliers.values[sel], multipliers.warm[sel], multipliers.k0)
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
-                runins=self.n_holes == 0, tour_below=self._tour_below(float(r)),
+                runins=self.n_holes == 0, tour_below=below,
                 walls=self._walls(lv, boxes.theta[sel], boxes.d[sel], float(r)),
+                tour_keep=None if keep_at is None else keep_at[sel], tour_skipped=skipped,
+                multipliers=mult,
             )  # fmt: skip
+            self.skipped[sel] = skipped
+            if multipliers is not None and mult is not None:
+                multipliers.values[sel], multipliers.warm[sel] = mult.values, mult.warm
         self.bound_evaluations += len(eps)
         return out
+
+    def multipliers(self, n_boxes: int) -> Multipliers | None:
+        """Cold multipliers for ``n_boxes`` boxes (:data:`WARM_TOUR`), over every line a box's
+        sandwich may reach; ``None`` without the 1-tree or over more than twice
+        :data:`~.one_tree.MAX_LANES` lines (the 1-tree's steps then start at 0)."""
+        if not (WARM_TOUR and self.ends and self.tour):
+            return None
+        k_lo, k_hi = self.k_range(2 * self.top_eps + self.reach + self.s)
+        if k_hi - k_lo + 1 > 2 * MAX_LANES:  # wide areas: layouts of few lanes are rare
+            return None
+        values = np.zeros((n_boxes, k_hi - k_lo + 1, 3, 2))
+        return Multipliers(values, np.zeros(n_boxes, dtype=bool), k_lo)
+
+    def deferred_min(self) -> float:
+        """The lowest bound (without the 1-tree) of a box taken out before its 1-tree."""
+        return min((float(b.min()) for _, b, _ in self.deferred), default=math.inf)
+
+    def settle_deferred(self, lower: float) -> float:
+        """The certificate's lower bound ``min(lower, bounds of the deferred boxes)``, each
+        deferred box's bound with its 1-tree, computed only for the boxes whose bound without
+        it is below ``lower`` (the others cannot lower the minimum), its steps stopping once
+        the box's bound reaches ``lower``: the minimum a 1-tree at every box would give."""
+        if not self.deferred:
+            return lower
+        boxes = _Boxes(*(np.concatenate([b[f] for b, _, _ in self.deferred]) for f in range(4)))
+        base = np.concatenate([v for _, v, _ in self.deferred])
+        mult = None
+        if all(m is not None for _, _, m in self.deferred):
+            parts = [m for _, _, m in self.deferred if m is not None]
+            mult = Multipliers(
+                np.concatenate([m.values for m in parts]),
+                np.concatenate([m.warm for m in parts]),
+                parts[0].k0,
+            )
+        self.deferred = []
+        sel = base < lower
+        if not sel.any():
+            return lower
+        work, evaluations = self.work, self.bound_evaluations  # not the search's work
+        mult = take_multipliers(mult, sel)
+        bounds = self.box_bounds(boxes.take(sel), tour_below=lower, multipliers=mult)
+        self.work, self.bound_evaluations = work, evaluations
+        return min(lower, float(bounds.min()))
 
     def _inside(self, lv: Any, st: Any, *args: Any) -> NDArray[np.float64]:
         """The keep-inside bound (:func:`~.inside_bound.inside_box_bounds`)."""
@@ -365,73 +451,6 @@ def _initial(search: CoverSearch, n_angles: int, angle: float | None) -> _Boxes:
     return initial_boxes(search.s, search.radius, n_angles, angle, FIXED_OFFSETS)
 
 
-class _Limits(NamedTuple):
-    """The tolerances and budgets of :func:`cover_optimum` (see its arguments)."""
-
-    rtol: float
-    resolve: float
-    min_eps: float
-    max_work: float
-    max_seconds: float | None
-    t0: float
-
-
-def _branch_and_bound(
-    search: CoverSearch,
-    boxes: _Boxes,
-    lim: _Limits,
-    progress: Callable[[float], None] | None,
-) -> tuple[float, int, str]:
-    """Bound, plan, discard or retire, and halve the boxes until none is left or a limit is
-    reached: ``(the lowest bound of a box taken out, rounds, why it stopped early or "")``."""
-    floor = math.inf  # the lowest bound of a discarded box
-    rounds, stopped = 0, ""
-    while len(boxes.theta):
-        rounds += 1
-        bounds = search.box_bounds(boxes)
-        points = search.point_values(boxes)
-        search.try_plans(boxes, search.ranks, first=rounds == 1)
-        best = search.best[0]
-        # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
-        # model at the box's centre, so halving cannot raise it further than the model
-        model_min = search.model_min
-        # settled: the bound is above the lowest model value by a quarter of the gap between
-        # it and the best plan (the certificate's gap cannot get much smaller than that gap)
-        settle = model_min - SETTLE_SHARE * max(best - model_min, 0.0) - lim.rtol * abs(best)
-        keep = (
-            (bounds < best - lim.rtol * abs(best))
-            & (bounds < points - lim.resolve * abs(best))
-            & (bounds < settle)
-        )
-        if (~keep).any():
-            floor = min(floor, float(bounds[~keep].min()))
-        boxes = boxes.take(keep)
-        bounds = bounds[keep]
-        if progress is not None and math.isfinite(best):
-            low = min(floor, float(bounds.min()) if len(bounds) else math.inf)
-            progress(max(0.0, min(1.0, 1.0 - (best - low) / max(abs(best), 1e-300))))
-        if not len(boxes.theta):
-            break
-        eps = box_radius(boxes, search.radius)
-        fine = eps <= lim.min_eps
-        if fine.any():
-            floor = min(floor, float(bounds[fine].min()))
-            stopped = stopped or "the boxes reached the smallest radius"
-            boxes = boxes.take(~fine)
-            if not len(boxes.theta):
-                break
-        if search.work_spent(len(boxes.theta)) > lim.max_work:
-            floor = min(floor, float(bounds[~fine].min()))
-            stopped = f"the work budget ({lim.max_work:.0e} box edges) was spent"
-            break
-        if lim.max_seconds is not None and time.perf_counter() - lim.t0 > lim.max_seconds:
-            floor = min(floor, float(bounds[~fine].min()))
-            stopped = f"{lim.max_seconds} s passed"
-            break
-        boxes = split_boxes(boxes, search.radius)
-    return floor, rounds, stopped
-
-
 def cover_optimum(
     region: Region | Polygon,
     spacing: float,
@@ -503,15 +522,15 @@ def cover_optimum(
         angle = float(angle) % math.pi
     boxes = _initial(search, n_angles, angle)
     search.top_eps = float(box_radius(boxes, search.radius).max())
-    limits = _Limits(rtol, resolve, min_eps, max_work, max_seconds, t0)
-    floor, rounds, stopped = _branch_and_bound(search, boxes, limits, progress)
+    limits = Limits(rtol, resolve, min_eps, max_work, max_seconds, t0)
+    floor, rounds, stopped = branch_and_bound(search, boxes, limits, progress)
     if not boustrophedon and evaluate is not None and math.isfinite(search.best[0]):
         search.polish()
         search.refine_offsets()
     value, theta, d = search.best
     if not math.isfinite(value):
         raise InvalidParameterError("no layout of this spacing has a lane over the area")
-    lower = min(floor, value)
+    lower = search.settle_deferred(min(floor, value))
     gap = max(0.0, value - lower)
     angle, offset = canonical(theta, d, s)
     return OptimizeResult(
