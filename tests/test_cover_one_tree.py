@@ -275,3 +275,21 @@ def test_warm_started_one_trees_stay_below_the_plans_and_rise(index, monkeypatch
             o = halves.d[i] + rng.uniform(-halves.eta[i], halves.eta[i])
             plans.append(evaluate(float(a), float(o)))
         assert warm_bounds[i] <= min(plans) + 1e-9
+
+
+def test_a_move_along_a_hole_edge_is_not_charged_a_detour_past_it():
+    # A review's reproducer: two lanes ending on one hole edge, the routed move runs along the
+    # edge (a wall); rounding gave the collinear "crossing" either sign and the detour past the
+    # wall's end charged a 7.0 m move 23.0 m: the point value was 511.5 s, above the plan's 509.5.
+    def sq(x0, y0, w, h):
+        return Polygon(np.array([[x0, y0], [x0 + w, y0], [x0 + w, y0 + h], [x0, y0 + h]])[::-1])
+
+    shell = Polygon(np.array([[0, 0], [100, 0], [100, 80], [0, 80]], float))
+    region = Region(shell, [sq(30, 20, 15, 30), sq(45.001, 20, 15, 30)])
+    cost = CoverCost.time(5.0, 10.0)
+    a, d = 0.008603252016391654, 2.1716931289126897
+    search = CoverSearch(region, 7.0, 3.5, cost, None, False)
+    value = search.point_values(Boxes(*(np.array([x]) for x in (a, 0.0, d, 0.0))), exact=True)[0]
+    plan = plan_region(region, 7.0, decompose_area=False, angle=a, offset=d, speed=5.0,
+                       turn_time=10.0)  # fmt: skip
+    assert value <= cost.of(plan.stats.path_length, plan.stats.n_turns) + 1e-9
