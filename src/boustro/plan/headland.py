@@ -11,7 +11,8 @@ the spot: the vehicle's turn radius applies to the moves between passes, not to 
 corners), so that the footprints cover the whole field; the path never leaves it. Where the
 field is too narrow for pass ``k + 1`` but wider than ``2k`` spacings (a corridor between a
 hole and the boundary), open passes along the contour at depth ``k * spacing`` cover the strip
-that neither pass ``k`` nor the lanes reach (:func:`_gap_passes`).
+that neither pass ``k`` nor the lanes reach, and shallower contours a corridor narrower than a
+spacing, where no pass goes (:func:`_gap_passes`).
 :func:`add_headland` appends the passes to a plan of the inner field, gap passes and then the
 rings innermost first, each
 begun at its point nearest the vehicle, joined by moves inside the field. The passes'
@@ -38,6 +39,15 @@ __all__ = ["MAX_HEADLAND", "add_headland", "check_headland", "headland_rings", "
 
 #: Most headland passes (a guard against a typo: 1000 passes at 10 m is a 10 km band).
 MAX_HEADLAND = 100
+
+#: Depths (shares of a spacing) of the contours that cover a corridor narrower than a spacing
+#: (a hole less than a spacing from the boundary), where no pass goes: one of them lies in it
+#: whenever it is wider than twice the depth, and every point of it is within reach of that.
+_NARROW = (0.4, 0.25, 0.1, 0.02)
+
+#: The shallowest contour tried (share of a spacing): a corridor narrower than twice that (a
+#: hole touching the boundary to within a thousandth of a millimetre at 10 m) stays uncovered.
+_SHALLOWEST = 1e-6
 
 #: Segments per quarter circle of the buffers' arcs (at reflex corners of the field).
 _QUAD_SEGS = 16
@@ -193,7 +203,9 @@ def _gap_passes(
     ``depth - k * spacing < reach`` of the contour at depth ``k * spacing`` (walk towards its
     nearest boundary point), so pieces of that contour near the strip cover it: chosen greedily
     (most uncovered area first) until nothing is left (components under ``1e-6 spacing^2``, the
-    buffers' rounding, ignored)."""
+    buffers' rounding, ignored). A corridor narrower than a spacing (a hole closer to the
+    boundary) gets no pass at all: every point of it is within reach of a contour at a depth
+    under half its width (:data:`_NARROW`, then a fifth of the last depth at a time)."""
     import shapely
 
     region = _shapely_region(field)
@@ -204,13 +216,27 @@ def _gap_passes(
     left = _parts(shapely.difference(region, covered), tiny)
     if left.is_empty:
         return []
+    out: list[NDArray[np.float64]] = []
+    # the corridors between 2k and 2k + 1 spacings wide, and those narrower than a spacing;
+    # then ever shallower contours while something is left (a corridor narrower than 2 depths)
+    depths = [k * spacing for k in range(1, passes)] + [f * spacing for f in _NARROW]
+    while depths and not left.is_empty:
+        left = _greedy(region, left, depths, reach, tiny, out)
+        depths = [depths[-1] / 5] if depths[-1] > _SHALLOWEST * spacing else []
+    return out
+
+
+def _greedy(region, left, depths: list[float], reach: float, tiny: float, out: list) -> object:
+    """Pieces of the contours at ``depths`` within reach of ``left``, chosen greedily (most
+    uncovered area first) and appended to ``out``; returns what is still left."""
+    import shapely
+
     near = shapely.buffer(left, reach * (1 + 1e-6))
     candidates = []
-    for k in range(1, passes):
-        contour = shapely.boundary(shapely.buffer(region, -k * spacing, quad_segs=64))
+    for depth in depths:
+        contour = shapely.boundary(shapely.buffer(region, -depth, quad_segs=64))
         piece = shapely.line_merge(shapely.intersection(contour, near))
         candidates += [g for g in getattr(piece, "geoms", [piece]) if g.geom_type == "LineString"]
-    out = []
     while candidates and left.area > tiny:
         gains = [
             shapely.intersection(left, shapely.buffer(c, reach, quad_segs=64)).area
@@ -222,7 +248,7 @@ def _gap_passes(
         c = candidates.pop(best)
         out.append(np.asarray(c.coords))
         left = _parts(shapely.difference(left, shapely.buffer(c, reach, quad_segs=64)), tiny)
-    return out
+    return left
 
 
 def _parts(geom, tiny: float):
