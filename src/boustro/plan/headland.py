@@ -259,6 +259,45 @@ def _parts(geom, tiny: float):
     return shapely.union_all(keep) if keep else shapely.Polygon()
 
 
+def _inside_the_field(
+    inner: Plan, router: Router
+) -> tuple[list[NDArray[np.float64]], list[str], list[int]]:
+    """The inner plan's waypoints, kinds and lanes with its run-ins and run-outs cut where they
+    would leave the field (dropped where cut to nothing), and every move that would leave it
+    routed inside (a run-in longer than the headland band used to end outside the field)."""
+    points: list[NDArray[np.float64]] = []
+    kinds: list[str] = []
+    lane: list[int] = []
+    w, k = inner.waypoints, inner.kinds
+    for i, (p, kind, ti) in enumerate(zip(w, k, inner.lane, strict=True)):
+        anchor = (
+            i + 1 if kind == "run_in" and i + 1 < len(w) and k[i + 1] == "start"
+            else i - 1 if kind == "run_out" and i > 0 and k[i - 1] == "end"
+            else None
+        )  # fmt: skip
+        if anchor is not None:
+            p = _cut(router, w[anchor], p)
+            if np.linalg.norm(p - w[anchor]) <= router.tol:
+                continue
+        if points and not (kind == "end" and kinds[-1] == "start"):
+            if not router.inside(points[-1], p):  # a move (a lane lies in the field)
+                for q in router.path(points[-1], p).points[1:-1]:
+                    points.append(q)
+                    kinds.append("via")
+                    lane.append(int(ti))
+        points.append(p)
+        kinds.append(kind)
+        lane.append(int(ti))
+    return points, kinds, lane
+
+
+def _cut(router: Router, a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``b``, or the point where ``a -> b`` first leaves the field (or enters a hole)."""
+    br, cls = router._pieces(a, b)
+    bad = np.flatnonzero(cls != 0)
+    return b if len(bad) == 0 else a + br[bad[0]] * (b - a)
+
+
 def _nearer_first(line: NDArray[np.float64], near: NDArray[np.float64]) -> NDArray[np.float64]:
     """An open pass driven from its end nearer ``near``."""
     return line if np.linalg.norm(line[0] - near) <= np.linalg.norm(line[-1] - near) else line[::-1]
@@ -287,9 +326,7 @@ def add_headland(inner: Plan, field: Region, passes: int, *, spacing: float, rea
         _spikes(_band_corners(field, spacing, k + 1), r, reach, router) for k, r in enumerate(rings)
     ]
     gaps = _gap_passes(field, spacing, reach, passes, rings)
-    points = list(inner.waypoints)
-    kinds = list(inner.kinds)
-    lane = [int(x) for x in inner.lane]
+    points, kinds, lane = _inside_the_field(inner, router)
     transects = list(inner.transects)
     angles = list(inner.transect_angle())
     roles = list(inner.role())
