@@ -265,10 +265,8 @@ def _inside_the_field(
     """The inner plan's waypoints, kinds and lanes with its run-ins and run-outs cut where they
     would leave the field (dropped where cut to nothing), and every move that would leave it
     routed inside (a run-in longer than the headland band used to end outside the field)."""
-    points: list[NDArray[np.float64]] = []
-    kinds: list[str] = []
-    lane: list[int] = []
     w, k = inner.waypoints, inner.kinds
+    keep: list[tuple[NDArray[np.float64], str, int]] = []
     for i, (p, kind, ti) in enumerate(zip(w, k, inner.lane, strict=True)):
         anchor = (
             i + 1 if kind == "run_in" and i + 1 < len(w) and k[i + 1] == "start"
@@ -279,15 +277,18 @@ def _inside_the_field(
             p = _cut(router, w[anchor], p)
             if np.linalg.norm(p - w[anchor]) <= router.tol:
                 continue
-        if points and not (kind == "end" and kinds[-1] == "start"):
-            if not router.inside(points[-1], p):  # a move (a lane lies in the field)
-                for q in router.path(points[-1], p).points[1:-1]:
-                    points.append(q)
-                    kinds.append("via")
-                    lane.append(int(ti))
+        keep.append((p, kind, int(ti)))
+    points, kinds, lane = [keep[0][0]], [keep[0][1]], [keep[0][2]]
+    pts = np.asarray([p for p, _, _ in keep])
+    routes = router.paths(pts[:-1], pts[1:]) if len(pts) > 1 else []
+    for (p, kind, ti), route in zip(keep[1:], routes, strict=True):
+        for q in route.points[1:-1]:  # a move that would leave the field, routed inside
+            points.append(q)
+            kinds.append("via")
+            lane.append(ti)
         points.append(p)
         kinds.append(kind)
-        lane.append(int(ti))
+        lane.append(ti)
     return points, kinds, lane
 
 
