@@ -14,6 +14,7 @@ from boustro.errors import InvalidParameterError
 from boustro.io import embedded_field
 from boustro.io.formats import write_mission
 from boustro.mission import plan_area
+from boustro.sensors import Swath
 from boustro.vehicle import Vehicle
 
 from .test_vehicle import circumradii
@@ -104,6 +105,59 @@ def test_headland_covers_a_corridor_too_narrow_for_the_next_pass(corridor, passe
     _check(mission, passes)
 
 
+@pytest.mark.parametrize("corridor", [1e-3, 0.5, 3.0, 8.0])
+@pytest.mark.parametrize("passes", [1, 2])
+def test_headland_covers_a_corridor_narrower_than_a_spacing(corridor, passes):
+    # A hole less than a spacing from two sides of the boundary: no pass goes between them
+    # (pass 1 lies half a spacing inside), nor do lanes; it used to be left uncovered whatever
+    # the passes (3 m at 10 m: 96 m2, covered_share 0.9967). A contour shallower than half
+    # the corridor covers it.
+    c = corridor
+    hole = [(c, c), (c + 40, c), (c + 40, c + 30), (c, c + 30)]
+    mission = plan_area([(0, 0), (300, 0), (300, 200), (0, 200)], 10.0, crs=None,
+                        holes=[hole], headland=passes)  # fmt: skip
+    _check(mission, passes)
+
+
+def test_headland_covers_the_gap_between_two_holes():
+    # Two holes 5 m apart at 10 m: no pass between them; it used to be left uncovered (345 m2).
+    holes = [
+        [(50, 40), (90, 40), (90, 110), (50, 110)],
+        [(95, 40), (135, 40), (135, 110), (95, 110)],
+    ]
+    mission = plan_area([(0, 0), (200, 0), (200, 150), (0, 150)], 10.0, crs=None, holes=holes,
+                        headland=1)  # fmt: skip
+    _check(mission, 1)
+
+
+@pytest.mark.parametrize(("turnaround", "holes"), [(15.0, []), (15.0, [POND]), (4.0, [POND])])
+def test_headland_run_ins_end_in_the_field(turnaround, holes):
+    # A run-in longer than the headland band used to end outside the field (a QA run: 272 m of
+    # the path outside with --headland 1 --turnaround 15); it is cut at the boundary now, and
+    # the moves between run-outs routed inside.
+    mission = plan_area(L_FIELD, 10.0, crs=None, holes=holes, headland=1, turnaround=turnaround)
+    _check(mission, 1)
+    assert mission.stats.outside_length == 0.0
+    kinds = mission.kinds
+    assert "run_in" in kinds and "run_out" in kinds
+    w = np.asarray(mission.plan.waypoints)
+    field = _field(mission)
+    cut = 0
+    for i, k in enumerate(kinds):
+        if k in ("run_in", "run_out"):  # full length, or cut where it meets the boundary
+            end = w[i + 1 if k == "run_in" else i - 1]
+            run = np.linalg.norm(w[i] - end)
+            assert run <= turnaround * (1 + 1e-9)
+            if run < turnaround * (1 - 1e-9):  # the whole run would leave the field, or it
+                whole = end + (w[i] - end) * turnaround / run  # stops at the band round a hole
+                near_hole = any(
+                    shapely.Point(w[i]).distance(h) < 10.0 + 1e-6 for h in field.interiors
+                )
+                assert near_hole or not field.contains(shapely.LineString([end, whole]))
+                cut += not near_hole
+    assert cut > 0 if turnaround > 10 else cut == 0
+
+
 def test_headland_on_a_convex_field_and_the_embedded_field():
     _check(plan_area(SQUARE, 10.0, crs=None, headland=3), 3)
     _check(plan_area(embedded_field(), 10.0, headland=2), 2)
@@ -153,6 +207,10 @@ def test_headland_errors():
         plan_area(SQUARE, 10.0, crs=None, headland=1.5)
     with pytest.raises(InvalidParameterError, match="between 0 and"):
         plan_area(SQUARE, 10.0, crs=None, headland=-1)
+    # A nadir gap: the passes would not cover their own blind strip (and the lanes, reaching
+    # farther than half a spacing, left a plain rectangle's field by 358 m): refused.
+    with pytest.raises(InvalidParameterError, match="nadir gap"):
+        plan_area(SQUARE, Swath(24.0, nadir_gap=4.0), crs=None, headland=2)
 
 
 def test_cli_headland_and_export(tmp_path, capsys):

@@ -153,7 +153,8 @@ def plan_area(
         headland: passes around the boundary and the holes (:mod:`boustro.plan.headland`): the
             lanes cover the field less a band of ``headland`` spacings, the passes the band,
             turns stay inside the field (a turn that would leave it keeps the straight move,
-            with a note), coverage is measured on the whole field.
+            with a note), coverage is measured on the whole field. Run-ins and run-outs
+            (``turnaround``) end where they would leave the field. Not with a nadir gap.
 
     Raises:
         InvalidPolygonError, NonConvexPolygonError, InvalidParameterError, NoTransectError,
@@ -178,6 +179,11 @@ def plan_area(
         turn_time = vehicle.turn_time if turn_time == 0 else turn_time
     area = as_area(area, crs, holes)
     sensor = Sensor(*sensor_spacing(spacing))
+    if passes and sensor.nadir_gap > 0:
+        raise InvalidParameterError(
+            "headland (--headland) does not take a nadir gap: the headland passes would not "
+            "cover their own blind strip, and the lanes' wider reach would leave the field"
+        )
     frame = project(area, sensor, hull_tolerance, decompose, start)
     field = None
     whole = frame.region if frame.region is not None else Region(frame.surveyed)

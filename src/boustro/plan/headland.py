@@ -11,7 +11,8 @@ the spot: the vehicle's turn radius applies to the moves between passes, not to 
 corners), so that the footprints cover the whole field; the path never leaves it. Where the
 field is too narrow for pass ``k + 1`` but wider than ``2k`` spacings (a corridor between a
 hole and the boundary), open passes along the contour at depth ``k * spacing`` cover the strip
-that neither pass ``k`` nor the lanes reach (:func:`_gap_passes`).
+that neither pass ``k`` nor the lanes reach, and shallower contours a corridor narrower than a
+spacing, where no pass goes (:func:`_gap_passes`).
 :func:`add_headland` appends the passes to a plan of the inner field, gap passes and then the
 rings innermost first, each
 begun at its point nearest the vehicle, joined by moves inside the field. The passes'
@@ -38,6 +39,15 @@ __all__ = ["MAX_HEADLAND", "add_headland", "check_headland", "headland_rings", "
 
 #: Most headland passes (a guard against a typo: 1000 passes at 10 m is a 10 km band).
 MAX_HEADLAND = 100
+
+#: Depths (shares of a spacing) of the contours that cover a corridor narrower than a spacing
+#: (a hole less than a spacing from the boundary), where no pass goes: one of them lies in it
+#: whenever it is wider than twice the depth, and every point of it is within reach of that.
+_NARROW = (0.4, 0.25, 0.1, 0.02)
+
+#: The shallowest contour tried (share of a spacing): a corridor narrower than twice that (a
+#: hole touching the boundary to within a thousandth of a millimetre at 10 m) stays uncovered.
+_SHALLOWEST = 1e-6
 
 #: Segments per quarter circle of the buffers' arcs (at reflex corners of the field).
 _QUAD_SEGS = 16
@@ -193,7 +203,9 @@ def _gap_passes(
     ``depth - k * spacing < reach`` of the contour at depth ``k * spacing`` (walk towards its
     nearest boundary point), so pieces of that contour near the strip cover it: chosen greedily
     (most uncovered area first) until nothing is left (components under ``1e-6 spacing^2``, the
-    buffers' rounding, ignored)."""
+    buffers' rounding, ignored). A corridor narrower than a spacing (a hole closer to the
+    boundary) gets no pass at all: every point of it is within reach of a contour at a depth
+    under half its width (:data:`_NARROW`, then a fifth of the last depth at a time)."""
     import shapely
 
     region = _shapely_region(field)
@@ -204,13 +216,27 @@ def _gap_passes(
     left = _parts(shapely.difference(region, covered), tiny)
     if left.is_empty:
         return []
+    out: list[NDArray[np.float64]] = []
+    # the corridors between 2k and 2k + 1 spacings wide, and those narrower than a spacing;
+    # then ever shallower contours while something is left (a corridor narrower than 2 depths)
+    depths = [k * spacing for k in range(1, passes)] + [f * spacing for f in _NARROW]
+    while depths and not left.is_empty:
+        left = _greedy(region, left, depths, reach, tiny, out)
+        depths = [depths[-1] / 5] if depths[-1] > _SHALLOWEST * spacing else []
+    return out
+
+
+def _greedy(region, left, depths: list[float], reach: float, tiny: float, out: list) -> object:
+    """Pieces of the contours at ``depths`` within reach of ``left``, chosen greedily (most
+    uncovered area first) and appended to ``out``; returns what is still left."""
+    import shapely
+
     near = shapely.buffer(left, reach * (1 + 1e-6))
     candidates = []
-    for k in range(1, passes):
-        contour = shapely.boundary(shapely.buffer(region, -k * spacing, quad_segs=64))
+    for depth in depths:
+        contour = shapely.boundary(shapely.buffer(region, -depth, quad_segs=64))
         piece = shapely.line_merge(shapely.intersection(contour, near))
         candidates += [g for g in getattr(piece, "geoms", [piece]) if g.geom_type == "LineString"]
-    out = []
     while candidates and left.area > tiny:
         gains = [
             shapely.intersection(left, shapely.buffer(c, reach, quad_segs=64)).area
@@ -222,7 +248,7 @@ def _gap_passes(
         c = candidates.pop(best)
         out.append(np.asarray(c.coords))
         left = _parts(shapely.difference(left, shapely.buffer(c, reach, quad_segs=64)), tiny)
-    return out
+    return left
 
 
 def _parts(geom, tiny: float):
@@ -231,6 +257,46 @@ def _parts(geom, tiny: float):
 
     keep = [g for g in getattr(geom, "geoms", [geom]) if g.geom_type == "Polygon" and g.area > tiny]
     return shapely.union_all(keep) if keep else shapely.Polygon()
+
+
+def _inside_the_field(
+    inner: Plan, router: Router
+) -> tuple[list[NDArray[np.float64]], list[str], list[int]]:
+    """The inner plan's waypoints, kinds and lanes with its run-ins and run-outs cut where they
+    would leave the field (dropped where cut to nothing), and every move that would leave it
+    routed inside (a run-in longer than the headland band used to end outside the field)."""
+    w, k = inner.waypoints, inner.kinds
+    keep: list[tuple[NDArray[np.float64], str, int]] = []
+    for i, (p, kind, ti) in enumerate(zip(w, k, inner.lane, strict=True)):
+        anchor = (
+            i + 1 if kind == "run_in" and i + 1 < len(w) and k[i + 1] == "start"
+            else i - 1 if kind == "run_out" and i > 0 and k[i - 1] == "end"
+            else None
+        )  # fmt: skip
+        if anchor is not None:
+            p = _cut(router, w[anchor], p)
+            if np.linalg.norm(p - w[anchor]) <= router.tol:
+                continue
+        keep.append((p, kind, int(ti)))
+    points, kinds, lane = [keep[0][0]], [keep[0][1]], [keep[0][2]]
+    pts = np.asarray([p for p, _, _ in keep])
+    routes = router.paths(pts[:-1], pts[1:]) if len(pts) > 1 else []
+    for (p, kind, ti), route in zip(keep[1:], routes, strict=True):
+        for q in route.points[1:-1]:  # a move that would leave the field, routed inside
+            points.append(q)
+            kinds.append("via")
+            lane.append(ti)
+        points.append(p)
+        kinds.append(kind)
+        lane.append(ti)
+    return points, kinds, lane
+
+
+def _cut(router: Router, a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``b``, or the point where ``a -> b`` first leaves the field (or enters a hole)."""
+    br, cls = router._pieces(a, b)
+    bad = np.flatnonzero(cls != 0)
+    return b if len(bad) == 0 else a + br[bad[0]] * (b - a)
 
 
 def _nearer_first(line: NDArray[np.float64], near: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -261,9 +327,7 @@ def add_headland(inner: Plan, field: Region, passes: int, *, spacing: float, rea
         _spikes(_band_corners(field, spacing, k + 1), r, reach, router) for k, r in enumerate(rings)
     ]
     gaps = _gap_passes(field, spacing, reach, passes, rings)
-    points = list(inner.waypoints)
-    kinds = list(inner.kinds)
-    lane = [int(x) for x in inner.lane]
+    points, kinds, lane = _inside_the_field(inner, router)
     transects = list(inner.transects)
     angles = list(inner.transect_angle())
     roles = list(inner.role())
