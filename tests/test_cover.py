@@ -296,3 +296,15 @@ def test_chords_layout_is_not_certified_by_the_guaranteed_lanes_bound(capsys, tm
     d = json.loads(out)
     assert d["objective"] == "time" and d["certified"] is False and d["gap"] is None
     assert "lower_bound" not in d
+
+
+@pytest.mark.parametrize(("angle", "lanes", "seconds"), [(None, 6, 180.0), (90.0, 10, 228.0)])
+def test_a_width_of_whole_spacings_gets_the_fewest_lanes(angle, lanes, seconds):
+    # 100 x 60 m at 10 m: 6 lanes fly it only at the one offset that lays them from an edge,
+    # which no box centre hits; the search planned 7 lanes (212 s) beside a bound of 180 s (QA)
+    m = plan_area([(0, 0), (100, 0), (100, 60), (0, 60)], 10.0, crs=None, speed=5,
+                  turn_time=10, progress=False,
+                  angle=None if angle is None else math.radians(angle))  # fmt: skip
+    s = m.summary()
+    assert s["n_transects"] == lanes and s["duration_s"] == pytest.approx(seconds)
+    assert s["certified"] and s["covered_share"] >= 1 - 1e-9
