@@ -347,21 +347,20 @@ class CoverSearch:
         directions instead (a fixed-angle search)."""
         for a in _edge_angles(self.region, EDGE_PLANS) if angles is None else angles:
             d = (np.arange(EDGE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / EDGE_OFFSETS)
+            if not self.keep_inside:
+                # and the lanes laid from either extreme: where the area's width is a whole
+                # number of spacings (a 100 x 60 m rectangle at 10 m), the fewest lanes need
+                # exactly that offset, a single point no box centre hits (the search planned 7
+                # lanes, 212 s, where 6 fly it in 180 s). Not with keep_inside: there its model
+                # ranks them first and the real plans came out up to 0.57% longer (a review)
+                ends = np.array([a, a + math.pi])
+                d = np.concatenate([d, centred_offsets(self.region, ends, self.s, self.reach)])
+                d[-1] = (-d[-1]) % self.s  # the line reach inside the highest extreme
             boxes = _Boxes(np.full(len(d), a), np.zeros(len(d)), d, np.zeros(len(d)))
             self.point_values(boxes)
             self.try_plans(boxes, self.ranks, limit=1)
             if self.ends and self.evaluate is not None and self.sandwich.tolerance <= 0:
                 self.try_plans(boxes, self.point_values(boxes, span_only=True), limit=1)
-            # and, planned apart (so the grid's best is still planned: a review saw keep-inside
-            # plans up to 0.57% longer when both competed for one plan), the lanes laid from
-            # either extreme: where the area's width is a whole number of spacings (a 100 x 60 m
-            # rectangle at 10 m), the fewest lanes need exactly that offset, a single point no
-            # box centre hits (the search planned 7 lanes, 212 s, where 6 fly it in 180 s)
-            ends = centred_offsets(self.region, np.array([a, a + math.pi]), self.s, self.reach)
-            ends[1] = (-ends[1]) % self.s  # the line reach inside the highest extreme
-            boxes = _Boxes(np.full(2, a), np.zeros(2), ends, np.zeros(2))
-            self.point_values(boxes)
-            self.try_plans(boxes, self.ranks, limit=1)
 
     def polish(self) -> None:
         """Plan the best modelled layout of each degree of angle whose model beats the best
@@ -527,9 +526,12 @@ def cover_optimum(
         min_eps = (1e-6 if boustrophedon else RESOLVE_EPS) * s
     resolve = rtol if boustrophedon else max(rtol, RESOLVE_RTOL)
     t0 = time.perf_counter()
-    if angle is not None:
+    if angle is None:
+        search.try_edges()
+    else:
         angle = float(angle) % math.pi
-    search.try_edges(None if angle is None else [angle])
+        if not keep_inside:
+            search.try_edges([angle])
     boxes = _initial(search, n_angles, angle)
     search.top_eps = float(box_radius(boxes, search.radius).max())
     limits = Limits(rtol, resolve, min_eps, max_work, max_seconds, t0)
