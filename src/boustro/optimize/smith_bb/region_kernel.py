@@ -42,7 +42,7 @@ from ..._jit import jit, jit_globals
 from . import kernel, region_splits
 from .kernel import _sup_w, lines_range
 from .region_chains import _chains, chain_bound, prepare
-from .region_splits import NODES, split_bound
+from .region_splits import NODES, _line_segments, split_bound
 
 __all__ = ["region_bounds", "region_values", "ring_starts"]
 
@@ -173,42 +173,6 @@ def _owners(oa, ob, o0, o1, pa, pb, p0, p1, tiny, owner):
         oa[j] = min(oa[j], pa[p])
         ob[j] = max(ob[j], pb[p])
     return True
-
-
-def _line_segments(oa, ob, o0, o1, pa, pb, p0, p1, owner, mask, g, lo, hi, n):
-    """Append the segments of one line to ``lo, hi`` from ``n``: per O-component, its pieces
-    grouped at the split points whose bit of ``mask`` (from bit ``g``) is set. Returns
-    ``(n, g, splits)``."""
-    splits = 0
-    p = p0
-    while p < p1:
-        if owner[p] < 0:
-            p += 1
-            continue
-        o = owner[p]
-        left = oa[o]  # the group lies right of this
-        first = p
-        last = p
-        q = p + 1
-        while q < p1 and (owner[q] < 0 or owner[q] == o):
-            if owner[q] < 0:
-                q += 1
-                continue
-            if (mask >> g) & 1:  # a split between last and q
-                lo[n] = pb[last] - pa[first]
-                hi[n] = pa[q] - left
-                n += 1
-                splits += 1
-                left = pb[last]
-                first = q
-            g += 1
-            last = q
-            q += 1
-        lo[n] = pb[last] - pa[first]
-        hi[n] = ob[o] - left
-        n += 1
-        p = q
-    return n, g, splits
 
 
 def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,

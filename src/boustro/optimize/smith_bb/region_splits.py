@@ -14,7 +14,7 @@ every choice of splits in the boxes open at the work budget (docs/global_optimum
 
 :func:`split_bound` is a branch and bound over those choices, line by line (a line's choice:
 the gaps between its pieces at which its segments split, at most its ``extra``): a node fixes
-the choices of its first lines exactly (:func:`_segments`) and pools the others, so its value
+the choices of its first lines exactly (:func:`_line_segments`) and pools the others, so its value
 bounds every choice below it (the root: the pooled bound); nodes at most the best complete
 choice or the caller's ``cut`` are not branched. The lines with the longest possible split
 groups are branched first (they make the pooled bound loose). Free segments (holding no
@@ -56,18 +56,18 @@ def _extent(oa, ob, o0, o1, p0, p1, pa, pb, owner):
     return out
 
 
-def _segments(oa, ob, o0, o1, pa, pb, p0, p1, owner, mask, lo, hi, n):
-    """Append the segments of one line whose pieces are grouped at the gaps set in ``mask``
-    (as :func:`.region_kernel._line_segments`, from bit 0). Returns ``(n, splits)``."""
+def _line_segments(oa, ob, o0, o1, pa, pb, p0, p1, owner, mask, g, lo, hi, n):
+    """Append the segments of one line to ``lo, hi`` from ``n``: per O-component, its pieces
+    grouped at the split points whose bit of ``mask`` (from bit ``g``) is set. Returns
+    ``(n, g, splits)``."""
     splits = 0
-    g = 0
     p = p0
     while p < p1:
         if owner[p] < 0:
             p += 1
             continue
         o = owner[p]
-        left = oa[o]
+        left = oa[o]  # the group lies right of this
         first = p
         last = p
         q = p + 1
@@ -75,7 +75,7 @@ def _segments(oa, ob, o0, o1, pa, pb, p0, p1, owner, mask, lo, hi, n):
             if owner[q] < 0:
                 q += 1
                 continue
-            if (mask >> g) & 1:
+            if (mask >> g) & 1:  # a split between last and q
                 lo[n] = pb[last] - pa[first]
                 hi[n] = pa[q] - left
                 n += 1
@@ -89,7 +89,7 @@ def _segments(oa, ob, o0, o1, pa, pb, p0, p1, owner, mask, lo, hi, n):
         hi[n] = ob[o] - left
         n += 1
         p = q
-    return n, splits
+    return n, g, splits
 
 
 def _node(oa, ob, ost, pa, pb, ist, owner, extra, gaps, order, nl, depth, chosen, lo, hi, w,
@@ -99,8 +99,8 @@ def _node(oa, ob, ost, pa, pb, ist, owner, extra, gaps, order, nl, depth, chosen
     n = n_fixed
     for i in range(depth):
         q = order[i]
-        n, splits = _segments(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], owner,
-                              chosen[i], lo, hi, n)  # fmt: skip
+        n, _, splits = _line_segments(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], owner,
+                              chosen[i], 0, lo, hi, n)  # fmt: skip
         if splits > extra[q]:
             return -np.inf
     pooled, smin, smax = 0, np.inf, 0.0
@@ -214,4 +214,4 @@ def split_bound(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_f
 def prepare() -> None:
     """Swap this module's helpers for their numba versions (before a caller compiles)."""
     kernel._compiled()
-    jit_globals(globals(), ("_extent", "_segments", "_node", "_sup_w"))
+    jit_globals(globals(), ("_extent", "_line_segments", "_node", "_sup_w"))
