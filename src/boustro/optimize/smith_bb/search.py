@@ -26,7 +26,14 @@ from ...geometry import Polygon, halfplanes
 from ...geometry.region import Region
 from ...objectives import SmithFitness
 from ...scoring import as_polygon
-from ..cover.boxes import Boxes, box_radius, initial_boxes, level_radius, split_boxes
+from ..cover.boxes import (
+    Boxes,
+    box_radius,
+    initial_boxes,
+    level_radius,
+    split_boxes,
+    split_parents,
+)
 from ..cover.sandwich import Sandwich
 from ..cover.search import SIMPLIFY_EDGES, SIMPLIFY_SPACING
 from ..exact import best_offset
@@ -286,8 +293,11 @@ def _run(
         size = max(BATCH, int(BATCH_SHARE * len(bounds)))
         order = np.argsort(-bounds)
         chosen, rest = order[:size], order[size:]
-        children = split_boxes(boxes.take(chosen), search.radius)
-        child_bounds = _evaluate(search, children)
+        parents = boxes.take(chosen)
+        children = split_boxes(parents, search.radius)
+        # a parent's bound holds on each child (its subset): the least of the two is a bound
+        up = bounds[chosen][split_parents(parents, search.radius)]
+        child_bounds = np.minimum(_evaluate(search, children), up)
         boxes = Boxes(*(np.concatenate(p) for p in zip(boxes.take(rest), children, strict=True)))
         bounds = np.concatenate([bounds[rest], child_bounds])
     return closed, rounds, stopped
