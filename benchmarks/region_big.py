@@ -3,9 +3,10 @@ certifying the 2000-vertex traced field with 10 holes (``traced_field(2000, 10)`
 upper bound, fitness, boxes and CPU (``time.process_time``) against the work budget, for this
 tree and a baseline tree (``--baseline``: a ``src`` folder), each in its own subprocess,
 interleaved (base, new, base again: the lesser CPU of the two base runs), the first compiling
-call excluded and timed apart. Targets of issue 21: certified (gap <= 1e-4) in 5 s.
+call excluded and timed apart, and each process's peak RSS. Targets of issue 21: certified
+(gap <= 1e-4) in 5 s.
 
-    git archive 1158b53 src | tar -x -C /tmp/base   # the tree before
+    git archive fff0927 src | tar -x -C /tmp/base   # the tree before
     PYTHONPATH=src python benchmarks/region_big.py --baseline /tmp/base/src [--budgets 1e7 4e7]
 """
 
@@ -14,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -34,6 +36,8 @@ def _worker(budgets: list[float], n: int, holes: int, spacing: float) -> None:
                "upper": res.upper_bound, "fitness": res.fitness, "boxes": res.info["boxes"],
                "converged": res.info["converged"]}  # fmt: skip
         print(json.dumps(row), flush=True)
+    # peak resident memory of the whole process (imports, all budgets), kilobytes on Linux
+    print(json.dumps({"rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}), flush=True)
 
 
 def main() -> None:
@@ -60,6 +64,9 @@ def main() -> None:
         runs[label] = [json.loads(line) for line in out.splitlines()]
     print(f"first call (compile or load): base {runs['base'][0]['first']:.2f} s, "
           f"new {runs['new'][0]['first']:.2f} s")  # fmt: skip
+    rss = {k: v.pop()["rss"] / 1024 for k, v in runs.items()}
+    print(f"peak RSS of a process (all budgets): base {max(rss['base'], rss['base2']):.0f} MB, "
+          f"new {rss['new']:.0f} MB")  # fmt: skip
     print(f"{'budget':>8} {'base gap':>9} {'new gap':>9} {'base ub':>8} {'new ub':>8} "
           f"{'base fit':>9} {'new fit':>9} {'base s':>7} {'new s':>7} {'boxes':>13}")  # fmt: skip
     for base, base2, new in zip(runs["base"][1:], runs["base2"][1:], runs["new"][1:], strict=True):
