@@ -12,6 +12,7 @@ from boustro.geometry.region import Region
 from boustro.optimize.cover import CoverCost, band_stats
 from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.search import CoverSearch
+from boustro.plan.lanes import region_lanes
 from boustro.plan.region import plan_region
 
 SPACING = 7.0
@@ -82,3 +83,49 @@ def test_box_bound_below_the_plan_at_its_centre_near_a_hole_by_the_boundary(tour
         bound = search.box_bounds(_box(scale))[0]
         assert bound <= plan + 1e-6
         assert bound > plan - 30.0  # the bound still sees most of the plan
+
+
+def _slit() -> Region:
+    """100 x 80 m with a 5 mm slit from the top side down to y = 60, a hole 2 mm beside it."""
+    shell = np.array(
+        [[0, 0], [100, 0], [100, 80], [62.005, 80], [62.005, 60], [62, 60], [62, 80], [0, 80]],
+        dtype=float,
+    )
+    return Region(Polygon(shell), [_square(62.007, 45, 15, 5)])
+
+
+@pytest.mark.parametrize("angle", [0.0, 3e-8, -3e-8, 1e-6])
+def test_lanes_never_bridge_a_slit_whose_ends_are_within_tol_across_the_lines(angle):
+    """A line almost along the top side (the slit's two top corners within 1e-9 of the
+    diameter across the lines: one slab event): the slab's edges were extended past their ends
+    along the side, and the top band's lane crossed the 5 mm slit (21 lanes and a 675.2 s
+    plan at 3e-8 rad where every layout nearby flies 22 lanes, 693.0 s; a box bound of 681.2 s
+    above it). Every band through the slit keeps two lanes, apart by the slit."""
+    region = _slit()
+    lanes = region_lanes(region, 5.0, angle, 0.2, reach=2.5, holes=region.holes)
+    x0 = lanes.origin[0] + np.cos(angle) * lanes.t0 - np.sin(angle) * lanes.c
+    x1 = lanes.origin[0] + np.cos(angle) * lanes.t1 - np.sin(angle) * lanes.c
+    y = lanes.origin[1] + np.sin(angle) * lanes.t0 + np.cos(angle) * lanes.c
+    across = (x0 < 62.001) & (x1 > 62.004) & (y > 60.5)  # a lane over the slit, above its end
+    assert not across.any()
+    top = lanes.k == lanes.k.max()
+    assert top.sum() == 2
+
+
+def test_box_bound_below_the_plans_sampled_beside_a_slit():
+    """The box around 0 rad of the slit's region: its bound below every sampled plan (22
+    lanes at every angle now)."""
+    region = _slit()
+    cost = CoverCost.time(5.0, 14.5)
+    search = CoverSearch(region, 5.0, 2.5, cost, None, False)
+    boxes = Boxes(np.array([0.0]), np.array([1.3e-6]), np.array([0.2]), np.array([4.3e-5]))
+    search.top_eps = 2e-4
+    bound = search.box_bounds(boxes)[0]
+    rng = np.random.default_rng(1)
+    for _ in range(4):
+        a, d = rng.uniform(-1.3e-6, 1.3e-6), 0.2 + rng.uniform(-4.3e-5, 4.3e-5)
+        plan = plan_region(
+            region, 5.0, decompose_area=False, angle=a, offset=d, speed=5.0, turn_time=14.5
+        )
+        assert plan.stats.n_transects == 22
+        assert bound <= cost.of(plan.stats.path_length, plan.stats.n_turns) + 1e-6
