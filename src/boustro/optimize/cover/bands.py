@@ -74,8 +74,9 @@ def edge_set(
 class BandStats(NamedTuple):
     """Per layout ``l`` and band ``b`` (line ``k = k0 + b``), arrays ``(L, B)``:
 
-    * ``length``: measure of the inner set's band projection minus the inner set's hole chords
-      on the line (a lower bound on the lane length any sandwiched area gets);
+    * ``length``: measure of the inner set's band projection minus the chords of its holes
+      (:attr:`EdgeSet.chords`) on the line (a lower bound on the lane length any sandwiched
+      area gets);
     * ``count``: pieces of the outer projection minus the outer set's hole chords that hold
       inner length (a lower bound on the lanes on the line);
     * ``in_lo, in_hi, out_lo, out_hi``: the extremes of the inner and outer projections
@@ -90,7 +91,7 @@ class BandStats(NamedTuple):
       interval of band ``k`` covers the hole's extent along the line grown by ``m``, so the
       chord lies inside every such plan's lane;
     * ``first_hi, last_lo``: the end of the first and the start of the last piece of the inner
-      projection minus the inner set's hole chords (``nan`` where none): the lane holding the
+      projection minus the chords of its holes (``nan`` where none): the lane holding the
       first piece ends at ``first_hi`` or beyond (:mod:`~boustro.optimize.cover.ends`);
     * ``pieces (L, B, 4)``: of the outer pieces ``count`` counts, the end of the first, the
       start of the second, the start of the last, the end of the one before (``nan`` if fewer
