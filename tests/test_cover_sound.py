@@ -129,3 +129,40 @@ def test_box_bound_below_the_plans_sampled_beside_a_slit():
         )
         assert plan.stats.n_transects == 22
         assert bound <= cost.of(plan.stats.path_length, plan.stats.n_turns) + 1e-6
+
+
+#: A box the adversarial sampler found above a plan before the fix (a hole 1.3 mm from the side,
+#: another stacked 1.6 mm above it; a line through their corners): holes, spacing, run-in, turn
+#: time, box ``(theta, delta, d, eta)`` (before: 428.1 s, 442.1 s with the 1-tree, where the plan
+#: at its centre takes 424.1 s; now 409.3 s and 410.8 s).
+SAMPLED = [
+    (
+        [[(0.001274, 21.935599), (26.017767, 21.935599), (26.017767, 27.761541),
+          (0.001274, 27.761541)],
+         [(1.350293, 27.763169), (24.303842, 27.763169), (24.303842, 34.321668),
+          (1.350293, 34.321668)]],
+        7.0, 0.0, 9.88, (0.0, 0.0, 5.0, 6.85e-4),
+    ),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("case", range(len(SAMPLED)))
+def test_box_bounds_below_plans_where_the_sampler_found_them_above(case):
+    holes, spacing, turnaround, turn_time, box = SAMPLED[case]
+    shell = Polygon(np.array([[0, 0], [100, 0], [100, 80], [0, 80]], dtype=float))
+    region = Region(shell, [Polygon(np.array(h)[::-1]) for h in holes])
+    cost = CoverCost.time(5.0, turn_time, turnaround=turnaround)
+    search = CoverSearch(region, spacing, spacing / 2, cost, None, False)
+    boxes = Boxes(*(np.array([v]) for v in box))
+    search.top_eps = 1.5 * float(box[1] * search.radius + box[3])
+    bound = search.box_bounds(boxes)[0]
+    rng = np.random.default_rng(case)
+    theta, delta, d, eta = box
+    for a, o in [(theta, d)] + [
+        (theta + rng.uniform(-delta, delta), d + rng.uniform(-eta, eta)) for _ in range(2)
+    ]:
+        plan = plan_region(
+            region, spacing, decompose_area=False, angle=a, offset=o, speed=5.0,
+            turn_time=turn_time, turnaround=turnaround,
+        )  # fmt: skip
+        assert bound <= cost.of(plan.stats.path_length, plan.stats.n_turns) + 1e-6
