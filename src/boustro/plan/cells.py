@@ -153,8 +153,12 @@ def trapezoids(
     dc = c2 - c1
     slope = (t2 - t1) / np.where(dc == 0, 1.0, dc)
 
+    t_lo, t_hi = np.minimum(t1, t2), np.maximum(t1, t2)
+
     def t_at(j: NDArray[np.int64], c: NDArray[np.float64]) -> NDArray[np.float64]:
-        return t1[j] + (c - c1[j]) * slope[j]
+        # within the edge: a slab whose end merged a vertex event within tol would otherwise
+        # extend an edge almost along the lines far past its end (a lane across a 5 mm slit)
+        return np.clip(t1[j] + (c - c1[j]) * slope[j], t_lo[j], t_hi[j])
 
     aa, bb = a[slab], b[slab]
     return Trapezoids(

@@ -34,15 +34,30 @@ __all__ = ["BandStats", "EdgeSet", "RigidBoxes", "band_stats", "edge_set"]
 class EdgeSet(NamedTuple):
     """The boundary of a region as edges: ``(E, 4)`` rows ``x1, y1, x2, y2`` (plan units) and
     ``hole (E,)``: ``-1`` for an edge of an outer ring, else the index of the ORIGINAL hole it
-    belongs to (several rings of a set may map to one original hole)."""
+    belongs to (several rings of a set may map to one original hole).
+
+    ``chords`` (an inner set's, ``(C, 4)`` edges of closed rings; ``None``: the set's own hole
+    edges): the rings whose chords on a line are the parts a lane loses to holes, in place of
+    the set's own hole rings. The inner set of a sandwich passes the union of the holes dilated
+    by its radius: where a hole lies nearer the boundary (or another hole) than twice the
+    radius the erosion merges it with the outside, and its own rings no longer say that the
+    line's part across it is a hole of every sandwiched area (:mod:`.sandwich`)."""
 
     xy: NDArray[np.float64]
     hole: NDArray[np.int64]
+    chords: NDArray[np.float64] | None = None
 
 
-def edge_set(rings: list[NDArray[np.float64]], holes: list[int]) -> EdgeSet:
+def edge_set(
+    rings: list[NDArray[np.float64]],
+    holes: list[int],
+    chords: list[NDArray[np.float64]] | None = None,
+) -> EdgeSet:
     """The :class:`EdgeSet` of closed ``rings`` (``(m, 2)``, not repeated), ``holes[i]`` the
-    original hole of ring ``i`` or ``-1`` for an outer ring."""
+    original hole of ring ``i`` or ``-1`` for an outer ring; ``chords``: the rings of
+    :attr:`EdgeSet.chords`."""
+    if chords is not None:
+        return edge_set(rings, holes)._replace(chords=edge_set(chords, [0] * len(chords)).xy)
     rows, ids = [], []
     for ring, h in zip(rings, holes, strict=True):
         ring = np.asarray(ring, dtype=np.float64)
@@ -59,8 +74,9 @@ def edge_set(rings: list[NDArray[np.float64]], holes: list[int]) -> EdgeSet:
 class BandStats(NamedTuple):
     """Per layout ``l`` and band ``b`` (line ``k = k0 + b``), arrays ``(L, B)``:
 
-    * ``length``: measure of the inner set's band projection minus the inner set's hole chords
-      on the line (a lower bound on the lane length any sandwiched area gets);
+    * ``length``: measure of the inner set's band projection minus the chords of its holes
+      (:attr:`EdgeSet.chords`) on the line (a lower bound on the lane length any sandwiched
+      area gets);
     * ``count``: pieces of the outer projection minus the outer set's hole chords that hold
       inner length (a lower bound on the lanes on the line);
     * ``in_lo, in_hi, out_lo, out_hi``: the extremes of the inner and outer projections
@@ -75,7 +91,7 @@ class BandStats(NamedTuple):
       interval of band ``k`` covers the hole's extent along the line grown by ``m``, so the
       chord lies inside every such plan's lane;
     * ``first_hi, last_lo``: the end of the first and the start of the last piece of the inner
-      projection minus the inner set's hole chords (``nan`` where none): the lane holding the
+      projection minus the chords of its holes (``nan`` where none): the lane holding the
       first piece ends at ``first_hi`` or beyond (:mod:`~boustro.optimize.cover.ends`);
     * ``pieces (L, B, 4)``: of the outer pieces ``count`` counts, the end of the first, the
       start of the second, the start of the last, the end of the one before (``nan`` if fewer
@@ -323,6 +339,7 @@ def _leaf(
     inner_hole,
     outer_xy,
     outer_hole,
+    chord_xy,
     cs,
     sn,
     d,
@@ -361,7 +378,10 @@ def _leaf(
     # 1e-7 spacings): the inner set's tau within its holes' margin over the real ones (the
     # sandwich's pad, tol), the outer set's beyond the planner's (fewer chords: a lower bound)
     tau_out = 1.5e-7 * max(s, tol)
-    gi_start, gi_t, _gi_h = _hole_chords(ih1, ih2, it1, it2, inner_hole, d, s, k0, nb, tol / 2)
+    # the inner set's holes: the holes dilated by its radius, merged with the outside or not
+    ch1, ch2, ct1, ct2 = _project(chord_xy, cs, sn, ox, oy)
+    chord_hole = np.zeros(chord_xy.shape[0], dtype=np.int64)
+    gi_start, gi_t, _gi_h = _hole_chords(ch1, ch2, ct1, ct2, chord_hole, d, s, k0, nb, tol / 2)
     go_start, go_t, go_h = _hole_chords(oh1, oh2, ot1, ot2, outer_hole, d, s, k0, nb, tau_out)
     # scratch for the pieces of one band (no arrays allocated per band)
     room = 1
@@ -425,6 +445,7 @@ def _all(
     inner_hole,
     outer_xy,
     outer_hole,
+    chord_xy,
     cs,
     sn,
     d,
@@ -460,6 +481,7 @@ def _all(
             inner_hole,
             outer_xy,
             outer_hole,
+            chord_xy,
             cs[leaf],
             sn[leaf],
             d[leaf],
@@ -525,9 +547,11 @@ def band_stats(
     if rigid is None:  # delta < 0: no rigid test
         rigid = RigidBoxes(np.zeros((0, 2)), np.zeros(1, dtype=np.int64),
                            np.full(len(angles), -1.0), np.zeros(len(angles)))  # fmt: skip
+    chords = inner.xy[inner.hole >= 0] if inner.chords is None else inner.chords
     out = fn(
         np.ascontiguousarray(inner.xy), np.ascontiguousarray(inner.hole),
         np.ascontiguousarray(outer.xy), np.ascontiguousarray(outer.hole),
+        np.ascontiguousarray(chords, dtype=np.float64),
         np.cos(angles), np.sin(angles), np.ascontiguousarray(offsets, dtype=np.float64),
         float(spacing), float(reach if inner_reach is None else inner_reach), float(reach),
         float(origin[0]), float(origin[1]), int(k0), int(k1 - k0 + 1), int(n_holes), float(tol),

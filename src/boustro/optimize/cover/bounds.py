@@ -61,7 +61,8 @@ def lower_bounds(
     """``(L,)`` a lower bound on the cost of every plan of the layouts' grids over any area
     between ``level``'s inner and outer sets.
 
-    Lanes: at least the inner projection minus the inner set's hole chords on each line, at
+    Lanes: at least the inner projection minus its holes' chords (the holes dilated by the
+    sandwich's radius, :attr:`~.bands.EdgeSet.chords`) on each line, at
     least one lane per piece of the outer projection (minus the outer set's hole chords) that
     holds such length, each with its run-in and run-out. Hole passes: every original hole whose
     outer-set chord overlaps the inner projection is cut in every such plan, so it gets its pass

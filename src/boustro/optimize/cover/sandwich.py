@@ -119,18 +119,36 @@ class Sandwich:
             r = eps + t
             outer = self.polygon.buffer(r * ARC_FACTOR + pad, quad_segs=QUAD_SEGS)
             inner = self.polygon.buffer(-((r + shrink) * ARC_FACTOR + pad), quad_segs=QUAD_SEGS)
+            holes = self._dilated_holes((r + shrink) * ARC_FACTOR + pad)
             outer = outer.simplify(SIMPLIFY_SHARE * t, preserve_topology=True)
             inner = inner.simplify(SIMPLIFY_SHARE * t, preserve_topology=True)
+            holes = holes.simplify(SIMPLIFY_SHARE * t, preserve_topology=True)
         else:
             outer = self.polygon.buffer(eps + pad, join_style="mitre", mitre_limit=5.0)
             inner = self.polygon.buffer(-((eps + shrink) * ARC_FACTOR + pad), quad_segs=QUAD_SEGS)
-        return self._level(eps, inner, outer)
+            holes = self._dilated_holes((eps + shrink) * ARC_FACTOR + pad)
+        return self._level(eps, inner, outer, holes)
 
-    def _level(self, eps: float, inner: Any, outer: Any) -> Level:
+    def _dilated_holes(self, radius: float) -> Any:
+        """The union of the holes dilated by ``radius`` (round joins, polygonal arcs outside
+        the true circle as the erosion's): the inner set's holes, also where the erosion
+        merged them with the outside or with each other. Every hole of a sandwiched area lies
+        in it (a hole moves by at most ``eps``), so a line loses at most its chords there,
+        while the inner set's own rings lose a merged hole (its band projection may then cover
+        the hole's chord: a lane length above the plan's, issue 16)."""
+        import shapely
+
+        parts = [h.buffer(radius, quad_segs=QUAD_SEGS) for h in self.hole_polygons]
+        return shapely.union_all(parts)
+
+    def _level(self, eps: float, inner: Any, outer: Any, holes: Any = None) -> Level:
         import shapely
 
         in_rings = _rings(inner)
-        inner_set = edge_set([r for r, _ in in_rings], [0 if h else -1 for _, h in in_rings])
+        chords = None if holes is None else [r for r, _ in _rings(holes)]
+        inner_set = edge_set(
+            [r for r, _ in in_rings], [0 if h else -1 for _, h in in_rings], chords
+        )
         out_rings = _rings(outer)
         ids, kept = [], []
         for ring, is_hole in out_rings:
