@@ -72,6 +72,12 @@ DEFER_TOUR = True
 #: Whether a box's 1-tree starts from its parent box's best multipliers (and its centre's
 #: from its box's), not from zero.
 WARM_TOUR = True
+#: Whole degrees of angle whose lanes laid from the area's extreme (the first half a spacing
+#: inside it: the layouts of a 1-degree brute force) are seeds and a final sweep of a search
+#: over every angle (:meth:`CoverSearch.try_centred`); 0: none.
+CENTRED_ANGLES = 180
+#: Those layouts planned before the search (the lowest models): a good first incumbent.
+CENTRED_SEEDS = 4
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 EDGE_OFFSETS = 64
@@ -126,6 +132,7 @@ class CoverSearch:
         self.model_min = math.inf  # the lowest model value at a layout seen
         self.points: list[NDArray[Any]] = []  # (value, theta, d) of every layout modelled
         self.ranks: NDArray[np.float64] = np.zeros(0)  # the last point values, for the plans
+        self.centred_plans = 0  # plans of the final sweep of centred layouts (try_centred)
 
     def work_spent(self, n_boxes: int) -> float:
         """The work after the next round of ``n_boxes`` boxes (8 layouts each at most: four
@@ -386,6 +393,33 @@ class CoverSearch:
         self.point_values(boxes)
         self.try_plans(boxes, self.ranks, limit=len(pick))
 
+    def centred_boxes(self) -> _Boxes:
+        """The layouts of a brute force over :data:`CENTRED_ANGLES` whole angles: each with
+        its first line ``reach`` inside the area's lowest extreme (:func:`centred_offsets`)."""
+        angles = np.arange(CENTRED_ANGLES, dtype=np.float64) * (math.pi / CENTRED_ANGLES)
+        d = centred_offsets(self.region, angles, self.s, self.reach)
+        zeros = np.zeros(len(angles))
+        return _Boxes(angles, zeros, d, zeros)
+
+    def try_centred(self, seeds: int | None = None) -> None:
+        """Plan the brute force's layouts (:meth:`centred_boxes`) that could beat the best
+        plan: ``seeds`` of them, those of the lowest models, before the search (a first
+        incumbent); without ``seeds``, after it, every one whose lower bound at the layout
+        itself (the exact area, with the 1-tree) is below the best plan, lowest first, until
+        none is left: the plan is then never longer than the best of that brute force (as far
+        as the bound at a layout holds, which the tests check against the plans)."""
+        if CENTRED_ANGLES <= 0:
+            return
+        boxes = self.centred_boxes()
+        if seeds is not None:
+            self.point_values(boxes)
+            self.try_plans(boxes, self.ranks, limit=seeds)
+            return
+        before = self.plans
+        values = self.point_values(boxes, exact=True)
+        self.try_plans(boxes, values, limit=len(values))
+        self.centred_plans = self.plans - before
+
     def refine_offsets(self) -> None:
         """Plan :data:`REFINE_OFFSETS` more offsets at the best angle: a routed plan's moves
         differ between offsets that the bound (lanes, turns) cannot tell apart."""
@@ -528,6 +562,8 @@ def cover_optimum(
     t0 = time.perf_counter()
     if angle is None:
         search.try_edges()
+        if evaluate is not None:
+            search.try_centred(CENTRED_SEEDS)
     else:
         angle = float(angle) % math.pi
         if not keep_inside:
@@ -539,6 +575,8 @@ def cover_optimum(
     if not boustrophedon and evaluate is not None and math.isfinite(search.best[0]):
         search.polish()
         search.refine_offsets()
+    if angle is None and evaluate is not None and math.isfinite(search.best[0]):
+        search.try_centred()
     value, theta, d = search.best
     if not math.isfinite(value):
         raise InvalidParameterError("no layout of this spacing has a lane over the area")
@@ -560,6 +598,7 @@ def cover_optimum(
             "certified": gap <= rtol * abs(value) + 1e-12,
             "rtol": rtol,
             "plans": search.plans,
+            "centred_plans": search.centred_plans,
             "rounds": rounds,
             "converged": not stopped,
             **({"stopped": stopped} if stopped else {}),
