@@ -8,9 +8,12 @@ import math
 import numpy as np
 import pytest
 
+import boustro.optimize.cover.bounds as bounds_module
+import boustro.optimize.cover.branch as branch_module
+import boustro.optimize.cover.search as search_module
 from boustro.geometry.region import Region, random_region
 from boustro.mission import plan_area
-from boustro.optimize.cover import CoverCost, centred_offsets
+from boustro.optimize.cover import CoverCost, centred_offsets, cover_optimum
 from boustro.optimize.cover.search import CoverSearch
 from boustro.plan.region import plan_region
 
@@ -76,3 +79,54 @@ def _cost(region: Region, a: float, d: float) -> float:
         turn_time=TURN_TIME,
     ).stats  # fmt: skip
     return CoverCost.time(SPEED, TURN_TIME).of(st.path_length, st.n_turns)
+
+
+def _search_pair(monkeypatch, module, flag, region):
+    """The time search of ``region`` (routed plans) with ``module.flag`` off and on, and the
+    layouts given a 1-tree in each."""
+    cost = CoverCost.time(SPEED, TURN_TIME)
+    counted: list[int] = []
+    real = bounds_module.one_tree_bound
+
+    def spy(st, *args, **kwargs):
+        todo = kwargs.get("todo")
+        counted[-1] += int(st.count.shape[0] if todo is None else todo.sum())
+        return real(st, *args, **kwargs)
+
+    monkeypatch.setattr(bounds_module, "one_tree_bound", spy)
+    runs, trees = [], []
+    for on in (False, True):
+        monkeypatch.setattr(module, flag, on)
+        counted.append(0)
+        runs.append(
+            cover_optimum(
+                region, SPACING, cost, lambda a, d: _cost(region, a, d), boustrophedon=False
+            )
+        )
+        trees.append(counted[-1])
+    return runs, trees
+
+
+@pytest.mark.parametrize("index", range(2))
+def test_point_one_trees_only_below_the_model_give_the_same_search(index, monkeypatch):
+    """branch.POINT_TOURS_BELOW_MODEL: the same plan, rounds and certificate, fewer 1-trees."""
+    region = random_regions(71, 2, n_holes=(1, 3))[index]
+    region = Region(region.shell.vertices * 130, [h.vertices * 130 for h in region.holes])
+    (a, b), (n_a, n_b) = _search_pair(monkeypatch, branch_module, "POINT_TOURS_BELOW_MODEL", region)
+    assert (a.angle, a.offset, a.fitness) == (b.angle, b.offset, b.fitness)
+    assert a.info["rounds"] == b.info["rounds"] and a.info["plans"] == b.info["plans"]
+    assert b.info["lower_bound"] == pytest.approx(a.info["lower_bound"], rel=1e-12)
+    assert n_b < n_a
+
+
+@pytest.mark.parametrize("index", range(2))
+def test_box_one_trees_stopped_at_the_take_out_value(index, monkeypatch):
+    """search.STOP_TOUR_AT_KEEP: a box's 1-tree steps stop once the box is taken out; the same
+    plans and rounds, a true certificate (below the plan) as tight as before to 1e-4."""
+    region = random_regions(71, 2, n_holes=(1, 3))[index]
+    region = Region(region.shell.vertices * 130, [h.vertices * 130 for h in region.holes])
+    (a, b), _ = _search_pair(monkeypatch, search_module, "STOP_TOUR_AT_KEEP", region)
+    assert (a.angle, a.offset, a.fitness) == (b.angle, b.offset, b.fitness)
+    assert a.info["rounds"] == b.info["rounds"]
+    assert b.info["lower_bound"] <= b.fitness
+    assert b.info["lower_bound"] == pytest.approx(a.info["lower_bound"], rel=1e-4)

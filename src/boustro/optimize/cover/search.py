@@ -69,6 +69,11 @@ TOUR_EPS = 0.25
 #: if it could lower the certificate's floor (:meth:`CoverSearch.settle_deferred`): the same
 #: certificate for less CPU (docs/mission_time.md, "The 1-tree's CPU").
 DEFER_TOUR = True
+#: Whether a box's 1-tree steps stop once its bound reaches the value at which the search
+#: takes it out (``keep_at``), not the best plan; a box so taken out below the best plan is
+#: deferred (with :data:`DEFER_TOUR`): its 1-tree goes on after the search where it could
+#: lower the certificate's floor (docs/mission_time.md, "The 1-tree's CPU").
+STOP_TOUR_AT_KEEP = True
 #: Whether a box's 1-tree starts from its parent box's best multipliers (and its centre's
 #: from its box's), not from zero.
 WARM_TOUR = True
@@ -185,12 +190,16 @@ class CoverSearch:
         *,
         span_only: bool = False,
         multipliers: Multipliers | None = None,
+        tour_keep: float | None = None,
     ) -> NDArray[np.float64]:
         """The bound at each box's centre with the region itself (a layout's own model); of
         the simplified region (:attr:`Sandwich.approximate`) unless ``exact``: the search only
         ranks and retires boxes by these, a plan's value is always exact. ``span_only``: the
         moves as the lines' span only (a second ranking, not recorded). ``multipliers``: the
-        1-tree's starts (the boxes' own; not changed)."""
+        1-tree's starts (the boxes' own; not changed). ``tour_keep``: with real plans
+        (``evaluate``), the 1-tree only at the layouts whose bound without it is below this (the
+        branch and bound's: where the 1-tree could lower :attr:`model_min` or retire a box;
+        elsewhere the value returned is the bound without it)."""
         if self.keep_inside:  # a relaxation of the plan even at one layout
             lv = self.sandwich.level(0.0, self.shrink)
         else:
@@ -219,6 +228,9 @@ class CoverSearch:
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
                 runins=self.n_holes == 0, tour_below=self._tour_below(),
                 walls=self._walls(lv, boxes.theta, boxes.d),
+                tour_keep=None if tour_keep is None or self.evaluate is None else np.full(
+                    len(boxes.theta), tour_keep
+                ),
                 multipliers=None if multipliers is None else Multipliers(
                     multipliers.values.copy(), multipliers.warm.copy(), multipliers.k0
                 ),
@@ -285,12 +297,18 @@ class CoverSearch:
             mult = None
             if multipliers is not None:
                 mult = Multipliers(multipliers.values[sel], multipliers.warm[sel], multipliers.k0)
+            # the 1-tree's steps stop once the box is taken out (STOP_TOUR_AT_KEEP): an array
+            # per layout, which lower_bounds takes elementwise (its threshold and stop)
+            stop: Any = below
+            early = STOP_TOUR_AT_KEEP and below is not None and keep_at is not None
+            if STOP_TOUR_AT_KEEP and below is not None and keep_at is not None:
+                stop = np.minimum(keep_at[sel], below)
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
-                runins=self.n_holes == 0, tour_below=below,
+                runins=self.n_holes == 0, tour_below=stop,
                 walls=self._walls(lv, boxes.theta[sel], boxes.d[sel], float(r)),
-                tour_keep=None if keep_at is None else keep_at[sel], tour_skipped=skipped,
-                multipliers=mult,
+                tour_keep=None if keep_at is None or early else keep_at[sel],
+                tour_skipped=skipped, multipliers=mult,
             )  # fmt: skip
             self.skipped[sel] = skipped
             if multipliers is not None and mult is not None:
