@@ -74,6 +74,10 @@ DEFER_TOUR = True
 #: deferred (with :data:`DEFER_TOUR`): its 1-tree goes on after the search where it could
 #: lower the certificate's floor (docs/mission_time.md, "The 1-tree's CPU").
 STOP_TOUR_AT_KEEP = True
+#: ... a share of the way from that value to the best plan above it: at 0 the floor of the
+#: certificate came out up to 0.3 s lower on 8 of 30 random areas (its lowest boxes stopped
+#: right at the take-out value), at 0.1 as before on them for most of the CPU saved.
+STOP_SHARE = 0.1
 #: Whether a box's 1-tree starts from its parent box's best multipliers (and its centre's
 #: from its box's), not from zero.
 WARM_TOUR = True
@@ -302,7 +306,7 @@ class CoverSearch:
             stop: Any = below
             early = STOP_TOUR_AT_KEEP and below is not None and keep_at is not None
             if STOP_TOUR_AT_KEEP and below is not None and keep_at is not None:
-                stop = np.minimum(keep_at[sel], below)
+                stop = np.minimum(keep_at[sel] + STOP_SHARE * (below - keep_at[sel]), below)
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
                 runins=self.n_holes == 0, tour_below=stop,
