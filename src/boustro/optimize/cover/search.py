@@ -69,14 +69,14 @@ TOUR_EPS = 0.25
 #: if it could lower the certificate's floor (:meth:`CoverSearch.settle_deferred`): the same
 #: certificate for less CPU (docs/mission_time.md, "The 1-tree's CPU").
 DEFER_TOUR = True
-#: Whether a box's 1-tree steps stop once its bound reaches the value at which the search
-#: takes it out (``keep_at``), not the best plan; a box so taken out below the best plan is
-#: deferred (with :data:`DEFER_TOUR`): its 1-tree goes on after the search where it could
-#: lower the certificate's floor (docs/mission_time.md, "The 1-tree's CPU").
+#: Whether a box's 1-tree is computed (and its steps go on) only until its bound passes the
+#: value at which the search takes it out (``keep_at``) by :data:`STOP_SHARE` of the way to the
+#: best plan, not until the best plan: a box taken out joins the floor with the bound reached
+#: (any steps give a valid bound), not deferred (this replaces :data:`DEFER_TOUR`'s deferral;
+#: docs/mission_time.md, "The 1-tree's CPU").
 STOP_TOUR_AT_KEEP = True
-#: ... a share of the way from that value to the best plan above it: at 0 the floor of the
-#: certificate came out up to 0.3 s lower on 8 of 30 random areas (its lowest boxes stopped
-#: right at the take-out value), at 0.1 as before on them for most of the CPU saved.
+#: That share: at 0 the certificate's floor came out up to 0.3 s lower on 8 of 30 random areas
+#: (its lowest boxes stopped right at the take-out value); at 0.1 as at 1 on the areas tried.
 STOP_SHARE = 0.1
 #: Whether a box's 1-tree starts from its parent box's best multipliers (and its centre's
 #: from its box's), not from zero.
@@ -301,8 +301,8 @@ class CoverSearch:
             mult = None
             if multipliers is not None:
                 mult = Multipliers(multipliers.values[sel], multipliers.warm[sel], multipliers.k0)
-            # the 1-tree's steps stop once the box is taken out (STOP_TOUR_AT_KEEP): an array
-            # per layout, which lower_bounds takes elementwise (its threshold and stop)
+            # the 1-tree's steps stop just past the take-out value (STOP_TOUR_AT_KEEP): an
+            # array per layout, which lower_bounds takes elementwise (its threshold and stop)
             stop: Any = below
             early = STOP_TOUR_AT_KEEP and below is not None and keep_at is not None
             if STOP_TOUR_AT_KEEP and below is not None and keep_at is not None:
