@@ -10,6 +10,8 @@ tree). Printed: the distribution of CPU (median, max, fields over 5 s), the rati
 baseline's, and how many plans are longer than the brute force's.
 
     python benchmarks/mission_time_cpu.py --baseline /tmp/base/src [--random 30] [--first 0]
+
+Without ``--baseline`` this tree only (the "base" columns repeat it).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import os
 import statistics
 import subprocess
 import sys
+from typing import Any
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SRC = os.path.join(os.path.dirname(HERE), "src")
@@ -61,7 +64,7 @@ def _ask(p: subprocess.Popen[str], i: int) -> dict[str, float]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--baseline", required=True, help="the baseline tree's src folder")
+    ap.add_argument("--baseline", help="the baseline tree's src folder (none: this tree only)")
     ap.add_argument("--random", type=int, default=30, help="random areas (default 30)")
     ap.add_argument("--first", type=int, default=0, help="the first random area's index")
     ap.add_argument("--no-f2c", action="store_true", help="without Fields2Cover's test.json")
@@ -72,12 +75,15 @@ def main() -> None:
     n = args.first + args.random
     fields = mt._fields(None, n, 0)
     index = ([] if args.no_f2c else [0]) + list(range(1 + args.first, 1 + n))
-    new, base = _worker(SRC, n), _worker(args.baseline, n)
-    rows = []
+    new = _worker(SRC, n)
+    base = _worker(args.baseline, n) if args.baseline else None
+    rows: list[tuple[Any, ...]] = []
     for i in index:
         name, area, crs = fields[i]
-        b = _ask(base, i)
+        b = _ask(base, i) if base is not None else None
         t = _ask(new, i)
+        if b is None:  # this tree alone: compared with itself
+            b = t
         brute, _ = mt._brute_centred(area, crs)
         rows.append((name, t, b, brute))
         print(
@@ -88,6 +94,8 @@ def main() -> None:
             flush=True,
         )
     for p in (new, base):
+        if p is None:
+            continue
         assert p.stdin is not None
         p.stdin.close()
         p.wait()
