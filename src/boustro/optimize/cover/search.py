@@ -433,9 +433,10 @@ class CoverSearch:
         """Plan the brute force's layouts (:meth:`centred_boxes`) that could beat the best
         plan: ``seeds`` of them, those of the lowest models, before the search (a first
         incumbent); without ``seeds``, after it, every one whose lower bound at the layout
-        itself (the exact area, with the 1-tree) is below the best plan, lowest first, until
-        none is left: the plan is then never longer than the best of that brute force (as far
-        as the bound at a layout holds, which the tests check against the plans)."""
+        itself (the exact area, with the 1-tree) is below the best plan, lowest first, at most
+        :data:`CENTRED_MAX_PLANS`: where that planned them all (:attr:`centred_complete`) the
+        plan is never longer than the best of that brute force (as far as the bound at a layout
+        holds, which the tests check against the plans)."""
         if CENTRED_ANGLES <= 0:
             return
         boxes = self.centred_boxes()
