@@ -1,5 +1,5 @@
 """The time objective against a 1-degree brute force of the lane angle (issue 16): the search
-plans the brute force's layouts whose bound could beat its best plan (search.try_centred)."""
+plans the brute force's layouts whose bound could beat its best plan (optimize/cover/centred.py)."""
 
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ import boustro.optimize.cover.search as search_module
 from boustro.geometry.region import Region, random_region
 from boustro.mission import plan_area
 from boustro.optimize.cover import CoverCost, centred_offsets, cover_optimum
+from boustro.optimize.cover.centred import centred_boxes
 from boustro.optimize.cover.search import CoverSearch
 from boustro.plan.region import plan_region
 
@@ -63,7 +64,7 @@ def test_the_bound_at_each_brute_force_layout_is_below_its_plan(seed):
         k = 250.0 / region.diameter
         region = Region(region.shell.vertices * k, [h.vertices * k for h in region.holes])
         search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
-        boxes = search.centred_boxes()
+        boxes = centred_boxes(region, SPACING, SPACING / 2)
         assert len(boxes.theta) == 180
         bounds = search.point_values(boxes, exact=True)
         plans = np.array([_cost(region, a, d) for a, d in zip(boxes.theta, boxes.d, strict=True)])

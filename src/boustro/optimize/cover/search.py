@@ -21,6 +21,7 @@ from .bounds import lower_bounds
 from .boxes import Boxes as _Boxes
 from .boxes import box_radius, initial_boxes, level_radius
 from .branch import Limits, branch_and_bound, take_multipliers
+from .centred import CENTRED_SEEDS, centred_offsets, try_centred
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
 from .inside_bound import contour_edges, inside_box_bounds, path_floor
@@ -28,7 +29,7 @@ from .one_tree import MAX_LANES, Multipliers
 from .sandwich import Level, Sandwich
 from .walls import WallCache
 
-__all__ = ["CoverSearch", "centred_offsets", "cover_optimum"]
+__all__ = ["CoverSearch", "cover_optimum"]
 
 #: Regions with more edges than this are searched with simplified sandwiches
 #: (:class:`Sandwich` with a tolerance of :data:`SIMPLIFY_SPACING` spacings).
@@ -81,17 +82,6 @@ STOP_SHARE = 0.1
 #: Whether a box's 1-tree starts from its parent box's best multipliers (and its centre's
 #: from its box's), not from zero.
 WARM_TOUR = True
-#: Whole degrees of angle whose lanes laid from the area's extreme (the first half a spacing
-#: inside it: the layouts of a 1-degree brute force) are seeds and a final sweep of a search
-#: over every angle (:meth:`CoverSearch.try_centred`); 0: none.
-CENTRED_ANGLES = 180
-#: Those layouts planned before the search (the lowest models): a good first incumbent.
-CENTRED_SEEDS = 4
-#: Plans of the final sweep at most (``info["centred_complete"]``: whether it planned every
-#: layout whose bound is below the best plan; a loose bound, as a vehicle's or headlands',
-#: would plan most of the 180). Not with keep-inside (its bound at a layout is 5-20% below its
-#: plans: 148 plans a search, 18-24 s a field; and its brute force is not issue 16's).
-CENTRED_MAX_PLANS = 24
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 EDGE_OFFSETS = 64
@@ -146,7 +136,7 @@ class CoverSearch:
         self.model_min = math.inf  # the lowest model value at a layout seen
         self.points: list[NDArray[Any]] = []  # (value, theta, d) of every layout modelled
         self.ranks: NDArray[np.float64] = np.zeros(0)  # the last point values, for the plans
-        self.centred_plans = 0  # plans of the final sweep of centred layouts (try_centred)
+        self.centred_plans = 0  # plans of the final sweep of centred layouts (centred.py)
         self.centred_complete: bool | None = None  # whether the sweep planned every one below
 
     def work_spent(self, n_boxes: int) -> float:
@@ -421,39 +411,6 @@ class CoverSearch:
         self.point_values(boxes)
         self.try_plans(boxes, self.ranks, limit=len(pick))
 
-    def centred_boxes(self) -> _Boxes:
-        """The layouts of a brute force over :data:`CENTRED_ANGLES` whole angles: each with
-        its first line ``reach`` inside the area's lowest extreme (:func:`centred_offsets`)."""
-        angles = np.arange(CENTRED_ANGLES, dtype=np.float64) * (math.pi / CENTRED_ANGLES)
-        d = centred_offsets(self.region, angles, self.s, self.reach)
-        zeros = np.zeros(len(angles))
-        return _Boxes(angles, zeros, d, zeros)
-
-    def try_centred(self, seeds: int | None = None) -> None:
-        """Plan the brute force's layouts (:meth:`centred_boxes`) that could beat the best
-        plan: ``seeds`` of them, those of the lowest models, before the search (a first
-        incumbent); without ``seeds``, after it, every one whose lower bound at the layout
-        itself (the exact area, with the 1-tree) is below the best plan, lowest first, at most
-        :data:`CENTRED_MAX_PLANS`: where that planned them all (:attr:`centred_complete`) the
-        plan is never longer than the best of that brute force (as far as the bound at a layout
-        holds, which the tests check against the plans)."""
-        if CENTRED_ANGLES <= 0:
-            return
-        boxes = self.centred_boxes()
-        if seeds is not None:
-            self.point_values(boxes)
-            self.try_plans(boxes, self.ranks, limit=seeds)
-            return
-        before = self.plans
-        values = self.point_values(boxes, exact=True)
-        self.try_plans(boxes, values, limit=CENTRED_MAX_PLANS)
-        self.centred_plans = self.plans - before
-        unseen = np.array(
-            [(round(float(t), 12), round(float(d), 12)) not in self.seen for t, d in
-             zip(boxes.theta, boxes.d, strict=True)]
-        )  # fmt: skip
-        self.centred_complete = not bool((unseen & (values < self.best[0])).any())
-
     def refine_offsets(self) -> None:
         """Plan :data:`REFINE_OFFSETS` more offsets at the best angle: a routed plan's moves
         differ between offsets that the bound (lanes, turns) cannot tell apart."""
@@ -497,17 +454,6 @@ class CoverSearch:
             tried += 1
             if value < self.best[0]:
                 self.best = (value, theta, d)
-
-
-def centred_offsets(
-    region: Region, angles: NDArray[Any], spacing: float, reach: float
-) -> NDArray[np.float64]:
-    """The offsets (from the shell's vertex mean, in ``[0, spacing)``) that put the first line
-    ``reach`` inside the area's lowest extreme across the lines at each of ``angles``: lanes
-    laid from the edge, as a person (or a brute force over angles) would."""
-    verts = region.shell.vertices - region.centre
-    normal = np.stack([-np.sin(angles), np.cos(angles)], axis=1)
-    return np.mod((normal @ verts.T).min(axis=1) + reach, spacing)
 
 
 def _edge_angles(region: Region, count: int) -> list[float]:
@@ -597,7 +543,7 @@ def cover_optimum(
     if angle is None:
         search.try_edges()
         if evaluate is not None and not keep_inside:
-            search.try_centred(CENTRED_SEEDS)
+            try_centred(search, CENTRED_SEEDS)
     else:
         angle = float(angle) % math.pi
         if not keep_inside:
@@ -610,7 +556,7 @@ def cover_optimum(
         search.polish()
         search.refine_offsets()
     if angle is None and evaluate is not None and not keep_inside and math.isfinite(search.best[0]):
-        search.try_centred()
+        try_centred(search)
     value, theta, d = search.best
     if not math.isfinite(value):
         raise InvalidParameterError("no layout of this spacing has a lane over the area")
