@@ -230,6 +230,8 @@ def test_deferred_one_trees_give_the_certificate_of_a_one_tree_at_every_box(inde
     for defer in (False, True):
         monkeypatch.setattr(search_module, "WARM_TOUR", True)
         monkeypatch.setattr(search_module, "DEFER_TOUR", defer)
+        # stopped at the take-out value, the 1-trees of boxes taken out are not deferred
+        monkeypatch.setattr(search_module, "STOP_TOUR_AT_KEEP", False)
         runs[defer] = cover_optimum(region, SPACING, cost, evaluate, boustrophedon=False)
     assert deferred[0] == 0 and deferred[1] > 0
     a, b = runs[False], runs[True]

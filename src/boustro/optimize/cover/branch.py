@@ -16,12 +16,25 @@ from .boxes import Boxes as _Boxes
 from .boxes import box_radius, split_boxes, split_parents
 from .one_tree import Multipliers
 
-__all__ = ["SETTLE_SHARE", "Limits", "branch_and_bound", "take_multipliers"]
+__all__ = [
+    "POINT_TOURS_BELOW_MODEL",
+    "SETTLE_SHARE",
+    "Limits",
+    "branch_and_bound",
+    "take_multipliers",
+]
 
 #: A box whose bound is within this share of (best plan - lowest model) below the lowest model
 #: is retired (the certificate's gap cannot get much below that difference anyway). 0.25 before
 #: the piece-ends bound; 0.15 cut the random areas' median gap by a tenth for 4% more CPU.
 SETTLE_SHARE = 0.15
+
+
+#: Whether a round computes the 1-tree at a box centre only where the bound without it is
+#: below the lowest model (plus ``resolve - rtol`` of the best plan): elsewhere it cannot
+#: change which boxes are kept, so the same search for less CPU (the points' 1-trees were
+#: half of the 1-tree's CPU; docs/mission_time.md, "The 1-tree's CPU").
+POINT_TOURS_BELOW_MODEL = True
 
 
 class Limits(NamedTuple):
@@ -55,7 +68,13 @@ def branch_and_bound(
     mult = search.multipliers(len(boxes.theta))
     while len(boxes.theta):
         rounds += 1
-        points = search.point_values(boxes, multipliers=mult)
+        # a point's 1-tree changes keep_at below only where its bound without it is below
+        # the lowest model plus (resolve - rtol) of the best plan (the resolve term is above
+        # settle elsewhere, docs/mission_time.md "The 1-tree's CPU"): the same boxes go
+        tour_keep = None
+        if POINT_TOURS_BELOW_MODEL and math.isfinite(search.model_min + search.best[0]):
+            tour_keep = search.model_min + (lim.resolve - lim.rtol) * abs(search.best[0])
+        points = search.point_values(boxes, multipliers=mult, tour_keep=tour_keep)
         search.try_plans(boxes, search.ranks, first=rounds == 1)
         best = search.best[0]
         # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
