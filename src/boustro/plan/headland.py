@@ -13,8 +13,8 @@ field is too narrow for pass ``k + 1`` but wider than ``2k`` spacings (a corrido
 hole and the boundary), open passes along the contour at depth ``k * spacing`` cover the strip
 that neither pass ``k`` nor the lanes reach, and shallower contours a corridor narrower than a
 spacing, where no pass goes (:func:`_gap_passes`).
-:func:`add_headland` appends the passes to a plan of the inner field, gap passes and then the
-rings innermost first, each
+:func:`add_headland` appends the passes to a plan of the inner field, gap passes (the nearest
+next) and then the rings innermost first, each
 begun at its point nearest the vehicle, joined by moves inside the field. The passes'
 waypoints have the kind ``headland`` (first ``start``, last ``end``) and their edges are
 transects with the role ``"headland"``, measured like passes around holes.
@@ -335,6 +335,24 @@ def _nearer_first(line: NDArray[np.float64], near: NDArray[np.float64]) -> NDArr
     return line if np.linalg.norm(line[0] - near) <= np.linalg.norm(line[-1] - near) else line[::-1]
 
 
+def _nearest_first(
+    lines: list[NDArray[np.float64]], start: NDArray[np.float64]
+) -> list[NDArray[np.float64]]:
+    """Open passes in the order a vehicle at ``start`` drives them going to the nearest end of
+    those left each time (the greedy's order is by area: with many holes it crossed the field
+    back and forth: 40 holes 25 m from the boundary, 108.6 km of path, now 81.8 km), each from
+    that end."""
+    left = list(lines)
+    out = []
+    at = start
+    while left:
+        d = [min(np.linalg.norm(g[0] - at), np.linalg.norm(g[-1] - at)) for g in left]
+        g = _nearer_first(left.pop(int(np.argmin(d))), at)
+        out.append(g)
+        at = g[-1]
+    return out
+
+
 def _dedupe(points: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
     keep = np.concatenate([[True], np.linalg.norm(np.diff(points, axis=0), axis=1) > tol])
     return points[keep]
@@ -367,7 +385,7 @@ def add_headland(inner: Plan, field: Region, passes: int, *, spacing: float, rea
     headland_length = 0.0
     n_rings = 0
     for pts, closed in [
-        *((g, False) for g in gaps),
+        *((g, False) for g in _nearest_first(gaps, points[-1])),
         *((r, True) for rs in rings[::-1] for r in rs),
     ]:
         pts = _rotate(pts, points[-1]) if closed else _nearer_first(pts, points[-1])
