@@ -379,8 +379,8 @@ def _add_path(p: argparse.ArgumentParser) -> None:
         metavar="DEG",
         help="sweep direction of the decomposition, degrees counter-clockwise from east in the "
         "plan frame (default: chosen for few turns). Without --decompose the cells along it "
-        "are kept only if they promise fewer turns than one grid: a plan of one grid says "
-        "that the sweep changed nothing (a note). Not with --no-decompose",
+        "are kept only if they promise fewer turns than one grid (boustro plan notes a plan "
+        "of one grid: the sweep changed nothing). Not with --no-decompose",
     )
 
 
