@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import io
 import math
 import os
@@ -32,6 +31,7 @@ from ._common import (
 from ._fields import mission_files, output_files, pick_fields, plan_fields
 from ._flight import add_flight_options, fly, plan_mission
 from ._plan_rows import rows as _rows
+from ._sweep import check_sweep, sweep_noted
 
 
 #: Objectives by name on the command line: the library's registry
@@ -500,37 +500,6 @@ def _vehicle(args: argparse.Namespace) -> Vehicle | None:
     return vehicle_of(args)
 
 
-def _check_sweep(args: argparse.Namespace) -> None:
-    """``--sweep`` with ``--no-decompose`` (which plans one grid: the sweep could change
-    nothing): one error before any work."""
-    if args.sweep is not None and args.decompose is False:
-        raise InvalidParameterError(
-            "--sweep sets the decomposition's direction; --no-decompose plans one grid, so it "
-            "would change nothing: leave one of them out"
-        )
-
-
-def _sweep_noted(args: argparse.Namespace, mission: Mission) -> Mission:
-    """With ``--sweep``, a plan of one cell (a convex area; the decomposition along the sweep
-    promised no fewer turns than one grid, and ``--decompose`` was not given) says that the
-    sweep changed nothing: a note (``notes`` in ``--json`` for a concave area, the table's
-    notes) and one line on stderr."""
-    if args.sweep is None or mission.plan.stats.n_cells > 1:
-        return mission
-    why = (
-        "the area is convex or planned on its convex hull, see --hull-tolerance"
-        if mission.plan.region is None or mission.plan.region.is_convex
-        else "the decomposition along it promised no fewer turns than one grid; --decompose "
-        "plans its cells"
-        if args.decompose is None
-        else "the decomposition along it gave one cell"
-    )
-    note = f"--sweep {args.sweep:g} changed nothing: the area is planned as one grid ({why})"
-    print(f"boustro: {note}", file=sys.stderr)
-    plan = dataclasses.replace(mission.plan, notes=(*mission.plan.notes, note))
-    return dataclasses.replace(mission, plan=plan)
-
-
 def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:
     spacing = _spacing(args, embedded=args.area is None)
     # no --objective: plan_area's default (mission time with a speed, else Eq. 1)
@@ -558,7 +527,7 @@ def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:
         vehicle=_vehicle(args),
         headland=args.headland,
     )
-    return fly(args, _sweep_noted(args, mission))
+    return fly(args, sweep_noted(args, mission))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -571,7 +540,7 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidParameterError("--format needs --out FILE")
     areas = _load(args)
     _vehicle(args)  # --reverse without --turn-radius: one error before any work
-    _check_sweep(args)
+    check_sweep(args)
     _spacing(args, embedded=args.area is None)  # a missing spacing: one error, not one per field
     planned = plan_fields(areas, lambda area: _plan_one(args, _validated(args, area)))
     missions = [m for ms in planned for m in ms]  # a field's sorties follow one another
