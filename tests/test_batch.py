@@ -388,6 +388,11 @@ def test_cli_bad_input_is_one_line(tmp_path, capsys):
     assert "Could not infer driver" in capsys.readouterr().err
     assert main(["batch", str(not_ours), "--out", str(tmp_path / "o.gpkg")]) == 2
     assert "give the spacing" in capsys.readouterr().err
+    assert main(["batch", str(not_ours), "--out", str(tmp_path / "o.gpkg"), "--spacing", "1",
+                 "--sweep", "30", "--no-decompose"]) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--no-decompose plans one grid" in err
+    assert not (tmp_path / "o.gpkg").exists()
 
 
 def test_store_is_valid_between_commits(tmp_path):

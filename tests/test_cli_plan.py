@@ -237,3 +237,47 @@ def test_fewest_transects_objective_flies_fewer_lanes(capsys):
         assert summary["covered_share"] >= 1 - 1e-9
         counts[objective] = summary["n_transects"]
     assert counts["fewest-transects"] <= counts["smith"]
+
+
+def test_json_spells_the_objective_as_the_cli_takes_it(capsys, tmp_path):
+    # --json said fewest_transects for a convex area (the closed form's name) and
+    # fewest-transects for a concave one (the certified search's), where --objective takes
+    # fewest-transects: both now print the CLI's spelling, which reads back as --objective;
+    # the old spelling is still accepted.
+    area = tmp_path / "l.wkt"
+    area.write_text("POLYGON ((0 0, 60 0, 60 20, 20 20, 20 60, 0 60, 0 0))")
+    for args in ([], [str(area), "--crs", "planar", "--spacing", "5"]):
+        code, out, err = run(capsys, "plan", *args, "--objective", "fewest-transects", "--json")
+        assert code == 0, err
+        summary = json.loads(out)
+        assert summary["objective"] == "fewest-transects"
+        assert all(c["objective"] == "fewest-transects" for c in summary.get("cells", []))
+        code, again, err = run(capsys, "plan", *args, "--objective", "fewest_transects", "--json")
+        assert code == 0, err
+        assert json.loads(again)["n_transects"] == summary["n_transects"]
+    with pytest.raises(SystemExit) as exit_:
+        main(["plan", "--objective", "fewest_lanes", "--json"])
+    assert exit_.value.code == 2 and "invalid choice: 'fewest-lanes'" in capsys.readouterr().err
+
+
+def test_sweep_that_changes_nothing_says_so(capsys, tmp_path):
+    # --sweep without --decompose used to change nothing silently where the area is planned as
+    # one grid; with --no-decompose it can change nothing: one error, nothing written.
+    out_file = tmp_path / "m.geojson"
+    code, out, err = run(capsys, "plan", "--sweep", "30", "--no-decompose", "--out", out_file)
+    assert code == 2 and not out and not out_file.exists()
+    assert err.count("\n") == 1 and "--no-decompose plans one grid" in err
+    code, out, err = run(capsys, "plan", "--sweep", "30", "--json")  # the convex embedded field
+    assert code == 0, err
+    assert "--sweep 30 changed nothing" in err
+    code, plain, _ = run(capsys, "plan", "--json")
+    for key in ("angle_deg", "offset", "n_transects", "path_length_m"):
+        assert json.loads(out)[key] == json.loads(plain)[key]
+    area = tmp_path / "l.wkt"  # a concave area: the note in --json's notes
+    area.write_text("POLYGON ((0 0, 60 0, 60 20, 20 20, 20 60, 0 60, 0 0))")
+    code, out, err = run(capsys, "plan", area, "--crs", "planar", "--spacing", "5",
+                         "--sweep", "0", "--json")  # fmt: skip
+    assert code == 0, err
+    summary = json.loads(out)
+    changed = any("--sweep 0 changed nothing" in n for n in summary.get("notes", []))
+    assert changed == (summary["n_cells"] == 1) and changed == ("--sweep 0 " in err)

@@ -16,33 +16,11 @@ from boustro.optimize.cover import CoverCost, band_stats, cover_optimum
 from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.ends import lane_end_bound
 from boustro.optimize.cover.search import CoverSearch
-from boustro.plan import vehicle_stats
 from boustro.plan.region import plan_region
 from boustro.vehicle import Vehicle
 
 from .conftest import random_regions
-
-SPACING = 9.0
-
-
-def _cost_of(region, cost, *, turnaround=0.0, vehicle=None, keep_inside=False, spacing=SPACING):
-    def evaluate(a, d):
-        plan = plan_region(
-            region, spacing, decompose_area=False, angle=a, offset=d, speed=5.0,
-            turn_time=10.0, turnaround=turnaround, keep_inside=keep_inside,
-        )  # fmt: skip
-        st = vehicle_stats(plan, vehicle) if vehicle is not None else plan.stats
-        return cost.of(st.path_length, st.n_turns)
-
-    return evaluate
-
-
-def _scaled(region: Region, size: float = 150.0) -> Region:
-    k = size / region.diameter
-    return Region(
-        Polygon(region.shell.vertices * k), [Polygon(h.vertices * k) for h in region.holes]
-    )
-
+from .plan_samples import SPACING, plan_cost, plans_in_boxes, sample_boxes, scaled
 
 CASES = ["plain", "turnaround", "vehicle", "inside"]
 
@@ -52,31 +30,21 @@ CASES = ["plain", "turnaround", "vehicle", "inside"]
 def test_box_bounds_with_lane_ends_never_exceed_a_plan_in_the_box(case, index):
     """Soundness of the whole box bound (the lane-ends bound included where it applies) against
     the real plans of layouts sampled in each box."""
-    region = _scaled(random_regions(31, 3, n_holes=(1, 3))[index])
+    region = scaled(random_regions(31, 3, n_holes=(1, 3))[index], 150.0)
     turnaround = 3.0 if case == "turnaround" else 0.0
     cost = CoverCost.time(5.0, 10.0, turnaround=turnaround)
     keep = case == "inside"
     vehicle = Vehicle(turn_radius=6.0) if case == "vehicle" else None
-    evaluate = _cost_of(region, cost, turnaround=turnaround, vehicle=vehicle, keep_inside=keep)
+    evaluate = plan_cost(region, cost, turnaround=turnaround, vehicle=vehicle, keep_inside=keep)
     search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False, keep_inside=keep)
     assert search.ends == (not keep)
     rng = np.random.default_rng(100 + index)
     n = 10
-    boxes = Boxes(
-        rng.uniform(0, math.pi, n),
-        rng.uniform(0, 0.02, n) * rng.integers(0, 2, n),
-        rng.uniform(0, SPACING, n),
-        rng.uniform(0, 1.5, n),
-    )
+    boxes = sample_boxes(rng, n)
     search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
     bounds = search.box_bounds(boxes)
     points = search.point_values(boxes, exact=True)
-    for i in range(n):
-        plans = [evaluate(float(boxes.theta[i]), float(boxes.d[i]))]
-        for _ in range(3):
-            a = boxes.theta[i] + rng.uniform(-boxes.delta[i], boxes.delta[i])
-            o = boxes.d[i] + rng.uniform(-boxes.eta[i], boxes.eta[i])
-            plans.append(evaluate(float(a), float(o)))
+    for i, plans in enumerate(plans_in_boxes(evaluate, boxes, rng)):
         assert bounds[i] <= min(plans) + 1e-9
         assert points[i] <= plans[0] + 1e-9  # the bound at the box's centre
 
@@ -93,7 +61,7 @@ def test_lane_ends_bound_is_the_boustrophedons_moves():
     with_ends = CoverSearch(region, 10.0, 5.0, cost, None, False)
     span_only = CoverSearch(region, 10.0, 5.0, cost, None, False)
     span_only.ends = False
-    evaluate = _cost_of(region, cost, spacing=10.0)
+    evaluate = plan_cost(region, cost, spacing=10.0)
     for d in (0.5, 3.3, 7.1):
         boxes = Boxes(np.zeros(1), np.zeros(1), np.array([d]), np.zeros(1))
         plan = evaluate(0.0, d)
@@ -108,8 +76,8 @@ def test_lane_ends_bound_is_the_boustrophedons_moves():
 
 def test_search_with_lane_ends_is_below_a_brute_force_and_no_worse():
     cost = CoverCost.time(5.0, 10.0)
-    for region in [_scaled(r, 120.0) for r in random_regions(5, 2, n_holes=(0, 2))]:
-        evaluate = _cost_of(region, cost)
+    for region in [scaled(r, 120.0) for r in random_regions(5, 2, n_holes=(0, 2))]:
+        evaluate = plan_cost(region, cost)
         res = cover_optimum(region, SPACING, cost, evaluate)
         brute = min(
             evaluate(a, d)
@@ -170,7 +138,7 @@ def _reference(st, spacing, cost, holes):
 def test_compiled_lane_ends_loop_equals_the_array_reference(turnaround):
     cost = CoverCost.time(4.0, 12.0, turnaround=turnaround)
     rng = np.random.default_rng(3)
-    for region in [_scaled(r) for r in random_regions(12, 3, n_holes=(0, 3))]:
+    for region in [scaled(r, 150.0) for r in random_regions(12, 3, n_holes=(0, 3))]:
         search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
         for eps in (0.0, 2.0):
             lv = search.sandwich.level(eps) if eps else search.sandwich.exact
@@ -195,7 +163,7 @@ def test_chevron_plan_gap_is_cut_by_the_lane_ends():
     assert s["gap"] <= 0.005 * m.stats.duration
     cost = CoverCost.time(5.0, 10.0)
     region = Region(Polygon(ring), [])
-    evaluate = _cost_of(region, cost, spacing=10.0)
+    evaluate = plan_cost(region, cost, spacing=10.0)
     brute = min(
         evaluate(a, d)
         for a in np.radians(np.arange(0, 180, 5.0))

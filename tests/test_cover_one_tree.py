@@ -18,32 +18,11 @@ from boustro.optimize.cover import CoverCost, band_stats, cover_optimum
 from boustro.optimize.cover.boxes import Boxes, split_boxes, split_parents
 from boustro.optimize.cover.one_tree import Multipliers, one_tree_bound
 from boustro.optimize.cover.search import CoverSearch
-from boustro.plan import vehicle_stats
 from boustro.plan.region import plan_region
 from boustro.vehicle import Vehicle
 
 from .conftest import random_regions
-
-SPACING = 9.0
-
-
-def _scaled(region: Region, size: float) -> Region:
-    k = size / region.diameter
-    return Region(
-        Polygon(region.shell.vertices * k), [Polygon(h.vertices * k) for h in region.holes]
-    )
-
-
-def _evaluate(region, cost, turnaround, vehicle):
-    def evaluate(a, d):
-        plan = plan_region(
-            region, SPACING, decompose_area=False, angle=a, offset=d, speed=5.0,
-            turn_time=10.0, turnaround=turnaround,
-        )  # fmt: skip
-        st = vehicle_stats(plan, vehicle) if vehicle is not None else plan.stats
-        return cost.of(st.path_length, st.n_turns)
-
-    return evaluate
+from .plan_samples import SPACING, plan_cost, plans_in_boxes, sample_boxes, scaled
 
 
 def _zeros(st, *args, **kw):
@@ -59,32 +38,22 @@ def test_one_tree_bound_alone_never_exceeds_a_plan_in_the_box(case, index, monke
     6 m turn radius's driven turns."""
     monkeypatch.setattr(bounds_module, "lane_end_bound", _zeros)
     monkeypatch.setattr(bounds_module, "piece_end_bound", _zeros)
-    region = _scaled(random_regions(53, 3, n_holes=(1, 3))[index], 170.0)
+    region = scaled(random_regions(53, 3, n_holes=(1, 3))[index], 170.0)
     rng = np.random.default_rng(11 + index)
     turnaround = 3.0 if case == "turnaround" else 0.0
     cost = CoverCost.time(5.0, float(rng.uniform(2.0, 30.0)), turnaround=turnaround)
     vehicle = Vehicle(turn_radius=6.0) if case == "vehicle" else None
-    evaluate = _evaluate(region, cost, turnaround, vehicle)
+    evaluate = plan_cost(region, cost, turnaround=turnaround, vehicle=vehicle)
     search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
     n = 10
-    boxes = Boxes(
-        rng.uniform(0, math.pi, n),
-        rng.uniform(0, 0.02, n) * rng.integers(0, 2, n),
-        rng.uniform(0, SPACING, n),
-        rng.uniform(0, 1.5, n),
-    )
+    boxes = sample_boxes(rng, n)
     search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
     box = search.box_bounds(boxes)
     points = search.point_values(boxes, exact=True)
     search.tour = False  # the same bounds without the 1-tree: the lines' span only
     assert (points > search.point_values(boxes, exact=True) + 1e-6).all()
     assert (box > search.box_bounds(boxes) + 1e-6).any()
-    for i in range(n):
-        plans = [evaluate(float(boxes.theta[i]), float(boxes.d[i]))]
-        for _ in range(3):
-            a = boxes.theta[i] + rng.uniform(-boxes.delta[i], boxes.delta[i])
-            o = boxes.d[i] + rng.uniform(-boxes.eta[i], boxes.eta[i])
-            plans.append(evaluate(float(a), float(o)))
+    for i, plans in enumerate(plans_in_boxes(evaluate, boxes, rng)):
         assert box[i] <= min(plans) + 1e-9
         assert points[i] <= plans[0] + 1e-9
 
@@ -128,7 +97,7 @@ def test_one_tree_never_exceeds_the_shortest_path_over_the_lanes(turnaround):
     """On boxes whose plans have 3-6 counted lanes (a small area with a hole, a wide
     spacing), the 1-tree bound is at most the brute-force shortest path over the lanes' end
     ranges (every order and direction), and within 10% of it on average."""
-    region = _scaled(random_regions(61, 1, n_holes=(1, 1))[0], 45.0)
+    region = scaled(random_regions(61, 1, n_holes=(1, 1))[0], 45.0)
     cost = CoverCost.time(5.0, 10.0, turnaround=turnaround)
     search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
     rng = np.random.default_rng(3)
@@ -167,7 +136,7 @@ def test_a_moves_detour_past_a_wall_is_never_longer_than_the_routed_move():
     from boustro.optimize.cover.walls import hole_walls, walls_in_frames
     from boustro.plan.routing import Router
 
-    region = _scaled(random_regions(71, 1, n_holes=(2, 2))[0], 120.0)
+    region = scaled(random_regions(71, 1, n_holes=(2, 2))[0], 120.0)
     search = CoverSearch(region, SPACING, SPACING / 2, CoverCost.time(5.0, 10.0), None, False)
     walls = hole_walls(search.sandwich.exact.outer)
     assert len(walls) >= 4
@@ -205,9 +174,9 @@ def test_deferred_one_trees_give_the_certificate_of_a_one_tree_at_every_box(inde
     """Boxes taken out by their other bounds get their 1-tree only after the search, and only
     where it could lower the floor (search.DEFER_TOUR): the same plan, rounds and certificate
     as a 1-tree at every box, with fewer boxes' 1-trees computed."""
-    region = _scaled(random_regions(71, 2, n_holes=(1, 3))[index], 260.0)
+    region = scaled(random_regions(71, 2, n_holes=(1, 3))[index], 260.0)
     cost = CoverCost.time(5.0, 10.0)
-    evaluate = _evaluate(region, cost, 0.0, None)
+    evaluate = plan_cost(region, cost)
     deferred: list[int] = []
     settle = CoverSearch.settle_deferred
 
@@ -248,10 +217,10 @@ def test_warm_started_one_trees_stay_below_the_plans_and_rise(index, monkeypatch
     start's bounds on the whole (the steps go on where the parent's stopped)."""
     monkeypatch.setattr(bounds_module, "lane_end_bound", _zeros)
     monkeypatch.setattr(bounds_module, "piece_end_bound", _zeros)
-    region = _scaled(random_regions(59, 3, n_holes=(1, 3))[index], 200.0)
+    region = scaled(random_regions(59, 3, n_holes=(1, 3))[index], 200.0)
     rng = np.random.default_rng(5 + index)
     cost = CoverCost.time(5.0, float(rng.uniform(2.0, 30.0)))
-    evaluate = _evaluate(region, cost, 0.0, None)
+    evaluate = plan_cost(region, cost)
     search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
     n = 8
     parents = Boxes(

@@ -20,33 +20,12 @@ from boustro.optimize.cover import CoverCost, band_stats
 from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.piece_ends import piece_end_bound
 from boustro.optimize.cover.search import CoverSearch
-from boustro.plan import vehicle_stats
 from boustro.plan.region import plan_region
 from boustro.plan.tour_exact import exact_nodes
 from boustro.vehicle import Vehicle
 
 from .conftest import random_regions
-
-SPACING = 9.0
-
-
-def _scaled(region: Region, size: float) -> Region:
-    k = size / region.diameter
-    return Region(
-        Polygon(region.shell.vertices * k), [Polygon(h.vertices * k) for h in region.holes]
-    )
-
-
-def _evaluate(region, cost, turnaround, vehicle):
-    def evaluate(a, d):
-        plan = plan_region(
-            region, SPACING, decompose_area=False, angle=a, offset=d, speed=5.0,
-            turn_time=10.0, turnaround=turnaround,
-        )  # fmt: skip
-        st = vehicle_stats(plan, vehicle) if vehicle is not None else plan.stats
-        return cost.of(st.path_length, st.n_turns)
-
-    return evaluate
+from .plan_samples import SPACING, plan_cost, plans_in_boxes, sample_boxes, scaled
 
 
 @pytest.mark.parametrize("case", ["plain", "turnaround", "vehicle"])
@@ -56,29 +35,19 @@ def test_piece_ends_bound_alone_never_exceeds_a_plan_in_the_box(case, index, mon
     lines' span (the lane-ends bound switched off) against the real plans of layouts sampled
     in each box; areas with 1-3 holes, a turn costing 2 to 30 s."""
     monkeypatch.setattr(bounds_module, "lane_end_bound", lambda st, *a: np.zeros(st.count.shape[0]))
-    region = _scaled(random_regions(47, 3, n_holes=(1, 3))[index], 170.0)
+    region = scaled(random_regions(47, 3, n_holes=(1, 3))[index], 170.0)
     rng = np.random.default_rng(7 + index)
     turnaround = 3.0 if case == "turnaround" else 0.0
     cost = CoverCost.time(5.0, float(rng.uniform(2.0, 30.0)), turnaround=turnaround)
     vehicle = Vehicle(turn_radius=6.0) if case == "vehicle" else None
-    evaluate = _evaluate(region, cost, turnaround, vehicle)
+    evaluate = plan_cost(region, cost, turnaround=turnaround, vehicle=vehicle)
     search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
     n = 10
-    boxes = Boxes(
-        rng.uniform(0, math.pi, n),
-        rng.uniform(0, 0.02, n) * rng.integers(0, 2, n),
-        rng.uniform(0, SPACING, n),
-        rng.uniform(0, 1.5, n),
-    )
+    boxes = sample_boxes(rng, n)
     search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
     box = search.box_bounds(boxes)
     points = search.point_values(boxes, exact=True)
-    for i in range(n):
-        plans = [evaluate(float(boxes.theta[i]), float(boxes.d[i]))]
-        for _ in range(3):
-            a = boxes.theta[i] + rng.uniform(-boxes.delta[i], boxes.delta[i])
-            o = boxes.d[i] + rng.uniform(-boxes.eta[i], boxes.eta[i])
-            plans.append(evaluate(float(a), float(o)))
+    for i, plans in enumerate(plans_in_boxes(evaluate, boxes, rng)):
         assert box[i] <= min(plans) + 1e-9
         assert points[i] <= plans[0] + 1e-9
 
@@ -147,7 +116,7 @@ def test_compiled_piece_ends_loop_equals_the_reference(turnaround):
     cost = CoverCost.time(4.0, 12.0, turnaround=turnaround)
     rng = np.random.default_rng(5)
     seen_split = False
-    for region in [_scaled(r, 150.0) for r in random_regions(13, 3, n_holes=(0, 3))]:
+    for region in [scaled(r, 150.0) for r in random_regions(13, 3, n_holes=(0, 3))]:
         search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
         for eps in (0.0, 2.0):
             lv = search.sandwich.level(eps) if eps else search.sandwich.exact
@@ -219,7 +188,7 @@ def test_exact_tour_equals_a_brute_force_over_orders_and_options():
 
 @pytest.mark.parametrize("force_start", [False, True])
 def test_exact_tour_never_longer_than_greedy_two_opt(force_start, monkeypatch):
-    regions = [_scaled(r, 160.0) for r in random_regions(23, 4, n_holes=(1, 3))]
+    regions = [scaled(r, 160.0) for r in random_regions(23, 4, n_holes=(1, 3))]
     rng = np.random.default_rng(2)
     shorter = 0
     for region in regions:

@@ -9,7 +9,6 @@ import math
 import numpy as np
 import pytest
 
-from boustro.geometry import Polygon
 from boustro.geometry.region import Region
 from boustro.optimize.cover import CoverCost, band_stats, lower_bounds
 from boustro.optimize.cover.boxes import Boxes
@@ -17,11 +16,9 @@ from boustro.optimize.cover.inside_bound import contour_edges, path_floor, stret
 from boustro.optimize.cover.search import CoverSearch
 from boustro.plan import inside
 from boustro.plan.lanes import region_lanes
-from boustro.plan.region import plan_region
 
 from .conftest import random_regions
-
-SPACING = 9.0
+from .plan_samples import SPACING, plan_cost, plans_in_boxes, sample_boxes, scaled
 
 
 def _areas() -> list[Region]:
@@ -29,23 +26,7 @@ def _areas() -> list[Region]:
     quad = [(0, 0), (160, 10), (140, 90), (20, 120)]
     holes = [[(70, 30), (95, 35), (85, 60)]]
     out = [Region(ell), Region(quad), Region(quad, holes)]
-    for r in random_regions(17, 2, n_holes=(0, 2)):
-        k = 150.0 / r.diameter
-        out.append(
-            Region(Polygon(r.shell.vertices * k), [Polygon(h.vertices * k) for h in r.holes])
-        )
-    return out
-
-
-def _cost_of(region, cost, turnaround=0.0):
-    def evaluate(a, d):
-        plan = plan_region(
-            region, SPACING, decompose_area=False, angle=a, offset=d, speed=5.0,
-            turn_time=10.0, turnaround=turnaround, keep_inside=True,
-        )  # fmt: skip
-        return cost.of(plan.stats.path_length, plan.stats.n_turns)
-
-    return evaluate
+    return out + [scaled(r, 150.0) for r in random_regions(17, 2, n_holes=(0, 2))]
 
 
 def _chords_only(search: CoverSearch, boxes: Boxes, eps: np.ndarray) -> np.ndarray:
@@ -68,25 +49,15 @@ def _chords_only(search: CoverSearch, boxes: Boxes, eps: np.ndarray) -> np.ndarr
 def test_keep_inside_box_bounds_never_exceed_a_plan_in_the_box(index, turnaround):
     region = _areas()[index]
     cost = CoverCost.time(5.0, 10.0, turnaround=turnaround)
-    evaluate = _cost_of(region, cost, turnaround)
+    evaluate = plan_cost(region, cost, turnaround=turnaround, keep_inside=True)
     search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False, keep_inside=True)
     rng = np.random.default_rng(40 + index)
     n = 8
-    boxes = Boxes(
-        rng.uniform(0, math.pi, n),
-        rng.uniform(0, 0.03, n) * rng.integers(0, 2, n),
-        rng.uniform(0, SPACING, n),
-        rng.uniform(0, 1.5, n),
-    )
+    boxes = sample_boxes(rng, n, delta=0.03)
     search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
     bounds = search.box_bounds(boxes)
     points = search.point_values(boxes, exact=True)
-    for i in range(n):
-        plans = [evaluate(float(boxes.theta[i]), float(boxes.d[i]))]
-        for _ in range(3):
-            a = boxes.theta[i] + rng.uniform(-boxes.delta[i], boxes.delta[i])
-            o = boxes.d[i] + rng.uniform(-boxes.eta[i], boxes.eta[i])
-            plans.append(evaluate(float(a), float(o)))
+    for i, plans in enumerate(plans_in_boxes(evaluate, boxes, rng)):
         assert bounds[i] <= min(plans) + 1e-9
         assert points[i] <= plans[0] + 1e-9
 
@@ -99,7 +70,7 @@ def test_the_bound_is_tighter_than_the_chords_alone():
     lifts = []
     for region in _areas()[:3]:
         search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False, keep_inside=True)
-        evaluate = _cost_of(region, cost)
+        evaluate = plan_cost(region, cost, keep_inside=True)
         n = 6
         boxes = Boxes(rng.uniform(0, math.pi, n), np.zeros(n), rng.uniform(0, SPACING, n),
                       np.zeros(n))  # fmt: skip

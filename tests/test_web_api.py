@@ -123,7 +123,9 @@ def test_options_reach_the_planner(client, embedded):
     assert plan(spacing=20)["n_transects"] < plan()["n_transects"]
     assert plan(bearing=0)["bearing_deg"] == pytest.approx(0.0, abs=1e-6)
     assert plan(angle=30)["angle_deg"] == pytest.approx(30.0, abs=1e-6)
-    assert plan(objective="fewest-transects")["n_transects"] <= 19
+    fewest = plan(objective="fewest-transects")
+    assert fewest["n_transects"] <= 19 and fewest["objective"] == "fewest-transects"
+    assert plan(objective="fewest_transects")["n_transects"] == fewest["n_transects"]  # as --json
     camera = plan(spacing=None, camera=[13.2, 8.8, 5472], altitude=80)
     assert camera["spacing_m"] == pytest.approx(36.0) and "camera" in camera["sensor"]
     swath = plan(spacing=None, swath=20, overlap=10, nadir_gap=2)

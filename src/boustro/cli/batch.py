@@ -8,6 +8,7 @@ from ..batch import COLUMN_OPTIONS, PlanOptions, batch
 from ..errors import InvalidParameterError
 from ..io.formats import FORMATS
 from ._common import positive_int, print_json, print_table
+from ._sweep import check_sweep
 from .plan import _add_optimiser, _add_path, _add_spacing
 
 __all__ = ["register", "run"]
@@ -112,6 +113,7 @@ def _options(args: argparse.Namespace) -> PlanOptions:
         raise InvalidParameterError("--start applies to one field: not offered by batch")
     if args.scheduler is not None and args.workers is not None:
         raise InvalidParameterError("give --workers or --scheduler, not both")
+    check_sweep(args)  # --sweep with --no-decompose: it would change nothing
     columns = {
         o: getattr(args, f"column_{o}")
         for o in COLUMN_OPTIONS

@@ -31,6 +31,7 @@ from ._common import (
 from ._fields import mission_files, output_files, pick_fields, plan_fields
 from ._flight import add_flight_options, fly, plan_mission
 from ._plan_rows import rows as _rows
+from ._sweep import check_sweep, sweep_noted
 
 
 #: Objectives by name on the command line: the library's registry
@@ -45,6 +46,12 @@ def cli_objectives() -> dict[str, Any]:
         for name, factory in objectives.OBJECTIVES.items()
         if not getattr(factory, "needs_chords", False)
     }
+
+
+def _kebab(name: str) -> str:
+    """An objective's name in kebab case, as ``--objective`` offers it and ``--json`` spells
+    it (``fewest_transects`` -> ``fewest-transects``)."""
+    return name.replace("_", "-")
 
 
 #: The objectives at import time (compatibility; the parser reads :func:`cli_objectives`).
@@ -240,6 +247,7 @@ def _add_optimiser(p: argparse.ArgumentParser) -> None:
     opt.add_argument(
         "--objective",
         choices=sorted(cli_objectives()),
+        type=_kebab,  # --json's spelling before this round (fewest_transects) still accepted
         default=None,
         help="what the optimiser seeks: time (the mission time of the flown plan: path / "
         "--speed + turns x --turn-time, minimised over every angle and offset by a certified "
@@ -370,7 +378,9 @@ def _add_path(p: argparse.ArgumentParser) -> None:
         type=finite_float,
         metavar="DEG",
         help="sweep direction of the decomposition, degrees counter-clockwise from east in the "
-        "plan frame (default: chosen for few turns)",
+        "plan frame (default: chosen for few turns). Without --decompose the cells along it "
+        "are kept only if they promise fewer turns than one grid (boustro plan notes a plan "
+        "of one grid: the sweep changed nothing). Not with --no-decompose",
     )
 
 
@@ -517,7 +527,7 @@ def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:
         vehicle=_vehicle(args),
         headland=args.headland,
     )
-    return fly(args, mission)
+    return fly(args, sweep_noted(args, mission))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -530,6 +540,7 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidParameterError("--format needs --out FILE")
     areas = _load(args)
     _vehicle(args)  # --reverse without --turn-radius: one error before any work
+    check_sweep(args)
     _spacing(args, embedded=args.area is None)  # a missing spacing: one error, not one per field
     planned = plan_fields(areas, lambda area: _plan_one(args, _validated(args, area)))
     missions = [m for ms in planned for m in ms]  # a field's sorties follow one another

@@ -19,24 +19,33 @@ from .flight import Sortie, TerrainRoute
 __all__ = ["Mission"]
 
 
+def objective_name(name: Any) -> str | None:
+    """An objective's name as ``boustro plan --objective`` and the web API spell it (kebab
+    case: ``fewest-transects``); the optimisers' answers spell some in snake case."""
+    return None if name is None else str(name).replace("_", "-")
+
+
 def certificate(optimum: OptimizeResult | None) -> dict[str, Any]:
-    """``objective``, ``certified`` and ``gap`` (and ``lower_bound`` for a minimised
-    objective) of an optimum: certified when the method proves its gap within its tolerance
-    (the certified cover search; the global Eq. 1 search when converged); ``gap`` is ``None``
-    without a certificate."""
+    """``objective`` (spelled as on the command line: :func:`objective_name`), ``certified``
+    and ``gap`` (and ``lower_bound`` for a minimised objective) of an optimum: certified when
+    the method proves its gap within its tolerance (the certified cover search; the global
+    Eq. 1 search when converged); ``gap`` is ``None`` without a certificate."""
     if optimum is None:
         return {"certified": False, "gap": None}
     info = optimum.info
     if "gap" in info and "lower_bound" in info and "certified" not in info:  # exact solvers
         gap = info["gap"]
         return {
-            "objective": info.get("objective"),
+            "objective": objective_name(info.get("objective")),
             "certified": gap is not None and bool(info.get("converged", True)),
             "gap": gap,
             "lower_bound": info["lower_bound"],
         }
     if "certified" in info:
-        out = {"objective": info.get("objective"), "certified": bool(info["certified"])}
+        out = {
+            "objective": objective_name(info.get("objective")),
+            "certified": bool(info["certified"]),
+        }
         out["gap"] = info.get("gap")
         if "lower_bound" in info:
             out["lower_bound"] = info["lower_bound"]

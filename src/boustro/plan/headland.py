@@ -13,8 +13,8 @@ field is too narrow for pass ``k + 1`` but wider than ``2k`` spacings (a corrido
 hole and the boundary), open passes along the contour at depth ``k * spacing`` cover the strip
 that neither pass ``k`` nor the lanes reach, and shallower contours a corridor narrower than a
 spacing, where no pass goes (:func:`_gap_passes`).
-:func:`add_headland` appends the passes to a plan of the inner field, gap passes and then the
-rings innermost first, each
+:func:`add_headland` appends the passes to a plan of the inner field, gap passes (the nearest
+next) and then the rings innermost first, each
 begun at its point nearest the vehicle, joined by moves inside the field. The passes'
 waypoints have the kind ``headland`` (first ``start``, last ``end``) and their edges are
 transects with the role ``"headland"``, measured like passes around holes.
@@ -46,8 +46,13 @@ MAX_HEADLAND = 100
 _NARROW = (0.4, 0.25, 0.1, 0.02)
 
 #: The shallowest contour tried (share of a spacing): a corridor narrower than twice that (a
-#: hole touching the boundary to within a thousandth of a millimetre at 10 m) stays uncovered.
+#: hole touching the boundary to within a hundredth of a millimetre at 10 m) gets a pass along
+#: the hole's boundary (:func:`_touching`; it used to stay uncovered).
 _SHALLOWEST = 1e-6
+
+#: Segments of the pieces the rings are buffered in (a ring weaving around 40 holes took GEOS
+#: 5.6 s to buffer whole, its 4-segment pieces 0.6 s with their union).
+_CHUNK = 4
 
 #: Segments per quarter circle of the buffers' arcs (at reflex corners of the field).
 _QUAD_SEGS = 16
@@ -205,58 +210,108 @@ def _gap_passes(
     (most uncovered area first) until nothing is left (components under ``1e-6 spacing^2``, the
     buffers' rounding, ignored). A corridor narrower than a spacing (a hole closer to the
     boundary) gets no pass at all: every point of it is within reach of a contour at a depth
-    under half its width (:data:`_NARROW`, then a fifth of the last depth at a time)."""
-    import shapely
-
+    under half its width (:data:`_NARROW`, then a fifth of the last depth at a time, down to
+    :data:`_SHALLOWEST`; then the field's boundary itself, which lies in the field), and one
+    narrower than twice that a pass along the hole (:func:`_touching`)."""
     region = _shapely_region(field)
     tiny = 1e-6 * spacing**2
-    lines = [shapely.LineString(r) for rs in rings for r in rs]
-    inner = shapely.buffer(region, -(passes - _OVERLAP) * spacing, quad_segs=_QUAD_SEGS)
-    covered = shapely.union_all([*shapely.buffer(lines, reach, quad_segs=64), inner])
-    left = _parts(shapely.difference(region, covered), tiny)
-    if left.is_empty:
-        return []
-    out: list[NDArray[np.float64]] = []
+    out = _touching(field, 2 * _SHALLOWEST * spacing)
+    left = _uncovered(region, spacing, reach, passes, [*rings, out], tiny)
     # the corridors between 2k and 2k + 1 spacings wide, and those narrower than a spacing;
-    # then ever shallower contours while something is left (a corridor narrower than 2 depths)
+    # then ever shallower contours while something is left (a corridor narrower than 2 depths),
+    # and last the boundary (depth 0: a corridor of a few micrometres)
     depths = [k * spacing for k in range(1, passes)] + [f * spacing for f in _NARROW]
-    while depths and not left.is_empty:
+    while depths and left:
         left = _greedy(region, left, depths, reach, tiny, out)
-        depths = [depths[-1] / 5] if depths[-1] > _SHALLOWEST * spacing else []
+        last = depths[-1]
+        depths = [last / 5] if last > _SHALLOWEST * spacing else [0.0] if last > 0 else []
     return out
 
 
-def _greedy(region, left, depths: list[float], reach: float, tiny: float, out: list) -> object:
-    """Pieces of the contours at ``depths`` within reach of ``left``, chosen greedily (most
-    uncovered area first) and appended to ``out``; returns what is still left."""
+def _touching(field: Region, width: float) -> list[NDArray[np.float64]]:
+    """Passes along a hole's boundary where it lies closer than ``width`` (twice the shallowest
+    contour's depth) to the shell or another hole: every point of such a corridor is within its
+    width of them, and its pieces, each under ``1e-6 spacing^2``, would be taken for the
+    buffers' rounding (1 um by 70 m: 7e-5 m2 missed)."""
     import shapely
 
-    near = shapely.buffer(left, reach * (1 + 1e-6))
+    rings = [shapely.LinearRing(r) for r in field.rings]
+    out: list[NDArray[np.float64]] = []
+    for i in range(1, len(rings)):
+        others = rings[:i]  # the shell and the holes before: each close pair gets one pass
+        if min(shapely.distance(rings[i], others)) >= width:
+            continue
+        near = shapely.buffer(shapely.union_all(others), width)
+        piece = shapely.line_merge(shapely.intersection(rings[i], near))
+        out += [
+            np.asarray(g.coords)
+            for g in getattr(piece, "geoms", [piece])
+            if g.geom_type == "LineString" and g.length > 0
+        ]
+    return out
+
+
+def _uncovered(region, spacing: float, reach: float, passes: int, rings, tiny: float) -> list:
+    """The parts (over ``tiny``) of the field that neither the rings' swaths nor the inner field
+    cover, as a list of polygons. The rings are buffered in pieces of :data:`_CHUNK` segments
+    (the same swaths): a whole ring weaving around many holes took GEOS seconds to buffer."""
+    import shapely
+
+    inner = shapely.buffer(region, -(passes - _OVERLAP) * spacing, quad_segs=_QUAD_SEGS)
+    chunks = [
+        shapely.LineString(r[a : a + _CHUNK + 1])
+        for rs in rings
+        for r in rs
+        for a in range(0, len(r) - 1, _CHUNK)
+    ]
+    covered = shapely.union_all([*shapely.buffer(chunks, reach, quad_segs=64), inner])
+    return _pieces(shapely.difference(region, covered), tiny)
+
+
+def _greedy(region, left: list, depths: list[float], reach: float, tiny: float, out: list) -> list:
+    """Pieces of the contours at ``depths`` within reach of ``left`` (polygons), chosen greedily
+    (most uncovered area first) and appended to ``out``; returns what is still left. A choice
+    changes the gains of the candidates whose swaths meet its swath only: those are recomputed,
+    on the parts of ``left`` they meet (an STRtree)."""
+    import shapely
+
+    near = shapely.buffer(shapely.union_all(left), reach * (1 + 1e-6))
     candidates = []
     for depth in depths:
         contour = shapely.boundary(shapely.buffer(region, -depth, quad_segs=64))
         piece = shapely.line_merge(shapely.intersection(contour, near))
         candidates += [g for g in getattr(piece, "geoms", [piece]) if g.geom_type == "LineString"]
-    while candidates and left.area > tiny:
-        gains = [
-            shapely.intersection(left, shapely.buffer(c, reach, quad_segs=64)).area
-            for c in candidates
-        ]
+    if not candidates:
+        return left
+    swaths = shapely.buffer(np.asarray(candidates, dtype=object), reach, quad_segs=64)
+    by_swath = shapely.STRtree(swaths)
+    parts = list(left)
+    gains = np.zeros(len(candidates))
+    todo = np.arange(len(candidates))
+    while sum(p.area for p in parts) > tiny:
+        tree = shapely.STRtree(parts)
+        for i in todo:
+            hit = tree.query(swaths[i])
+            gains[i] = sum(shapely.intersection(parts[j], swaths[i]).area for j in hit)
         best = int(np.argmax(gains))
         if gains[best] <= tiny:
             break
-        c = candidates.pop(best)
-        out.append(np.asarray(c.coords))
-        left = _parts(shapely.difference(left, shapely.buffer(c, reach, quad_segs=64)), tiny)
-    return left
+        out.append(np.asarray(candidates[best].coords))
+        hit = set(tree.query(swaths[best]).tolist())
+        parts = [
+            q
+            for j, p in enumerate(parts)
+            for q in (_pieces(shapely.difference(p, swaths[best]), tiny) if j in hit else [p])
+        ]
+        todo = by_swath.query(swaths[best])
+        gains[best] = -math.inf
+        todo = todo[gains[todo] > -math.inf]
+    return parts
 
 
-def _parts(geom, tiny: float):
-    """``geom`` without its polygon parts of area at most ``tiny``."""
-    import shapely
-
-    keep = [g for g in getattr(geom, "geoms", [geom]) if g.geom_type == "Polygon" and g.area > tiny]
-    return shapely.union_all(keep) if keep else shapely.Polygon()
+def _pieces(geom, tiny: float) -> list:
+    """The polygon parts of ``geom`` of area over ``tiny``."""
+    return [g for g in getattr(geom, "geoms", [geom]) if g.geom_type == "Polygon" and g.area > tiny]
 
 
 def _inside_the_field(
@@ -304,6 +359,24 @@ def _nearer_first(line: NDArray[np.float64], near: NDArray[np.float64]) -> NDArr
     return line if np.linalg.norm(line[0] - near) <= np.linalg.norm(line[-1] - near) else line[::-1]
 
 
+def _nearest_first(
+    lines: list[NDArray[np.float64]], start: NDArray[np.float64]
+) -> list[NDArray[np.float64]]:
+    """Open passes in the order a vehicle at ``start`` drives them going to the nearest end of
+    those left each time (the greedy's order is by area: with many holes it crossed the field
+    back and forth: 40 holes 25 m from the boundary, 108.6 km of path, now 81.8 km), each from
+    that end."""
+    left = list(lines)
+    out = []
+    at = start
+    while left:
+        d = [min(np.linalg.norm(g[0] - at), np.linalg.norm(g[-1] - at)) for g in left]
+        g = _nearer_first(left.pop(int(np.argmin(d))), at)
+        out.append(g)
+        at = g[-1]
+    return out
+
+
 def _dedupe(points: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
     keep = np.concatenate([[True], np.linalg.norm(np.diff(points, axis=0), axis=1) > tol])
     return points[keep]
@@ -336,7 +409,7 @@ def add_headland(inner: Plan, field: Region, passes: int, *, spacing: float, rea
     headland_length = 0.0
     n_rings = 0
     for pts, closed in [
-        *((g, False) for g in gaps),
+        *((g, False) for g in _nearest_first(gaps, points[-1])),
         *((r, True) for rs in rings[::-1] for r in rs),
     ]:
         pts = _rotate(pts, points[-1]) if closed else _nearer_first(pts, points[-1])

@@ -179,6 +179,8 @@ def parse_options(options: Any) -> PlanOptions:
         raise InvalidParameterError(
             f"unknown option(s) {', '.join(map(repr, unknown))}; expected {', '.join(OPTIONS)}"
         )
+    if isinstance(options.get("objective"), str):  # the snake spelling too (fewest_transects)
+        options = {**options, "objective": options["objective"].replace("_", "-")}
     objective = _choice(options, "objective", tuple(sorted(web_objectives())), "")
     method = options.get("method")
     if method is not None and not isinstance(method, str):

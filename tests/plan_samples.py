@@ -1,0 +1,87 @@
+"""Real plans sampled in boxes of (angle, offset): the reference the soundness tests of the
+certified time search's bounds (tests/test_cover_*.py, tests/test_inside_bound.py) hold their
+bounds to. A bound is sound when it is below the cost of every plan whose layout lies in its
+box; the tests assert that on the costs these helpers return (the asserts stay in the tests, so
+a wrong bound fails them)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+
+import numpy as np
+
+from boustro.geometry import Polygon
+from boustro.geometry.region import Region
+from boustro.optimize.cover import CoverCost
+from boustro.optimize.cover.boxes import Boxes
+from boustro.plan import vehicle_stats
+from boustro.plan.region import plan_region
+from boustro.vehicle import Vehicle
+
+__all__ = ["SPACING", "plan_cost", "plans_in_boxes", "sample_boxes", "scaled"]
+
+#: The spacing of the soundness tests' plans, metres.
+SPACING = 9.0
+
+
+def scaled(region: Region, size: float) -> Region:
+    """``region`` scaled to a diameter of ``size``."""
+    k = size / region.diameter
+    return Region(
+        Polygon(region.shell.vertices * k), [Polygon(h.vertices * k) for h in region.holes]
+    )
+
+
+def plan_cost(
+    region: Region,
+    cost: CoverCost,
+    *,
+    turnaround: float = 0.0,
+    vehicle: Vehicle | None = None,
+    keep_inside: bool = False,
+    spacing: float = SPACING,
+) -> Callable[[float, float], float]:
+    """``evaluate(angle, offset)``: the cost of the real plan of one grid at that layout (5 m/s,
+    10 s a turn in the plan's statistics; ``cost`` prices its length and turns), with the
+    vehicle's driven turns where given."""
+
+    def evaluate(a: float, d: float) -> float:
+        plan = plan_region(
+            region, spacing, decompose_area=False, angle=a, offset=d, speed=5.0,
+            turn_time=10.0, turnaround=turnaround, keep_inside=keep_inside,
+        )  # fmt: skip
+        st = vehicle_stats(plan, vehicle) if vehicle is not None else plan.stats
+        return cost.of(st.path_length, st.n_turns)
+
+    return evaluate
+
+
+def sample_boxes(
+    rng: np.random.Generator, n: int, spacing: float = SPACING, delta: float = 0.02
+) -> Boxes:
+    """``n`` random boxes: angles in ``[0, pi)``, half-widths up to ``delta`` radians (half of
+    them zero), offsets in ``[0, spacing)``, offset half-widths up to 1.5 m."""
+    return Boxes(
+        rng.uniform(0, math.pi, n),
+        rng.uniform(0, delta, n) * rng.integers(0, 2, n),
+        rng.uniform(0, spacing, n),
+        rng.uniform(0, 1.5, n),
+    )
+
+
+def plans_in_boxes(
+    evaluate: Callable[[float, float], float],
+    boxes: Boxes,
+    rng: np.random.Generator,
+    k: int = 3,
+) -> Iterator[list[float]]:
+    """For each box, the costs of its centre's plan (first) and of ``k`` plans at layouts drawn
+    uniformly in it."""
+    for i in range(len(boxes.theta)):
+        plans = [evaluate(float(boxes.theta[i]), float(boxes.d[i]))]
+        for _ in range(k):
+            a = boxes.theta[i] + rng.uniform(-boxes.delta[i], boxes.delta[i])
+            o = boxes.d[i] + rng.uniform(-boxes.eta[i], boxes.eta[i])
+            plans.append(evaluate(float(a), float(o)))
+        yield plans
