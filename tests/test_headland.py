@@ -131,6 +131,22 @@ def test_headland_covers_the_gap_between_two_holes():
     _check(mission, 1)
 
 
+@pytest.mark.parametrize(
+    ("width", "length", "spacing", "passes"),
+    [(1e-4, 0.9, 10.0, 1), (21e-6, 2.0, 10.0, 1), (3e-4, 3.0, 30.0, 1), (1e-3, 0.05, 10.0, 2)],
+)
+def test_headland_covers_a_short_narrow_corridor_between_holes(width, length, spacing, passes):
+    # A review: two holes side by side, ``width`` apart along ``length``: the whole corridor is
+    # under 1e-6 spacing^2 and was dropped as the buffers' rounding (100 um x 0.9 m: 9e-5 m2).
+    holes = [
+        [(40, 40), (60, 40), (60, 40 + length), (40, 40 + length)],
+        [(60 + width, 40), (80, 40), (80, 40 + length), (60 + width, 40 + length)],
+    ]
+    mission = plan_area([(0, 0), (200, 0), (200, 120), (0, 120)], spacing, crs=None, holes=holes,
+                        headland=passes, angle=0.2)  # fmt: skip
+    _check(mission, passes)
+
+
 @pytest.mark.parametrize(("turnaround", "holes"), [(15.0, []), (15.0, [POND]), (4.0, [POND])])
 def test_headland_run_ins_end_in_the_field(turnaround, holes):
     # A run-in longer than the headland band used to end outside the field (a QA run: 272 m of

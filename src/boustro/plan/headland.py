@@ -207,14 +207,15 @@ def _gap_passes(
     10 m with 2 passes: a 5 m strip). Every point of such a strip lies within
     ``depth - k * spacing < reach`` of the contour at depth ``k * spacing`` (walk towards its
     nearest boundary point), so pieces of that contour near the strip cover it: chosen greedily
-    (most uncovered area first) until nothing is left (components under ``1e-6 spacing^2``, the
-    buffers' rounding, ignored). A corridor narrower than a spacing (a hole closer to the
-    boundary) gets no pass at all: every point of it is within reach of a contour at a depth
-    under half its width (:data:`_NARROW`, then a fifth of the last depth at a time, down to
-    :data:`_SHALLOWEST`; then the field's boundary itself, which lies in the field), and one
-    narrower than twice that a pass along the hole (:func:`_touching`)."""
+    (most uncovered area first) until nothing is left (components under ``1e-12 spacing^2``,
+    the buffers' rounding, ignored: at ``1e-6 spacing^2`` a whole corridor of 100 um by 0.9 m
+    between two holes at 10 m was dropped, a review). A corridor narrower than a spacing (a hole
+    closer to the boundary) gets no pass at all: every point of it is within reach of a contour
+    at a depth under half its width (:data:`_NARROW`, then a fifth of the last depth at a time,
+    down to :data:`_SHALLOWEST`; then the field's boundary itself, which lies in the field), and
+    one narrower than twice that a pass along the hole (:func:`_touching`)."""
     region = _shapely_region(field)
-    tiny = 1e-6 * spacing**2
+    tiny = 1e-12 * spacing**2
     out = _touching(field, 2 * _SHALLOWEST * spacing)
     left = _uncovered(region, spacing, reach, passes, [*rings, out], tiny)
     # the corridors between 2k and 2k + 1 spacings wide, and those narrower than a spacing;
@@ -231,8 +232,9 @@ def _gap_passes(
 def _touching(field: Region, width: float) -> list[NDArray[np.float64]]:
     """Passes along a hole's boundary where it lies closer than ``width`` (twice the shallowest
     contour's depth) to the shell or another hole: every point of such a corridor is within its
-    width of them, and its pieces, each under ``1e-6 spacing^2``, would be taken for the
-    buffers' rounding (1 um by 70 m: 7e-5 m2 missed)."""
+    width of them: one pass along the hole covers such a corridor directly, where the contours
+    would need depths down to 0 (1 um by 70 m: 7e-5 m2 missed when pieces under
+    ``1e-6 spacing^2`` were still taken for rounding)."""
     import shapely
 
     rings = [shapely.LinearRing(r) for r in field.rings]
