@@ -103,7 +103,7 @@ def _contour_passes(
         v, at, total = ring.v, ring.at, ring.total
         n = len(ring.samples)
         s = np.linspace(0.0, total, n + 1)[:-1]
-        near = shapely.distance(ring.samples, residual) <= reach + total / n
+        near = shapely.dwithin(ring.samples, residual, reach + total / n)  # prepared
         runs = _runs(near, s, total, MERGE_GAP * 2 * half)
         if runs is None:
             out.append(v)
