@@ -419,7 +419,15 @@ def plan_decomposed(
     best: tuple[float, Plan, _Candidate, list[OptimizeResult], bool] | None = None
     lay: Layout = "chords" if layout == "chords" else "guaranteed"
     planned = PLANNED if len(region.edges) <= LARGE_EDGES else 1
+    seen: set[bytes] = set()
     for cand in candidates[:planned]:
+        key = b"/".join(
+            b"|".join(np.ascontiguousarray(r.vertices).tobytes() for r in (c.shell, *c.holes))
+            for c in cand.cells
+        )
+        if key in seen:  # the same cells under another name: the same plans, not kept (a tie)
+            continue
+        seen.add(key)
         for search in searches:
             optima = _cell_optima(search, cand.cells, beat)
             if optima is None:  # screened out (or no lane): the other search too

@@ -68,7 +68,10 @@ def _pieces(geometry: Any, eps: float) -> list[Any]:
     import shapely
 
     polys = [g for g in shapely.get_parts(geometry) if g.geom_type == "Polygon" and not g.is_empty]
-    return [g for g in polys if not g.buffer(-eps).is_empty]
+    if not polys:
+        return []
+    kept = ~shapely.is_empty(shapely.buffer(polys, -eps, quad_segs=16))  # as g.buffer(-eps)
+    return [g for g, ok in zip(polys, kept, strict=True) if ok]
 
 
 def _lines(geometry: Any, tol: float) -> list[NDArray[np.float64]]:
@@ -103,7 +106,7 @@ def _contour_passes(
         v, at, total = ring.v, ring.at, ring.total
         n = len(ring.samples)
         s = np.linspace(0.0, total, n + 1)[:-1]
-        near = shapely.distance(ring.samples, residual) <= reach + total / n
+        near = shapely.dwithin(ring.samples, residual, reach + total / n)  # prepared
         runs = _runs(near, s, total, MERGE_GAP * 2 * half)
         if runs is None:
             out.append(v)
@@ -129,16 +132,26 @@ def _corner_spurs(
     d = shapely.distance(contour.corner_points, shapely.LineString(line))
     pick = (d > reach * (1 + 1e-9)) & (d < 4 * half)
     spurs: dict[int, list[NDArray[np.float64]]] = {}
-    for i in np.flatnonzero(pick)[np.isin(np.flatnonzero(pick), first)]:
-        c = corners[i]
-        j = int(np.argmin(np.linalg.norm(line - c, axis=1)))
-        v = line[j]
+    idx = np.flatnonzero(pick)
+    idx = idx[np.isin(idx, first)]
+    if not len(idx):
+        return line
+    # each corner's nearest contour point, all at once (the same norms as one by one)
+    near = np.argmin(np.linalg.norm(line[None] - corners[idx][:, None], axis=2), axis=1)
+    found = []
+    for i, j in zip(idx, near, strict=True):
+        c, v = corners[i], line[j]
         gap = float(np.linalg.norm(v - c))
         if gap <= half or gap > d[i] * (1 + 1e-6) + tol:  # V must be the contour's corner
             continue
-        p = c + (v - c) / gap * (half * (1 - 1e-3))  # C inside the polygonised swath
-        if grown.covers(shapely.LineString([v, p])):
-            spurs.setdefault(j, []).extend([p, v])
+        found.append((int(j), v, c + (v - c) / gap * (half * (1 - 1e-3))))  # C inside the swath
+    if found:
+        legs = np.array([[v, p] for _, v, p in found])
+        for (j, v, p), ok in zip(
+            found, shapely.covers(grown, shapely.linestrings(legs)), strict=True
+        ):
+            if ok:
+                spurs.setdefault(j, []).extend([p, v])
     if not spurs:
         return line
     parts = []

@@ -301,7 +301,7 @@ def _near(lines: list[NDArray[np.float64]], rest: Any, far: float) -> list[NDArr
         return []
     segs = np.concatenate([np.stack([line[:-1], line[1:]], axis=1) for line in lines])
     owner = np.concatenate([np.full(len(line) - 1, i) for i, line in enumerate(lines)])
-    keep = shapely.distance(shapely.linestrings(segs), rest) <= far
+    keep = shapely.dwithin(shapely.linestrings(segs), rest, far)
     out = []
     for i, line in enumerate(lines):
         flags = keep[owner == i]
