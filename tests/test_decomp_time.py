@@ -372,7 +372,7 @@ def test_cells_searched_largest_first_and_stopped_once_their_bounds_reach_the_gr
         reach = 0.0  # no area floor, no turn between cells: the bounds alone
         cost = SimpleNamespace(per_turn=0.0, per_length=1.0)
 
-        def optimum(self, cell):
+        def optimum(self, cell, cutoff=None):
             asked.append(cell.area)
             return SimpleNamespace(info={"lower_bound": 10.0 * cell.area})
 

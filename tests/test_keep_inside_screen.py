@@ -26,7 +26,7 @@ def _square(x: float, side: float) -> Region:
 
 
 def _fake_search(bounds: dict[float, float], calls: list[float]) -> SimpleNamespace:
-    def optimum(cell: Region):
+    def optimum(cell: Region, cutoff: float | None = None):
         calls.append(cell.area)
         return SimpleNamespace(info={"lower_bound": bounds[cell.area]})
 

@@ -47,6 +47,7 @@ from .project import Frame
 from .steps import Planned, _path_options
 
 __all__ = [
+    "CUTOFF_MARGIN",
     "LARGE_EDGES",
     "MAX_CELLS",
     "MAX_SEARCHES",
@@ -73,6 +74,9 @@ MODEL_ANGLES = 36
 MODEL_OFFSETS = 4
 #: Edge directions of a cell (longest first) where the lanes laid from its edge are planned.
 CENTRED_ANGLES = 8
+#: A cell's search stops once its lower bound brings the candidate's floor this share of the
+#: one grid's cost above it (:func:`_cell_optima`; rounding: the floor is then above ``beat``).
+CUTOFF_MARGIN = 1e-9
 #: Neighbouring cells whose angles differ by less than this are tried as one cell.
 MERGE_ANGLE = math.radians(15.0)
 
@@ -158,11 +162,19 @@ class _Search:
         self.models[key] = out
         return out
 
-    def optimum(self, cell: Region) -> OptimizeResult | None:
-        """The cell's certified optimum (``None`` past :data:`MAX_SEARCHES` or no lane)."""
+    def optimum(self, cell: Region, cutoff: float | None = None) -> OptimizeResult | None:
+        """The cell's certified optimum (``None`` past :data:`MAX_SEARCHES` or no lane).
+
+        ``cutoff``: the search may stop once no layout of the cell costs less
+        (``info["cut_off"]``: then only its lower bound counts, the candidate is screened out);
+        such a result is reused only where its lower bound reaches the cutoff asked."""
         key = _key(cell)
         if key in self.cache:
-            return self.cache[key]
+            hit = self.cache[key]
+            if hit is None or not hit.info.get("cut_off"):
+                return hit
+            if cutoff is not None and float(hit.info["lower_bound"]) >= cutoff:
+                return hit
         if self.searches >= MAX_SEARCHES:
             return None
         self.searches += 1
@@ -170,10 +182,15 @@ class _Search:
             opt = cover_optimum(
                 cell, self.s, self.cost, lambda a, d: self.value(cell, a, d),
                 reach=self.reach, boustrophedon=False, keep_inside=self.keep_inside,
+                centred=False, cutoff=cutoff,
             )  # fmt: skip
         except (NoTransectError, InvalidPolygonError, InvalidParameterError):
-            self.cache[key] = None
+            if cutoff is None:  # a search cut off may have stopped before its first plan
+                self.cache[key] = None
             return None
+        if opt.info.get("cut_off"):  # its candidate is screened out: only the bound counts
+            self.cache[key] = opt
+            return opt
         opt = self._centred(cell, opt)
         opt = dataclasses.replace(opt, info={**opt.info, "keep_inside": self.keep_inside})
         self.cache[key] = opt
@@ -355,7 +372,9 @@ def _cell_optima(
     for i, k in enumerate(order):
         if beat is not None and floor >= beat:
             return None
-        opt = search.optimum(cells[k])
+        # the search may stop once the cell's lower bound alone brings the floor to beat
+        cutoff = None if beat is None else beat - (floor - rest[i]) + CUTOFF_MARGIN * abs(beat)
+        opt = search.optimum(cells[k], cutoff)
         if opt is None:
             return None
         found[k] = opt

@@ -17,6 +17,7 @@ from .boxes import box_radius, split_boxes, split_parents
 from .one_tree import Multipliers
 
 __all__ = [
+    "CUT_OFF",
     "POINT_TOURS_BELOW_MODEL",
     "SETTLE_SHARE",
     "Limits",
@@ -37,6 +38,10 @@ SETTLE_SHARE = 0.15
 POINT_TOURS_BELOW_MODEL = True
 
 
+#: Why a search with a ``cutoff`` stopped once its lower bound reached it (``info["stopped"]``).
+CUT_OFF = "the lower bound reached the cutoff"
+
+
 class Limits(NamedTuple):
     """The tolerances and budgets of :func:`cover_optimum` (see its arguments)."""
 
@@ -46,6 +51,7 @@ class Limits(NamedTuple):
     max_work: float
     max_seconds: float | None
     t0: float
+    cutoff: float | None = None  # stop once the lower bound reaches it (cover_optimum's)
 
 
 def take_multipliers(mult: Multipliers | None, index: NDArray[Any]) -> Multipliers | None:
@@ -75,7 +81,7 @@ def branch_and_bound(
         if POINT_TOURS_BELOW_MODEL and math.isfinite(search.model_min + search.best[0]):
             tour_keep = search.model_min + (lim.resolve - lim.rtol) * abs(search.best[0])
         points = search.point_values(boxes, multipliers=mult, tour_keep=tour_keep)
-        search.try_plans(boxes, search.ranks, first=rounds == 1)
+        search.try_plans(boxes, search.ranks, first=rounds == 1, bounds=points)
         best = search.best[0]
         # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
         # model at the box's centre, so halving cannot raise it further than the model
@@ -98,12 +104,14 @@ def branch_and_bound(
         if done.any():
             floor = min(floor, float(bounds[done].min()))
         boxes, bounds, mult = boxes.take(keep), bounds[keep], take_multipliers(mult, keep)
+        low = min(floor, search.deferred_min(), float(bounds.min()) if len(bounds) else math.inf)
         if progress is not None and math.isfinite(best):
-            low = min(
-                floor, search.deferred_min(), float(bounds.min()) if len(bounds) else math.inf
-            )
             progress(max(0.0, min(1.0, 1.0 - (best - low) / max(abs(best), 1e-300))))
         if not len(boxes.theta):
+            break
+        if lim.cutoff is not None and low >= lim.cutoff:  # no layout is below the cutoff
+            floor = low
+            stopped = CUT_OFF
             break
         eps = box_radius(boxes, search.radius)
         fine = eps <= lim.min_eps

@@ -69,8 +69,8 @@ def try_centred(search: Any, seeds: int | None = None) -> None:
         return
     boxes = centred_boxes(search.region, search.s, search.reach)
     if seeds is not None:
-        search.point_values(boxes)
-        search.try_plans(boxes, search.ranks, limit=seeds)
+        bounds = search.point_values(boxes)
+        search.try_plans(boxes, search.ranks, limit=seeds, bounds=bounds)
         return
     before = search.plans
     values: NDArray[np.float64] = search.point_values(boxes, exact=True)

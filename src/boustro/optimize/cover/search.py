@@ -20,7 +20,7 @@ from .bands import RigidBoxes, band_stats
 from .bounds import lower_bounds
 from .boxes import Boxes as _Boxes
 from .boxes import box_radius, initial_boxes, level_radius
-from .branch import Limits, branch_and_bound, take_multipliers
+from .branch import CUT_OFF, Limits, branch_and_bound, take_multipliers
 from .centred import CENTRED_SEEDS, centred_offsets, try_centred
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
@@ -82,6 +82,13 @@ STOP_SHARE = 0.1
 #: Whether a box's 1-tree starts from its parent box's best multipliers (and its centre's
 #: from its box's), not from zero.
 WARM_TOUR = True
+#: Whether a layout whose own bound (the exact area, the 1-tree) is above the best plan is not
+#: planned (:meth:`CoverSearch.try_plans`): its plan cannot beat the best one; it still counts
+#: as tried, so the search plans the same layouts otherwise and finds the same plan
+#: (docs/mission_time.md, "The 1-tree's CPU").
+SKIP_RULED_OUT = True
+#: A bound must be above the best plan by this share of it to rule a layout out (rounding).
+RULE_OUT_TOL = 1e-9
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 EDGE_OFFSETS = 64
@@ -130,6 +137,7 @@ class CoverSearch:
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
+        self.ruled_out = 0  # layouts not planned: their bound is above the best plan
         self.bound_evaluations = 0
         self.work = 0.0  # layouts bounded times the edges of the sandwich level used
         self.seen: set[tuple[float, float]] = set()
@@ -382,10 +390,11 @@ class CoverSearch:
                 d = np.concatenate([d, centred_offsets(self.region, ends, self.s, self.reach)])
                 d[-1] = (-d[-1]) % self.s  # the line reach inside the highest extreme
             boxes = _Boxes(np.full(len(d), a), np.zeros(len(d)), d, np.zeros(len(d)))
-            self.point_values(boxes)
-            self.try_plans(boxes, self.ranks, limit=1)
+            bounds = self.point_values(boxes)
+            self.try_plans(boxes, self.ranks, limit=1, bounds=bounds)
             if self.ends and self.evaluate is not None and self.sandwich.tolerance <= 0:
-                self.try_plans(boxes, self.point_values(boxes, span_only=True), limit=1)
+                span = self.point_values(boxes, span_only=True)
+                self.try_plans(boxes, span, limit=1, bounds=bounds)
 
     def polish(self) -> None:
         """Plan the best modelled layout of each degree of angle whose model beats the best
@@ -402,14 +411,14 @@ class CoverSearch:
         pick = order[first]
         pick = pick[np.argsort(v[pick])][:POLISH_PLANS]
         boxes = _Boxes(theta[pick], np.zeros(len(pick)), d[pick], np.zeros(len(pick)))
-        self.try_plans(boxes, v[pick], limit=len(pick))
+        self.try_plans(boxes, v[pick], limit=len(pick), bounds=self.layout_bounds(boxes))
         # the first lane half a spacing inside the area's extreme: the layout a person, or a
         # brute force over degrees, would fly
         angles = np.radians(bins[pick].astype(np.float64))
         centred = centred_offsets(self.region, angles, self.s, self.reach)
         boxes = _Boxes(angles, np.zeros(len(pick)), centred, np.zeros(len(pick)))
-        self.point_values(boxes)
-        self.try_plans(boxes, self.ranks, limit=len(pick))
+        bounds = self.point_values(boxes)
+        self.try_plans(boxes, self.ranks, limit=len(pick), bounds=bounds)
 
     def refine_offsets(self) -> None:
         """Plan :data:`REFINE_OFFSETS` more offsets at the best angle: a routed plan's moves
@@ -417,8 +426,33 @@ class CoverSearch:
         theta = self.best[1]
         d = (np.arange(REFINE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / REFINE_OFFSETS)
         boxes = _Boxes(np.full(len(d), theta), np.zeros(len(d)), d, np.zeros(len(d)))
-        self.point_values(boxes)
-        self.try_plans(boxes, self.ranks, limit=REFINE_OFFSETS)
+        bounds = self.point_values(boxes)
+        self.try_plans(boxes, self.ranks, limit=REFINE_OFFSETS, bounds=bounds)
+
+    def bounds_rule_out(self) -> bool:
+        """Whether a layout's own bound (:meth:`point_values` on the exact area, the 1-tree
+        where computed) is a lower bound of its plan's cost here, so that a layout whose bound
+        is above the best plan need not be planned (:data:`SKIP_RULED_OUT`): with real plans,
+        on areas searched with exact sandwiches, not with keep-inside (its bound at a layout is
+        5-20% below its plans: it would rule out next to nothing, and is tested in boxes only)."""
+        return (
+            SKIP_RULED_OUT
+            and self.evaluate is not None
+            and self.sandwich.tolerance <= 0
+            and not self.keep_inside
+        )
+
+    def layout_bounds(self, boxes: _Boxes) -> NDArray[np.float64] | None:
+        """The bound at each box's centre (:meth:`point_values`, exact, the 1-tree up to the
+        best plan) without touching the search's state (its work, ranks, lowest model), where
+        :meth:`bounds_rule_out`; else ``None``."""
+        if not self.bounds_rule_out() or not len(boxes.theta):
+            return None
+        state = (self.ranks, len(self.points), self.model_min, self.work, self.bound_evaluations)
+        out = self.point_values(boxes, exact=True)
+        self.ranks, n, self.model_min, self.work, self.bound_evaluations = state
+        del self.points[n:]
+        return out
 
     def try_plans(
         self,
@@ -426,10 +460,18 @@ class CoverSearch:
         points: NDArray[np.float64],
         first: bool = False,
         limit: int | None = None,
+        bounds: NDArray[np.float64] | None = None,
     ) -> None:
         """Evaluate the plans of the boxes' centres with the lowest point values (upper
         bounds), where they could beat the best plan: :data:`PLANS_PER_ROUND`, or at the first
-        round :data:`FIRST_PLANS` at angles at least :data:`FIRST_SEPARATION` apart."""
+        round :data:`FIRST_PLANS` at angles at least :data:`FIRST_SEPARATION` apart.
+
+        ``bounds`` (per box, where :meth:`bounds_rule_out`): lower bounds of the plans at the
+        centres; a layout whose bound is above the best plan is not planned (its plan cannot
+        beat it) but counts as tried, so the same plans win as without ``bounds``
+        (:attr:`ruled_out` counts them)."""
+        if bounds is not None and not self.bounds_rule_out():
+            bounds = None
         order = np.argsort(points)
         if limit is None:
             limit = FIRST_PLANS if first else PLANS_PER_ROUND
@@ -448,6 +490,10 @@ class CoverSearch:
                 continue
             taken.append(float(boxes.theta[i]))
             self.seen.add(key)
+            if bounds is not None and bounds[i] > self.best[0] + RULE_OUT_TOL * abs(self.best[0]):
+                self.ruled_out += 1
+                tried += 1
+                continue
             theta, d = float(boxes.theta[i]), float(boxes.d[i])
             value = self.plan_value(boxes, int(i), points)
             self.plans += 1
@@ -491,6 +537,8 @@ def cover_optimum(
     max_work: float = MAX_WORK,
     max_seconds: float | None = None,
     progress: Callable[[float], None] | None = None,
+    centred: bool = True,
+    cutoff: float | None = None,
 ) -> OptimizeResult:
     """The layout ``(angle, offset)`` whose plan has the least ``cost``, with a certificate.
 
@@ -520,6 +568,15 @@ def cover_optimum(
             moves and no rigid hole cuts.
         boustrophedon: whether plans fly one lane per line in boustrophedon order (the convex
             planner); default: the region is a convex polygon without holes.
+        centred: whether the layouts of a 1-degree brute force of the angle are planned after
+            the search where their bound is below its best plan (:func:`~.centred.try_centred`;
+            a search over every angle with real plans, not keep-inside): its plan is then never
+            longer than that brute force's. ``False`` where that guarantee is not needed (a
+            decomposition's cells: a decomposed plan is kept only when it beats the one grid's).
+        cutoff: stop as soon as no layout can cost less than this (the lowest bound of every
+            box reached it): then ``info["stopped"]`` says so, ``info["cut_off"]`` is true, the
+            plan is the best found so far and ``lower_bound`` is at least ``cutoff`` (a
+            decomposition's cell whose candidate cannot beat the one grid any more).
 
     Returns:
         an :class:`OptimizeResult` with ``fitness`` = the best plan's cost (minimised),
@@ -550,17 +607,20 @@ def cover_optimum(
             search.try_edges([angle])
     boxes = _initial(search, n_angles, angle)
     search.top_eps = float(box_radius(boxes, search.radius).max())
-    limits = Limits(rtol, resolve, min_eps, max_work, max_seconds, t0)
+    limits = Limits(rtol, resolve, min_eps, max_work, max_seconds, t0, cutoff)
     floor, rounds, stopped = branch_and_bound(search, boxes, limits, progress)
-    if not boustrophedon and evaluate is not None and math.isfinite(search.best[0]):
+    cut_off = stopped == CUT_OFF
+    found = math.isfinite(search.best[0]) and not cut_off
+    if not boustrophedon and evaluate is not None and found:
         search.polish()
         search.refine_offsets()
-    if angle is None and evaluate is not None and not keep_inside and math.isfinite(search.best[0]):
+    if centred and angle is None and evaluate is not None and not keep_inside and found:
         try_centred(search)
     value, theta, d = search.best
     if not math.isfinite(value):
         raise InvalidParameterError("no layout of this spacing has a lane over the area")
-    lower = search.settle_deferred(min(floor, value))
+    # cut off: the floor counts the deferred boxes' bounds (without their 1-trees)
+    lower = min(floor, value) if cut_off else search.settle_deferred(min(floor, value))
     gap = max(0.0, value - lower)
     angle, offset = canonical(theta, d, s)
     return OptimizeResult(
@@ -578,6 +638,7 @@ def cover_optimum(
             "certified": gap <= rtol * abs(value) + 1e-12,
             "rtol": rtol,
             "plans": search.plans,
+            "ruled_out": search.ruled_out,
             "centred_plans": search.centred_plans,
             **(
                 {"centred_complete": search.centred_complete}
@@ -585,6 +646,7 @@ def cover_optimum(
                 else {}
             ),
             "rounds": rounds,
+            "cut_off": cut_off,
             "converged": not stopped,
             **({"stopped": stopped} if stopped else {}),
         },

@@ -1,0 +1,166 @@
+"""The cover search's CPU cuts of issue 16's 5 s (docs/mission_time.md, "The 1-tree's CPU"):
+layouts ruled out by their own bound are not planned, a decomposition's cells are searched
+without the brute-force sweep and stop once their candidate is screened out (``cutoff``)."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import boustro.mission.decomposed as decomposed_module
+import boustro.optimize.cover.search as search_module
+from boustro.geometry.region import Region
+from boustro.mission.decomposed import CUTOFF_MARGIN, _cell_optima, _Search
+from boustro.optimize import OptimizeResult
+from boustro.optimize.cover import CoverCost, cover_optimum
+from boustro.optimize.cover.boxes import Boxes
+from boustro.plan.region import plan_region
+
+from .conftest import random_regions
+
+SPEED, TURN_TIME, SPACING = 5.0, 10.0, 10.0
+COST = CoverCost.time(SPEED, TURN_TIME)
+
+
+def _region(seed: int, index: int = 0) -> Region:
+    region = random_regions(seed, index + 1, n_holes=(1, 3))[index]
+    k = 250.0 / region.diameter
+    return Region(region.shell.vertices * k, [h.vertices * k for h in region.holes])
+
+
+def _plans(region: Region, counted: list[int]):
+    def evaluate(a: float, d: float) -> float:
+        counted.append(1)
+        st = plan_region(
+            region, SPACING, decompose_area=False, angle=float(a), offset=float(d), speed=SPEED,
+            turn_time=TURN_TIME,
+        ).stats  # fmt: skip
+        return COST.of(st.path_length, st.n_turns)
+
+    return evaluate
+
+
+@pytest.mark.parametrize("seed", [71, 5])
+def test_layouts_ruled_out_by_their_bound_are_not_planned_the_same_search(seed, monkeypatch):
+    region = _region(seed)
+    runs, calls = [], []
+    for on in (False, True):
+        monkeypatch.setattr(search_module, "SKIP_RULED_OUT", on)
+        counted: list[int] = []
+        runs.append(cover_optimum(region, SPACING, COST, _plans(region, counted)))
+        calls.append(len(counted))
+    off, on = runs
+    assert (on.angle, on.offset, on.fitness) == (off.angle, off.offset, off.fitness)
+    assert on.info["lower_bound"] == off.info["lower_bound"]
+    assert on.info["rounds"] == off.info["rounds"]
+    assert off.info["ruled_out"] == 0 and on.info["ruled_out"] > 0
+    # the same layouts tried: planned before, now planned or ruled out
+    assert on.info["plans"] + on.info["ruled_out"] == off.info["plans"]
+    assert calls == [off.info["plans"], on.info["plans"]]
+
+
+def test_ruled_out_only_with_exact_bounds_and_real_plans():
+    region = _region(71)
+    s = search_module.CoverSearch(region, SPACING, SPACING / 2, COST, None, False)
+    assert not s.bounds_rule_out()  # the model is the plan: nothing to save
+    s = search_module.CoverSearch(region, SPACING, SPACING / 2, COST, lambda a, d: 0.0, False)
+    assert s.bounds_rule_out()
+    s = search_module.CoverSearch(
+        region, SPACING, SPACING / 2, COST, lambda a, d: 0.0, False, keep_inside=True
+    )
+    assert not s.bounds_rule_out() and s.layout_bounds(_one()) is None
+
+
+def _one() -> Boxes:
+    z = np.zeros(1)
+    return Boxes(z + 0.3, z, z + 2.0, z)
+
+
+def test_layout_bounds_leave_the_search_state_alone():
+    region = _region(71)
+    s = search_module.CoverSearch(region, SPACING, SPACING / 2, COST, lambda a, d: 0.0, False)
+    before = (s.work, s.bound_evaluations, s.model_min, len(s.points))
+    b = s.layout_bounds(_one())
+    assert b is not None and math.isfinite(float(b[0])) and b[0] > 0
+    assert (s.work, s.bound_evaluations, s.model_min, len(s.points)) == before
+
+
+def test_cutoff_stops_the_search_with_a_true_bound():
+    region = _region(71)
+    full = cover_optimum(region, SPACING, COST, _plans(region, []))
+    assert not full.info["cut_off"]
+    cutoff = 0.98 * full.info["lower_bound"]
+    cut = cover_optimum(region, SPACING, COST, _plans(region, []), cutoff=cutoff)
+    assert cut.info["cut_off"] and not cut.info["converged"]
+    assert cut.info["stopped"] == "the lower bound reached the cutoff"
+    assert cutoff <= cut.info["lower_bound"] <= full.fitness
+    assert cut.info["rounds"] < full.info["rounds"] and cut.info["plans"] < full.info["plans"]
+    # a cutoff never reached: the same search
+    same = cover_optimum(region, SPACING, COST, _plans(region, []), cutoff=2 * full.fitness)
+    assert not same.info["cut_off"]
+    assert (same.angle, same.offset, same.fitness) == (full.angle, full.offset, full.fitness)
+    assert same.info["lower_bound"] == full.info["lower_bound"]
+
+
+def test_without_the_centred_sweep():
+    region = _region(71)
+    res = cover_optimum(region, SPACING, COST, _plans(region, []), centred=False)
+    assert res.info["centred_plans"] == 0 and "centred_complete" not in res.info
+    full = cover_optimum(region, SPACING, COST, _plans(region, []))
+    assert "centred_complete" in full.info
+    assert res.info["lower_bound"] == pytest.approx(full.info["lower_bound"], rel=1e-12)
+
+
+def _result(lower: float, cut_off: bool) -> OptimizeResult:
+    return OptimizeResult(
+        angle=0.0, offset=0.0, fitness=lower + 5.0, spacing=SPACING, method="certified-cover",
+        evaluations=0, seconds=0.0,
+        info={"lower_bound": lower, "cut_off": cut_off, "gap": 5.0, "certified": False},
+    )  # fmt: skip
+
+
+def test_a_cell_cut_off_is_reused_only_where_its_bound_reaches_the_cutoff(monkeypatch):
+    asked: list[float | None] = []
+
+    def fake(cell, s, cost, evaluate, *, cutoff=None, centred=True, **kwargs):
+        assert centred is False  # the cells need no brute-force sweep
+        asked.append(cutoff)
+        return _result(120.0, cutoff is not None)
+
+    monkeypatch.setattr(decomposed_module, "cover_optimum", fake)
+    search = object.__new__(_Search)
+    search.cache, search.searches, search.s, search.reach = {}, 0, SPACING, SPACING / 2
+    search.cost, search.keep_inside = COST, False
+    search._centred = lambda cell, opt: opt  # type: ignore[method-assign]
+    cell = _region(71)
+    assert search.optimum(cell, 100.0).info["cut_off"]
+    assert search.optimum(cell, 110.0).info["lower_bound"] == 120.0  # reused: 120 >= 110
+    assert asked == [100.0]
+    search.optimum(cell, 130.0)  # 120 < 130: searched again
+    assert asked == [100.0, 130.0]
+    full = search.optimum(cell)  # the optimum itself: searched in full
+    assert asked == [100.0, 130.0, None] and not full.info["cut_off"]
+    search.optimum(cell, 50.0)  # a full search serves every cutoff
+    assert asked == [100.0, 130.0, None] and search.searches == 3
+
+
+def test_cells_get_the_cutoff_that_screens_their_candidate_out():
+    cells = [SimpleNamespace(area=a) for a in (1.0, 5.0, 3.0)]
+    cutoffs: list[float | None] = []
+
+    class Search:
+        reach = 0.0  # no area floor, no turn between cells: the bounds alone
+        cost = SimpleNamespace(per_turn=0.0, per_length=1.0)
+
+        def optimum(self, cell, cutoff=None):
+            cutoffs.append(cutoff)
+            return SimpleNamespace(info={"lower_bound": 10.0 * cell.area})
+
+    assert _cell_optima(Search(), cells, beat=None) is not None and cutoffs == [None] * 3
+    cutoffs.clear()
+    assert _cell_optima(Search(), cells, beat=70.0) is None
+    # the first cell alone must reach 70, the second 70 - 50 (then 50 + 30 >= 70)
+    assert cutoffs == pytest.approx([70.0 * (1 + CUTOFF_MARGIN), 20.0 + 70.0 * CUTOFF_MARGIN])
