@@ -438,12 +438,9 @@ def plan_decomposed(
     best: tuple[float, Plan, _Candidate, list[OptimizeResult], bool] | None = None
     lay: Layout = "chords" if layout == "chords" else "guaranteed"
     planned = PLANNED if len(region.edges) <= LARGE_EDGES else 1
-    seen: set[bytes] = set()
+    seen: set[tuple[tuple[bytes, ...], ...]] = set()
     for cand in candidates[:planned]:
-        key = b"/".join(
-            b"|".join(np.ascontiguousarray(r.vertices).tobytes() for r in (c.shell, *c.holes))
-            for c in cand.cells
-        )
+        key = tuple(tuple(r.vertices.tobytes() for r in (c.shell, *c.holes)) for c in cand.cells)
         if key in seen:  # the same cells under another name: the same plans, not kept (a tie)
             continue
         seen.add(key)

@@ -38,6 +38,10 @@ class Boxes(NamedTuple):
     def take(self, mask: NDArray[np.bool_] | NDArray[np.intp]) -> Boxes:
         return Boxes(*(a[mask] for a in self))
 
+    def centre_key(self, i: int) -> tuple[float, float]:
+        """Box ``i``'s centre as a search remembers the layouts it tried (rounded)."""
+        return (round(float(self.theta[i]), 12), round(float(self.d[i]), 12))
+
 
 def box_radius(boxes: Boxes, radius: float) -> NDArray[np.float64]:
     """``eps = delta * radius + eta``: how far a point within ``radius`` of the centre moves

@@ -76,10 +76,5 @@ def try_centred(search: Any, seeds: int | None = None) -> None:
     values: NDArray[np.float64] = search.point_values(boxes, exact=True)
     search.try_plans(boxes, values, limit=CENTRED_MAX_PLANS)
     search.centred_plans = search.plans - before
-    unseen = np.array(
-        [
-            (round(float(t), 12), round(float(d), 12)) not in search.seen
-            for t, d in zip(boxes.theta, boxes.d, strict=True)
-        ]
-    )
+    unseen = np.array([boxes.centre_key(i) not in search.seen for i in range(len(boxes.d))])
     search.centred_complete = not bool((unseen & (values < search.best[0])).any())

@@ -309,7 +309,7 @@ class CoverSearch:
             # array per layout, which lower_bounds takes elementwise (its threshold and stop)
             stop: Any = below
             early = STOP_TOUR_AT_KEEP and below is not None and keep_at is not None
-            if STOP_TOUR_AT_KEEP and below is not None and keep_at is not None:
+            if STOP_TOUR_AT_KEEP and below is not None and keep_at is not None:  # early, for mypy
                 stop = np.minimum(keep_at[sel] + STOP_SHARE * (below - keep_at[sel]), below)
             out[sel] = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
@@ -429,6 +429,18 @@ class CoverSearch:
         bounds = self.point_values(boxes)
         self.try_plans(boxes, self.ranks, limit=REFINE_OFFSETS, bounds=bounds)
 
+    def counts(self) -> dict[str, Any]:
+        """The plans made, the layouts ruled out, the brute-force sweep's plans and whether it
+        planned every layout below the best plan (where it ran): a result's ``info``."""
+        out: dict[str, Any] = {
+            "plans": self.plans,
+            "ruled_out": self.ruled_out,
+            "centred_plans": self.centred_plans,
+        }
+        if self.centred_complete is not None:
+            out["centred_complete"] = self.centred_complete
+        return out
+
     def bounds_rule_out(self) -> bool:
         """Whether a layout's own bound (:meth:`point_values` on the exact area, the 1-tree
         where computed) is a lower bound of its plan's cost here, so that a layout whose bound
@@ -479,7 +491,7 @@ class CoverSearch:
         for i in order:
             if tried >= limit or points[i] >= self.best[0]:
                 break
-            key = (round(float(boxes.theta[i]), 12), round(float(boxes.d[i]), 12))
+            key = boxes.centre_key(int(i))
             if key in self.seen:
                 continue
             if first and any(
@@ -637,14 +649,7 @@ def cover_optimum(
             "gap": gap,
             "certified": gap <= rtol * abs(value) + 1e-12,
             "rtol": rtol,
-            "plans": search.plans,
-            "ruled_out": search.ruled_out,
-            "centred_plans": search.centred_plans,
-            **(
-                {"centred_complete": search.centred_complete}
-                if search.centred_complete is not None
-                else {}
-            ),
+            **search.counts(),
             "rounds": rounds,
             "cut_off": cut_off,
             "converged": not stopped,
