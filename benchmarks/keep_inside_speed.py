@@ -6,7 +6,8 @@ Each case is planned as ``boustro plan --speed 5 --turn-time 10 --keep-inside`` 
 ``src`` (``--baseline``, e.g. a ``git archive`` of 1158b53), each in a fresh process, the two
 interleaved; the CPU time of the planning call (``time.process_time``, the machine is shared),
 the mission time, the certificate's gap, coverage (shapely, on the area itself) and the path
-outside are printed with the ratio of CPU times.
+outside are printed with the ratio of CPU times and whether the two paths are the same (a hash
+of the waypoints' bytes).
 
 Cases: a three-lobed 200-vertex star 1000 m across at 36 lanes (``benchmarks/estimate.py``'s),
 Fields2Cover's ``test.json`` (embedded, 10 m), ``--random N`` seeded random concave areas with
@@ -31,7 +32,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 SRC = os.path.join(os.path.dirname(HERE), "src")
 
 CHILD = r"""
-import json, os, sys, time
+import hashlib, json, os, sys, time
 sys.path.insert(0, {here!r})
 from estimate import star
 import numpy as np
@@ -60,7 +61,9 @@ s = m.summary()
 print(json.dumps(dict(cpu=cpu, decomposed=m.optimum.method.startswith("decomposed"),
                       time=m.stats.duration, gap=s.get("gap"),
                       covered=s.get("covered_share"), outside=s.get("outside_length_m", 0.0),
-                      lanes=s["n_transects"], method=s["method"])))
+                      lanes=s["n_transects"], method=s["method"],
+                      path=hashlib.sha256(np.ascontiguousarray(m.waypoints).tobytes())
+                      .hexdigest()[:12])))
 """
 
 
@@ -87,9 +90,9 @@ def main() -> None:
         cases = [c for c in cases if c in args.only]
     print(
         "| case | baseline: time s / gap s / CPU s | this tree: time s / gap s / CPU s | "
-        "covered | outside m | time ratio | CPU ratio |"
+        "covered | outside m | time ratio | same path | CPU ratio |"
     )
-    print("|---|---|---|---:|---:|---:|---:|")
+    print("|---|---|---|---:|---:|---:|---|---:|")
     for src in (args.baseline, SRC):  # numba's caches filled: no compilation timed
         _run(src, "random_0", args.data)
     for case in cases:
@@ -100,6 +103,7 @@ def main() -> None:
             f"{new['time']:.1f} / {new['gap'] or 0:.1f} / {new['cpu']:.1f} | "
             f"{100 * (new['covered'] or 0):.6f}% | {new['outside']:.3g} | "
             f"{new['time'] / base['time']:.4f}{' (cells)' if new['decomposed'] else ''} | "
+            f"{'yes' if new['path'] == base['path'] else 'no'} | "
             f"x{new['cpu'] / base['cpu']:.2f} |",
             flush=True,
         )

@@ -96,6 +96,15 @@ def _contour_passes(
     a stretch between two samples is kept when both are within ``reach`` plus the step of the
     residual (so every needed point is kept), and kept stretches less than :data:`MERGE_GAP`
     spacings apart are driven as one pass."""
+    arcs = _contour_arcs(residual, reach, tol, contour, half)
+    return [_corner_spurs(line, contour, half, reach, tol) for line in arcs]
+
+
+def _contour_arcs(
+    residual: Any, reach: float, tol: float, contour: Contour, half: float
+) -> list[NDArray[np.float64]]:
+    """The stretches of the contour :func:`_contour_passes` keeps, before their corner spurs
+    (which only add length: a spur leaves the contour and comes back to the same point)."""
     import shapely
 
     if not contour.rings:
@@ -113,8 +122,7 @@ def _contour_passes(
             continue
         for a, b in runs:
             out.append(_arc(v, at, a, b))
-    out = [line for line in out if np.linalg.norm(np.diff(line, axis=0), axis=1).sum() > tol]
-    return [_corner_spurs(line, contour, half, reach, tol) for line in out]
+    return [line for line in out if np.linalg.norm(np.diff(line, axis=0), axis=1).sum() > tol]
 
 
 def _corner_spurs(

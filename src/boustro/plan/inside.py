@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..geometry import Polygon
 from ..geometry.region import Region, as_region
 from .cells import _frame
-from .contour import Contour, _contour_passes, _lines, _pieces, contour_of
+from .contour import Contour, _contour_arcs, _corner_spurs, _lines, _pieces, contour_of
 from .coverage import _aligned_boxes, _axes
 from .lanes import Lanes, _intervals_on_lines
 from .types import Plan
@@ -43,6 +43,7 @@ from .types import Plan
 __all__ = [
     "MARGINS",
     "MAX_PATCHES",
+    "SCREEN_SLACK",
     "boundary_passes",
     "clip_lanes",
     "inside_layout",
@@ -246,22 +247,41 @@ def boundary_passes(
         its first and last points agree), contour parts first, then patches; ``uncovered`` the
         area still uncovered after them (0 unless :data:`MAX_PATCHES` ran out).
     """
+    geo, residual = _residual(area, lanes, spacing, reach)
+    if residual is None:
+        return [], 0.0
+    arcs = _contour_arcs(residual, reach, geo.tol, geo.contour, spacing / 2)
+    return _completed(geo, residual, arcs, reach)
+
+
+def _residual(
+    area: Region, lanes: list[Lanes], spacing: float, reach: float
+) -> tuple[_Geometry, Any]:
+    """The area's :class:`_Geometry` and what the lanes' footprints leave of it (shapely),
+    ``None`` when that is only rounding slivers."""
     import shapely
 
     geo = _geometry(area, spacing)
-    target = geo.target
-    eps = 1e-7 * spacing  # slivers thinner than this are rounding
-    tol = geo.tol
     segments = [ls.segments for ls in lanes if len(ls.k)]
     if segments:
         angles = np.concatenate([np.full(len(ls.k), ls.angle) for ls in lanes if len(ls.k)])
         covered = _lane_footprint(np.concatenate(segments), angles, area.centre, reach, spacing)
-        residual = shapely.difference(target, covered)
+        residual = shapely.difference(geo.target, covered)
     else:
-        residual = target
-    if not _pieces(residual, eps):
-        return [], 0.0
-    passes = _contour_passes(target, residual, spacing / 2, reach, tol, geo.contour)
+        residual = geo.target
+    return geo, (residual if _pieces(residual, 1e-7 * spacing) else None)
+
+
+def _completed(
+    geo: _Geometry, residual: Any, arcs: list[NDArray[np.float64]], reach: float
+) -> tuple[list[NDArray[np.float64]], float]:
+    """:func:`boundary_passes` from the residual and the contour's kept stretches ``arcs``
+    (:func:`~boustro.plan.contour._contour_arcs`): their corner spurs, the patches."""
+    import shapely
+
+    target, spacing, tol = geo.target, geo.spacing, geo.tol
+    eps = 1e-7 * spacing  # slivers thinner than this are rounding
+    passes = [_corner_spurs(line, geo.contour, spacing / 2, reach, tol) for line in arcs]
     inner = reach  # as boustro.plan.coverage measures the passes (quad_segs=64)
 
     def cover(lines: list[NDArray[np.float64]], rest: Any) -> Any:
@@ -392,6 +412,16 @@ def _attach(
 #: The margins (in spacings) inside the boundary at which :func:`inside_layout` tries cutting
 #: the lanes: at the boundary, and half a spacing inside (where the contour runs).
 MARGINS = (0.0, 0.5)
+#: Relative room of :func:`inside_layout`'s margin screen: margin 0 is completed unless margin
+#: 1/2 is shorter by this share of margin 0's floor (far above the sums' rounding, 1e-15, and
+#: the points dropped within 1e-9 of the area's diameter; the lengths differ by percents).
+SCREEN_SLACK = 1e-6
+
+
+def _length(cut: list[Lanes], passes: list[NDArray[np.float64]]) -> float:
+    """The lanes' and the passes' length together."""
+    length = sum(float(np.sum(ls.t1 - ls.t0)) for ls in cut)
+    return length + sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)
 
 
 def inside_layout(
@@ -399,22 +429,42 @@ def inside_layout(
 ) -> tuple[list[Lanes], list[NDArray[np.float64]], float]:
     """The lanes cut inside ``area`` and the boundary passes that complete their coverage
     (:func:`boundary_passes`), for the margin of :data:`MARGINS` whose lanes and passes are the
-    shortest together (the moves between them are not counted; a tie keeps the first).
+    shortest together (the moves between them are not counted; a tie keeps the margin 0).
+
+    Margin 1/2 is laid first; margin 0's passes are completed (their bands and patches: most of
+    their cost) only when its lanes and the contour stretches it keeps (each pass holds one,
+    whole: the spurs and patches only add length) are not already longer than margin 1/2's
+    lanes and passes: the same choice as laying both in full, for a third of the work where
+    margin 1/2 wins (docs/keep_inside.md, "Margin screen").
 
     Returns:
         ``(lanes, passes, uncovered)``, as :func:`clip_lanes` and :func:`boundary_passes`.
     """
     tol = 1e-9 * area.diameter
-    best: tuple[float, list[Lanes], list[NDArray[np.float64]], float] | None = None
-    for m in MARGINS:
-        cut = [clip_lanes(ls, area, tol, m * spacing, spacing) for ls in lanes]
-        passes, uncovered = boundary_passes(area, cut, spacing, reach)
-        length = sum(float(np.sum(ls.t1 - ls.t0)) for ls in cut)
-        length += sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)
-        if best is None or (uncovered, length) < (best[3], best[0] - tol):
-            best = (length, cut, passes, uncovered)
-    assert best is not None
-    return best[1], best[2], best[3]
+    half = [clip_lanes(ls, area, tol, MARGINS[1] * spacing, spacing) for ls in lanes]
+    passes_h, uncovered_h = boundary_passes(area, half, spacing, reach)
+    length_h = _length(half, passes_h)
+    cut = [clip_lanes(ls, area, tol, MARGINS[0] * spacing, spacing) for ls in lanes]
+
+    def loses(floor: float) -> bool:
+        """Whether margin 1/2 wins against a margin 0 whose length is at least ``floor``, with
+        room (:data:`SCREEN_SLACK`) for the sums' rounding and the points :func:`_dedupe` drops
+        (each within ``tol`` of the one before: at most ``2 tol`` shorter each)."""
+        return uncovered_h == 0 and length_h < floor - tol - SCREEN_SLACK * floor
+
+    if loses(_length(cut, [])):
+        return half, passes_h, uncovered_h
+    geo, residual = _residual(area, cut, spacing, reach)
+    if residual is None:
+        passes, uncovered = [], 0.0
+    else:
+        arcs = _contour_arcs(residual, reach, geo.tol, geo.contour, spacing / 2)
+        if loses(_length(cut, arcs) - 2 * tol * sum(len(a) for a in arcs)):
+            return half, passes_h, uncovered_h
+        passes, uncovered = _completed(geo, residual, arcs, reach)
+    if (uncovered_h, length_h) < (uncovered, _length(cut, passes) - tol):
+        return half, passes_h, uncovered_h
+    return cut, passes, uncovered
 
 
 def outside_length(waypoints: ArrayLike, area: Region | Polygon | ArrayLike) -> float:
