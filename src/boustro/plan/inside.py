@@ -455,9 +455,9 @@ def inside_layout(
     if loses(_length(cut, [])):
         return half, passes_h, uncovered_h
     geo, residual = _residual(area, cut, spacing, reach)
-    if residual is None:
-        passes, uncovered = [], 0.0
-    else:
+    passes: list[NDArray[np.float64]] = []
+    uncovered = 0.0
+    if residual is not None:
         arcs = _contour_arcs(residual, reach, geo.tol, geo.contour, spacing / 2)
         if loses(_length(cut, arcs) - 2 * tol * sum(len(a) for a in arcs)):
             return half, passes_h, uncovered_h
