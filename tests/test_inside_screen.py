@@ -104,3 +104,29 @@ def test_the_screen_is_sound_where_margin_0_has_passes():
     assert passes  # margin 0 leaves triangles along every edge
     assert inside._length(got[0], got[1]) <= inside._length(cut, passes) + tol
     assert inside.SCREEN_SLACK == pytest.approx(1e-6)
+
+
+@pytest.mark.parametrize(
+    "ring, holes, spacing",
+    [
+        ([(0, 0), (10, 0), (10, 10), (0, 10)], [[(1, 1), (9, 1), (9, 9), (1, 9)]], 1.0),
+        ([(0, 0), (120, 0), (120, 40), (50, 40), (50, 100), (0, 100)],
+         [[(10, 10), (30, 10), (30, 25)], [(60, 15), (90, 12), (80, 30)]], 10.0),
+    ],
+)  # fmt: skip
+def test_the_screen_on_a_thin_ring_and_two_lane_directions(ring, holes, spacing):
+    """A 1 m ring (margin 1/2 has no lanes at all) and an L with two holes whose lanes come in
+    two directions (as a decomposed plan's cells give them): the same choice as both in full."""
+    region = Region(ring, holes)
+    tol = 1e-9 * region.diameter
+    for angles in ([0.3], [0.0, math.pi / 2], [1.1, 2.0]):
+        lanes = [region_lanes(region, spacing, a, 0.25 * spacing, reach=spacing / 2,
+                              holes=region.holes) for a in angles]  # fmt: skip
+        got = inside.inside_layout(region, lanes, spacing, spacing / 2)
+        ref = []
+        for m in inside.MARGINS:
+            cut = [inside.clip_lanes(ls, region, tol, m * spacing, spacing) for ls in lanes]
+            passes, unc = inside.boundary_passes(region, cut, spacing, spacing / 2)
+            ref.append((unc, inside._length(cut, passes), cut, passes))
+        keep = ref[1] if (ref[1][0], ref[1][1]) < (ref[0][0], ref[0][1] - tol) else ref[0]
+        _same(got, (keep[2], keep[3], keep[0]))
