@@ -19,8 +19,9 @@ from boustro.formats import MAV_CMD_NAV_WAYPOINT, write_mission
 from boustro.geometry.region import Region, random_region
 from boustro.io import embedded_field
 from boustro.mission import plan_area
-from boustro.plan.inside import clip_lanes, outside_length
+from boustro.plan.inside import clip_lanes
 from boustro.plan.lanes import region_lanes
+from boustro.plan.outside import outside_length
 from boustro.plan.region import plan_region
 
 from .conftest import run_cli

@@ -8,7 +8,7 @@ import pytest
 import shapely
 
 from boustro.geometry.traced import traced_field
-from boustro.plan.inside import outside_length, shapely_area
+from boustro.plan.outside import outside_length, shapely_area
 from boustro.plan.region import plan_region
 
 

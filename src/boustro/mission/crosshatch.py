@@ -25,7 +25,7 @@ from ..objectives import SmithFitness, objective_sign
 from ..optimize import optimize
 from ..optimize.fixed_angle import optimize_offset
 from ..plan import PlanStats
-from ..plan.inside import outside_length
+from ..plan.outside import outside_length
 from .camera import with_camera
 from .defaults import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD
 from .map_back import angle_for_bearing

@@ -28,7 +28,7 @@ from ..plan import (
     order_lanes,
     vehicle_stats,
 )
-from ..plan.inside import with_outside_length
+from ..plan.outside import with_outside_length
 from ..sensors import SensorSpacing
 from ..vehicle import Vehicle
 from .camera import camera_trigger, with_camera

@@ -17,7 +17,7 @@ from ..optimize.fixed_angle import optimize_offset
 from ..optimize.methods import resolve_method
 from ..plan import Coverage, Plan, build_plan, coverage
 from ..plan.cells import _frame
-from ..plan.inside import outside_length
+from ..plan.outside import outside_length
 from ..plan.region import plan_region
 from .defaults import (
     DEFAULT_METHOD,

@@ -18,7 +18,7 @@ from ..scoring import Segments, as_polygon, transect_segments
 if TYPE_CHECKING:
     pass
 
-from .inside import outside_length
+from .outside import outside_length
 from .types import Layout, Plan, PlanStats
 
 __all__ = [

@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError, InvalidPolygonError
 from ..geometry.region import Region
-from .inside import with_outside_length
+from .outside import with_outside_length
 from .routing import Router
 from .types import Plan
 

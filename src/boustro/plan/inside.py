@@ -17,7 +17,7 @@ enters a hole. Three pieces make that possible without losing coverage:
 * connecting moves are routed inside the area (:class:`boustro.plan.routing.Router` with no
   reach outside: its visibility graph holds the shell's reflex vertices as well as the holes').
 
-:func:`outside_length` (:mod:`boustro.plan.outside`, re-exported here) measures how much of a
+:func:`outside_length` (:mod:`boustro.plan.outside`) measures how much of a
 path lies outside an area or inside one of its holes (the ``outside_length`` statistic of
 every plan). Shapely is imported inside the functions (``import boustro.plan`` does not load
 it).
@@ -37,7 +37,7 @@ from .cells import _frame
 from .contour import Contour, _contour_arcs, _corner_spurs, _lines, _pieces, contour_of
 from .coverage import _aligned_boxes, _axes
 from .lanes import Lanes, _intervals_on_lines
-from .outside import outside_length, shapely_area, with_outside_length
+from .outside import shapely_area
 
 __all__ = [
     "MARGINS",
@@ -46,9 +46,6 @@ __all__ = [
     "boundary_passes",
     "clip_lanes",
     "inside_layout",
-    "outside_length",
-    "shapely_area",
-    "with_outside_length",
 ]
 
 #: Patches (short passes over corners and thin parts) placed at most; more means the area has

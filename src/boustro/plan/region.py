@@ -20,8 +20,9 @@ from ..optimize import OptimizeResult
 from ..optimize.problem import _progress_bar
 from .cell_order import solve_order
 from .cells import _TOL, _check_float
-from .inside import inside_layout, outside_length
+from .inside import inside_layout
 from .lanes import Lanes, region_lanes
+from .outside import outside_length
 from .region_opt import _cells_for_sweep, _estimate, choose_sweep, optimize_region
 from .routing import Router, router_for
 from .tour import (

@@ -53,7 +53,7 @@ class PlanStats:
         hole_pass_length: length of the passes around holes (included in ``path_length``).
         outside_length: length of the path (lanes, run-ins and run-outs, connecting moves)
             outside the area or inside a hole, measured with shapely segment by segment
-            (:func:`boustro.plan.inside.outside_length`; included in ``path_length``); 0 with
+            (:func:`boustro.plan.outside.outside_length`; included in ``path_length``); 0 with
             ``keep_inside``.
         boundary_pass_length: length of the boundary passes of a ``keep_inside`` plan
             (included in ``path_length``).

@@ -32,7 +32,7 @@ from ..vehicle import (
     reeds_shepp_paths,
     turns_between,
 )
-from .inside import with_outside_length
+from .outside import with_outside_length
 from .types import Plan, PlanStats
 
 __all__ = ["drive_vehicle", "order_lanes", "vehicle_stats"]
