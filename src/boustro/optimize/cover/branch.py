@@ -74,17 +74,19 @@ def retire_at(
 ) -> NDArray[np.float64]:
     """The bound at which each box (``points``: the model at its centre) leaves the search:
     discarded at ``best - rtol |best|`` (it cannot beat the best plan by more than ``rtol``),
-    resolved within ``resolve`` of its centre's model, settled above the lowest model less
-    :data:`SETTLE_SHARE` of its distance to the best plan and ``rtol``. Where the lowest model
-    less that share is at or above the discard value (:data:`CERTIFY_FIRST`), no box is
-    resolved or settled below the discard value: a box retired there would leave the
-    certificate's floor below it, uncertified however far the others went (Fields2Cover's
-    ``test1.xml``: settled boxes at 3987.54 s where the plan certifies at 3987.70 s)."""
+    resolved within ``resolve`` of its centre's model, settled within the larger of
+    :data:`SETTLE_SHARE` of (best plan - lowest model) and ``rtol |best|`` below the lowest
+    model (before, the sum of the two: a floor ``rtol`` lower than the resolved boxes allow).
+    Where the lowest model less that share is at or above the discard value
+    (:data:`CERTIFY_FIRST`), no box is resolved or settled: one retired below the discard value
+    leaves the certificate's floor there, uncertified however far the others go (Fields2Cover's
+    ``test1.xml``: boxes settled at 3987.54 s, where the plan of 3991.70 s certifies at 3987.70
+    s)."""
     discard = best - lim.rtol * abs(best)
-    aim = model_min - SETTLE_SHARE * max(best - model_min, 0.0)
-    if CERTIFY_FIRST and aim >= discard:
+    unavoidable = SETTLE_SHARE * max(best - model_min, 0.0)
+    if CERTIFY_FIRST and model_min - unavoidable >= discard:
         return np.full(len(points), discard)
-    settle = aim - lim.rtol * abs(best)
+    settle = model_min - max(unavoidable, lim.rtol * abs(best))
     return np.minimum(np.minimum(discard, points - lim.resolve * abs(best)), settle)
 
 
@@ -113,8 +115,8 @@ def branch_and_bound(
         # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
         # model at the box's centre, so halving cannot raise it further than the model
         model_min = search.model_min
-        # settled: the bound is above the lowest model value by a quarter of the gap between
-        # it and the best plan (the certificate's gap cannot get much smaller than that gap)
+        # settled: the bound is near the lowest model value (the certificate's gap cannot get
+        # much smaller than the best plan's distance to it)
         keep_at = retire_at(points, best, model_min, lim)
         # the 1-tree only where the other bounds keep the box: a box taken out without it
         # joins the certificate's floor later (settle_deferred), with it where it matters
