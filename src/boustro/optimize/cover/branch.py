@@ -27,9 +27,10 @@ __all__ = [
     "take_multipliers",
 ]
 
-#: A box whose bound is within this share of (best plan - lowest model) below the lowest model
-#: is retired (the certificate's gap cannot get much below that difference anyway). 0.25 before
-#: the piece-ends bound; 0.15 cut the random areas' median gap by a tenth for 4% more CPU.
+#: A box whose bound is within this share of (best plan - lowest model), or ``rtol`` of the best
+#: plan if larger, below the lowest model is retired (the certificate's gap cannot get much
+#: below that difference anyway; :func:`retire_at`). 0.25 before the piece-ends bound; 0.15 cut
+#: the random areas' median gap by a tenth for 4% more CPU.
 SETTLE_SHARE = 0.15
 
 
