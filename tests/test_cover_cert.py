@@ -92,16 +92,18 @@ def test_the_one_tree_certifies_a_concave_area_without_holes():
 def test_boxes_are_not_retired_below_the_discard_value_where_the_certificate_is_in_reach():
     """retire_at: with the lowest model (less SETTLE_SHARE of its distance to the best plan)
     at or above the discard value, every box is kept until it is discarded; otherwise boxes
-    settle within the larger of that share and rtol below the lowest model, not their sum."""
+    settle within rtol of the lowest model where the share is smaller, else within both."""
     lim = Limits(1e-3, 1e-3, 1e-6, math.inf, None, 0.0)
     points = np.array([1000.0, 1005.0, 1100.0])
     best, discard = 1000.0, 999.0
     assert (retire_at(points, best, 999.9, lim) == discard).all()
     share = branch_module.SETTLE_SHARE
-    low = retire_at(points, best, 990.0, lim)
-    assert low.max() <= 990.0 - share * 10.0 + 1e-12
-    assert low[2] == pytest.approx(990.0 - share * 10.0)  # not 990 - 1.5 - 1
-    assert (low <= discard).all()
+    near = retire_at(points, best, 995.0, lim)  # share * 5 < rtol * best: rtol alone
+    assert near[2] == pytest.approx(995.0 - 1.0)
+    far = retire_at(points, best, 980.0, lim)  # share * 20 > rtol * best: both
+    assert far[2] == pytest.approx(980.0 - share * 20.0 - 1.0)
+    assert (near <= discard).all() and (far <= discard).all()
+    assert far == pytest.approx(np.full(3, 980.0 - share * 20.0 - 1.0))
 
 
 def _benchmark_area(i: int) -> Region:
