@@ -75,6 +75,10 @@ TOUR_EPS = 0.25
 #: docs/mission_time.md, "The certificate on Fields2Cover's fields").
 TOUR_PLAIN = True
 TOUR_PLAIN_EPS = 0.125
+#: ... on areas of at most this many edges: on the 100-vertex traced field (issue 17) the points'
+#: 1-trees raised the lowest model, and with it the settling value, so more boxes were halved
+#: and the work budget ran out: a plan 3.2 s longer, gap 50.1 -> 80.3 s, 1.37x the CPU.
+TOUR_PLAIN_EDGES = 32
 #: Whether a box taken out by its other bounds gets its 1-tree only after the search, and only
 #: if it could lower the certificate's floor (:meth:`CoverSearch.settle_deferred`): the same
 #: certificate for less CPU (docs/mission_time.md, "The 1-tree's CPU").
@@ -137,7 +141,8 @@ class CoverSearch:
         # the lane-ends bound on a routed tour's moves (not with boundary or headland passes)
         self.ends = not self.boustrophedon and not keep_inside and cost.fixed == 0
         # the 1-tree bound on the moves (optimize/cover/one_tree.py)
-        self.tour = TOUR_BOUND and (self.n_holes > 0 or TOUR_PLAIN) and not simplify
+        plain = TOUR_PLAIN and len(region.edges) <= TOUR_PLAIN_EDGES
+        self.tour = TOUR_BOUND and (self.n_holes > 0 or plain) and not simplify
         self.tour_eps = (TOUR_EPS if self.n_holes else TOUR_PLAIN_EPS) * spacing
         self.walls = WallCache()
         self.defer = DEFER_TOUR  # read by the branch and bound (optimize/cover/branch.py)
