@@ -1,15 +1,17 @@
 """Planning CPU of the time objective against a baseline tree, interleaved (issue 16).
 
-Two worker processes plan the same fields (:mod:`mission_time`'s: Fields2Cover's ``test.json``
-and seeded random concave areas with holes), one with this tree's ``src`` and one with the
-baseline's (e.g. ``git archive fff0927 src | tar -x -C /tmp/base``), one field at a time each in
-turn, so that both see the same load. Each worker compiles its kernels on a small field first
-(not timed). Per field: ``time.process_time`` of ``plan_area(..., speed, turn_time)`` in each,
-the missions' times, and the 1-degree brute force's (``mission_time._brute_centred``, this
-tree). Printed: the distribution of CPU (median, max, fields over 5 s), the ratio of CPU to the
-baseline's, and how many plans are longer than the brute force's.
+Two worker processes plan the same fields (:mod:`mission_time`'s: Fields2Cover's ``test.json``,
+its concave fields with ``--data``, and seeded random concave areas with holes), one with this
+tree's ``src`` and one with the baseline's (e.g. ``git archive fff0927 src | tar -x -C
+/tmp/base``), one field at a time each in turn, so that both see the same load. Each worker
+compiles its kernels on a small field first (not timed). Per field: ``time.process_time`` of
+``plan_area(..., speed, turn_time)`` in each, the missions' times, and the 1-degree brute
+force's (``mission_time._brute_centred``, this tree). Printed: the distribution of CPU (median,
+max, fields over 5 s), the ratio of CPU to the baseline's, and how many plans are longer than
+the brute force's.
 
     python benchmarks/mission_time_cpu.py --baseline /tmp/base/src [--random 30] [--first 0]
+        [--data <Fields2Cover>/data]
 
 Without ``--baseline`` this tree only (the "base" columns repeat it).
 """
@@ -31,21 +33,21 @@ WORKER = r"""
 import json, sys, time
 sys.path.insert(0, sys.argv[1])
 import mission_time as mt
-fields = mt._fields(None, int(sys.argv[2]), 0)
+fields = mt._fields(sys.argv[3] or None, int(sys.argv[2]), 0)
 ring = [(0, 0), (120, 0), (120, 80), (60, 100), (0, 80)]
 mt._row((ring, [[(30, 30), (50, 30), (50, 45)]]), None)  # compile (not timed)
 print("ready", flush=True)
 for line in sys.stdin:
     name, area, crs = fields[int(line)]
     row = mt._row(area, crs)
-    print(json.dumps({k: row[k] for k in ("time", "cpu", "gap", "lanes")}), flush=True)
+    print(json.dumps({k: row[k] for k in ("time", "cpu", "gap", "lanes", "certified")}), flush=True)
 """
 
 
-def _worker(src: str, n_random: int) -> subprocess.Popen[str]:
+def _worker(src: str, n_random: int, data: str | None) -> subprocess.Popen[str]:
     env = {**os.environ, "PYTHONPATH": src}
     p = subprocess.Popen(
-        [sys.executable, "-c", WORKER, HERE, str(n_random)],
+        [sys.executable, "-c", WORKER, HERE, str(n_random), data or ""],
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         text=True,
@@ -62,21 +64,27 @@ def _ask(p: subprocess.Popen[str], i: int) -> dict[str, float]:
     return json.loads(p.stdout.readline())
 
 
+def _cert(row: dict[str, Any]) -> str:
+    return ", certified" if row.get("certified") else ""
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--baseline", help="the baseline tree's src folder (none: this tree only)")
     ap.add_argument("--random", type=int, default=30, help="random areas (default 30)")
     ap.add_argument("--first", type=int, default=0, help="the first random area's index")
-    ap.add_argument("--no-f2c", action="store_true", help="without Fields2Cover's test.json")
+    ap.add_argument("--no-f2c", action="store_true", help="without Fields2Cover's fields")
+    ap.add_argument("--data", help="Fields2Cover's data/ folder: its concave fields too")
     args = ap.parse_args()
     sys.path.insert(0, HERE)
     import mission_time as mt  # the benchmarks folder is not a package
 
     n = args.first + args.random
-    fields = mt._fields(None, n, 0)
-    index = ([] if args.no_f2c else [0]) + list(range(1 + args.first, 1 + n))
-    new = _worker(SRC, n)
-    base = _worker(args.baseline, n) if args.baseline else None
+    fields = mt._fields(args.data, n, 0)
+    f2c = len(fields) - n  # test.json and the fields of --data
+    index = ([] if args.no_f2c else list(range(f2c))) + list(range(f2c + args.first, f2c + n))
+    new = _worker(SRC, n, args.data)
+    base = _worker(args.baseline, n, args.data) if args.baseline else None
     rows: list[tuple[Any, ...]] = []
     for i in index:
         name, area, crs = fields[i]
@@ -87,8 +95,9 @@ def main() -> None:
         brute, _ = mt._brute_centred(area, crs)
         rows.append((name, t, b, brute))
         print(
-            f"{name:16s} new {t['time']:8.1f} s ({t['cpu']:5.2f} s CPU, gap {t['gap']:6.2f}) | "
-            f"base {b['time']:8.1f} s ({b['cpu']:5.2f} s CPU, gap {b['gap']:6.2f}) | brute "
+            f"{name:20s} new {t['time']:8.1f} s ({t['cpu']:5.2f} s CPU, gap {t['gap']:6.2f}"
+            f"{_cert(t)}) | base {b['time']:8.1f} s ({b['cpu']:5.2f} s CPU, gap "
+            f"{b['gap']:6.2f}{_cert(b)}) | brute "
             f"{brute:8.1f} | new/brute {t['time'] / brute:.4f} base/brute {b['time'] / brute:.4f}"
             f" | CPU new/base {t['cpu'] / b['cpu']:.2f}",
             flush=True,

@@ -17,18 +17,27 @@ from .boxes import box_radius, split_boxes, split_parents
 from .one_tree import Multipliers
 
 __all__ = [
+    "CERTIFY_FIRST",
     "CUT_OFF",
     "POINT_TOURS_BELOW_MODEL",
     "SETTLE_SHARE",
     "Limits",
     "branch_and_bound",
+    "retire_at",
     "take_multipliers",
 ]
 
-#: A box whose bound is within this share of (best plan - lowest model) below the lowest model
-#: is retired (the certificate's gap cannot get much below that difference anyway). 0.25 before
-#: the piece-ends bound; 0.15 cut the random areas' median gap by a tenth for 4% more CPU.
+#: A box whose bound is within this share of (best plan - lowest model) and ``rtol`` of the best
+#: plan (``rtol`` alone where it is larger) below the lowest model is retired (the certificate's
+#: gap cannot get much below that difference anyway; :func:`retire_at`). 0.25 before the
+#: piece-ends bound; 0.15 cut the random areas' median gap by a tenth for 4% more CPU.
 SETTLE_SHARE = 0.15
+
+
+#: Whether boxes are only discarded (never resolved or settled below the discard value) when
+#: the lowest model, less :data:`SETTLE_SHARE` of its distance to the best plan, is at or above
+#: that value: the certificate is then within reach (:func:`retire_at`).
+CERTIFY_FIRST = True
 
 
 #: Whether a round computes the 1-tree at a box centre only where the bound without it is
@@ -61,6 +70,31 @@ def take_multipliers(mult: Multipliers | None, index: NDArray[Any]) -> Multiplie
     return Multipliers(mult.values[index], mult.warm[index], mult.k0)
 
 
+def retire_at(
+    points: NDArray[np.float64], best: float, model_min: float, lim: Limits
+) -> NDArray[np.float64]:
+    """The bound at which each box (``points``: the model at its centre) leaves the search:
+    discarded at ``best - rtol |best|`` (it cannot beat the best plan by more than ``rtol``),
+    resolved within ``resolve`` of its centre's model, settled within :data:`SETTLE_SHARE` of
+    (best plan - lowest model) plus ``rtol |best|`` below the lowest model, or within ``rtol
+    |best|`` alone where the share is smaller (the resolved boxes stop there anyway; the sum
+    took another ``rtol`` off the floor: Fields2Cover's ``test_2_cell.json#1``, 0.05% of its
+    gap; where the share is larger the sum stays, the CPU of a wide gap's boxes: random area 9
+    of ``benchmarks/mission_time.py`` took 1.3x with the larger of the two).
+    Where the lowest model less that share is at or above the discard value
+    (:data:`CERTIFY_FIRST`), no box is resolved or settled: one retired below the discard value
+    leaves the certificate's floor there, uncertified however far the others go (Fields2Cover's
+    ``test1.xml``: boxes settled at 3987.54 s, where the plan of 3991.70 s certifies at 3987.70
+    s)."""
+    discard = best - lim.rtol * abs(best)
+    unavoidable = SETTLE_SHARE * max(best - model_min, 0.0)
+    if CERTIFY_FIRST and model_min - unavoidable >= discard:
+        return np.full(len(points), discard)
+    near = unavoidable < lim.rtol * abs(best)  # the share alone would settle above resolution
+    settle = model_min - lim.rtol * abs(best) - (0.0 if near else unavoidable)
+    return np.minimum(np.minimum(discard, points - lim.resolve * abs(best)), settle)
+
+
 def branch_and_bound(
     search: Any,
     boxes: _Boxes,
@@ -86,12 +120,9 @@ def branch_and_bound(
         # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
         # model at the box's centre, so halving cannot raise it further than the model
         model_min = search.model_min
-        # settled: the bound is above the lowest model value by a quarter of the gap between
-        # it and the best plan (the certificate's gap cannot get much smaller than that gap)
-        settle = model_min - SETTLE_SHARE * max(best - model_min, 0.0) - lim.rtol * abs(best)
-        keep_at = np.minimum(
-            np.minimum(best - lim.rtol * abs(best), points - lim.resolve * abs(best)), settle
-        )
+        # settled: the bound is near the lowest model value (the certificate's gap cannot get
+        # much smaller than the best plan's distance to it)
+        keep_at = retire_at(points, best, model_min, lim)
         # the 1-tree only where the other bounds keep the box: a box taken out without it
         # joins the certificate's floor later (settle_deferred), with it where it matters
         bounds = search.box_bounds(boxes, keep_at if search.defer else None, multipliers=mult)

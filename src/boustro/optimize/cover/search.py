@@ -61,11 +61,24 @@ POLISH_PLANS = 32
 #: Offsets planned at the best angle after the search of a routed plan.
 REFINE_OFFSETS = 8
 #: Whether a routed tour's moves are also bounded by the 1-tree of its lanes' ends, on areas
-#: with holes of at most :data:`SIMPLIFY_EDGES` edges (docs/mission_time.md, "The tour's 1-tree").
+#: with holes (and :data:`TOUR_PLAIN`) of at most :data:`SIMPLIFY_EDGES` edges
+#: (docs/mission_time.md, "The tour's 1-tree").
 TOUR_BOUND = True
 #: The largest box radius (in spacings) whose boxes get the 1-tree bound: wider boxes give
 #: their lanes' ends wide ranges, where it adds little, and are halved anyway.
 TOUR_EPS = 0.25
+#: Whether the 1-tree bound is also computed on areas without holes (a concave area's routed
+#: tour), in boxes of radius at most :data:`TOUR_PLAIN_EPS` spacings, in a search over every
+#: angle with the brute-force sweep (``centred``; not a decomposition's cells): the lanes' ends
+#: bounds take off the two largest charges for the path's free ends, which a notched side's
+#: long moves make large (Fields2Cover's ``test_2_cell.json``: 101 m of 631 m of moves missed;
+#: docs/mission_time.md, "The certificate on Fields2Cover's fields").
+TOUR_PLAIN = True
+TOUR_PLAIN_EPS = 0.125
+#: ... on areas of at most this many edges: on the 100-vertex traced field (issue 17) the points'
+#: 1-trees raised the lowest model, and with it the settling value, so more boxes were halved
+#: and the work budget ran out: a plan 3.2 s longer, gap 50.1 -> 80.3 s, 1.37x the CPU.
+TOUR_PLAIN_EDGES = 32
 #: Whether a box taken out by its other bounds gets its 1-tree only after the search, and only
 #: if it could lower the certificate's floor (:meth:`CoverSearch.settle_deferred`): the same
 #: certificate for less CPU (docs/mission_time.md, "The 1-tree's CPU").
@@ -128,7 +141,9 @@ class CoverSearch:
         # the lane-ends bound on a routed tour's moves (not with boundary or headland passes)
         self.ends = not self.boustrophedon and not keep_inside and cost.fixed == 0
         # the 1-tree bound on the moves (optimize/cover/one_tree.py)
-        self.tour = TOUR_BOUND and self.n_holes > 0 and not simplify
+        plain = TOUR_PLAIN and len(region.edges) <= TOUR_PLAIN_EDGES
+        self.tour = TOUR_BOUND and (self.n_holes > 0 or plain) and not simplify
+        self.tour_eps = (TOUR_EPS if self.n_holes else TOUR_PLAIN_EPS) * spacing
         self.walls = WallCache()
         self.defer = DEFER_TOUR  # read by the branch and bound (optimize/cover/branch.py)
         self.skipped: NDArray[np.bool_] = np.zeros(0, dtype=bool)  # see box_bounds
@@ -173,8 +188,9 @@ class CoverSearch:
     def _tour_below(self, eps: float = 0.0) -> float | None:
         """Where the 1-tree bound is computed: layouts whose other bounds are below the best
         plan (the others are discarded anyway), in boxes of radius ``eps`` at most
-        :data:`TOUR_EPS` spacings; ``None`` without the lane-ends bounds."""
-        if not (self.ends and self.tour) or eps > TOUR_EPS * self.s:
+        :data:`TOUR_EPS` spacings (:data:`TOUR_PLAIN_EPS` without holes); ``None`` without
+        the lane-ends bounds."""
+        if not (self.ends and self.tour) or eps > self.tour_eps:
             return None
         return self.best[0]
 
@@ -605,6 +621,8 @@ def cover_optimum(
         boustrophedon = not r.holes and r.shell.is_convex
     search = CoverSearch(r, s, reach, cost, evaluate, boustrophedon, keep_inside)
     boustrophedon = search.boustrophedon
+    if not centred:  # a decomposition's cell: the 1-tree without holes cost more than it gave
+        search.tour = search.tour and search.n_holes > 0
     if min_eps is None:
         min_eps = (1e-6 if boustrophedon else RESOLVE_EPS) * s
     resolve = rtol if boustrophedon else max(rtol, RESOLVE_RTOL)
