@@ -15,6 +15,7 @@ import boustro.optimize.cover.search as search_module
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region, random_region
 from boustro.optimize.cover import CoverCost, cover_optimum
+from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.branch import Limits, retire_at
 from boustro.optimize.cover.search import CoverSearch
 
@@ -131,3 +132,16 @@ def test_certify_first_certifies_where_settled_boxes_kept_the_floor_below(monkey
     rng = np.random.default_rng(3)
     for a in np.radians(np.arange(0.0, 180.0, 3.0)):
         assert lower <= evaluate(float(a), float(rng.uniform(0, 10.0))) + 1e-9
+
+
+def test_the_one_tree_of_boxes_without_a_counted_lane_is_zero():
+    """A batch whose layouts hold no counted lane (a thin dart, a review's reproducer): the
+    1-tree adds nothing (it raised IndexError once areas without holes got it)."""
+    dart = Region(Polygon(np.array([[0, 0], [170, 1.2], [0, 2.4], [60, 1.2]], float)))
+    search = CoverSearch(dart, 9.0, 4.5, CoverCost.time(5.0, 10.0), None, False)
+    search.top_eps = 2.0
+    boxes = Boxes(
+        np.array([1.9058025]), np.array([0.0]), np.array([7.29496561]), np.array([0.65234999])
+    )
+    bound = search.box_bounds(boxes)
+    assert bound.shape == (1,) and np.isfinite(bound).all() and bound[0] >= 0.0

@@ -357,7 +357,7 @@ def one_tree_bound(
     n_layouts = st.count.shape[0]
     lanes = st.count.sum(axis=1)
     ok = lanes <= MAX_LANES if todo is None else todo & (lanes <= MAX_LANES)
-    if cost.per_length <= 0 or not ok.any():
+    if cost.per_length <= 0 or not (ok & (lanes >= 1)).any():
         return np.zeros(n_layouts)
     if walls is None:
         walls = np.zeros((n_layouts, 0, 4))
