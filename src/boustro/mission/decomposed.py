@@ -44,6 +44,7 @@ from ..plan.region import plan_region
 from ..plan.types import Layout
 from .cover import flown_cost
 from .project import Frame
+from .slivers import cut_slivers
 from .steps import Planned, _path_options
 
 __all__ = [
@@ -53,6 +54,7 @@ __all__ = [
     "MAX_SEARCHES",
     "MAX_UNION_EDGES",
     "PLANNED",
+    "SLIVER_WIDTH",
     "plan_decomposed",
 ]
 
@@ -79,6 +81,10 @@ CENTRED_ANGLES = 8
 CUTOFF_MARGIN = 1e-9
 #: Neighbouring cells whose angles differ by less than this are tried as one cell.
 MERGE_ANGLE = math.radians(15.0)
+#: Spikes of a candidate's cells narrower than this share of the spacing are cut before the
+#: cells are searched and planned (:mod:`.slivers`): the cover search's smallest box radius
+#: (``RESOLVE_EPS``), below which its bound cannot see them.
+SLIVER_WIDTH = 1e-3
 
 
 class _Candidate(NamedTuple):
@@ -348,6 +354,7 @@ def _candidates(region: Region, search: _Search, sweep: float | None) -> list[_C
         for label, cells, values in [(name, list(dec.cells), models)] + (
             [] if merged is None else [(f"{name}, merged", *merged)]
         ):
+            cells = [cut_slivers(c, SLIVER_WIDTH * search.s) for c in cells]
             estimate = sum(v[0] for v in values) + turn * (len(cells) - 1)
             out.append(_Candidate(label, cells, values, estimate))
     out.sort(key=lambda c: c.estimate)
