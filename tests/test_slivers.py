@@ -91,25 +91,3 @@ def test_random37_cells_have_no_spike_and_their_searches_converge(monkeypatch):
         assert "smallest radius" not in info.get("stopped", "")
     assert m.stats.duration == pytest.approx(1382.1253238, abs=1e-6)
     assert m.summary()["gap"] == pytest.approx(16.3431929, abs=1e-6)
-
-
-L_SHAPE = [(0, 0), (100, 0), (100, 30), (30, 30), (30, 100), (0, 100)]
-
-
-@pytest.mark.parametrize(
-    "ring, holes",
-    [
-        (L_SHAPE, []),
-        ([(0, 0), (120, 0), (120, 80), (60, 100), (0, 80)], [[(30, 30), (50, 30), (50, 45)]]),
-    ],
-)
-def test_small_cells_first_same_plan(monkeypatch, ring, holes):
-    """The cells searched smallest first (SMALL_CELLS_FIRST) give the plan, its time and its
-    certificate of the largest-first order (the cutoffs only stop screened-out candidates)."""
-    out = []
-    for flag in (True, False):
-        monkeypatch.setattr(decomposed, "SMALL_CELLS_FIRST", flag)
-        m = plan_area(ring, 10.0, crs=None, holes=holes, speed=5.0, turn_time=10.0)
-        s = m.summary()
-        out.append((m.stats.duration, s["n_transects"], s.get("gap"), s["method"]))
-    assert out[0] == out[1]
