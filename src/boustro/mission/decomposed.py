@@ -12,7 +12,9 @@ them. The model (:meth:`_Search.model`: the cell's lines' segments as lanes, no 
 candidates; the best :data:`PLANNED` whose model beats the one grid (``beat``) have every cell
 optimised by :func:`boustro.optimize.cover.cover_optimum` on the cell as an area (its
 certificate is the cell's) and are planned with the order of the passes solved
-(:func:`boustro.plan.cell_order.solve_order`): the least flown cost is kept.
+(:func:`boustro.plan.cell_order.solve_order`): the least flown cost is kept. A candidate's
+cells are searched without their spikes thinner than the search's smallest box
+(:mod:`.slivers`) and planned whole (so that the plan covers the spikes too).
 
 With ``keep_inside`` each candidate's cells are searched without keep-inside first (cheap
 plans, tight bounds) and only then with it (plans with boundary passes, 10-30 times dearer,
@@ -44,6 +46,7 @@ from ..plan.region import plan_region
 from ..plan.types import Layout
 from .cover import flown_cost
 from .project import Frame
+from .slivers import cut_slivers
 from .steps import Planned, _path_options
 
 __all__ = [
@@ -53,6 +56,7 @@ __all__ = [
     "MAX_SEARCHES",
     "MAX_UNION_EDGES",
     "PLANNED",
+    "SLIVER_WIDTH",
     "plan_decomposed",
 ]
 
@@ -79,13 +83,18 @@ CENTRED_ANGLES = 8
 CUTOFF_MARGIN = 1e-9
 #: Neighbouring cells whose angles differ by less than this are tried as one cell.
 MERGE_ANGLE = math.radians(15.0)
+#: Spikes of a candidate's cells narrower than this share of the spacing are cut before the
+#: cells are searched (:mod:`.slivers`; planned whole, their certificate dropped): the cover
+#: search's smallest box radius (``RESOLVE_EPS``), below which its bound cannot see them.
+SLIVER_WIDTH = 1e-3
 
 
 class _Candidate(NamedTuple):
     name: str
-    cells: list[Region]
+    cells: list[Region]  # planned: they cover the area
     models: list[tuple[float, float, float]]  # each cell's modelled (cost, angle, offset)
     estimate: float  # the cells' modelled costs and one turn between consecutive cells
+    searched: list[Region]  # the cells less their thin spikes (:mod:`.slivers`): searched
 
 
 class _Search:
@@ -348,8 +357,9 @@ def _candidates(region: Region, search: _Search, sweep: float | None) -> list[_C
         for label, cells, values in [(name, list(dec.cells), models)] + (
             [] if merged is None else [(f"{name}, merged", *merged)]
         ):
+            searched = [cut_slivers(c, SLIVER_WIDTH * search.s) for c in cells]
             estimate = sum(v[0] for v in values) + turn * (len(cells) - 1)
-            out.append(_Candidate(label, cells, values, estimate))
+            out.append(_Candidate(label, cells, values, estimate, searched))
     out.sort(key=lambda c: c.estimate)
     return out
 
@@ -382,6 +392,18 @@ def _cell_optima(
     if beat is not None and floor >= beat:
         return None
     return [found[k] for k in range(len(cells))]
+
+
+def _uncertified_where_cut(optima: list[OptimizeResult], cand: _Candidate) -> list[OptimizeResult]:
+    """The optima, those of cells searched without a spike (:mod:`.slivers`) marked: their
+    search's certificate is the cut cell's, the plan flies the whole cell (so that it covers the
+    spike), hence ``certified`` false and ``spikes_cut`` true there."""
+    return [
+        o
+        if searched is cell
+        else dataclasses.replace(o, info={**o.info, "certified": False, "spikes_cut": True})
+        for o, cell, searched in zip(optima, cand.cells, cand.searched, strict=True)
+    ]
 
 
 def _area_floor(search: _Search, cell: Region) -> float:
@@ -445,9 +467,10 @@ def plan_decomposed(
             continue
         seen.add(key)
         for search in searches:
-            optima = _cell_optima(search, cand.cells, beat)
+            optima = _cell_optima(search, cand.searched, beat)
             if optima is None:  # screened out (or no lane): the other search too
                 break
+            optima = _uncertified_where_cut(optima, cand)
             plan = plan_region(
                 region, search.s, layout=lay, cells=list(zip(cand.cells, optima, strict=True)),
                 order="auto", keep_inside=keep_inside,

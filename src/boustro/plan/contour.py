@@ -25,7 +25,7 @@ class _Ring(NamedTuple):
 
 
 class Contour(NamedTuple):
-    """What :func:`_contour_passes` needs of an area that does not depend on the lanes (built
+    """What :func:`_contour_arcs` needs of an area that does not depend on the lanes (built
     once per area and spacing by :func:`contour_of`): the contour's rings, the area's corners
     and the area grown by ``tol`` (the spurs' test)."""
 
@@ -86,25 +86,18 @@ def _lines(geometry: Any, tol: float) -> list[NDArray[np.float64]]:
     return out
 
 
-def _contour_passes(
-    target: Any, residual: Any, half: float, reach: float, tol: float, contour: Contour
+def _contour_arcs(
+    residual: Any, reach: float, tol: float, contour: Contour, half: float
 ) -> list[NDArray[np.float64]]:
-    """The parts of the contour (:func:`contour_of`: the boundary of ``target`` shrunk by
+    """The parts of the contour (:func:`contour_of`: the area's boundary shrunk by
     ``half``) within reach of the uncovered ``residual``: each covers its side of the residual
     near the boundary (a point within ``half`` of the boundary and in a disk of radius ``half``
     inside the area is within ``half`` of the contour). Each ring is sampled every ``half / 2``;
     a stretch between two samples is kept when both are within ``reach`` plus the step of the
     residual (so every needed point is kept), and kept stretches less than :data:`MERGE_GAP`
-    spacings apart are driven as one pass."""
-    arcs = _contour_arcs(residual, reach, tol, contour, half)
-    return [_corner_spurs(line, contour, half, reach, tol) for line in arcs]
-
-
-def _contour_arcs(
-    residual: Any, reach: float, tol: float, contour: Contour, half: float
-) -> list[NDArray[np.float64]]:
-    """The stretches of the contour :func:`_contour_passes` keeps, before their corner spurs
-    (which only add length: a spur leaves the contour and comes back to the same point)."""
+    spacings apart are driven as one pass. The passes are these stretches with their corner
+    spurs (:func:`_corner_spurs`, which only add length: a spur leaves the contour and comes
+    back to the same point)."""
     import shapely
 
     if not contour.rings:

@@ -1,8 +1,8 @@
 """How much of a path leaves its area: :func:`outside_length` measures, segment by segment
 with shapely, the length of a path outside an area or inside one of its holes (the
 ``outside_length`` statistic of every plan; :func:`with_outside_length` sets it), and
-:func:`shapely_area` gives an area as a shapely Polygon. Re-exported by
-:mod:`boustro.plan.inside` (their home before). Shapely is imported inside the functions."""
+:func:`shapely_area` gives an area as a shapely Polygon (their home was
+:mod:`boustro.plan.inside` before). Shapely is imported inside the functions."""
 
 from __future__ import annotations
 
