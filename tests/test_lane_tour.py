@@ -140,7 +140,7 @@ def test_refine_tour_distances_are_the_driven_moves():
         if region.contains(p[None])[0]:
             pts.append(p)
     pts = np.array(pts)
-    dist = _distances(router, pts)
+    dist = _distances(router, pts, router.distances(pts), len(pts))  # every pair tested
     i, j = np.triu_indices(len(pts), 1)
     routes = router.paths(pts[i], pts[j])
     flown = np.array([np.linalg.norm(np.diff(r.points, axis=0), axis=1).sum() for r in routes])

@@ -21,11 +21,14 @@ from .order_kernel import improve_lanes
 from .routing import Router
 from .tour import _extension_end, _Pass
 
-__all__ = ["LANE_TOUR_BUDGET", "LANE_TOUR_UNITS", "refine_tour"]
+__all__ = ["LANE_TOUR_BUDGET", "LANE_TOUR_UNITS", "NEAREST", "refine_tour"]
 
 #: Units (lanes and other passes) above which the tour is not refined (the distances between
 #: their ends: a matrix of ``(2 units + 1)^2`` moves).
 LANE_TOUR_UNITS = 1000
+#: Neighbours of each lane end towards which the search tests the straight move (moves that
+#: pass within the router's reach outside the shell; farther pairs keep the routed distance).
+NEAREST = 8
 #: Moves the refinement evaluates at most: a count, not a time, so that plans do not depend on
 #: the machine's load.
 LANE_TOUR_BUDGET = 20_000_000
@@ -74,17 +77,50 @@ def _moves(dist: NDArray[np.float64], seq: NDArray[np.int64], flip: NDArray[np.i
     return float(dist[0, entry[0]] + dist[exit_[:-1], entry[1:]].sum())
 
 
-def _distances(router: Router, pts: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The moves between ``pts`` as the driven tour flies them (:meth:`Router.paths`): straight
-    where the straight move is allowed (it may pass within the router's reach outside the
-    shell), else :meth:`Router.distances`'s detour."""
-    dist = router.distances(pts)
-    i, j = np.triu_indices(len(pts), 1)
+def _distances(
+    router: Router, pts: NDArray[np.float64], full: NDArray[np.float64], nearest: int
+) -> NDArray[np.float64]:
+    """The moves between ``pts`` for the search: ``full`` (:meth:`Router.distances`), and the
+    straight move where :meth:`Router.paths` would fly it (it may pass within the router's
+    reach outside the shell), tested towards each point's ``nearest`` neighbours where ``full``
+    is longer."""
+    dist = full.copy()
+    m = len(pts)
+    k = min(nearest, m - 1)
+    euclid = np.linalg.norm(pts[:, None] - pts[None], axis=-1)
+    near = np.argsort(euclid, axis=1, kind="stable")[:, 1 : k + 1]
+    i, j = np.repeat(np.arange(m), k), near.ravel()
+    pair = np.unique(np.minimum(i, j) * m + np.maximum(i, j))
+    i, j = pair // m, pair % m
+    longer = dist[i, j] > euclid[i, j] * (1 + 1e-12)
+    i, j = i[longer], j[longer]
     ok, _ = router._straight_many(pts[i], pts[j])
     i, j = i[ok], j[ok]
-    straight = np.linalg.norm(pts[i] - pts[j], axis=1)
-    dist[i, j] = dist[j, i] = np.minimum(dist[i, j], straight)
+    dist[i, j] = dist[j, i] = euclid[i, j]
     return dist
+
+
+def _flown(
+    router: Router,
+    pts: NDArray[np.float64],
+    dist: NDArray[np.float64],
+    a: NDArray[np.int64],
+    b: NDArray[np.int64],
+) -> float:
+    """The total of the moves ``pts[a] -> pts[b]`` as :meth:`Router.paths` flies them: straight
+    where allowed, else the detour (``dist``: :meth:`Router.distances`, exact there)."""
+    ok, _ = router._straight_many(pts[a], pts[b])
+    straight = np.linalg.norm(pts[a] - pts[b], axis=1)
+    return float(np.where(ok, straight, dist[a, b]).sum())
+
+
+def _edges(
+    seq: NDArray[np.int64], flip: NDArray[np.int64]
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """The points (indices into the distances) each move of the tour leaves and reaches."""
+    entry = 1 + 2 * seq + flip
+    exit_ = 2 + 2 * seq - flip
+    return exit_[:-1], entry[1:]
 
 
 def refine_tour(
@@ -110,12 +146,21 @@ def refine_tour(
     if n < 3 or n > LANE_TOUR_UNITS:
         return passes, order, choice
     ends = _ends(units, router, turnaround, inside)
-    dist = _distances(router, np.vstack([np.asarray(start, dtype=np.float64)[None], ends]))
+    pts = np.vstack([np.asarray(start, dtype=np.float64)[None], ends])
+    full = router.distances(pts)  # exact where the straight move is blocked
+    dist = _distances(router, pts, full, NEAREST)
     if not force_start:
         dist[0] = 0.0
     seq0, flip0 = np.arange(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
     seq, flip = improve_lanes(seq0, flip0, int(force_start), dist, budget)
     if not _moves(dist, seq, flip) < _moves(dist, seq0, flip0) - 1e-9:
+        return passes, order, choice
+    # both tours' moves as flown (the first lane is the same with a forced start; no approach
+    # is flown without): the given tour is kept unless the new one is shorter
+    new, old = (
+        _flown(router, pts, full, *_edges(sq, fl)) for sq, fl in ((seq, flip), (seq0, flip0))
+    )
+    if not new < old - 1e-9:
         return passes, order, choice
     out = []
     for u, f in zip(seq, flip, strict=True):
