@@ -13,7 +13,7 @@ import shapely
 import boustro.plan.region as region_mod
 from boustro.geometry.region import Region
 from boustro.plan import coverage
-from boustro.plan.lane_tour import _distances, refine_tour
+from boustro.plan.lane_tour import _flown, refine_tour
 from boustro.plan.order_kernel import _lane_search, improve_lanes
 from boustro.plan.region import plan_region
 from boustro.plan.routing import Router
@@ -130,7 +130,9 @@ def test_lane_search_is_a_local_optimum_the_compiled_one_the_same():
             assert _cost(dist, s, f) >= c - 1e-6
 
 
-def test_refine_tour_distances_are_the_driven_moves():
+def test_moves_measured_as_flown():
+    """The check that keeps the given tour unless the new one is shorter measures the moves as
+    Router.paths flies them (straight within the reach outside the shell, else the detour)."""
     region = random_regions(7, 1, n_holes=(2, 2))[0]
     router = Router(region, reach=0.05 * region.diameter)
     rng = np.random.default_rng(0)
@@ -140,11 +142,14 @@ def test_refine_tour_distances_are_the_driven_moves():
         if region.contains(p[None])[0]:
             pts.append(p)
     pts = np.array(pts)
-    dist = _distances(router, pts, router.distances(pts), len(pts))  # every pair tested
+    dist = router.distances(pts)
     i, j = np.triu_indices(len(pts), 1)
     routes = router.paths(pts[i], pts[j])
-    flown = np.array([np.linalg.norm(np.diff(r.points, axis=0), axis=1).sum() for r in routes])
-    np.testing.assert_allclose(dist[i, j], flown, rtol=1e-9, atol=1e-9)
+    flown = [np.linalg.norm(np.diff(r.points, axis=0), axis=1).sum() for r in routes]
+    for k in range(len(i)):
+        assert _flown(router, pts, dist, i[k : k + 1], j[k : k + 1]) == pytest.approx(flown[k])
+    assert _flown(router, pts, dist, i, j) == pytest.approx(sum(flown))
+    assert any(d > f + 1e-6 for d, f in zip(dist[i, j], flown, strict=True))  # reach counts
 
 
 def test_refine_tour_keeps_short_tours_and_bad_sizes():

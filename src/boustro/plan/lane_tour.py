@@ -21,14 +21,11 @@ from .order_kernel import improve_lanes
 from .routing import Router
 from .tour import _extension_end, _Pass
 
-__all__ = ["LANE_TOUR_BUDGET", "LANE_TOUR_UNITS", "NEAREST", "refine_tour"]
+__all__ = ["LANE_TOUR_BUDGET", "LANE_TOUR_UNITS", "refine_tour"]
 
 #: Units (lanes and other passes) above which the tour is not refined (the distances between
 #: their ends: a matrix of ``(2 units + 1)^2`` moves).
 LANE_TOUR_UNITS = 1000
-#: Neighbours of each lane end towards which the search tests the straight move (moves that
-#: pass within the router's reach outside the shell; farther pairs keep the routed distance).
-NEAREST = 8
 #: Moves the refinement evaluates at most: a count, not a time, so that plans do not depend on
 #: the machine's load.
 LANE_TOUR_BUDGET = 20_000_000
@@ -77,29 +74,6 @@ def _moves(dist: NDArray[np.float64], seq: NDArray[np.int64], flip: NDArray[np.i
     return float(dist[0, entry[0]] + dist[exit_[:-1], entry[1:]].sum())
 
 
-def _distances(
-    router: Router, pts: NDArray[np.float64], full: NDArray[np.float64], nearest: int
-) -> NDArray[np.float64]:
-    """The moves between ``pts`` for the search: ``full`` (:meth:`Router.distances`), and the
-    straight move where :meth:`Router.paths` would fly it (it may pass within the router's
-    reach outside the shell), tested towards each point's ``nearest`` neighbours where ``full``
-    is longer."""
-    dist = full.copy()
-    m = len(pts)
-    k = min(nearest, m - 1)
-    euclid = np.linalg.norm(pts[:, None] - pts[None], axis=-1)
-    near = np.argsort(euclid, axis=1, kind="stable")[:, 1 : k + 1]
-    i, j = np.repeat(np.arange(m), k), near.ravel()
-    pair = np.unique(np.minimum(i, j) * m + np.maximum(i, j))
-    i, j = pair // m, pair % m
-    longer = dist[i, j] > euclid[i, j] * (1 + 1e-12)
-    i, j = i[longer], j[longer]
-    ok, _ = router._straight_many(pts[i], pts[j])
-    i, j = i[ok], j[ok]
-    dist[i, j] = dist[j, i] = euclid[i, j]
-    return dist
-
-
 def _flown(
     router: Router,
     pts: NDArray[np.float64],
@@ -109,6 +83,8 @@ def _flown(
 ) -> float:
     """The total of the moves ``pts[a] -> pts[b]`` as :meth:`Router.paths` flies them: straight
     where allowed, else the detour (``dist``: :meth:`Router.distances`, exact there)."""
+    if len(a) == 0:
+        return 0.0
     ok, _ = router._straight_many(pts[a], pts[b])
     straight = np.linalg.norm(pts[a] - pts[b], axis=1)
     return float(np.where(ok, straight, dist[a, b]).sum())
@@ -147,20 +123,25 @@ def refine_tour(
         return passes, order, choice
     ends = _ends(units, router, turnaround, inside)
     pts = np.vstack([np.asarray(start, dtype=np.float64)[None], ends])
-    full = router.distances(pts)  # exact where the straight move is blocked
-    dist = _distances(router, pts, full, NEAREST)
+    dist = router.distances(pts)  # exact where the straight move is blocked
     if not force_start:
         dist[0] = 0.0
     seq0, flip0 = np.arange(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
     seq, flip = improve_lanes(seq0, flip0, int(force_start), dist, budget)
     if not _moves(dist, seq, flip) < _moves(dist, seq0, flip0) - 1e-9:
         return passes, order, choice
-    # both tours' moves as flown (the first lane is the same with a forced start; no approach
-    # is flown without): the given tour is kept unless the new one is shorter
-    new, old = (
-        _flown(router, pts, full, *_edges(sq, fl)) for sq, fl in ((seq, flip), (seq0, flip0))
+    # the moves of both tours as flown (straight moves may pass within the router's reach
+    # outside the shell, which ``distances`` does not count; the first lane is the same with a
+    # forced start, no approach is flown without): the given tour stays unless the new one is
+    # shorter. Only the moves one tour has and the other has not are measured.
+    new, old = _edges(seq, flip), _edges(seq0, flip0)
+    key_new = np.minimum(*new) * len(pts) + np.maximum(*new)
+    key_old = np.minimum(*old) * len(pts) + np.maximum(*old)
+    only_new, only_old = ~np.isin(key_new, key_old), ~np.isin(key_old, key_new)
+    gain = _flown(router, pts, dist, old[0][only_old], old[1][only_old]) - _flown(
+        router, pts, dist, new[0][only_new], new[1][only_new]
     )
-    if not new < old - 1e-9:
+    if not gain > 1e-9:
         return passes, order, choice
     out = []
     for u, f in zip(seq, flip, strict=True):
