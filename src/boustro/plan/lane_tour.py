@@ -25,10 +25,10 @@ __all__ = ["LANE_TOUR_BUDGET", "LANE_TOUR_UNITS", "refine_tour"]
 
 #: Units (lanes and other passes) above which the tour is not refined (the distances between
 #: their ends: a matrix of ``(2 units + 1)^2`` moves).
-LANE_TOUR_UNITS = 1000
+LANE_TOUR_UNITS = 500
 #: Moves the refinement evaluates at most: a count, not a time, so that plans do not depend on
 #: the machine's load.
-LANE_TOUR_BUDGET = 20_000_000
+LANE_TOUR_BUDGET = 5_000_000
 
 _Unit = tuple[_Pass, NDArray[np.float64]]
 
