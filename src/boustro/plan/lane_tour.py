@@ -105,10 +105,10 @@ def refine_tour(
     choice: list[int],
     start: NDArray[np.float64],
     router: Router,
-    *,
     force_start: bool,
     turnaround: float = 0.0,
     inside: bool = False,
+    *,
     budget: int = LANE_TOUR_BUDGET,
 ) -> tuple[list[_Pass], list[int], list[int]]:
     """The tour ``order``/``choice`` of ``passes`` with its chains split into lanes and the

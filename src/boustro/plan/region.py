@@ -417,16 +417,8 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
             passes, start_pt, router, force_start=forced, solver=opts.order
         )
         notes.extend(said)
-    passes, order, choice = refine_tour(
-        passes,
-        order,
-        choice,
-        start_pt,
-        router,
-        force_start=forced,
-        turnaround=opts.turnaround,
-        inside=opts.keep_inside,
-    )
+    run = (opts.turnaround, opts.keep_inside)  # the lanes' run-ins and run-outs
+    passes, order, choice = refine_tour(passes, order, choice, start_pt, router, forced, *run)
     return _Tour(passes, order, choice, router, solver)
 
 
