@@ -28,8 +28,10 @@ STORED = {
     "t150d": (179, 28398.40543207045, 59253.669121564424, -1728852.1315928693),
     # keep-inside: a pass's swath is the union of its pieces split at its spurs' tips (one GEOS
     # buffer of a line turning back on itself was most of the plan's time), whose noding moves
-    # a patch by micrometres: 30275.394908338647 m at 8882b43 (+5.0e-5 m, 1352 waypoints both)
-    "t400in": (1352, 30275.394958414592, 459179.8363606306, 26669581.976194274),
+    # a patch by micrometres: 30275.394908338647 m at 8882b43 (+5.0e-5 m, 1352 waypoints both);
+    # then 30275.394958414592 m, 1352 waypoints until the tour was refined lane by lane
+    # (plan/lane_tour.py, issue 16): the same lanes and boundary passes in a shorter order
+    "t400in": (1349, 29290.67154001922, 458537.7668046735, -31558956.89223797),
 }
 CASES = {
     "t300": (traced_field(300, 4), {}),

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from .._jit import jit, jit_globals
 
-__all__ = ["improve_order"]
+__all__ = ["improve_lanes", "improve_order"]
 
 
 def _cost(order, start, dist, entry, exit_, internal, n_opt):
@@ -108,3 +108,147 @@ def improve_order(
         n_opt,
     )  # fmt: skip
     return [int(k) for k in out]
+
+
+# -- lanes as units: 2-opt and or-opt with directions (:mod:`boustro.plan.lane_tour`) ---------
+def _en(seq, flip, k):
+    """The point (index into the distances) where the unit at position ``k`` is entered; the
+    start (0) before the first position, -1 (no move) past the last."""
+    if k < 0:
+        return 0
+    if k >= seq.shape[0]:
+        return -1
+    return 1 + 2 * seq[k] + flip[k]
+
+
+def _ex(seq, flip, k):
+    """The point where the unit at position ``k`` is left (0: the start, before the first)."""
+    if k < 0:
+        return 0
+    return 2 + 2 * seq[k] - flip[k]
+
+
+def _d(dist, a, b):
+    """The move from point ``a`` to ``b`` (none, 0, to the end of the tour: ``b`` = -1)."""
+    if b < 0:
+        return 0.0
+    return dist[a, b]
+
+
+def _reverse(seq, flip, i, j):
+    """Positions ``i..j`` driven in reverse: their order and every unit's direction."""
+    seq[i : j + 1] = seq[i : j + 1][::-1].copy()
+    flip[i : j + 1] = 1 - flip[i : j + 1][::-1]
+
+
+def _two_opt_lanes(seq, flip, fixed, dist, left):
+    """One first-improvement 2-opt move (a segment reversed, a single unit turned round); the
+    evaluations left after it (negative: none improved, ``-left - 1``)."""
+    n = seq.shape[0]
+    for i in range(fixed, n):
+        a = _ex(seq, flip, i - 1)
+        ei = _en(seq, flip, i)
+        for j in range(i, n):
+            b = _en(seq, flip, j + 1)
+            before = _d(dist, a, ei) + _d(dist, _ex(seq, flip, j), b)
+            after = _d(dist, a, _ex(seq, flip, j)) + _d(dist, ei, b)
+            left -= 1
+            if after < before - 1e-9:
+                _reverse(seq, flip, i, j)
+                return left
+            if left <= 0:
+                return -1
+    return -left - 1
+
+
+def _or_opt_lanes(seq, flip, fixed, dist, left):
+    """One first-improvement or-opt move: 1-3 consecutive units moved elsewhere, either way
+    round; the evaluations left as :func:`_two_opt_lanes`."""
+    n = seq.shape[0]
+    for size in range(1, 4):
+        for i in range(fixed, n - size + 1):
+            j = i + size - 1
+            p, q = _ex(seq, flip, i - 1), _en(seq, flip, j + 1)
+            s_in, s_out = _en(seq, flip, i), _ex(seq, flip, j)
+            gain = _d(dist, p, s_in) + _d(dist, s_out, q) - _d(dist, p, q)
+            for k in range(fixed - 1, n):  # insert between positions k and k + 1
+                if i - 1 <= k <= j:
+                    continue
+                x, y = _ex(seq, flip, k), _en(seq, flip, k + 1)
+                base = _d(dist, x, y)
+                fwd = _d(dist, x, s_in) + _d(dist, s_out, y) - base
+                # reversed: entered where it was left, left where it was entered
+                rev = _d(dist, x, s_out) + _d(dist, s_in, y) - base
+                left -= 2
+                if min(fwd, rev) < gain - 1e-9:
+                    _move(seq, flip, i, j, k, rev < fwd)
+                    return left
+                if left <= 0:
+                    return -1
+    return -left - 1
+
+
+def _move(seq, flip, i, j, k, reverse):
+    """Positions ``i..j`` moved to after position ``k`` (reversed with ``reverse``)."""
+    if reverse:
+        _reverse(seq, flip, i, j)
+    if k > j:  # rotate i..k left by the segment's size
+        size = j - i + 1
+        s, f = seq[i : j + 1].copy(), flip[i : j + 1].copy()
+        seq[i : k - size + 1] = seq[j + 1 : k + 1].copy()
+        flip[i : k - size + 1] = flip[j + 1 : k + 1].copy()
+        seq[k - size + 1 : k + 1] = s
+        flip[k - size + 1 : k + 1] = f
+    else:  # k < i - 1: rotate k+1..j right
+        size = j - i + 1
+        s, f = seq[i : j + 1].copy(), flip[i : j + 1].copy()
+        seq[k + 1 + size : j + 1] = seq[k + 1 : i].copy()
+        flip[k + 1 + size : j + 1] = flip[k + 1 : i].copy()
+        seq[k + 1 : k + 1 + size] = s
+        flip[k + 1 : k + 1 + size] = f
+
+
+def _lane_search(seq, flip, fixed, dist, budget):
+    """2-opt and or-opt moves until neither improves or ``budget`` evaluations are spent."""
+    left = budget
+    while left > 0:
+        left = _two_opt_lanes(seq, flip, fixed, dist, left)
+        if left >= 0:
+            continue
+        left = -left - 1
+        if left <= 0:
+            break
+        left = _or_opt_lanes(seq, flip, fixed, dist, left)
+        if left < 0:
+            break
+    return seq, flip
+
+
+@cache
+def _compiled_lanes() -> Any:
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
+        return _lane_search
+    jit_globals(
+        globals(), ("_en", "_ex", "_d", "_reverse", "_two_opt_lanes", "_or_opt_lanes", "_move")
+    )
+    return jit(_lane_search)
+
+
+def improve_lanes(
+    seq: NDArray[np.int64],
+    flip: NDArray[np.int64],
+    fixed: int,
+    dist: NDArray[np.float64],
+    budget: int,
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Units (lanes, hole and boundary passes) in the order ``seq``, each driven forwards
+    (``flip`` 0: entered at point ``1 + 2 u``, left at ``2 + 2 u`` of ``dist``) or backwards,
+    improved by 2-opt (segments reversed, units turned round) and or-opt (1-3 units moved,
+    either way round) until neither improves or ``budget`` moves were evaluated; the first
+    ``fixed`` positions stay. ``dist[0]``: the moves from the start (zeros: a free start). The
+    deltas assume symmetric moves (:meth:`~boustro.plan.routing.Router.distances`)."""
+    seq, flip = _compiled_lanes()(
+        np.array(seq, dtype=np.int64), np.array(flip, dtype=np.int64), int(fixed),
+        np.ascontiguousarray(dist, dtype=np.float64), int(budget),
+    )  # fmt: skip
+    return seq, flip

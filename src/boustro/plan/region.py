@@ -21,6 +21,7 @@ from ..optimize.problem import _progress_bar
 from .cell_order import solve_order
 from .cells import _TOL, _check_float
 from .inside import inside_layout
+from .lane_tour import refine_tour
 from .lanes import Lanes, region_lanes
 from .outside import outside_length
 from .region_opt import _cells_for_sweep, _estimate, choose_sweep, optimize_region
@@ -407,13 +408,17 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
         start_pt = np.asarray(start, dtype=np.float64).reshape(-1)
         if start_pt.shape != (2,) or not np.all(np.isfinite(start_pt)):
             raise InvalidParameterError(f"start must be a finite (x, y) pair, got {start!r}")
+    forced = start is not None
+    solver: str | None = None  # greedy + 2-opt, not reported
     if opts.order == "heuristic":
-        order, choice = _order(passes, start_pt, router, force_start=start is not None)
-        return _Tour(passes, order, choice, router)
-    order, choice, solver, said = solve_order(
-        passes, start_pt, router, force_start=start is not None, solver=opts.order
-    )
-    notes.extend(said)
+        order, choice = _order(passes, start_pt, router, force_start=forced)
+    else:
+        order, choice, solver, said = solve_order(
+            passes, start_pt, router, force_start=forced, solver=opts.order
+        )
+        notes.extend(said)
+    run = (opts.turnaround, opts.keep_inside)  # the lanes' run-ins and run-outs
+    passes, order, choice = refine_tour(passes, order, choice, start_pt, router, forced, *run)
     return _Tour(passes, order, choice, router, solver)
 
 

@@ -1,0 +1,159 @@
+"""The tour refined lane by lane (plan/lane_tour.py, issue 16): never longer than the order of
+chains it starts from, the same lanes driven, full coverage, the compiled kernel."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+import shapely
+
+import boustro.plan.region as region_mod
+from boustro.geometry.region import Region
+from boustro.plan import coverage
+from boustro.plan.lane_tour import _flown, refine_tour
+from boustro.plan.order_kernel import _lane_search, improve_lanes
+from boustro.plan.region import plan_region
+from boustro.plan.routing import Router
+from boustro.plan.tour_exact import EXACT_TOUR_PASSES
+
+from .conftest import random_regions
+
+
+def _no_refine(passes, order, choice, *args, **kwargs):
+    return passes, order, choice
+
+
+def _pair(monkeypatch, region: Region, **kw):
+    """The plan with the refined tour and with today's order of chains (the refinement off)."""
+    new = plan_region(region, region.diameter / 25, decompose_area=False, **kw)
+    with monkeypatch.context() as m:
+        m.setattr(region_mod, "refine_tour", _no_refine)
+        old = plan_region(region, region.diameter / 25, decompose_area=False, **kw)
+    return new, old
+
+
+def _lanes(plan) -> list[tuple[float, ...]]:
+    """The lane transects as unordered segments, sorted (the same lanes, however driven)."""
+    lanes = plan.transects[np.array(plan.role()) == "lane"]
+    rows = [tuple(np.round(np.concatenate(sorted(map(tuple, s))), 9)) for s in lanes]
+    return sorted(rows)
+
+
+@pytest.mark.parametrize("turnaround", [0.0, 0.04])
+def test_refined_tour_never_longer_same_lanes_and_covers(monkeypatch, turnaround):
+    shorter = 0
+    for k, region in enumerate(random_regions(21, 6, n_holes=(1, 3))):
+        for angle in (0.2 + 0.5 * k, 1.3 + 0.5 * k):
+            kw = dict(angle=angle, offset=0.01, speed=5.0, turn_time=10.0, turnaround=turnaround)
+            new, old = _pair(monkeypatch, region, **kw)
+            assert new.stats.duration <= old.stats.duration + 1e-9
+            assert new.stats.n_turns == old.stats.n_turns
+            shorter += new.stats.duration < old.stats.duration - 1e-6
+            assert _lanes(new) == _lanes(old)  # the same lanes, reordered or turned round
+            assert coverage(new).covered_share >= 1 - 1e-9  # shapely, exact
+            path = shapely.LineString(new.waypoints)
+            for hole in region.holes:
+                core = shapely.Polygon(hole.vertices).buffer(-1e-7 * region.diameter)
+                assert path.intersection(core).length == 0.0
+    assert shorter >= 3  # the refinement does shorten tours (not only keeps them)
+
+
+def test_forced_start_keeps_the_first_lane(monkeypatch):
+    region = random_regions(5, 1, n_holes=(2, 2))[0]
+    start = region.shell.vertices[2]
+    new, old = _pair(monkeypatch, region, angle=0.7, offset=0.0, start=tuple(start))
+    np.testing.assert_allclose(new.transects[0], old.transects[0])
+    assert new.stats.path_length <= old.stats.path_length + 1e-9
+
+
+def test_a_boustrophedon_of_one_chain_stays_as_it_is(monkeypatch):
+    region = Region([(0, 0), (100, 0), (100, 60), (0, 60)], [])
+    new, old = _pair(monkeypatch, region, angle=0.0, offset=0.0)
+    np.testing.assert_array_equal(new.waypoints, old.waypoints)
+
+
+def test_few_passes_exact_order_then_refined(monkeypatch):
+    """With at most EXACT_TOUR_PASSES passes the order of chains is exact (tour_exact.py); the
+    refinement starts from it and is never longer."""
+    seen = []
+    real = region_mod.refine_tour
+
+    def spy(passes, order, choice, *args, **kwargs):
+        seen.append(len(passes))
+        return real(passes, order, choice, *args, **kwargs)
+
+    for region in random_regions(4, 4, n_holes=(1, 1)):
+        with monkeypatch.context() as m:
+            m.setattr(region_mod, "refine_tour", spy)
+            new, old = _pair(monkeypatch, region, angle=0.4, offset=0.0)
+        assert new.stats.path_length <= old.stats.path_length + 1e-9
+    assert min(seen) <= EXACT_TOUR_PASSES
+
+
+def _brute(dist: np.ndarray, n: int) -> float:
+    best = math.inf
+    for perm in itertools.permutations(range(n)):
+        for flips in itertools.product((0, 1), repeat=n):
+            seq, flip = np.array(perm), np.array(flips)
+            entry, exit_ = 1 + 2 * seq + flip, 2 + 2 * seq - flip
+            best = min(best, float(dist[0, entry[0]] + dist[exit_[:-1], entry[1:]].sum()))
+    return best
+
+
+def _cost(dist, seq, flip) -> float:
+    entry, exit_ = 1 + 2 * seq + flip, 2 + 2 * seq - flip
+    return float(dist[0, entry[0]] + dist[exit_[:-1], entry[1:]].sum())
+
+
+def test_lane_search_is_a_local_optimum_the_compiled_one_the_same():
+    rng = np.random.default_rng(3)
+    for trial in range(12):
+        n = int(rng.integers(3, 6))
+        pts = rng.uniform(0, 100, (2 * n + 1, 2))
+        dist = np.linalg.norm(pts[:, None] - pts[None], axis=-1)
+        if trial % 2:
+            dist[0] = 0.0  # a free start
+        seq0, flip0 = np.arange(n), np.zeros(n, dtype=np.int64)
+        seq, flip = improve_lanes(seq0, flip0, 0, dist, 10**6)
+        assert sorted(seq.tolist()) == list(range(n))
+        c = _cost(dist, seq, flip)
+        assert _brute(dist, n) - 1e-9 <= c <= _cost(dist, seq0, flip0) + 1e-9
+        py_seq, py_flip = _lane_search(seq0.copy(), flip0.copy(), 0, dist, 10**6)
+        assert py_seq.tolist() == seq.tolist() and py_flip.tolist() == flip.tolist()
+        # no single 2-opt or or-opt move improves it: every reversal and every move of 1-3
+        for i, j in itertools.combinations_with_replacement(range(n), 2):
+            s, f = seq.copy(), flip.copy()
+            s[i : j + 1], f[i : j + 1] = s[i : j + 1][::-1], 1 - f[i : j + 1][::-1]
+            assert _cost(dist, s, f) >= c - 1e-6
+
+
+def test_moves_measured_as_flown():
+    """The check that keeps the given tour unless the new one is shorter measures the moves as
+    Router.paths flies them (straight within the reach outside the shell, else the detour)."""
+    region = random_regions(7, 1, n_holes=(2, 2))[0]
+    router = Router(region, reach=0.05 * region.diameter)
+    rng = np.random.default_rng(0)
+    pts = []
+    while len(pts) < 16:
+        p = rng.uniform(-1, 1, 2)
+        if region.contains(p[None])[0]:
+            pts.append(p)
+    pts = np.array(pts)
+    dist = router.distances(pts)
+    i, j = np.triu_indices(len(pts), 1)
+    routes = router.paths(pts[i], pts[j])
+    flown = [np.linalg.norm(np.diff(r.points, axis=0), axis=1).sum() for r in routes]
+    for k in range(len(i)):
+        assert _flown(router, pts, dist, i[k : k + 1], j[k : k + 1]) == pytest.approx(flown[k])
+    assert _flown(router, pts, dist, i, j) == pytest.approx(sum(flown))
+    assert any(d > f + 1e-6 for d, f in zip(dist[i, j], flown, strict=True))  # reach counts
+
+
+def test_refine_tour_keeps_short_tours_and_bad_sizes():
+    region = Region([(0, 0), (10, 0), (10, 10), (0, 10)], [])
+    router = Router(region)
+    out = refine_tour([], [], [], np.zeros(2), router, force_start=False)
+    assert out == ([], [], [])
