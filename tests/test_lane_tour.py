@@ -13,7 +13,7 @@ import shapely
 import boustro.plan.region as region_mod
 from boustro.geometry.region import Region
 from boustro.plan import coverage
-from boustro.plan.lane_tour import _flown, refine_tour
+from boustro.plan.lane_tour import _flown, refine_tour, refinement
 from boustro.plan.order_kernel import _lane_search, improve_lanes
 from boustro.plan.region import plan_region
 from boustro.plan.routing import Router
@@ -147,8 +147,8 @@ def test_moves_measured_as_flown():
     routes = router.paths(pts[i], pts[j])
     flown = [np.linalg.norm(np.diff(r.points, axis=0), axis=1).sum() for r in routes]
     for k in range(len(i)):
-        assert _flown(router, pts, dist, i[k : k + 1], j[k : k + 1]) == pytest.approx(flown[k])
-    assert _flown(router, pts, dist, i, j) == pytest.approx(sum(flown))
+        assert _flown(router, pts, i[k : k + 1], j[k : k + 1]) == pytest.approx(flown[k])
+    assert _flown(router, pts, i, j) == pytest.approx(sum(flown))
     assert any(d > f + 1e-6 for d, f in zip(dist[i, j], flown, strict=True))  # reach counts
 
 
@@ -157,3 +157,51 @@ def test_refine_tour_keeps_short_tours_and_bad_sizes():
     router = Router(region)
     out = refine_tour([], [], [], np.zeros(2), router, force_start=False)
     assert out == ([], [], [])
+
+
+def test_never_longer_on_a_traced_field_where_detours_differ_by_direction():
+    """A review's reproducer: on a traced field (over 160 reflex vertices the router's detours
+    go through simplified domains and are pulled tight, not the same both ways nor as long as
+    ``distances`` says) the refined tour was 0.15 m longer; the check now flies both tours'
+    differing moves in their directions."""
+    from boustro.geometry.traced import traced_field
+
+    region = traced_field(400, 8, seed=0, radius=120.0)
+    kw = dict(angle=2.0010741575072397, offset=2.697867137638703, speed=5.0, turn_time=10.0)
+    new = plan_region(region, 10.0, decompose_area=False, turnaround=6.0, **kw)
+    with refinement(False):
+        old = plan_region(region, 10.0, decompose_area=False, turnaround=6.0, **kw)
+    assert new.stats.path_length <= old.stats.path_length + 1e-9
+    assert new.stats.n_turns == old.stats.n_turns
+
+
+L_FIELD = np.array([[0, 0], [150, 0], [150, 60], [60, 60], [60, 150], [0, 150]], float)
+U_FIELD = np.array(
+    [[0, 0], [120, 0], [120, 100], [100, 100], [100, 3], [20, 3], [20, 100], [0, 100]], float
+)
+
+
+@pytest.mark.parametrize("case", ["vehicle", "headland"])
+def test_no_refinement_where_a_vehicle_drives_the_order_or_a_headland_joins_it(case, monkeypatch):
+    """The refinement compares straight moves between lane ends, not a turn radius's turns nor
+    the move to the headland passes (a review: +10 m with a 6 m Dubins turn on a U, +31 m with a
+    headland): plan_area plans those with the order of chains, as before the refinement."""
+    from boustro.mission import plan_area
+    from boustro.plan import lane_tour
+    from boustro.vehicle import Vehicle
+
+    enabled: list[bool] = []
+    real = region_mod.refine_tour
+
+    def spy(*args, **kwargs):
+        enabled.append(lane_tour._REFINE.get())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(region_mod, "refine_tour", spy)
+    kw = {"vehicle": Vehicle(turn_radius=6.0)} if case == "vehicle" else {"headland": 1}
+    field = U_FIELD if case == "vehicle" else L_FIELD
+    plan_area(field, 10.0, crs=None, **kw)
+    assert enabled and not any(enabled)
+    enabled.clear()
+    plan_area(field, 10.0, crs=None)
+    assert enabled and all(enabled)

@@ -28,6 +28,7 @@ from ..plan import (
     order_lanes,
     vehicle_stats,
 )
+from ..plan.lane_tour import refinement
 from ..plan.outside import with_outside_length
 from ..sensors import SensorSpacing
 from ..vehicle import Vehicle
@@ -218,32 +219,36 @@ def plan_area(
         progress=show,
         keep_inside=_check_flag("keep_inside", keep_inside),
     )
-    if cost is not None:
-        finish = None
-        if field is not None or vehicle is not None:  # the costs of what is flown
+    # the tour refined lane by lane except where a turn radius's turns or the headland passes
+    # are added to its order afterwards (plan.lane_tour.refinement)
+    refine = not passes and (vehicle is None or vehicle.turn_radius <= 0)
+    with refinement(refine):
+        if cost is not None:
+            finish = None
+            if field is not None or vehicle is not None:  # the costs of what is flown
 
-            def finish(plan: Plan) -> Plan:
-                if field is None and vehicle is not None:  # its statistics, no waypoints
-                    stats = vehicle_stats(plan, vehicle, field=turns_in)
-                    return dataclasses.replace(plan, stats=stats)
-                empty = Planned(plan, None, None)  # type: ignore[arg-type]
-                return _drive(frame, empty, field, passes, vehicle, False, turns_in).plan
+                def finish(plan: Plan) -> Plan:
+                    if field is None and vehicle is not None:  # its statistics, no waypoints
+                        stats = vehicle_stats(plan, vehicle, field=turns_in)
+                        return dataclasses.replace(plan, stats=stats)
+                    empty = Planned(plan, None, None)  # type: ignore[arg-type]
+                    return _drive(frame, empty, field, passes, vehicle, False, turns_in).plan
 
-        cell_finish = None
-        if vehicle is not None:  # a cell's own lanes with the vehicle's turns (no headland)
+            cell_finish = None
+            if vehicle is not None:  # a cell's own lanes with the vehicle's turns (no headland)
 
-            def cell_finish(plan: Plan) -> Plan:
-                return dataclasses.replace(plan, stats=vehicle_stats(plan, vehicle))
+                def cell_finish(plan: Plan) -> Plan:
+                    return dataclasses.replace(plan, stats=vehicle_stats(plan, vehicle))
 
-        skips = vehicle is not None and vehicle.turn_radius > 0  # every other lane possible
-        planned = _plan_for_cost(
-            frame, cost, decompose, sweep, settings, finish, skips, cell_finish, passes
-        )
-    elif frame.region is None:
-        planned = plan_convex(frame, **settings)
-    else:
-        planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
-    planned = _drive(frame, planned, field, passes, vehicle, check_coverage, turns_in)
+            skips = vehicle is not None and vehicle.turn_radius > 0  # every other lane possible
+            planned = _plan_for_cost(
+                frame, cost, decompose, sweep, settings, finish, skips, cell_finish, passes
+            )
+        elif frame.region is None:
+            planned = plan_convex(frame, **settings)
+        else:
+            planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
+        planned = _drive(frame, planned, field, passes, vehicle, check_coverage, turns_in)
     # the length outside, measured once on the path flown (lanes, passes, moves, curves)
     # against the whole area (not its hull, nor the inner field of a headland)
     planned = planned._replace(plan=with_outside_length(planned.plan, whole))

@@ -8,11 +8,17 @@ that tour, splits every chain into its lanes, and improves the sequence of lanes
 passes (each a unit driven either way) by 2-opt (a stretch of the tour driven in reverse, a
 unit turned round) and or-opt (one to three units moved elsewhere, either way round) on the
 moves between them (:func:`~boustro.plan.order_kernel.improve_lanes`, compiled). The tour it
-returns is never longer than the one it was given by the same distances: the moves of both are
-summed and the given one kept unless the new one is shorter.
+returns is never longer than the one it was given: the given one is kept unless the new one is
+shorter by the router's distances and by the moves the two tours do not share, flown as the
+driver flies them (:meth:`~boustro.plan.routing.Router.paths`, in their directions). Not where
+a vehicle's turns or headland passes are added to the order afterwards (:func:`refinement`).
 """
 
 from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
+from contextvars import ContextVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,7 +27,7 @@ from .order_kernel import improve_lanes
 from .routing import Router
 from .tour import _extension_end, _Pass
 
-__all__ = ["LANE_TOUR_BUDGET", "LANE_TOUR_UNITS", "refine_tour"]
+__all__ = ["LANE_TOUR_BUDGET", "LANE_TOUR_UNITS", "refine_tour", "refinement"]
 
 #: Units (lanes and other passes) above which the tour is not refined (the distances between
 #: their ends: a matrix of ``(2 units + 1)^2`` moves).
@@ -31,6 +37,21 @@ LANE_TOUR_UNITS = 500
 LANE_TOUR_BUDGET = 5_000_000
 
 _Unit = tuple[_Pass, NDArray[np.float64]]
+
+_REFINE: ContextVar[bool] = ContextVar("boustro_refine_tour", default=True)
+
+
+@contextlib.contextmanager
+def refinement(enabled: bool) -> Iterator[None]:
+    """Tours planned inside the block are refined (:func:`refine_tour`) only if ``enabled``.
+    Off where the order is driven with a vehicle's turns or joined to headland passes
+    (:func:`boustro.mission.plan_area`): the refinement compares the moves between lane ends,
+    not the turns of a turn radius nor the move to the headland, and could lengthen those."""
+    token = _REFINE.set(bool(enabled))
+    try:
+        yield
+    finally:
+        _REFINE.reset(token)
 
 
 def _units(passes: list[_Pass], order: list[int], choice: list[int]) -> list[_Unit]:
@@ -75,19 +96,14 @@ def _moves(dist: NDArray[np.float64], seq: NDArray[np.int64], flip: NDArray[np.i
 
 
 def _flown(
-    router: Router,
-    pts: NDArray[np.float64],
-    dist: NDArray[np.float64],
-    a: NDArray[np.int64],
-    b: NDArray[np.int64],
+    router: Router, pts: NDArray[np.float64], a: NDArray[np.int64], b: NDArray[np.int64]
 ) -> float:
-    """The total of the moves ``pts[a] -> pts[b]`` as :meth:`Router.paths` flies them: straight
-    where allowed, else the detour (``dist``: :meth:`Router.distances`, exact there)."""
+    """The total of the moves ``pts[a] -> pts[b]`` as the driver flies them
+    (:meth:`Router.paths`, each in its direction: a detour through a simplified domain is not
+    always the same both ways, nor as long as :meth:`Router.distances` says)."""
     if len(a) == 0:
         return 0.0
-    ok, _ = router._straight_many(pts[a], pts[b])
-    straight = np.linalg.norm(pts[a] - pts[b], axis=1)
-    return float(np.where(ok, straight, dist[a, b]).sum())
+    return float(sum(r.length for r in router.paths(pts[a], pts[b])))
 
 
 def _edges(
@@ -113,13 +129,14 @@ def refine_tour(
 ) -> tuple[list[_Pass], list[int], list[int]]:
     """The tour ``order``/``choice`` of ``passes`` with its chains split into lanes and the
     lanes and other passes reordered where that shortens the moves: ``(passes, order,
-    choice)``, the given ones where it does not (or above :data:`LANE_TOUR_UNITS` units). With
+    choice)``, the given ones where it does not (or above :data:`LANE_TOUR_UNITS` units, or
+    outside :func:`refinement`'s ``enabled``). With
     ``force_start`` the first lane stays first (the approach from ``start`` counted), without
     the tour begins where it is shortest. ``turnaround``, ``inside``: the lanes' run-ins and
     run-outs (:class:`~boustro.plan.tour._Driver`), from whose ends the moves are flown."""
     units = _units(passes, order, choice)
     n = len(units)
-    if n < 3 or n > LANE_TOUR_UNITS:
+    if n < 3 or n > LANE_TOUR_UNITS or not _REFINE.get():
         return passes, order, choice
     ends = _ends(units, router, turnaround, inside)
     pts = np.vstack([np.asarray(start, dtype=np.float64)[None], ends])
@@ -133,13 +150,13 @@ def refine_tour(
     # the moves of both tours as flown (straight moves may pass within the router's reach
     # outside the shell, which ``distances`` does not count; the first lane is the same with a
     # forced start, no approach is flown without): the given tour stays unless the new one is
-    # shorter. Only the moves one tour has and the other has not are measured.
+    # shorter. Only the moves one tour flies and the other does not (in that direction) are
+    # measured.
     new, old = _edges(seq, flip), _edges(seq0, flip0)
-    key_new = np.minimum(*new) * len(pts) + np.maximum(*new)
-    key_old = np.minimum(*old) * len(pts) + np.maximum(*old)
+    key_new, key_old = new[0] * len(pts) + new[1], old[0] * len(pts) + old[1]  # directed
     only_new, only_old = ~np.isin(key_new, key_old), ~np.isin(key_old, key_new)
-    gain = _flown(router, pts, dist, old[0][only_old], old[1][only_old]) - _flown(
-        router, pts, dist, new[0][only_new], new[1][only_new]
+    gain = _flown(router, pts, old[0][only_old], old[1][only_old]) - _flown(
+        router, pts, new[0][only_new], new[1][only_new]
     )
     if not gain > 1e-9:
         return passes, order, choice
