@@ -107,5 +107,42 @@ def test_random37_cells_have_no_spike_and_their_searches_converge(monkeypatch):
         # the spiked cell halved about 50,000 boxes down to the smallest radius (11 s); with
         # the certify-first rule a cell may still end there, after about 9,000 (0.14 s)
         assert info["evaluations"] < 25_000
-    assert m.stats.duration == pytest.approx(1382.1253238, abs=1e-6)
-    assert m.summary()["gap"] == pytest.approx(16.3431929, abs=1e-6)
+    # the plan before the cut (1382.1253 s); the tour refined lane by lane since: 1372.6 s
+    assert m.stats.duration <= 1382.1253238
+    assert m.summary()["gap"] <= 16.3431929
+
+
+RANDOM86_CELL = np.array(
+    [
+        [-77.32309831913612, -49.02446859156076],
+        [-81.40844657607317, -60.52034892012182],
+        [-81.26133027853427, -53.759579889596296],
+        [-78.68314096639965, -45.432309413670225],
+        [-13.803061014921546, 137.31071320899719],
+        [-79.15615264450804, 107.12332355145296],
+        [-118.15582271681494, 24.234629406887272],
+        [-122.21306799392904, -27.874989913476924],
+        [-92.13599800061964, -90.74689038304277],
+    ]
+)
+
+
+def test_a_tip_moved_to_its_foot_is_not_cut_again():
+    """A review's reproducer (a cell of random area 86): after the tip moved to its foot the
+    new vertex is a right angle that rounding made acute (cosine 6.5e-14) whose foot is itself,
+    and the loop never ended. Now one cut, a valid ring, less area by under width x length."""
+    out = cut_spikes(RANDOM86_CELL, 0.01)
+    assert len(out) == len(RANDOM86_CELL)
+    assert _folds(out, 0.01) <= 1  # the foot: a right angle, not a spike
+    lost = _area(RANDOM86_CELL) - _area(out)
+    assert 0 < lost <= 0.01 * 12.3
+
+
+@pytest.mark.parametrize("degrees", [0.1, 0.47, 13.0, 89.9])
+def test_a_thin_rotated_rectangle_ends(degrees):
+    """A 50 m x 5 mm corridor rotated off the axes (the review: 200 of 200 angles hung)."""
+    t = np.radians(degrees)
+    rot = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+    ring = np.array([[0, 0], [50, 0], [50, 0.005], [0, 0.005]]) @ rot.T + [300, 200]
+    out = cut_spikes(ring, 0.01)
+    assert len(out) >= 3 and np.isfinite(out).all()

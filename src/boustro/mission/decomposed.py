@@ -397,11 +397,11 @@ def _cell_optima(
 def _uncertified_where_cut(optima: list[OptimizeResult], cand: _Candidate) -> list[OptimizeResult]:
     """The optima, those of cells searched without a spike (:mod:`.slivers`) marked: their
     search's certificate is the cut cell's, the plan flies the whole cell (so that it covers the
-    spike), hence ``certified`` false and ``spikes_cut`` true there."""
+    spike), hence no certificate there (``certified`` false, ``gap`` and ``lower_bound``
+    ``None``, ``spikes_cut`` true)."""
+    marks = {"certified": False, "gap": None, "lower_bound": None, "spikes_cut": True}
     return [
-        o
-        if searched is cell
-        else dataclasses.replace(o, info={**o.info, "certified": False, "spikes_cut": True})
+        o if searched is cell else dataclasses.replace(o, info={**o.info, **marks})
         for o, cell, searched in zip(optima, cand.cells, cand.searched, strict=True)
     ]
 

@@ -33,28 +33,40 @@ def cut_spikes(ring: NDArray[np.float64], width: float) -> NDArray[np.float64]:
     that end's foot on the longer edge (or goes, where the foot is the longer edge's far end).
     Repeated until no such vertex is left; the ring unchanged (the same array) if none."""
     v = np.asarray(ring, dtype=np.float64)
-    changed = True
-    while changed and len(v) > 3:
-        changed = False
-        for i in range(len(v)):
-            a, p, b = v[i - 1], v[i], v[(i + 1) % len(v)]
-            u1, u2 = a - p, b - p
-            l1, l2 = float(np.hypot(*u1)), float(np.hypot(*u2))
-            if min(l1, l2) <= 0 or float(u1 @ u2) <= 0:
-                continue
-            ul, ll, us = (u1, l1, u2) if l1 >= l2 else (u2, l2, u1)
-            if abs(float(ul[0] * us[1] - ul[1] * us[0])) / ll > width:
-                continue
-            foot = p + ul * (float(ul @ us) / (ll * ll))
-            near = a if l1 >= l2 else b  # the longer edge's far end
-            if float(np.hypot(*(foot - near))) <= width:
-                v = np.delete(v, i, axis=0)
-            else:
-                v = v.copy()
-                v[i] = foot
-            changed = True
-            break
-    return v
+    for _ in range(len(v)):  # each step moves or removes a vertex of a spike; at most n spikes
+        step = _cut_one(v, width)
+        if step is None:
+            return v
+        v = step
+    return np.asarray(ring, dtype=np.float64)  # no end in sight: the ring as given
+
+
+def _cut_one(v: NDArray[np.float64], width: float) -> NDArray[np.float64] | None:
+    """The ring with its first spike narrower than ``width`` cut (:func:`cut_spikes`); ``None``
+    if there is none. Acute means the edges' cosine above ``1e-9`` (a tip just moved to its foot
+    is a right angle, which rounding can make a hair acute), and a vertex whose foot is itself
+    is not a spike."""
+    if len(v) <= 3:
+        return None
+    for i in range(len(v)):
+        a, p, b = v[i - 1], v[i], v[(i + 1) % len(v)]
+        u1, u2 = a - p, b - p
+        l1, l2 = float(np.hypot(*u1)), float(np.hypot(*u2))
+        if min(l1, l2) <= 0 or float(u1 @ u2) <= 1e-9 * l1 * l2:
+            continue
+        ul, ll, us = (u1, l1, u2) if l1 >= l2 else (u2, l2, u1)
+        if abs(float(ul[0] * us[1] - ul[1] * us[0])) / ll > width:
+            continue
+        foot = p + ul * (float(ul @ us) / (ll * ll))
+        if float(np.hypot(*(foot - p))) <= 1e-12 * ll:
+            continue
+        near = a if l1 >= l2 else b  # the longer edge's far end
+        if float(np.hypot(*(foot - near))) <= width:
+            return np.delete(v, i, axis=0)
+        out = v.copy()
+        out[i] = foot
+        return out
+    return None
 
 
 def cut_slivers(cell: Region, width: float) -> Region:
