@@ -221,34 +221,10 @@ def plan_area(
     )
     # the tour refined lane by lane except where a turn radius's turns or the headland passes
     # are added to its order afterwards (plan.lane_tour.refinement)
-    refine = not passes and (vehicle is None or vehicle.turn_radius <= 0)
-    with refinement(refine):
-        if cost is not None:
-            finish = None
-            if field is not None or vehicle is not None:  # the costs of what is flown
-
-                def finish(plan: Plan) -> Plan:
-                    if field is None and vehicle is not None:  # its statistics, no waypoints
-                        stats = vehicle_stats(plan, vehicle, field=turns_in)
-                        return dataclasses.replace(plan, stats=stats)
-                    empty = Planned(plan, None, None)  # type: ignore[arg-type]
-                    return _drive(frame, empty, field, passes, vehicle, False, turns_in).plan
-
-            cell_finish = None
-            if vehicle is not None:  # a cell's own lanes with the vehicle's turns (no headland)
-
-                def cell_finish(plan: Plan) -> Plan:
-                    return dataclasses.replace(plan, stats=vehicle_stats(plan, vehicle))
-
-            skips = vehicle is not None and vehicle.turn_radius > 0  # every other lane possible
-            planned = _plan_for_cost(
-                frame, cost, decompose, sweep, settings, finish, skips, cell_finish, passes
-            )
-        elif frame.region is None:
-            planned = plan_convex(frame, **settings)
-        else:
-            planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
-        planned = _drive(frame, planned, field, passes, vehicle, check_coverage, turns_in)
+    with refinement(not passes and (vehicle is None or vehicle.turn_radius <= 0)):
+        planned = _plan_and_drive(
+            frame, cost, settings, decompose, sweep, field, passes, vehicle, turns_in
+        )
     # the length outside, measured once on the path flown (lanes, passes, moves, curves)
     # against the whole area (not its hull, nor the inner field of a headland)
     planned = planned._replace(plan=with_outside_length(planned.plan, whole))
@@ -256,6 +232,48 @@ def plan_area(
         frame = frame._replace(depth=0.0)
     mission = map_back(frame, planned, altitude=altitude, turnaround=turnaround)
     return with_camera(mission, camera_trigger(spacing))
+
+
+def _plan_and_drive(
+    frame: Frame,
+    cost: CoverCost | None,
+    settings: dict[str, Any],
+    decompose: bool | None,
+    sweep: float | None,
+    field: Region | None,
+    passes: int,
+    vehicle: Vehicle | None,
+    turns_in: Region | None,
+) -> Planned:
+    """The plan for the objective (a plan-level cost: :func:`_plan_for_cost`; else Eq. 1's
+    convex or concave planner), then driven: headland passes around ``field`` and the
+    vehicle's turns (:func:`_drive`)."""
+    if cost is not None:
+        finish = None
+        if field is not None or vehicle is not None:  # the costs of what is flown
+
+            def finish(plan: Plan) -> Plan:
+                if field is None and vehicle is not None:  # its statistics, no waypoints
+                    stats = vehicle_stats(plan, vehicle, field=turns_in)
+                    return dataclasses.replace(plan, stats=stats)
+                empty = Planned(plan, None, None)  # type: ignore[arg-type]
+                return _drive(frame, empty, field, passes, vehicle, False, turns_in).plan
+
+        cell_finish = None
+        if vehicle is not None:  # a cell's own lanes with the vehicle's turns (no headland)
+
+            def cell_finish(plan: Plan) -> Plan:
+                return dataclasses.replace(plan, stats=vehicle_stats(plan, vehicle))
+
+        skips = vehicle is not None and vehicle.turn_radius > 0  # every other lane possible
+        planned = _plan_for_cost(
+            frame, cost, decompose, sweep, settings, finish, skips, cell_finish, passes
+        )
+    elif frame.region is None:
+        planned = plan_convex(frame, **settings)
+    else:
+        planned = plan_concave(frame, decompose=decompose, sweep=sweep, **settings)
+    return _drive(frame, planned, field, passes, vehicle, settings["check_coverage"], turns_in)
 
 
 def _plan_for_cost(
