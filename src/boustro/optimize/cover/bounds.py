@@ -57,6 +57,7 @@ def lower_bounds(
     tour_keep: NDArray[np.float64] | None = None,
     tour_skipped: NDArray[np.bool_] | None = None,
     multipliers: Multipliers | None = None,
+    tour_steps: int | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every plan of the layouts' grids over any area
     between ``level``'s inner and outer sets.
@@ -80,7 +81,8 @@ def lower_bounds(
     per layout, if given), the 1-tree bound (:func:`~.one_tree.one_tree_bound`, its moves past
     ``walls``; its steps stop once the layout's bound reaches ``tour_below``); the layouts
     below ``tour_below`` but not below ``tour_keep`` are marked in ``tour_skipped`` (an output,
-    filled when given with ``tour_keep``; ``multipliers``: the 1-tree's starts, kept).
+    filled when given with ``tour_keep``; ``multipliers``: the 1-tree's starts, kept;
+    ``tour_steps``: its subgradient steps, default :data:`~.one_tree.ONE_TREE_STEPS`).
     ``runins=False`` (an
     area with holes: the planner cuts a run-in or run-out that would enter a hole) counts no
     run-ins or run-outs in the lanes' length.
@@ -119,8 +121,9 @@ def lower_bounds(
                     tour_skipped[:] = todo & (out >= tour_keep)
                 todo &= out < tour_keep
             tree = one_tree_bound(
-                st, spacing, cost, todo=todo, walls=walls, enough=enough, multipliers=multipliers
-            )
+                st, spacing, cost, todo=todo, walls=walls, enough=enough,
+                multipliers=multipliers, steps=tour_steps,
+            )  # fmt: skip
             out = out + np.maximum(tree - move_cost, 0.0)
         return out
     length = st.length.sum(axis=1) + runs + moves + perimeter

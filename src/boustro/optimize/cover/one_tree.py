@@ -41,12 +41,16 @@ from ..._jit import jit, jit_globals
 from .bands import BandStats
 from .cost import CoverCost
 
-__all__ = ["MAX_LANES", "ONE_TREE_STEPS", "Multipliers", "one_tree_bound"]
+__all__ = ["MAX_LANES", "ONE_TREE_STEPS", "POINT_TREE_STEPS", "Multipliers", "one_tree_bound"]
 
 #: Layouts with more counted lanes than this are not bounded (``O(lanes^2)`` per step).
 MAX_LANES = 160
 #: Subgradient steps per layout.
 ONE_TREE_STEPS = 40
+#: Subgradient steps at a single layout (the search's point values, which set its lowest model
+#: and so the certificate's settling floor): 40 steps fall 1-3 m of moves short of the
+#: multipliers' limit there (docs/mission_time.md, "The 1-tree's steps at single layouts").
+POINT_TREE_STEPS = 120
 #: The walls lengthen the distances between ends on lines at most this many lines apart only:
 #: the 1-tree's edges are short (on the random areas of ``benchmarks/tour_bound.py`` the
 #: bounds with 1 and with every line are the same; the walls took 40% of its CPU).

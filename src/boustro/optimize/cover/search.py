@@ -25,7 +25,7 @@ from .centred import CENTRED_SEEDS, centred_offsets, try_centred
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
 from .inside_bound import contour_edges, inside_box_bounds, path_floor
-from .one_tree import MAX_LANES, Multipliers
+from .one_tree import MAX_LANES, POINT_TREE_STEPS, Multipliers
 from .sandwich import Level, Sandwich
 from .walls import WallCache
 
@@ -258,6 +258,7 @@ class CoverSearch:
                 multipliers=None if multipliers is None else Multipliers(
                     multipliers.values.copy(), multipliers.warm.copy(), multipliers.k0
                 ),
+                tour_steps=POINT_TREE_STEPS,
             )  # fmt: skip
             if self.evaluate is None:  # the model is the plan
                 self.ranks = out
