@@ -390,6 +390,7 @@ def _leaf(
     first_hi,
     last_lo,
     pieces,
+    split,
 ):
     ih1, ih2, it1, it2 = _project(inner_xy, cs, sn, ox, oy)
     oh1, oh2, ot1, ot2 = _project(outer_xy, cs, sn, ox, oy)
@@ -448,7 +449,7 @@ def _leaf(
         # outer pieces holding inner length; split at the split gaps where that counts more
         c = _count_pieces(qlo, qhi, qlo, qhi, n_q, plo, phi, n_p, tol, pieces[b])
         ng = _split_gaps(hxy, hstart, ext, cs, sn, ox, oy, d + (k0 + b) * s, glo, ghi)
-        if ng > 0:
+        if split and ng > 0:
             n_s = _split_pieces(qlo, qhi, n_q, glo, ghi, ng, slo, shi, llo, lhi)
             c_s = _count_pieces(slo, shi, llo, lhi, n_s, plo, phi, n_p, tol, split_row)
             if c_s > c:
@@ -486,6 +487,7 @@ def _all(
     hstart,
     delta,
     eta,
+    split,
 ):
     n = cs.shape[0]
     length = np.zeros((n, nb))
@@ -532,6 +534,7 @@ def _all(
             first_hi[leaf],
             last_lo[leaf],
             pieces[leaf],
+            split,
         )
     return length, count, in_lo, in_hi, out_lo, out_hi, cut, rigid, first_hi, last_lo, pieces
 
@@ -562,10 +565,14 @@ def band_stats(
     *,
     inner_reach: float | None = None,
     rigid: RigidBoxes | None = None,
+    split: bool = True,
 ) -> BandStats:
     """:class:`BandStats` of the layouts ``(angles[l], offsets[l])`` for lines ``k`` in
     ``k_range`` (inclusive; it must hold every line whose band meets the outer set); with
-    ``rigid``, also the holes every plan of each box cuts (``BandStats.rigid``)."""
+    ``rigid``, also the holes every plan of each box cuts (``BandStats.rigid``) and, with
+    ``split``, the lines those holes split in every plan of the box
+    (:func:`~.rigid._split_gaps`: a line's ``count`` and ``pieces`` from its outer pieces split
+    there where that counts more lanes)."""
     k0, k1 = k_range
     fn = _compiled()
     angles = np.ascontiguousarray(angles, dtype=np.float64)
@@ -583,6 +590,6 @@ def band_stats(
         np.ascontiguousarray(rigid.xy, dtype=np.float64),
         np.ascontiguousarray(rigid.start, dtype=np.int64),
         np.ascontiguousarray(rigid.delta, dtype=np.float64),
-        np.ascontiguousarray(rigid.eta, dtype=np.float64),
+        np.ascontiguousarray(rigid.eta, dtype=np.float64), bool(split),
     )  # fmt: skip
     return BandStats(int(k0), *out)
