@@ -418,7 +418,7 @@ def _leaf(
     # the holes' split gaps (:func:`.rigid._split_gaps`): every plan of the box has a gap there
     n_h = hstart.shape[0] - 1
     ext = np.empty((n_h, 5))
-    _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, ext)
+    _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, split, ext)
     glo, ghi = np.empty(n_h + 1), np.empty(n_h + 1)
     slo, shi = np.empty(room + n_h), np.empty(room + n_h)
     llo, lhi = np.empty(room + n_h), np.empty(room + n_h)
@@ -449,7 +449,7 @@ def _leaf(
         # outer pieces holding inner length; split at the split gaps where that counts more
         c = _count_pieces(qlo, qhi, qlo, qhi, n_q, plo, phi, n_p, tol, pieces[b])
         ng = _split_gaps(hxy, hstart, ext, cs, sn, ox, oy, d + (k0 + b) * s, glo, ghi)
-        if split and ng > 0:
+        if ng > 0:
             n_s = _split_pieces(qlo, qhi, n_q, glo, ghi, ng, slo, shi, llo, lhi)
             c_s = _count_pieces(slo, shi, llo, lhi, n_s, plo, phi, n_p, tol, split_row)
             if c_s > c:
@@ -570,9 +570,10 @@ def band_stats(
     """:class:`BandStats` of the layouts ``(angles[l], offsets[l])`` for lines ``k`` in
     ``k_range`` (inclusive; it must hold every line whose band meets the outer set); with
     ``rigid``, also the holes every plan of each box cuts (``BandStats.rigid``) and, with
-    ``split``, the lines those holes split in every plan of the box
-    (:func:`~.rigid._split_gaps`: a line's ``count`` and ``pieces`` from its outer pieces split
-    there where that counts more lanes)."""
+    ``split``, the lines that the holes the outer set lost (eroded away: thinner than the
+    sandwich's radius) split in every plan of the box (:func:`~.rigid._split_gaps`: a line's
+    ``count`` and ``pieces`` from its outer pieces split there where that counts more
+    lanes)."""
     k0, k1 = k_range
     fn = _compiled()
     angles = np.ascontiguousarray(angles, dtype=np.float64)
@@ -580,6 +581,12 @@ def band_stats(
         rigid = RigidBoxes(np.zeros((0, 2)), np.zeros(1, dtype=np.int64),
                            np.full(len(angles), -1.0), np.zeros(len(angles)))  # fmt: skip
     chords = inner.xy[inner.hole >= 0] if inner.chords is None else inner.chords
+    # the split gaps of the holes the outer set lost (eroded away): elsewhere its own hole
+    # chords split the lines (and the search's path stays that of the bound without them)
+    gone = np.zeros(len(rigid.start) - 1, dtype=np.bool_)
+    if split:
+        gone[:] = True
+        gone[outer.hole[(outer.hole >= 0) & (outer.hole < len(gone))]] = False
     out = fn(
         np.ascontiguousarray(inner.xy), np.ascontiguousarray(inner.hole),
         np.ascontiguousarray(outer.xy), np.ascontiguousarray(outer.hole),
@@ -590,6 +597,6 @@ def band_stats(
         np.ascontiguousarray(rigid.xy, dtype=np.float64),
         np.ascontiguousarray(rigid.start, dtype=np.int64),
         np.ascontiguousarray(rigid.delta, dtype=np.float64),
-        np.ascontiguousarray(rigid.eta, dtype=np.float64), bool(split),
+        np.ascontiguousarray(rigid.eta, dtype=np.float64), gone,
     )  # fmt: skip
     return BandStats(int(k0), *out)

@@ -53,10 +53,11 @@ def _rigid_cuts(
                 break
 
 
-def _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, ext):
+def _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, split, ext):
     """Per hole ``h``, ``ext[h] = (n_lo, n_hi, u_lo, u_hi, m)``: its extents across and along
     the lines of the layout and ``m = delta rho + eta + tol``, the most any of its points moves
-    in the box (``rho``: its farthest vertex from the origin); ``m = -1`` without a box."""
+    in the box (``rho``: its farthest vertex from the origin); ``m = -1`` without a box or
+    where ``split[h]`` is false (no split gaps of that hole)."""
     for h in range(hstart.shape[0] - 1):
         n_lo, n_hi, u_lo, u_hi, rho = np.inf, -np.inf, np.inf, -np.inf, 0.0
         for v in range(hstart[h], hstart[h + 1]):
@@ -66,7 +67,7 @@ def _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, ext):
             u_lo, u_hi = min(u_lo, uv), max(u_hi, uv)
             rho = max(rho, math.sqrt(x * x + y * y))
         ext[h, 0], ext[h, 1], ext[h, 2], ext[h, 3] = n_lo, n_hi, u_lo, u_hi
-        ext[h, 4] = delta * rho + eta + tol if delta >= 0 else -1.0
+        ext[h, 4] = delta * rho + eta + tol if delta >= 0 and split[h] else -1.0
 
 
 def _split_gaps(hxy, hstart, ext, cs, sn, ox, oy, c, glo, ghi):
