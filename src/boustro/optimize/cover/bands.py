@@ -418,7 +418,9 @@ def _leaf(
     # the holes' split gaps (:func:`.rigid._split_gaps`): every plan of the box has a gap there
     n_h = hstart.shape[0] - 1
     ext = np.empty((n_h, 5))
-    _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, split, ext)
+    any_split = delta >= 0 and split.any()
+    if any_split:
+        _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, split, ext)
     glo, ghi = np.empty(n_h + 1), np.empty(n_h + 1)
     slo, shi = np.empty(room + n_h), np.empty(room + n_h)
     llo, lhi = np.empty(room + n_h), np.empty(room + n_h)
@@ -448,7 +450,9 @@ def _leaf(
         n_q = _minus(o_lo[q0 : q0 + mo], o_hi[q0 : q0 + mo], mo, go[0::2], go[1::2], 0.0, qlo, qhi)
         # outer pieces holding inner length; split at the split gaps where that counts more
         c = _count_pieces(qlo, qhi, qlo, qhi, n_q, plo, phi, n_p, tol, pieces[b])
-        ng = _split_gaps(hxy, hstart, ext, cs, sn, ox, oy, d + (k0 + b) * s, glo, ghi)
+        ng = 0
+        if any_split:
+            ng = _split_gaps(hxy, hstart, ext, cs, sn, ox, oy, d + (k0 + b) * s, glo, ghi)
         if ng > 0:
             n_s = _split_pieces(qlo, qhi, n_q, glo, ghi, ng, slo, shi, llo, lhi)
             c_s = _count_pieces(slo, shi, llo, lhi, n_s, plo, phi, n_p, tol, split_row)
