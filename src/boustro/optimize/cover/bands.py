@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._jit import jit, jit_globals
-from .rigid import RigidBoxes, _rigid_cuts
+from .rigid import RigidBoxes, _hole_extents, _rigid_cuts, _split_gaps, _split_pieces
 
 __all__ = ["BandStats", "EdgeSet", "RigidBoxes", "band_stats", "edge_set"]
 
@@ -334,6 +334,30 @@ def _minus(lo, hi, n, glo, ghi, tol, out_lo, out_hi):
     return m
 
 
+def _count_pieces(slo, shi, llo, lhi, n, plo, phi, n_p, tol, row):
+    """The pieces ``[slo, shi]`` (sorted, disjoint) holding inner length (``[plo, phi]``, ``n_p``
+    pieces), and in ``row`` (:attr:`BandStats.pieces`) the loose ends ``llo, lhi`` of the first,
+    second, last and the one before the last of them; returns their number."""
+    row[:] = math.nan
+    c = 0
+    j = 0
+    before = math.nan  # the end of the counted piece before the last one
+    for q in range(n):
+        while j < n_p and phi[j] <= slo[q] + tol:
+            j += 1
+        if j < n_p and plo[j] < shi[q] - tol:
+            c += 1
+            if c == 1:
+                row[0] = lhi[q]
+            elif c == 2:
+                row[1] = llo[q]
+            if c >= 2:
+                row[2] = llo[q]
+                row[3] = before
+            before = lhi[q]
+    return c
+
+
 def _leaf(
     inner_xy,
     inner_hole,
@@ -366,6 +390,7 @@ def _leaf(
     first_hi,
     last_lo,
     pieces,
+    split,
 ):
     ih1, ih2, it1, it2 = _project(inner_xy, cs, sn, ox, oy)
     oh1, oh2, ot1, ot2 = _project(outer_xy, cs, sn, ox, oy)
@@ -390,6 +415,16 @@ def _leaf(
         room = max(room, o_m[b] + go_start[b + 1] - go_start[b] + 1)
     plo, phi = np.empty(room), np.empty(room)
     qlo, qhi = np.empty(room), np.empty(room)
+    # the holes' split gaps (:func:`.rigid._split_gaps`): every plan of the box has a gap there
+    n_h = hstart.shape[0] - 1
+    ext = np.empty((n_h, 5))
+    any_split = delta >= 0 and split.any()
+    if any_split:
+        _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, split, ext)
+    glo, ghi = np.empty(n_h + 1), np.empty(n_h + 1)
+    slo, shi = np.empty(room + n_h), np.empty(room + n_h)
+    llo, lhi = np.empty(room + n_h), np.empty(room + n_h)
+    split_row = np.empty(4)
     for b in range(nb):
         p0, m = i_start[b], i_m[b]
         q0, mo = o_start[b], o_m[b]
@@ -413,23 +448,17 @@ def _leaf(
         go = go_t[go_start[b] : go_start[b + 1]]
         gh = go_h[go_start[b] : go_start[b + 1]]
         n_q = _minus(o_lo[q0 : q0 + mo], o_hi[q0 : q0 + mo], mo, go[0::2], go[1::2], 0.0, qlo, qhi)
-        # outer pieces holding inner length
-        c = 0
-        j = 0
-        before = math.nan  # the end of the counted piece before the last one
-        for q in range(n_q):
-            while j < n_p and phi[j] <= qlo[q] + tol:
-                j += 1
-            if j < n_p and plo[j] < qhi[q] - tol:
-                c += 1
-                if c == 1:
-                    pieces[b, 0] = qhi[q]
-                elif c == 2:
-                    pieces[b, 1] = qlo[q]
-                if c >= 2:
-                    pieces[b, 2] = qlo[q]
-                    pieces[b, 3] = before
-                before = qhi[q]
+        # outer pieces holding inner length; split at the split gaps where that counts more
+        c = _count_pieces(qlo, qhi, qlo, qhi, n_q, plo, phi, n_p, tol, pieces[b])
+        ng = 0
+        if any_split:
+            ng = _split_gaps(hxy, hstart, ext, cs, sn, ox, oy, d + (k0 + b) * s, glo, ghi)
+        if ng > 0:
+            n_s = _split_pieces(qlo, qhi, n_q, glo, ghi, ng, slo, shi, llo, lhi)
+            c_s = _count_pieces(slo, shi, llo, lhi, n_s, plo, phi, n_p, tol, split_row)
+            if c_s > c:
+                c = c_s
+                pieces[b, :] = split_row
         count[b] = c
         # holes whose outer chord overlaps the inner projection
         for q in range(0, go.shape[0] - 1, 2):
@@ -462,6 +491,7 @@ def _all(
     hstart,
     delta,
     eta,
+    split,
 ):
     n = cs.shape[0]
     length = np.zeros((n, nb))
@@ -508,6 +538,7 @@ def _all(
             first_hi[leaf],
             last_lo[leaf],
             pieces[leaf],
+            split,
         )
     return length, count, in_lo, in_hi, out_lo, out_hi, cut, rigid, first_hi, last_lo, pieces
 
@@ -519,6 +550,7 @@ def _compiled() -> Any:
         return _all
     jit_globals(globals(), ("_project", "_sort_pairs", "_sort_keys", "_band_intervals",
                             "_crossings", "_overlaps", "_hole_chords", "_minus", "_rigid_cuts",
+                            "_hole_extents", "_split_gaps", "_split_pieces", "_count_pieces",
                             "_leaf"))  # fmt: skip
     return jit(_all)
 
@@ -537,10 +569,15 @@ def band_stats(
     *,
     inner_reach: float | None = None,
     rigid: RigidBoxes | None = None,
+    split: bool = True,
 ) -> BandStats:
     """:class:`BandStats` of the layouts ``(angles[l], offsets[l])`` for lines ``k`` in
     ``k_range`` (inclusive; it must hold every line whose band meets the outer set); with
-    ``rigid``, also the holes every plan of each box cuts (``BandStats.rigid``)."""
+    ``rigid``, also the holes every plan of each box cuts (``BandStats.rigid``) and, with
+    ``split``, the lines that the holes the outer set lost (eroded away: thinner than the
+    sandwich's radius) split in every plan of the box (:func:`~.rigid._split_gaps`: a line's
+    ``count`` and ``pieces`` from its outer pieces split there where that counts more
+    lanes)."""
     k0, k1 = k_range
     fn = _compiled()
     angles = np.ascontiguousarray(angles, dtype=np.float64)
@@ -548,6 +585,12 @@ def band_stats(
         rigid = RigidBoxes(np.zeros((0, 2)), np.zeros(1, dtype=np.int64),
                            np.full(len(angles), -1.0), np.zeros(len(angles)))  # fmt: skip
     chords = inner.xy[inner.hole >= 0] if inner.chords is None else inner.chords
+    # the split gaps of the holes the outer set lost (eroded away): elsewhere its own hole
+    # chords split the lines (and the search's path stays that of the bound without them)
+    gone = np.zeros(len(rigid.start) - 1, dtype=np.bool_)
+    if split:
+        gone[:] = True
+        gone[outer.hole[(outer.hole >= 0) & (outer.hole < len(gone))]] = False
     out = fn(
         np.ascontiguousarray(inner.xy), np.ascontiguousarray(inner.hole),
         np.ascontiguousarray(outer.xy), np.ascontiguousarray(outer.hole),
@@ -558,6 +601,6 @@ def band_stats(
         np.ascontiguousarray(rigid.xy, dtype=np.float64),
         np.ascontiguousarray(rigid.start, dtype=np.int64),
         np.ascontiguousarray(rigid.delta, dtype=np.float64),
-        np.ascontiguousarray(rigid.eta, dtype=np.float64),
+        np.ascontiguousarray(rigid.eta, dtype=np.float64), gone,
     )  # fmt: skip
     return BandStats(int(k0), *out)

@@ -51,3 +51,98 @@ def _rigid_cuts(
             if found:
                 rigid[h] = True
                 break
+
+
+def _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, split, ext):
+    """Per hole ``h``, ``ext[h] = (n_lo, n_hi, u_lo, u_hi, m)``: its extents across and along
+    the lines of the layout and ``m = delta rho + eta + tol``, the most any of its points moves
+    in the box (``rho``: its farthest vertex from the origin); ``m = -1`` without a box or
+    where ``split[h]`` is false (no split gaps of that hole)."""
+    for h in range(hstart.shape[0] - 1):
+        n_lo, n_hi, u_lo, u_hi, rho = np.inf, -np.inf, np.inf, -np.inf, 0.0
+        for v in range(hstart[h], hstart[h + 1]):
+            x, y = hxy[v, 0] - ox, hxy[v, 1] - oy
+            nv, uv = -sn * x + cs * y, cs * x + sn * y
+            n_lo, n_hi = min(n_lo, nv), max(n_hi, nv)
+            u_lo, u_hi = min(u_lo, uv), max(u_hi, uv)
+            rho = max(rho, math.sqrt(x * x + y * y))
+        ext[h, 0], ext[h, 1], ext[h, 2], ext[h, 3] = n_lo, n_hi, u_lo, u_hi
+        ext[h, 4] = delta * rho + eta + tol if delta >= 0 and split[h] else -1.0
+
+
+def _split_gaps(hxy, hstart, ext, cs, sn, ox, oy, c, glo, ghi):
+    """The *split gaps* of the line at ``c`` (across), sorted and merged into ``glo, ghi``;
+    returns their number. A hole whose extent across the lines, shrunk by its ``m``, holds
+    ``c`` strictly is crossed by the line at every rigid image of the box (its points move by
+    at most ``m``; it is connected). The points of a moved hole on the line come from points
+    of the hole within ``m`` of it (across) and moved by at most ``m`` (along): its chord lies
+    in the hole's part in the slab ``|n - c| <= m``, its extent along the line grown by ``m``
+    (the hole's edges clipped to the slab). Every plan of the box has a gap in its lanes
+    there, however thin the hole (a sandwich's outer set may erode it away)."""
+    ng = 0
+    for h in range(ext.shape[0]):
+        m = ext[h, 4]
+        if not (m >= 0 and ext[h, 0] + m < c < ext[h, 1] - m):
+            continue
+        u_lo, u_hi = np.inf, -np.inf
+        v0, v1 = hstart[h], hstart[h + 1]
+        for v in range(v0, v1):
+            w = v + 1 if v + 1 < v1 else v0
+            x1, y1 = hxy[v, 0] - ox, hxy[v, 1] - oy
+            x2, y2 = hxy[w, 0] - ox, hxy[w, 1] - oy
+            n1, n2 = -sn * x1 + cs * y1, -sn * x2 + cs * y2
+            t1, t2 = cs * x1 + sn * y1, cs * x2 + sn * y2
+            a, b = max(min(n1, n2), c - m), min(max(n1, n2), c + m)
+            if a > b:
+                continue
+            if n1 == n2:
+                ta, tb = t1, t2
+            else:
+                ta = t1 + (a - n1) * (t2 - t1) / (n2 - n1)
+                tb = t1 + (b - n1) * (t2 - t1) / (n2 - n1)
+            u_lo, u_hi = min(u_lo, ta, tb), max(u_hi, ta, tb)
+        glo[ng], ghi[ng] = u_lo - m, u_hi + m
+        ng += 1
+    # sort by start (insertion sort, few holes), then merge overlapping gaps
+    for q in range(1, ng):
+        a, b = glo[q], ghi[q]
+        j = q - 1
+        while j >= 0 and glo[j] > a:
+            glo[j + 1], ghi[j + 1] = glo[j], ghi[j]
+            j -= 1
+        glo[j + 1], ghi[j + 1] = a, b
+    n = 0
+    for q in range(ng):
+        if n > 0 and glo[q] <= ghi[n - 1]:
+            ghi[n - 1] = max(ghi[n - 1], ghi[q])
+        else:
+            glo[n], ghi[n] = glo[q], ghi[q]
+            n += 1
+    return n
+
+
+def _split_pieces(qlo, qhi, n_q, glo, ghi, ng, slo, shi, llo, lhi):
+    """The pieces ``qlo, qhi`` (sorted, disjoint) split at the split gaps ``glo, ghi``: per
+    sub-piece its *strict* extent ``[slo, shi]`` (the piece minus the gaps: points of two
+    sub-pieces are never in one lane of a plan of the box, a real hole's chord lies between)
+    and its *loose* one ``[llo, lhi]`` (a lane holding a point of the strict extent lies in
+    it: it ends before the chord, at most at the gap's end); returns their number."""
+    n = 0
+    g = 0
+    for q in range(n_q):
+        a, b = qlo[q], qhi[q]
+        while g < ng and ghi[g] <= a:
+            g += 1
+        cur, loose = a, a
+        gg = g
+        while gg < ng and glo[gg] < b:
+            if glo[gg] > cur:
+                slo[n], shi[n], llo[n], lhi[n] = cur, glo[gg], loose, min(b, ghi[gg])
+                n += 1
+            cur = max(cur, ghi[gg])
+            loose = max(a, glo[gg])
+            gg += 1
+        if b > cur:
+            slo[n], shi[n], llo[n], lhi[n] = cur, b, loose, b
+            n += 1
+    return n
