@@ -43,6 +43,7 @@ __all__ = [
     "MARGINS",
     "MAX_PATCHES",
     "SCREEN_SLACK",
+    "SPUR_CACHE",
     "boundary_passes",
     "clip_lanes",
     "inside_layout",
@@ -56,6 +57,8 @@ MAX_PATCHES = 5000
 BAND_CACHE = 4096
 #: Unions of bands kept (:func:`_bands`).
 UNION_CACHE = 128
+#: Contour stretches whose corner spurs an area's :class:`_Geometry` keeps (:meth:`_Geometry.spurs`).
+SPUR_CACHE = 1024
 #: Areas whose shapely geometry (:func:`_geometry`) is kept: a search plans one area (or a
 #: decomposition's few cells) hundreds of times.
 AREA_CACHE = 32
@@ -75,12 +78,29 @@ class _Geometry:
         self.tol = 1e-9 * area.diameter
         self._contour: Contour | None = None
         self._shrunk: dict[float, Any] = {}
+        self._spurs: dict[tuple[bytes, int, float], NDArray[np.float64]] = {}
 
     @property
     def contour(self) -> Contour:
         if self._contour is None:
             self._contour = contour_of(self.target, self.spacing / 2, self.tol)
         return self._contour
+
+    def spurs(self, line: NDArray[np.float64], reach: float) -> NDArray[np.float64]:
+        """``line`` (a kept stretch of the contour) with its corner spurs
+        (:func:`~boustro.plan.contour._corner_spurs`), cached by the stretch's points: the plans
+        of a search keep the same few stretches (the whole ring where the lanes leave some of
+        it all round), and the spurs depend on nothing else (the same array, read-only)."""
+        key = (np.ascontiguousarray(line, dtype=np.float64).tobytes(), len(line), reach)
+        out = self._spurs.get(key)
+        if out is None:
+            if len(self._spurs) >= SPUR_CACHE:
+                self._spurs.pop(next(iter(self._spurs)))
+            out = _corner_spurs(line, self.contour, self.spacing / 2, reach, self.tol)
+            out = np.array(out, dtype=np.float64)  # its own copy, never written
+            out.flags.writeable = False
+            self._spurs[key] = out
+        return out
 
     def shrunk(self, margin: float) -> Any:
         """The area shrunk by ``margin`` (``quad_segs=8``), prepared."""
@@ -269,7 +289,7 @@ def _completed(
 
     target, spacing, tol = geo.target, geo.spacing, geo.tol
     eps = 1e-7 * spacing  # slivers thinner than this are rounding
-    passes = [_corner_spurs(line, geo.contour, spacing / 2, reach, tol) for line in arcs]
+    passes = [geo.spurs(line, reach) for line in arcs]
     inner = reach  # as boustro.plan.coverage measures the passes (quad_segs=64)
 
     def cover(lines: list[NDArray[np.float64]], rest: Any) -> Any:
