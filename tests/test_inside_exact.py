@@ -1,8 +1,10 @@
-"""Issue 16 (tenth round): three cuts in :mod:`boustro.plan.inside` that must not change a plan.
+"""Issue 16 (tenth round): four cuts in :mod:`boustro.plan.inside` that must not change a plan.
 Each is checked bit for bit against the code it replaced (kept here as the reference): the
 corner spurs cached per area (:meth:`inside._Geometry.spurs`), the lanes' intervals in the
-shrunk area found for all lanes at once (:func:`inside._shrunk_intervals`), and the runs of
-pass segments near the residual found with arrays (:func:`inside._near`)."""
+shrunk area found for all lanes at once (:func:`inside._shrunk_intervals`), the runs of
+pass segments near the residual found with arrays (:func:`inside._near`), and the pieces
+kept without a negative buffer where their area shows a deep point
+(:func:`boustro.plan.contour._pieces`)."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ import math
 import numpy as np
 import pytest
 import shapely
+import shapely.affinity
 
 from boustro.geometry.region import Region
 from boustro.plan import inside
@@ -139,3 +142,41 @@ def test_near_of_nothing(n):
     lines = [np.array([[5.0, 5.0], [6.0, 5.0]])] * n
     assert inside._near(lines, rest, 1.0) == _near_before(lines, rest, 1.0) == []
     assert _pieces(rest, 1e-7)
+
+
+def _pieces_before(geometry, eps):
+    """:func:`boustro.plan.contour._pieces` as it was: every polygon buffered."""
+    polys = [g for g in shapely.get_parts(geometry) if g.geom_type == "Polygon" and not g.is_empty]
+    if not polys:
+        return []
+    kept = ~shapely.is_empty(shapely.buffer(polys, -eps, quad_segs=16))
+    return [g for g, ok in zip(polys, kept, strict=True) if ok]
+
+
+def test_pieces_equal_the_buffered_test():
+    """Residual-like collections: boxes, slivers a few eps thin (kept or not by the buffer),
+    spikes, a ring, a line mixed in; the same pieces as buffering every one."""
+    rng = np.random.default_rng(2)
+    eps = 1e-7 * SPACING
+    dropped = 0
+    for _ in range(20):
+        geoms = []
+        for _ in range(12):
+            x, y = rng.uniform(0, 100, 2)
+            w = rng.choice([rng.uniform(0.1, 10), eps * rng.uniform(0.5, 4)])
+            h = rng.uniform(eps, 20)
+            box = shapely.box(x, y, x + w, y + h)
+            geoms.append(shapely.affinity.rotate(box, rng.uniform(0, 180), origin=(x, y)))
+        geoms.append(shapely.Polygon([(0, 0), (50, 0), (50, 3 * eps)]))  # a spike
+        geoms.append(
+            shapely.box(0, 0, 10, 10).difference(shapely.box(eps, eps, 10 - eps, 10 - eps))
+        )
+        geoms.append(shapely.LineString([(0, 0), (5, 5)]))
+        collection = shapely.GeometryCollection(geoms)
+        got = _pieces(collection, eps)
+        want = _pieces_before(collection, eps)
+        assert len(got) == len(want)
+        dropped += len(shapely.get_parts(collection)) - 1 - len(got)  # the line is never kept
+        assert all(shapely.equals_exact(a, b, 0.0) for a, b in zip(got, want, strict=True))
+    assert dropped > 20  # slivers and the thin ring dropped, the rest kept
+    assert _pieces(shapely.Polygon(), eps) == []
