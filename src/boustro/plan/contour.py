@@ -67,11 +67,20 @@ def _pieces(geometry: Any, eps: float) -> list[Any]:
     negative buffer of ``eps``)."""
     import shapely
 
-    polys = [g for g in shapely.get_parts(geometry) if g.geom_type == "Polygon" and not g.is_empty]
-    if not polys:
+    parts = shapely.get_parts(geometry)
+    polys = parts[(shapely.get_type_id(parts) == 3) & ~shapely.is_empty(parts)]
+    if not len(polys):
         return []
-    kept = ~shapely.is_empty(shapely.buffer(polys, -eps, quad_segs=16))  # as g.buffer(-eps)
-    return [g for g, ok in zip(polys, kept, strict=True) if ok]
+    # within eps of the boundary of a polygon with n vertices and perimeter P lies at most
+    # eps (P + pi n eps) of its area (the offset curves are at most that long): a polygon of
+    # twice that area has points deeper than eps, its buffer(-eps) is not empty; the others
+    # are buffered (as g.buffer(-eps))
+    n = shapely.get_num_coordinates(polys)
+    kept = shapely.area(polys) > 2 * eps * (shapely.length(polys) + math.pi * n * eps)
+    test = np.flatnonzero(~kept)
+    if len(test):
+        kept[test] = ~shapely.is_empty(shapely.buffer(polys[test], -eps, quad_segs=16))
+    return list(polys[kept])
 
 
 def _lines(geometry: Any, tol: float) -> list[NDArray[np.float64]]:

@@ -43,6 +43,7 @@ __all__ = [
     "MARGINS",
     "MAX_PATCHES",
     "SCREEN_SLACK",
+    "SPUR_CACHE",
     "boundary_passes",
     "clip_lanes",
     "inside_layout",
@@ -56,6 +57,9 @@ MAX_PATCHES = 5000
 BAND_CACHE = 4096
 #: Unions of bands kept (:func:`_bands`).
 UNION_CACHE = 128
+#: Contour stretches whose corner spurs an area's :class:`_Geometry` keeps
+#: (:meth:`_Geometry.spurs`).
+SPUR_CACHE = 1024
 #: Areas whose shapely geometry (:func:`_geometry`) is kept: a search plans one area (or a
 #: decomposition's few cells) hundreds of times.
 AREA_CACHE = 32
@@ -75,12 +79,29 @@ class _Geometry:
         self.tol = 1e-9 * area.diameter
         self._contour: Contour | None = None
         self._shrunk: dict[float, Any] = {}
+        self._spurs: dict[tuple[bytes, int, float], NDArray[np.float64]] = {}
 
     @property
     def contour(self) -> Contour:
         if self._contour is None:
             self._contour = contour_of(self.target, self.spacing / 2, self.tol)
         return self._contour
+
+    def spurs(self, line: NDArray[np.float64], reach: float) -> NDArray[np.float64]:
+        """``line`` (a kept stretch of the contour) with its corner spurs
+        (:func:`~boustro.plan.contour._corner_spurs`), cached by the stretch's points: the plans
+        of a search keep the same few stretches (the whole ring where the lanes leave some of
+        it all round), and the spurs depend on nothing else (the same array, read-only)."""
+        key = (np.ascontiguousarray(line, dtype=np.float64).tobytes(), len(line), reach)
+        out = self._spurs.get(key)
+        if out is None:
+            if len(self._spurs) >= SPUR_CACHE:
+                self._spurs.pop(next(iter(self._spurs)))
+            out = _corner_spurs(line, self.contour, self.spacing / 2, reach, self.tol)
+            out = np.array(out, dtype=np.float64)  # its own copy, never written
+            out.flags.writeable = False
+            self._spurs[key] = out
+        return out
 
     def shrunk(self, margin: float) -> Any:
         """The area shrunk by ``margin`` (``quad_segs=8``), prepared."""
@@ -146,21 +167,25 @@ def clip_lanes(
 
 def _shrunk_intervals(lanes: Lanes, inner: Any) -> list[list[tuple[float, float]]]:
     """Per lane, the intervals (along it) of its line inside ``inner`` (the area shrunk by the
-    margin, :meth:`_Geometry.shrunk`)."""
+    margin, :meth:`_Geometry.shrunk`): the line parts of each lane's intersection, their
+    extreme points along the lane (all parts at once: the same products as part by part)."""
     import shapely
 
     u, _ = _frame(lanes.angle)
     if len(lanes.k) == 0 or inner.is_empty:
         return [[] for _ in lanes.k]
     parts = shapely.intersection(shapely.linestrings(lanes.segments), inner)
-    rows = []
-    for g in parts:
-        row = []
-        for line in shapely.get_parts(g):
-            if line.geom_type == "LineString" and not line.is_empty:
-                t = (np.asarray(line.coords) - lanes.origin) @ u
-                row.append((float(t.min()), float(t.max())))
-        rows.append(row)
+    rows: list[list[tuple[float, float]]] = [[] for _ in range(len(parts))]
+    lines, owner = shapely.get_parts(parts, return_index=True)
+    pick = (shapely.get_type_id(lines) == 1) & ~shapely.is_empty(lines)  # LineStrings
+    if not pick.any():
+        return rows
+    xy, which = shapely.get_coordinates(lines[pick], return_index=True)
+    t = (xy - lanes.origin) @ u
+    starts = np.concatenate([[0], np.flatnonzero(np.diff(which)) + 1])
+    lo, hi = np.minimum.reduceat(t, starts), np.maximum.reduceat(t, starts)
+    for i, a, b in zip(owner[pick].tolist(), lo.tolist(), hi.tolist(), strict=True):
+        rows[i].append((a, b))
     return rows
 
 
@@ -269,7 +294,7 @@ def _completed(
 
     target, spacing, tol = geo.target, geo.spacing, geo.tol
     eps = 1e-7 * spacing  # slivers thinner than this are rounding
-    passes = [_corner_spurs(line, geo.contour, spacing / 2, reach, tol) for line in arcs]
+    passes = [geo.spurs(line, reach) for line in arcs]
     inner = reach  # as boustro.plan.coverage measures the passes (quad_segs=64)
 
     def cover(lines: list[NDArray[np.float64]], rest: Any) -> Any:
@@ -308,24 +333,24 @@ def _near(lines: list[NDArray[np.float64]], rest: Any, far: float) -> list[NDArr
     if not lines or rest.is_empty:
         return []
     segs = np.concatenate([np.stack([line[:-1], line[1:]], axis=1) for line in lines])
-    owner = np.concatenate([np.full(len(line) - 1, i) for i, line in enumerate(lines)])
+    counts = np.array([len(line) - 1 for line in lines])
+    first = np.concatenate([[0], np.cumsum(counts)[:-1]])  # each line's first segment
     keep = shapely.dwithin(shapely.linestrings(segs), rest, far)
+    # segment m runs on into m + 1: both kept, the same line, not turning back (a spur's tip)
+    d = segs[:, 1] - segs[:, 0]
+    norm = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-300)
+    back = np.einsum("ij,ij->i", d[:-1], d[1:]) / (norm[:-1] * norm[1:]) < -1 + 1e-9
+    on = keep[:-1] & keep[1:] & ~back
+    ends_at = first[1:][first[1:] > 0] - 1  # each line's last segment (before the next)
+    on[ends_at[ends_at < len(on)]] = False  # never runs on into the next line's first
+    on = np.concatenate([on, [False]])
+    starts = np.flatnonzero(keep & ~np.concatenate([[False], on[:-1]]))
+    ends = np.flatnonzero(keep & ~on)
+    owner = np.repeat(np.arange(len(lines)), counts)
     out = []
-    for i, line in enumerate(lines):
-        flags = keep[owner == i]
-        d = np.diff(line, axis=0)
-        norm = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-300)
-        back = np.einsum("ij,ij->i", d[:-1], d[1:]) / (norm[:-1] * norm[1:]) < -1 + 1e-9
-        j = 0
-        while j < len(flags):
-            if not flags[j]:
-                j += 1
-                continue
-            k = j  # segments j..k kept, none turning back between them
-            while k + 1 < len(flags) and flags[k + 1] and not back[k]:
-                k += 1
-            out.append(line[j : k + 2])
-            j = k + 1
+    for j, k in zip(starts.tolist(), ends.tolist(), strict=True):
+        i = int(owner[j])
+        out.append(lines[i][j - first[i] : k - first[i] + 2])
     return out
 
 
