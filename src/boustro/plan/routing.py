@@ -25,6 +25,45 @@ def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
+#: Routed moves a :class:`Router` remembers (about 100 bytes each plus their corners).
+_ROUTES = 1 << 16
+
+#: Edges up to which :meth:`Router.anchor` measures every edge (above: an STRtree first).
+_DENSE_ANCHOR = 256
+
+
+def _feet(
+    q: NDArray[np.float64], e1: NDArray[np.float64], e2: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(foot (P, E, 2), distance (P, E))``: the nearest point of each edge to each point."""
+    ab = e2 - e1
+    den = np.maximum(np.einsum("ij,ij->i", ab, ab), np.finfo(np.float64).tiny)
+    t = np.clip(np.einsum("pij,ij->pi", q[:, None] - e1[None], ab) / den, 0, 1)
+    foot = e1[None] + t[..., None] * ab[None]
+    return foot, np.linalg.norm(foot - q[:, None], axis=-1)
+
+
+def _pair_feet(
+    q: NDArray[np.float64], e1: NDArray[np.float64], e2: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`_feet` of the pairs ``q[i]``, edge ``i`` (the same arithmetic, ``(M, 2)``,
+    ``(M,)``)."""
+    ab = e2 - e1
+    den = np.maximum(np.einsum("ij,ij->i", ab, ab), np.finfo(np.float64).tiny)
+    t = np.clip(np.einsum("ij,ij->i", q - e1, ab) / den, 0, 1)
+    foot = e1 + t[:, None] * ab
+    return foot, np.linalg.norm(foot - q, axis=-1)
+
+
+def _nearest_feet(
+    q: NDArray[np.float64], e1: NDArray[np.float64], e2: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``(P, 2)``: each point's nearest point of the edges (ties: the first edge)."""
+    foot, dist = _feet(q, e1, e2)
+    k = np.argmin(dist, axis=1)
+    return foot[np.arange(len(q)), k]
+
+
 class Route(NamedTuple):
     """A connecting move: ``points (L, 2)`` from start to end, its ``length``, the part of it
     ``outside`` the area (length; within ``reach`` of the area unless ``found`` is false),
@@ -71,6 +110,10 @@ class Router:
                 self._coarse = [Router(d) for d in self._domains]
                 self.nodes = np.zeros((0, 2))
         self._graph()
+        # moves already routed, by their ends' bytes: a move depends on its ends and the
+        # router only, and a plan flies its tour's moves after the refinement measured them,
+        # and plans of nearby layouts share moves (the hole passes' ends, the start)
+        self._routes: dict[bytes, Route] = {}
 
     # -- membership --------------------------------------------------------------------------
     def classify(self, points: ArrayLike) -> NDArray[np.int64]:
@@ -84,15 +127,31 @@ class Router:
         p = np.asarray(points, dtype=np.float64).reshape(-1, 2).copy()
         where = self.classify(p)
         bad = np.flatnonzero(where != 0)
-        if len(bad):
-            q = p[bad]
-            ab = self._e2 - self._e1
-            den = np.maximum(np.einsum("ij,ij->i", ab, ab), np.finfo(np.float64).tiny)
-            t = np.clip(np.einsum("pij,ij->pi", q[:, None] - self._e1[None], ab) / den, 0, 1)
-            foot = self._e1[None] + t[..., None] * ab[None]
-            k = np.argmin(np.linalg.norm(foot - q[:, None], axis=-1), axis=1)
-            p[bad] = foot[np.arange(len(bad)), k]
+        if len(bad) and len(self._e1) <= _DENSE_ANCHOR:
+            p[bad] = _nearest_feet(p[bad], self._e1, self._e2)
+        elif len(bad):  # the same arithmetic on the edges that can be nearest (an STRtree)
+            p[bad] = self._index_feet(p[bad])
         return p
+
+    def _index_feet(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        """:func:`_nearest_feet` of the points ``q`` over all edges, computed on candidates:
+        the edges whose boxes lie within the distance to the nearest box's edge (they hold
+        every edge as near as that one: the nearest and its ties, taken in index order)."""
+        import shapely
+
+        e1, e2 = self._e1, self._e2
+        qi, qe = self._index.tree.query_nearest(shapely.points(q))
+        d1 = np.full(len(q), np.inf)
+        np.minimum.at(d1, qi, _pair_feet(q[qi], e1[qe], e2[qe])[1])
+        pad = (d1 * (1 + 1e-9) + self.tol)[:, None]
+        i, e = self._index.box_pairs(q - pad, q + pad)
+        foot, dist = _pair_feet(q[i], e1[e], e2[e])
+        pick = np.lexsort((e, dist, i))  # by point, nearest first, ties: the first edge
+        first = np.ones(len(pick), dtype=bool)
+        first[1:] = i[pick][1:] != i[pick][:-1]
+        out = np.empty_like(q)
+        out[i[pick][first]] = foot[pick][first]
+        return out
 
     # -- segments ----------------------------------------------------------------------------
     def _breaks(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -264,22 +323,40 @@ class Router:
         """The connecting move from ``p`` to ``q`` (module docstring)."""
         p = np.asarray(p, dtype=np.float64).reshape(2)
         q = np.asarray(q, dtype=np.float64).reshape(2)
-        ok, outside = self._straight(p, q)
-        if ok:
-            return Route(np.stack([p, q]), float(np.linalg.norm(q - p)), outside, True)
-        return self._detour(p, q)
+        key = p.tobytes() + q.tobytes()
+        route = self._routes.get(key)
+        if route is None:
+            ok, outside = self._straight(p, q)
+            if ok:
+                route = Route(np.stack([p, q]), float(np.linalg.norm(q - p)), outside, True)
+            else:
+                route = self._detour(p, q)
+            self._keep(key, route)
+        return route
 
     def paths(self, p: ArrayLike, q: ArrayLike) -> list[Route]:
         """``[path(p[i], q[i]) ...]``, the straight moves tested all at once."""
-        p = np.asarray(p, dtype=np.float64).reshape(-1, 2)
-        q = np.asarray(q, dtype=np.float64).reshape(-1, 2)
-        ok, outside = self._straight_many(p, q)
-        return [
-            Route(np.stack([a, b]), float(np.linalg.norm(b - a)), float(o), True)
-            if good
-            else self._detour(a, b)
-            for a, b, good, o in zip(p, q, ok, outside, strict=True)
-        ]
+        p = np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 2)
+        q = np.ascontiguousarray(q, dtype=np.float64).reshape(-1, 2)
+        keys = [a.tobytes() + b.tobytes() for a, b in zip(p, q, strict=True)]
+        new = [i for i, k in enumerate(keys) if k not in self._routes]
+        if new:
+            pn, qn = p[new], q[new]
+            ok, outside = self._straight_many(pn, qn)
+            for i, a, b, good, o in zip(new, pn, qn, ok, outside, strict=True):
+                if good:
+                    route = Route(np.stack([a, b]), float(np.linalg.norm(b - a)), float(o), True)
+                else:
+                    route = self._detour(a, b)
+                self._keep(keys[i], route)
+        return [self._routes[k] for k in keys]
+
+    def _keep(self, key: bytes, route: Route) -> None:
+        """Remember a routed move (read-only; forgotten all at once past :data:`_ROUTES`)."""
+        if len(self._routes) >= _ROUTES:
+            self._routes.clear()
+        route.points.flags.writeable = False
+        self._routes[key] = route
 
     def _detour(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> Route:
         """The move from ``p`` to ``q`` where the straight one is not allowed."""
