@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from functools import lru_cache
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,6 +28,9 @@ def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64
 
 #: Routed moves a :class:`Router` remembers (about 100 bytes each plus their corners).
 _ROUTES = 1 << 16
+
+#: Points whose rows (:meth:`Router._rows`) a :class:`Router` remembers, per computation.
+_ROWS = 1 << 14
 
 #: Edges up to which :meth:`Router.anchor` measures every edge (above: an STRtree first).
 _DENSE_ANCHOR = 256
@@ -114,6 +118,7 @@ class Router:
         # router only, and a plan flies its tour's moves after the refinement measured them,
         # and plans of nearby layouts share moves (the hole passes' ends, the start)
         self._routes: dict[bytes, Route] = {}
+        self._row_cache: dict[str, dict[bytes, tuple[Any, ...]]] = {}
 
     # -- membership --------------------------------------------------------------------------
     def classify(self, points: ArrayLike) -> NDArray[np.int64]:
@@ -308,7 +313,12 @@ class Router:
         return out
 
     def _to_nodes(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Distances ``(P, N)`` from anchored points to the visible nodes (inf if hidden)."""
+        """Distances ``(P, N)`` from anchored points to the visible nodes (inf if hidden);
+        each point's row computed once (:meth:`_rows`)."""
+        return self._rows("nodes", p, lambda x: (self._to_nodes_now(x),))[0]
+
+    def _to_nodes_now(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
+        """:meth:`_to_nodes`, computed."""
         n = len(self.nodes)
         if n == 0 or len(p) == 0:
             return np.full((len(p), n), math.inf)
@@ -436,12 +446,48 @@ class Router:
         np.fill_diagonal(out, 0.0)
         return out
 
+    def _rows(
+        self,
+        name: str,
+        p: NDArray[np.float64],
+        compute: Callable[[NDArray[np.float64]], tuple[NDArray[Any], ...]],
+    ) -> tuple[NDArray[Any], ...]:
+        """``compute(p)`` for a computation whose answer for each point depends on that point
+        only (its rows), each point's rows remembered by the point's bytes: the tours of a
+        plan and plans of nearby layouts share points (lane ends, hole passes, the start)."""
+        cache = self._row_cache.setdefault(name, {})
+        p = np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 2)
+        keys = [x.tobytes() for x in p]
+        new: dict[bytes, int] = {}
+        for i, k in enumerate(keys):
+            if k not in cache and k not in new:
+                new[k] = i
+        if new:
+            if len(cache) + len(new) > _ROWS:
+                cache.clear()
+            idx = np.fromiter(new.values(), dtype=np.int64, count=len(new))
+            got = compute(p[idx])
+            for j, k in enumerate(new):
+                cache[k] = tuple(g[j] for g in got)
+        rows = [cache[k] for k in keys]
+        if not rows:
+            return compute(p)
+        return tuple(np.array([r[c] for r in rows]) for c in range(len(rows[0])))
+
     # -- traced boundaries: routes through the inner domains ---------------------------------
     def _to_domains(
         self, pa: NDArray[np.float64]
     ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
         """Each anchored point's nearest point of a domain, the domain (``-1``: none reached
-        by a straight move inside the area) and the length of that leg."""
+        by a straight move inside the area) and the length of that leg; each point's answer
+        computed once (:meth:`_rows`)."""
+        pd, which, leg = self._rows("domains", pa, self._to_domains_now)
+        return pd, which, leg
+
+    def _to_domains_now(
+        self, pa: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
+        """:meth:`_to_domains`, computed."""
         pd, which = nearest_in(self._domains, pa)
         ok = self._visible_many(pa, pd)
         which = np.where(ok, which, -1)
