@@ -23,6 +23,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "COST_MODEL",
+    "COVER_HOLES",
     "FIELD_AREA_KM2",
     "KEEP_INSIDE_FACTOR",
     "MAX_AREA_KM2",
@@ -97,6 +98,14 @@ COST_MODEL: dict[str, tuple[float, ...]] = {
 #: estimate within a factor 2.7 of the CPU measured (it was 10 when every cell was searched
 #: with and without keep-inside: measured 4.3-21x then).
 KEEP_INSIDE_FACTOR = 2.0
+#: ``(c, gamma)``: each hole of an area planned by the cover search (``"cover-region"``) adds
+#: ``c n^gamma`` seconds (its passes and the moves around it in every plan the search makes,
+#: and the plans it adds). The ``"cover-region"`` row was fitted on stars without holes; on
+#: issue 21's traced fields with 10 holes it said 5.5-55 s for 20-83 s measured. Fitted on
+#: ``benchmarks/scale.py --part time`` (2026-11-27, load 3.4-5.5, 5 m/s, 10 s a turn, 10 m):
+#: traced fields of 500-5000 vertices with 10 holes (20.4, 25.1, 33.3, 83.0 s) and 500 and
+#: 2000 vertices with 2 (8.8, 17.5 s): estimate / measured 0.82-0.98 there (docs/scale.md).
+COVER_HOLES = (0.217, 0.3)
 
 #: Above this many (hull) vertices the certified optimiser's work is over its limit whatever
 #: the spacing (at least ``n^3 (n - 1)``), so :func:`global_work` is not computed.
@@ -127,13 +136,21 @@ class WorkEstimate(NamedTuple):
         )
 
 
-def estimate_seconds(kind: str, vertices: int, lanes: float, work: float = 0.0) -> float:
-    """The cost model :data:`COST_MODEL` (row ``kind``) at ``vertices``, ``lanes``, ``work``."""
+def estimate_seconds(
+    kind: str, vertices: int, lanes: float, work: float = 0.0, holes: int = 0
+) -> float:
+    """The cost model :data:`COST_MODEL` (row ``kind``) at ``vertices``, ``lanes``, ``work``;
+    with ``holes`` the cover search's time per hole (:data:`COVER_HOLES`)."""
     if kind == "certified":
         a, b = COST_MODEL["certified"]
         return a + b * work
     a, c1, beta, c2, alpha = COST_MODEL[kind]
-    return a + c1 * max(lanes, 1.0) ** beta + c2 * max(vertices, 3) ** alpha
+    n = max(vertices, 3)
+    out = a + c1 * max(lanes, 1.0) ** beta + c2 * n**alpha
+    if kind == "cover-region" and holes > 0:
+        c3, gamma = COVER_HOLES
+        out += holes * c3 * n**gamma
+    return out
 
 
 def frame_estimate(
@@ -165,7 +182,7 @@ def frame_estimate(
         area_km2=float(frame.ground_area) / 1e6,
         kind=kind,
         work=float(work),
-        seconds=estimate_seconds(kind, vertices, lanes, work)
+        seconds=estimate_seconds(kind, vertices, lanes, work, holes=len(frame.holes))
         * (KEEP_INSIDE_FACTOR if keep_inside and cover else 1.0),
     )
 
