@@ -278,7 +278,8 @@ def test_a_long_sliver_of_small_area_is_refused_for_its_time(capsys, tmp_path):
 def test_the_cover_searchs_estimate_counts_the_holes():
     """Review (issue 21): the cover rows were fitted on stars without holes and said 12.9 s
     for the 33 s that the 2000-vertex traced field with 10 holes takes with --speed; each hole
-    now adds ``c n^gamma`` (COVER_HOLES), fitted on traced fields of 500-5000 vertices."""
+    now add ``c h^kappa n^gamma`` (COVER_HOLES), fitted on traced fields of 500-5000
+    vertices."""
     from boustro.geometry.traced import traced_field
 
     pond = [[(40, 40), (50, 40), (50, 50), (40, 50)][::-1]]
@@ -286,8 +287,8 @@ def test_the_cover_searchs_estimate_counts_the_holes():
     bare = estimate_work(ring, 4.0, crs=None, speed=5.0, turn_time=10.0)
     holed = estimate_work(ring, 4.0, crs=None, holes=pond, speed=5.0, turn_time=10.0)
     assert holed.kind == "cover-region" and holed.holes == 1
-    c, gamma = COVER_HOLES
-    extra = c * holed.vertices**gamma
+    c, kappa, gamma = COVER_HOLES
+    extra = c * 1**kappa * holed.vertices**gamma
     assert holed.seconds == pytest.approx(estimate_seconds("cover-region", 8, holed.lanes) + extra)
     assert holed.seconds > bare.seconds
     field = traced_field(2000, 10)
