@@ -11,8 +11,9 @@ import shapely
 
 from boustro.geometry.traced import traced_field
 from boustro.plan.edge_index import EdgeIndex
+from boustro.plan.nearest_edge import nearest_feet
 from boustro.plan.region import plan_region
-from boustro.plan.routing import Router, _nearest_feet, router_for
+from boustro.plan.routing import Router, router_for
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +39,7 @@ def test_anchor_from_candidates_equals_the_nearest_of_every_edge(field):
     bad = router.classify(pts) != 0
     assert bad.sum() > 300  # outside the shell and inside holes
     want = pts.copy()
-    want[bad] = _nearest_feet(pts[bad], router._e1, router._e2)
+    want[bad] = nearest_feet(pts[bad], router._e1, router._e2)
     assert np.array_equal(got, want)
 
 

@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..geometry.region import Region, as_region
 from .edge_index import CHUNK, EdgeIndex
+from .nearest_edge import DENSE_ANCHOR, index_feet, nearest_feet
 from .route_domain import MAX_NODES, inner_domains, nearest_in
 from .straight_moves import straight_moves
 from .visibility_kernel import DENSE_EDGES, segment_crossings
@@ -31,41 +32,6 @@ _ROUTES = 1 << 16
 
 #: Points whose rows (:meth:`Router._rows`) a :class:`Router` remembers, per computation.
 _ROWS = 1 << 14
-
-#: Edges up to which :meth:`Router.anchor` measures every edge (above: an STRtree first).
-_DENSE_ANCHOR = 256
-
-
-def _feet(
-    q: NDArray[np.float64], e1: NDArray[np.float64], e2: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(foot (P, E, 2), distance (P, E))``: the nearest point of each edge to each point."""
-    ab = e2 - e1
-    den = np.maximum(np.einsum("ij,ij->i", ab, ab), np.finfo(np.float64).tiny)
-    t = np.clip(np.einsum("pij,ij->pi", q[:, None] - e1[None], ab) / den, 0, 1)
-    foot = e1[None] + t[..., None] * ab[None]
-    return foot, np.linalg.norm(foot - q[:, None], axis=-1)
-
-
-def _pair_feet(
-    q: NDArray[np.float64], e1: NDArray[np.float64], e2: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """:func:`_feet` of the pairs ``q[i]``, edge ``i`` (the same arithmetic, ``(M, 2)``,
-    ``(M,)``)."""
-    ab = e2 - e1
-    den = np.maximum(np.einsum("ij,ij->i", ab, ab), np.finfo(np.float64).tiny)
-    t = np.clip(np.einsum("ij,ij->i", q - e1, ab) / den, 0, 1)
-    foot = e1 + t[:, None] * ab
-    return foot, np.linalg.norm(foot - q, axis=-1)
-
-
-def _nearest_feet(
-    q: NDArray[np.float64], e1: NDArray[np.float64], e2: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    """``(P, 2)``: each point's nearest point of the edges (ties: the first edge)."""
-    foot, dist = _feet(q, e1, e2)
-    k = np.argmin(dist, axis=1)
-    return foot[np.arange(len(q)), k]
 
 
 class Route(NamedTuple):
@@ -132,31 +98,11 @@ class Router:
         p = np.asarray(points, dtype=np.float64).reshape(-1, 2).copy()
         where = self.classify(p)
         bad = np.flatnonzero(where != 0)
-        if len(bad) and len(self._e1) <= _DENSE_ANCHOR:
-            p[bad] = _nearest_feet(p[bad], self._e1, self._e2)
+        if len(bad) and len(self._e1) <= DENSE_ANCHOR:
+            p[bad] = nearest_feet(p[bad], self._e1, self._e2)
         elif len(bad):  # the same arithmetic on the edges that can be nearest (an STRtree)
-            p[bad] = self._index_feet(p[bad])
+            p[bad] = index_feet(self._index, p[bad])
         return p
-
-    def _index_feet(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
-        """:func:`_nearest_feet` of the points ``q`` over all edges, computed on candidates:
-        the edges whose boxes lie within the distance to the nearest box's edge (they hold
-        every edge as near as that one: the nearest and its ties, taken in index order)."""
-        import shapely
-
-        e1, e2 = self._e1, self._e2
-        qi, qe = self._index.tree.query_nearest(shapely.points(q))
-        d1 = np.full(len(q), np.inf)
-        np.minimum.at(d1, qi, _pair_feet(q[qi], e1[qe], e2[qe])[1])
-        pad = (d1 * (1 + 1e-9) + self.tol)[:, None]
-        i, e = self._index.box_pairs(q - pad, q + pad)
-        foot, dist = _pair_feet(q[i], e1[e], e2[e])
-        pick = np.lexsort((e, dist, i))  # by point, nearest first, ties: the first edge
-        first = np.ones(len(pick), dtype=bool)
-        first[1:] = i[pick][1:] != i[pick][:-1]
-        out = np.empty_like(q)
-        out[i[pick][first]] = foot[pick][first]
-        return out
 
     # -- segments ----------------------------------------------------------------------------
     def _breaks(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
