@@ -22,6 +22,17 @@ Usage::
                                                 # region search), per stage, 50 .. 5000 vertices
     python benchmarks/scale.py --part area-spacing  # the same, 2000 vertices + 10 holes,
                                                 # spacing 1/10 .. 1/500 of the diameter
+    python benchmarks/scale.py --part time --vertices 2000 --holes 10 --baseline-src /tmp/b/src
+                                                # plan_area with the time objective (5 m/s,
+                                                # 10 s a turn): the certified search over plans
+
+The ``time`` part runs ``plan_area(shell, 10, crs=None, holes=..., speed=5, turn_time=10)``
+(the certified cover search, every layout it evaluates a real plan), counts the plans made
+(``plan_region``'s tour step), times the plan's stages (cells, lanes, the tour's order, its
+lane-by-lane refinement, driving with routing, assembly) and prints the estimate made before
+planning (``estimate_work(..., speed=5, turn_time=10)``), the gap, the fitness (mission time,
+s) and a hash of the waypoints, so that the two trees' plans can be compared. Its baseline is a
+``src`` folder (``--baseline-src``) or a commit (``--baseline``, default :data:`TIME_BASELINE`).
 
 The ``area`` parts time ``boustro.mission.plan_area(shell, spacing, crs=None, holes=...)`` (Eq. 1,
 the certified region search with its work budget, coverage measured with shapely) and its
@@ -50,6 +61,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 BASELINE = "42b81be"  # main when issue 21's work started
 AREA_BASELINE = "8882b43"  # main before the vectorised trace and links (parts area*)
+TIME_BASELINE = "21da16c"  # main before the router's candidate anchors and routed-move cache
+#: The plan's stages in :mod:`boustro.plan.region` timed by part ``time``.
+PLAN_STAGES = ("_plan_cells", "_plan_lanes", "_order", "refine_tour", "_drive", "_assemble")
 STAGES = (
     "choose_sweep",
     "_cells_for_sweep",
@@ -141,6 +155,106 @@ def area_worker(path: str, spacing: float) -> None:
     print(json.dumps(out))
 
 
+def time_worker(path: str, spacing: float) -> None:
+    """``plan_area`` with the time objective on the field in ``path``: CPU, plans, stages."""
+    import hashlib
+
+    import boustro.plan.region as pr
+    from boustro.mission import estimate_work, plan_area
+
+    data = np.load(path)
+    shell = data["shell"]
+    holes = [data[k] for k in sorted(data.files) if k.startswith("hole_")]
+    kw = {"crs": None, "speed": 5.0, "turn_time": 10.0}
+    plan_area(data["warm_shell"], 10.0, holes=[data["warm_hole"]], **kw)
+    stages: dict[str, float] = {}
+    plans = [0]
+
+    def timed(name, f):
+        def g(*a, **k):
+            if name == "_plan_cells":
+                plans[0] += 1
+            t = time.process_time()
+            try:
+                return f(*a, **k)
+            finally:
+                stages[name] = stages.get(name, 0.0) + time.process_time() - t
+
+        return g
+
+    for name in PLAN_STAGES:
+        setattr(pr, name, timed(name, getattr(pr, name)))
+    est = estimate_work(shell, spacing, holes=holes, **kw)
+    t0, w0 = time.process_time(), time.perf_counter()
+    m = plan_area(shell, spacing, holes=holes, **kw)
+    out = {"cpu": time.process_time() - t0, "wall": time.perf_counter() - w0}
+    info = m.optimum.info
+    out.update(stages=stages, plans=plans[0], estimate=est.seconds, kind=est.kind)
+    out.update(lanes=m.plan.stats.n_transects, fitness=float(m.optimum.fitness))
+    gap = info.get("gap")
+    out["gap"] = None if gap is None else float(gap) / float(m.optimum.fitness)
+    out["converged"] = bool(info.get("converged") or info.get("certified"))
+    out["covered"] = m.coverage.covered_share if m.coverage is not None else None
+    out["path_length"] = m.plan.stats.path_length
+    out["hash"] = hashlib.sha1(np.ascontiguousarray(m.plan.waypoints).tobytes()).hexdigest()[:10]
+    hwm = [line for line in open("/proc/self/status") if line.startswith("VmHWM:")]
+    out["rss_mb"] = int(hwm[0].split()[1]) / 1024
+    print(json.dumps(out))
+
+
+def time_main(args: argparse.Namespace) -> None:
+    """Part ``time``: one row per size, this tree beside the baseline (each in a subprocess,
+    the baseline first), then this tree's stages."""
+    load = os.getloadavg()[0]
+    print(f"# plan_area, time objective, {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC, "
+          f"load {load:.1f}")  # fmt: skip
+    with tempfile.TemporaryDirectory() as tmp_name:
+        tmp = Path(tmp_name)
+        base = None
+        if args.baseline_src:
+            base = Path(args.baseline_src)
+        elif not args.no_baseline:
+            base = _baseline_src(args.baseline or TIME_BASELINE, tmp)
+        holes = args.holes if args.holes is not None else [10]
+        rows = [(n, h) for h in holes for n in (args.vertices or (500, 1000, 2000))]
+        print("| vertices | holes | lanes | estimate | plans | this tree | baseline | speed-up "
+              "| same plan |")  # fmt: skip
+        print("|---:|---:|---:|---:|---:|---|---|---:|---|")
+        done = []
+        for n, h in rows:
+            field = _field_file(tmp, n, h)
+            old = None
+            if base is not None:
+                old = _run(base, field, args.spacing, timeout=600.0, part="time")
+            new = _run(ROOT / "src", field, args.spacing, timeout=600.0, part="time")
+            ratio = "" if old is None or new is None else f"{old['cpu'] / new['cpu']:.2f}x"
+            same = ""
+            if old is not None and new is not None:
+                same = "yes" if old["hash"] == new["hash"] else (
+                    f"no: {new['fitness']:.1f} s vs {old['fitness']:.1f} s")  # fmt: skip
+            if new is None:
+                print(f"| {n} | {h} | | | | > 600 s | | | |", flush=True)
+                continue
+            base_cell = "-" if base is None else _time_cell(old, 600)
+            head = f"| {n} | {h} | {new['lanes']} | {new['estimate']:.3g} s | {new['plans']} | "
+            print(f"{head}{_time_cell(new, 600)} | {base_cell} | {ratio} | {same} |", flush=True)
+            done.append((n, h, new))
+        print()
+        print("| vertices | holes | plans | " + " | ".join(PLAN_STAGES) + " | rest (search) |")
+        print("|---:|---:|---:|" + "---:|" * (len(PLAN_STAGES) + 1))
+        for n, h, r in done:
+            cells = " | ".join(f"{r['stages'].get(name, 0.0):.2f}" for name in PLAN_STAGES)
+            rest = r["cpu"] - sum(r["stages"].values())
+            print(f"| {n} | {h} | {r['plans']} | {cells} | {rest:.2f} |")
+
+
+def _time_cell(res: dict | None, timeout: float) -> str:
+    if res is None:
+        return f"> {timeout:g} s"
+    cert = "certified" if res["converged"] else f"gap {res['gap']:.3g}"
+    return f"{res['cpu']:.1f} s, {res['rss_mb']:.0f} MB, {cert}"
+
+
 def _field_file(tmp: Path, n: int, holes: int) -> Path:
     from boustro.geometry.traced import traced_field
 
@@ -189,24 +303,31 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument(
         "--part",
-        choices=("vertices", "spacing", "cover", "area", "area-spacing"),
+        choices=("vertices", "spacing", "cover", "area", "area-spacing", "time"),
         default="vertices",
     )
     ap.add_argument("--vertices", type=int, nargs="+", help="sizes (parts vertices, cover)")
     ap.add_argument("--quick", action="store_true", help="50, 200, 500 vertices only")
     ap.add_argument("--baseline", help="commit compared against (default: BASELINE, AREA_BASELINE)")
     ap.add_argument("--no-baseline", action="store_true")
+    ap.add_argument("--baseline-src", help="part time: the baseline's src folder (no archive)")
+    ap.add_argument("--holes", type=int, nargs="+", help="part time: holes (default 10)")
     ap.add_argument("--timeout", type=float, default=15.0, help="seconds a baseline run may take")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     ap.add_argument("--spacing", type=float, default=10.0, help="metres (part vertices)")
     args = ap.parse_args()
     if args.worker:
-        if args.part.startswith("area"):
+        if args.part == "time":
+            time_worker(args.worker, args.spacing)
+        elif args.part.startswith("area"):
             area_worker(args.worker, args.spacing)
         else:
             worker(args.worker, args.spacing, args.part)
         return
     sys.path.insert(0, str(ROOT / "src"))
+    if args.part == "time":
+        time_main(args)
+        return
     if args.part.startswith("area"):
         area_main(args)
         return

@@ -23,6 +23,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "COST_MODEL",
+    "COVER_HOLES",
     "FIELD_AREA_KM2",
     "KEEP_INSIDE_FACTOR",
     "MAX_AREA_KM2",
@@ -97,6 +98,17 @@ COST_MODEL: dict[str, tuple[float, ...]] = {
 #: estimate within a factor 2.7 of the CPU measured (it was 10 when every cell was searched
 #: with and without keep-inside: measured 4.3-21x then).
 KEEP_INSIDE_FACTOR = 2.0
+#: ``(c, kappa, gamma)``: an area with ``h`` holes planned by the cover search
+#: (``"cover-region"``) adds ``c h^kappa n^gamma`` seconds (the passes around the holes and the
+#: moves past them in every plan the search makes, and the plans they add). The
+#: ``"cover-region"`` row was fitted on stars without holes; on issue 21's traced fields it said
+#: 5.3-55 s for 8.8-83 s measured (0.34-0.66x). Fitted (least worst ratio) on
+#: ``benchmarks/scale.py --part time`` (2026-11-27, load 3.4-5.5, 5 m/s, 10 s a turn, 10 m):
+#: traced fields of 500-5000 vertices with 10 holes (20.4, 25.1, 33.3, 83.0 s) and of 500 and
+#: 2000 vertices with 2 (8.8, 35.6 s): estimate / measured 0.77-1.29 there (the calibration
+#: itself; docs/scale.md). The search's time is irregular: 2000 vertices took longer with 2
+#: holes than with 10. A small area with one hole gains about 0.4 s.
+COVER_HOLES = (0.0467, 0.25, 0.75)
 
 #: Above this many (hull) vertices the certified optimiser's work is over its limit whatever
 #: the spacing (at least ``n^3 (n - 1)``), so :func:`global_work` is not computed.
@@ -127,13 +139,21 @@ class WorkEstimate(NamedTuple):
         )
 
 
-def estimate_seconds(kind: str, vertices: int, lanes: float, work: float = 0.0) -> float:
-    """The cost model :data:`COST_MODEL` (row ``kind``) at ``vertices``, ``lanes``, ``work``."""
+def estimate_seconds(
+    kind: str, vertices: int, lanes: float, work: float = 0.0, holes: int = 0
+) -> float:
+    """The cost model :data:`COST_MODEL` (row ``kind``) at ``vertices``, ``lanes``, ``work``;
+    with ``holes`` the cover search's time per hole (:data:`COVER_HOLES`)."""
     if kind == "certified":
         a, b = COST_MODEL["certified"]
         return a + b * work
     a, c1, beta, c2, alpha = COST_MODEL[kind]
-    return a + c1 * max(lanes, 1.0) ** beta + c2 * max(vertices, 3) ** alpha
+    n = max(vertices, 3)
+    out = a + c1 * max(lanes, 1.0) ** beta + c2 * n**alpha
+    if kind == "cover-region" and holes > 0:
+        c3, kappa, gamma = COVER_HOLES
+        out += c3 * holes**kappa * n**gamma
+    return out
 
 
 def frame_estimate(
@@ -165,7 +185,7 @@ def frame_estimate(
         area_km2=float(frame.ground_area) / 1e6,
         kind=kind,
         work=float(work),
-        seconds=estimate_seconds(kind, vertices, lanes, work)
+        seconds=estimate_seconds(kind, vertices, lanes, work, holes=len(frame.holes))
         * (KEEP_INSIDE_FACTOR if keep_inside and cover else 1.0),
     )
 

@@ -43,6 +43,10 @@ class EdgeIndex:
         self.holes: list[Any] = [shapely.Polygon(h.vertices) for h in region.holes]
         shapely.prepare(self.shell)
         shapely.prepare(self.holes)
+        # the holes' bounding boxes (H, 4): a hole is asked only about the points in its box
+        self.hole_boxes = np.array(
+            [[*h.vertices.min(axis=0), *h.vertices.max(axis=0)] for h in region.holes]
+        ).reshape(-1, 4)
 
     def box_pairs(
         self, lo: NDArray[np.float64], hi: NDArray[np.float64]
@@ -102,6 +106,17 @@ class EdgeIndex:
         far = ~self.near(p)
         x, y = p[:, 0], p[:, 1]
         out[far & ~shapely.contains_xy(self.shell, x, y)] = 2
-        for hole in self.holes:
-            out[far & shapely.contains_xy(hole, x, y)] = 1
+        if not self.holes:
+            return out
+        b = self.hole_boxes
+        boxed = (
+            far[:, None]
+            & (x[:, None] >= b[None, :, 0])
+            & (y[:, None] >= b[None, :, 1])
+            & (x[:, None] <= b[None, :, 2])
+            & (y[:, None] <= b[None, :, 3])
+        )  # (P, H): a point outside a hole's box is not in it
+        for k in np.flatnonzero(boxed.any(axis=0)):
+            sel = np.flatnonzero(boxed[:, k])
+            out[sel[shapely.contains_xy(self.holes[k], x[sel], y[sel])]] = 1
         return out

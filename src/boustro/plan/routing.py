@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from functools import lru_cache
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..geometry.region import Region, as_region
 from .edge_index import CHUNK, EdgeIndex
+from .nearest_edge import DENSE_ANCHOR, index_feet, nearest_feet
 from .route_domain import MAX_NODES, inner_domains, nearest_in
 from .straight_moves import straight_moves
 from .visibility_kernel import DENSE_EDGES, segment_crossings
@@ -23,6 +25,13 @@ _NEAREST = 16
 
 def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+#: Routed moves a :class:`Router` remembers (about 100 bytes each plus their corners).
+_ROUTES = 1 << 16
+
+#: Points whose rows (:meth:`Router._rows`) a :class:`Router` remembers, per computation.
+_ROWS = 1 << 14
 
 
 class Route(NamedTuple):
@@ -71,6 +80,11 @@ class Router:
                 self._coarse = [Router(d) for d in self._domains]
                 self.nodes = np.zeros((0, 2))
         self._graph()
+        # moves already routed, by their ends' bytes: a move depends on its ends and the
+        # router only, and a plan flies its tour's moves after the refinement measured them,
+        # and plans of nearby layouts share moves (the hole passes' ends, the start)
+        self._routes: dict[bytes, Route] = {}
+        self._row_cache: dict[str, dict[bytes, tuple[Any, ...]]] = {}
 
     # -- membership --------------------------------------------------------------------------
     def classify(self, points: ArrayLike) -> NDArray[np.int64]:
@@ -84,14 +98,10 @@ class Router:
         p = np.asarray(points, dtype=np.float64).reshape(-1, 2).copy()
         where = self.classify(p)
         bad = np.flatnonzero(where != 0)
-        if len(bad):
-            q = p[bad]
-            ab = self._e2 - self._e1
-            den = np.maximum(np.einsum("ij,ij->i", ab, ab), np.finfo(np.float64).tiny)
-            t = np.clip(np.einsum("pij,ij->pi", q[:, None] - self._e1[None], ab) / den, 0, 1)
-            foot = self._e1[None] + t[..., None] * ab[None]
-            k = np.argmin(np.linalg.norm(foot - q[:, None], axis=-1), axis=1)
-            p[bad] = foot[np.arange(len(bad)), k]
+        if len(bad) and len(self._e1) <= DENSE_ANCHOR:
+            p[bad] = nearest_feet(p[bad], self._e1, self._e2)
+        elif len(bad):  # the same arithmetic on the edges that can be nearest (an STRtree)
+            p[bad] = index_feet(self._index, p[bad])
         return p
 
     # -- segments ----------------------------------------------------------------------------
@@ -249,7 +259,12 @@ class Router:
         return out
 
     def _to_nodes(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Distances ``(P, N)`` from anchored points to the visible nodes (inf if hidden)."""
+        """Distances ``(P, N)`` from anchored points to the visible nodes (inf if hidden);
+        each point's row computed once (:meth:`_rows`)."""
+        return self._rows("nodes", p, lambda x: (self._to_nodes_now(x),))[0]
+
+    def _to_nodes_now(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
+        """:meth:`_to_nodes`, computed."""
         n = len(self.nodes)
         if n == 0 or len(p) == 0:
             return np.full((len(p), n), math.inf)
@@ -264,22 +279,40 @@ class Router:
         """The connecting move from ``p`` to ``q`` (module docstring)."""
         p = np.asarray(p, dtype=np.float64).reshape(2)
         q = np.asarray(q, dtype=np.float64).reshape(2)
-        ok, outside = self._straight(p, q)
-        if ok:
-            return Route(np.stack([p, q]), float(np.linalg.norm(q - p)), outside, True)
-        return self._detour(p, q)
+        key = p.tobytes() + q.tobytes()
+        route = self._routes.get(key)
+        if route is None:
+            ok, outside = self._straight(p, q)
+            if ok:
+                route = Route(np.stack([p, q]), float(np.linalg.norm(q - p)), outside, True)
+            else:
+                route = self._detour(p, q)
+            self._keep(key, route)
+        return route
 
     def paths(self, p: ArrayLike, q: ArrayLike) -> list[Route]:
         """``[path(p[i], q[i]) ...]``, the straight moves tested all at once."""
-        p = np.asarray(p, dtype=np.float64).reshape(-1, 2)
-        q = np.asarray(q, dtype=np.float64).reshape(-1, 2)
-        ok, outside = self._straight_many(p, q)
-        return [
-            Route(np.stack([a, b]), float(np.linalg.norm(b - a)), float(o), True)
-            if good
-            else self._detour(a, b)
-            for a, b, good, o in zip(p, q, ok, outside, strict=True)
-        ]
+        p = np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 2)
+        q = np.ascontiguousarray(q, dtype=np.float64).reshape(-1, 2)
+        keys = [a.tobytes() + b.tobytes() for a, b in zip(p, q, strict=True)]
+        new = [i for i, k in enumerate(keys) if k not in self._routes]
+        if new:
+            pn, qn = p[new], q[new]
+            ok, outside = self._straight_many(pn, qn)
+            for i, a, b, good, o in zip(new, pn, qn, ok, outside, strict=True):
+                if good:
+                    route = Route(np.stack([a, b]), float(np.linalg.norm(b - a)), float(o), True)
+                else:
+                    route = self._detour(a, b)
+                self._keep(keys[i], route)
+        return [self._routes[k] for k in keys]
+
+    def _keep(self, key: bytes, route: Route) -> None:
+        """Remember a routed move (read-only; forgotten all at once past :data:`_ROUTES`)."""
+        if len(self._routes) >= _ROUTES:
+            self._routes.clear()
+        route.points.flags.writeable = False
+        self._routes[key] = route
 
     def _detour(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> Route:
         """The move from ``p`` to ``q`` where the straight one is not allowed."""
@@ -359,12 +392,48 @@ class Router:
         np.fill_diagonal(out, 0.0)
         return out
 
+    def _rows(
+        self,
+        name: str,
+        p: NDArray[np.float64],
+        compute: Callable[[NDArray[np.float64]], tuple[NDArray[Any], ...]],
+    ) -> tuple[NDArray[Any], ...]:
+        """``compute(p)`` for a computation whose answer for each point depends on that point
+        only (its rows), each point's rows remembered by the point's bytes: the tours of a
+        plan and plans of nearby layouts share points (lane ends, hole passes, the start)."""
+        cache = self._row_cache.setdefault(name, {})
+        p = np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 2)
+        keys = [x.tobytes() for x in p]
+        new: dict[bytes, int] = {}
+        for i, k in enumerate(keys):
+            if k not in cache and k not in new:
+                new[k] = i
+        if new:
+            if len(cache) + len(new) > _ROWS:
+                cache.clear()
+            idx = np.fromiter(new.values(), dtype=np.int64, count=len(new))
+            got = compute(p[idx])
+            for j, k in enumerate(new):
+                cache[k] = tuple(g[j] for g in got)
+        rows = [cache[k] for k in keys]
+        if not rows:
+            return compute(p)
+        return tuple(np.array([r[c] for r in rows]) for c in range(len(rows[0])))
+
     # -- traced boundaries: routes through the inner domains ---------------------------------
     def _to_domains(
         self, pa: NDArray[np.float64]
     ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
         """Each anchored point's nearest point of a domain, the domain (``-1``: none reached
-        by a straight move inside the area) and the length of that leg."""
+        by a straight move inside the area) and the length of that leg; each point's answer
+        computed once (:meth:`_rows`)."""
+        pd, which, leg = self._rows("domains", pa, self._to_domains_now)
+        return pd, which, leg
+
+    def _to_domains_now(
+        self, pa: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
+        """:meth:`_to_domains`, computed."""
         pd, which = nearest_in(self._domains, pa)
         ok = self._visible_many(pa, pd)
         which = np.where(ok, which, -1)

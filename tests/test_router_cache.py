@@ -1,0 +1,95 @@
+"""The router's work per plan on traced fields (issue 21): anchors from STRtree candidates,
+holes asked by their boxes, routed moves and per-point answers remembered. Every answer must
+equal the one computed from scratch, bit for bit, so plans do not depend on what was planned
+before them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+
+from boustro.geometry.traced import traced_field
+from boustro.plan.edge_index import EdgeIndex
+from boustro.plan.nearest_edge import nearest_feet
+from boustro.plan.region import plan_region
+from boustro.plan.routing import Router, router_for
+
+
+@pytest.fixture(scope="module")
+def field():
+    return traced_field(1200, 6)
+
+
+def _points(r, n, seed):
+    rng = np.random.default_rng(seed)
+    lo, hi = r.shell.vertices.min(axis=0), r.shell.vertices.max(axis=0)
+    pts = [rng.uniform(lo - 40, hi + 40, (n, 2))]
+    v = r.shell.vertices[rng.integers(0, len(r.shell.vertices), n)]
+    pts += [v, v + rng.normal(0, 0.5, v.shape)]  # on the boundary, and just off it
+    for h in r.holes:
+        pts += [h.vertices + rng.normal(0, 0.3, h.vertices.shape), h.vertices.mean(axis=0)[None]]
+    return np.vstack(pts)
+
+
+def test_anchor_from_candidates_equals_the_nearest_of_every_edge(field):
+    router = Router(field, 5.0)
+    pts = _points(field, 600, 0)
+    got = router.anchor(pts)
+    bad = router.classify(pts) != 0
+    assert bad.sum() > 300  # outside the shell and inside holes
+    want = pts.copy()
+    want[bad] = nearest_feet(pts[bad], router._e1, router._e2)
+    assert np.array_equal(got, want)
+
+
+def test_classify_asks_only_the_holes_whose_box_holds_the_point(field):
+    index = EdgeIndex(field, 1e-9 * field.diameter)
+    pts = _points(field, 800, 1)
+    got = index.classify(pts)
+    far = ~index.near(pts)
+    want = np.zeros(len(pts), dtype=np.int64)
+    want[far & ~shapely.contains_xy(index.shell, pts[:, 0], pts[:, 1])] = 2
+    for hole in index.holes:
+        want[far & shapely.contains_xy(hole, pts[:, 0], pts[:, 1])] = 1
+    assert np.array_equal(got, want)
+    assert {0, 1, 2} <= set(got.tolist())
+
+
+def test_remembered_routes_and_rows_equal_a_fresh_router(field):
+    warm = Router(field, 5.0)
+    pts = _points(field, 60, 2)
+    a, b = pts[:120], pts[60:180]  # overlapping point sets
+    warm.distances(a)
+    warm.paths(a[:-1], a[1:])
+    fresh = Router(field, 5.0)
+    assert np.array_equal(warm.distances(b), fresh.distances(b))
+    for x, y in zip(warm.paths(b[:-1], b[1:]), fresh.paths(b[:-1], b[1:]), strict=True):
+        assert np.array_equal(x.points, y.points)
+        assert (x.length, x.outside, x.straight, x.found) == (
+            y.length,
+            y.outside,
+            y.straight,
+            y.found,
+        )
+    assert warm._routes and warm._row_cache["domains"]  # the traced field routes by domains
+    pa = warm.anchor(b)
+    for got, want in zip(warm._to_domains(pa), fresh._to_domains_now(pa), strict=True):
+        assert np.array_equal(got, want)
+    route = warm.path(b[0], b[5])
+    assert route is warm.path(b[0], b[5])  # remembered, and read-only
+    with pytest.raises(ValueError):
+        route.points[0, 0] = 1.0
+
+
+def test_a_plan_is_the_same_after_other_plans_of_the_field():
+    r = traced_field(600, 4, seed=2)
+    kw = {"decompose_area": False, "speed": 5.0, "turn_time": 10.0}
+    router_for.cache_clear()
+    fresh = plan_region(r, 10.0, angle=0.7, offset=2.0, **kw)
+    router_for.cache_clear()
+    for angle in (0.69, 0.71, 1.9):  # nearby layouts first: the router remembers their moves
+        plan_region(r, 10.0, angle=angle, offset=2.0, **kw)
+    again = plan_region(r, 10.0, angle=0.7, offset=2.0, **kw)
+    assert np.array_equal(fresh.waypoints, again.waypoints)
+    assert fresh.stats == again.stats
