@@ -55,7 +55,9 @@ def _counts(region: Region, box: Boxes, rigid: bool, exact: bool = False) -> np.
     search = CoverSearch(region, SPACING, SPACING / 2, COST, None, False)
     eps = float(box_radius(box, search.radius)[0])
     lv = search.sandwich.exact if exact else search.sandwich.level(eps)
-    rb = RigidBoxes(search.hole_xy, search.hole_start, box.delta, box.eta) if rigid else None
+    rb = None
+    if rigid:
+        rb = RigidBoxes(search.hole_xy, search.hole_start, box.delta, box.eta, search.split_rings)
     st = band_stats(
         lv.inner, lv.outer, box.theta, box.d, SPACING, SPACING / 2, search.origin,
         search.k_range(eps), search.n_holes, search.tol, inner_reach=search._inner_reach(),
@@ -108,3 +110,39 @@ def test_box_bounds_with_split_gaps_below_plans_sampled_in_the_box(seed, tour):
         ]
         for a, o in samples:
             assert bound <= _plan_cost(region, a, o) + 1e-6
+
+
+@pytest.mark.parametrize("off", [0.0005, 0.002, 0.003, 0.008])
+def test_a_fence_tip_thinner_than_the_planners_eps_is_not_counted_as_a_split(off):
+    """A review's reproducer: a 20 m x 1 mm diamond (a fence) at 0.6 rad to the lines, its sharp
+    lower tip ``off`` below a line. Near the tip the fence is thinner than the planner's eps
+    (:func:`boustro.plan.lanes._cut_holes` cuts a line only where the lines at ``c +- eps``
+    cross the hole too), so the plan flies through it there: the split gaps come from the holes
+    eroded past that eps (:func:`boustro.optimize.cover.rigid.split_rings`). With the
+    unreduced hole the box bound was 349.99 s at ``off`` 2 mm, the plan at its centre 340.91 s."""
+    w, length, alpha = 1e-3, 20.0, 0.6
+    u, n = np.array([np.cos(alpha), np.sin(alpha)]), np.array([-np.sin(alpha), np.cos(alpha)])
+    tip = np.array([60.0, 45.0 - off])
+    c = tip + u * length / 2
+    region = _region(np.array([tip, c + n * w / 2, tip + u * length, c - n * w / 2]), extra=False)
+    d = (45.0 - CoverSearch(region, SPACING, SPACING / 2, COST, None, False).origin[1]) % SPACING
+    box = Boxes(np.array([0.0]), np.array([1e-3 / 600]), np.array([d]), np.array([1e-3]))
+    plans = [_plan_cost(region, a, o) for a, o in [(0.0, d), (-1e-3 / 600, d - 1e-3)]]
+    plans.append(_plan_cost(region, 1e-3 / 600, d + 1e-3))
+    for tour in (False, True):
+        assert _bound(region, box, tour) <= min(plans) + 1e-6
+
+
+def test_a_hole_thinner_than_the_planners_eps_is_not_a_rigid_cut():
+    """A review's reproducer: a 1 um x 80 m diamond, which the planner never cuts (thinner than
+    its eps everywhere): the box's rigid cuts counted its pass and split lanes, a bound of
+    453.53 s (457.27 s with the 1-tree) above the plan at the box's centre (416.06 s)."""
+    a, theta, d, eta = 0.5537, 0.3910, 3.9249, 3e-3
+    u, n = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
+    c = np.array([60.0, 45.0])
+    hole = np.array([c - u * 40, c + n * 5e-7, c + u * 40, c - n * 5e-7])
+    region = _region(hole, extra=False)
+    box = Boxes(np.array([theta]), np.array([eta / 60]), np.array([d]), np.array([eta]))
+    plan = _plan_cost(region, theta, d)
+    for tour in (False, True):
+        assert _bound(region, box, tour) <= plan + 1e-6

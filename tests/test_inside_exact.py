@@ -180,3 +180,19 @@ def test_pieces_equal_the_buffered_test():
         assert all(shapely.equals_exact(a, b, 0.0) for a, b in zip(got, want, strict=True))
     assert dropped > 20  # slivers and the thin ring dropped, the rest kept
     assert _pieces(shapely.Polygon(), eps) == []
+
+
+def test_pieces_keep_a_deep_piece_that_geos_erodes_away_at_utm_coordinates():
+    """A review: at UTM-sized coordinates GEOS's ``buffer(-eps)`` of a valid piece 2.5e-4 m
+    deep is empty for ``eps`` 2.5e-8 m (the buffered test dropped it, leaving it uncovered);
+    the area rule keeps it, as it keeps the same piece moved to the origin."""
+    piece = shapely.from_wkt(
+        "POLYGON ((512346.5413830811 5412353.990505062, 512346.6981799225 5412353.987653996, "
+        "512346.6986246743 5412353.987145826, 512346.5389255167 5412353.990049666, "
+        "512346.5413830811 5412353.990505062))"
+    )
+    eps = 1e-7 * 0.25
+    assert piece.is_valid and piece.exterior.distance(piece.centroid) > 1000 * eps
+    moved = shapely.affinity.translate(piece, -512345, -5412345)
+    assert len(_pieces(moved, eps)) == 1
+    assert len(_pieces(piece, eps)) == 1

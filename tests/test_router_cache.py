@@ -93,3 +93,34 @@ def test_a_plan_is_the_same_after_other_plans_of_the_field():
     again = plan_region(r, 10.0, angle=0.7, offset=2.0, **kw)
     assert np.array_equal(fresh.waypoints, again.waypoints)
     assert fresh.stats == again.stats
+
+
+@pytest.mark.parametrize("limit", [35, 50, 200])
+def test_full_caches_forget_and_still_answer(field, monkeypatch, limit):
+    """A review: a batch with points remembered before the cache is emptied (past its limit)
+    raised KeyError (a 300-vertex traced field at 4 m crashed ``plan_area``). With tiny limits
+    every answer still equals a fresh router's."""
+    import boustro.plan.routing as routing
+
+    monkeypatch.setattr(routing, "_ROUTES", limit)
+    monkeypatch.setattr(routing, "_ROWS", limit)
+    warm, fresh = Router(field, 5.0), Router(field, 5.0)
+    pts = _points(field, 80, 3)
+    for n in (30, len(pts) // 2, len(pts)):  # each batch holds remembered points and new ones
+        p, q = pts[: n - 1], pts[1:n]
+        for x, y in zip(warm.paths(p, q), fresh._straight_many(p, q)[0], strict=True):
+            assert x.straight == bool(y)
+        assert np.array_equal(warm.distances(pts[:n]), Router(field, 5.0).distances(pts[:n]))
+        pa = warm.anchor(pts[:n])
+        for got, want in zip(warm._to_domains(pa), fresh._to_domains_now(pa), strict=True):
+            assert np.array_equal(got, want)
+    assert len(warm._routes) <= limit
+    assert all(len(c) <= limit for c in warm._row_cache.values())
+
+
+def test_an_anchor_of_a_nan_point_is_nan(field):
+    """Above 256 edges the anchors come from STRtree candidates: a NaN point has none, and its
+    anchor is NaN (as over every edge), not uninitialised memory."""
+    router = Router(field, 5.0)
+    got = router.anchor(np.array([[np.nan, np.nan], [np.nan, 0.0], [0.0, np.nan]]))
+    assert np.isnan(got).any(axis=1).all()

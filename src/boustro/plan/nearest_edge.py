@@ -68,6 +68,6 @@ def index_feet(index: EdgeIndex, q: NDArray[np.float64]) -> NDArray[np.float64]:
     pick = np.lexsort((e, dist, i))  # by point, nearest first, ties: the first edge
     first = np.ones(len(pick), dtype=bool)
     first[1:] = i[pick][1:] != i[pick][:-1]
-    out = np.empty_like(q)
+    out = np.full_like(q, np.nan)  # a point without a candidate (NaN): NaN, as every edge
     out[i[pick][first]] = foot[pick][first]
     return out

@@ -295,7 +295,9 @@ class Router:
         p = np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 2)
         q = np.ascontiguousarray(q, dtype=np.float64).reshape(-1, 2)
         keys = [a.tobytes() + b.tobytes() for a, b in zip(p, q, strict=True)]
-        new = [i for i, k in enumerate(keys) if k not in self._routes]
+        # the answers kept here: remembering one may forget the others (_keep)
+        out: list[Route | None] = [self._routes.get(k) for k in keys]
+        new = [i for i, r in enumerate(out) if r is None]
         if new:
             pn, qn = p[new], q[new]
             ok, outside = self._straight_many(pn, qn)
@@ -305,7 +307,8 @@ class Router:
                 else:
                     route = self._detour(a, b)
                 self._keep(keys[i], route)
-        return [self._routes[k] for k in keys]
+                out[i] = route
+        return [r for r in out if r is not None]
 
     def _keep(self, key: bytes, route: Route) -> None:
         """Remember a routed move (read-only; forgotten all at once past :data:`_ROUTES`)."""
@@ -404,9 +407,11 @@ class Router:
         cache = self._row_cache.setdefault(name, {})
         p = np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 2)
         keys = [x.tobytes() for x in p]
+        # the batch's rows kept here: the cache may be emptied below
+        known = {k: cache[k] for k in keys if k in cache}
         new: dict[bytes, int] = {}
         for i, k in enumerate(keys):
-            if k not in cache and k not in new:
+            if k not in known and k not in new:
                 new[k] = i
         if new:
             if len(cache) + len(new) > _ROWS:
@@ -414,8 +419,8 @@ class Router:
             idx = np.fromiter(new.values(), dtype=np.int64, count=len(new))
             got = compute(p[idx])
             for j, k in enumerate(new):
-                cache[k] = tuple(g[j] for g in got)
-        rows = [cache[k] for k in keys]
+                known[k] = cache[k] = tuple(g[j] for g in got)
+        rows = [known[k] for k in keys]
         if not rows:
             return compute(p)
         return tuple(np.array([r[c] for r in rows]) for c in range(len(rows[0])))

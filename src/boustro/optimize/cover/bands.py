@@ -26,7 +26,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._jit import jit, jit_globals
-from .rigid import RigidBoxes, _hole_extents, _rigid_cuts, _split_gaps, _split_pieces
+from .rigid import (
+    RigidBoxes,
+    _hole_extents,
+    _rigid_cuts,
+    _split_gaps,
+    _split_pieces,
+    split_rings,
+)
 
 __all__ = ["BandStats", "EdgeSet", "RigidBoxes", "band_stats", "edge_set"]
 
@@ -390,6 +397,9 @@ def _leaf(
     first_hi,
     last_lo,
     pieces,
+    sxy,
+    sstart,
+    sparent,
     split,
 ):
     ih1, ih2, it1, it2 = _project(inner_xy, cs, sn, ox, oy)
@@ -397,7 +407,7 @@ def _leaf(
     i_start, i_m, i_lo, i_hi = _band_intervals(ih1, ih2, it1, it2, d, s, r_in, k0, nb)
     o_start, o_m, o_lo, o_hi = _band_intervals(oh1, oh2, ot1, ot2, d, s, r_out, k0, nb)
     if delta >= 0:
-        _rigid_cuts(hxy, hstart, cs, sn, d, s, ox, oy, k0, nb, delta, eta,
+        _rigid_cuts(sxy, sstart, sparent, cs, sn, d, s, ox, oy, k0, nb, delta, eta,
                     i_start, i_m, i_lo, i_hi, tol, rigid)  # fmt: skip
     # chords where the lines tau either side cross the hole too (the planner's rule, with its
     # 1e-7 spacings): the inner set's tau within its holes' margin over the real ones (the
@@ -416,11 +426,12 @@ def _leaf(
     plo, phi = np.empty(room), np.empty(room)
     qlo, qhi = np.empty(room), np.empty(room)
     # the holes' split gaps (:func:`.rigid._split_gaps`): every plan of the box has a gap there
-    n_h = hstart.shape[0] - 1
+    # (of the holes eroded past the planner's eps: :func:`.rigid.split_rings`)
+    n_h = sstart.shape[0] - 1
     ext = np.empty((n_h, 5))
     any_split = delta >= 0 and split.any()
     if any_split:
-        _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, split, ext)
+        _hole_extents(sxy, sstart, cs, sn, ox, oy, delta, eta, tol, split, ext)
     glo, ghi = np.empty(n_h + 1), np.empty(n_h + 1)
     slo, shi = np.empty(room + n_h), np.empty(room + n_h)
     llo, lhi = np.empty(room + n_h), np.empty(room + n_h)
@@ -452,7 +463,7 @@ def _leaf(
         c = _count_pieces(qlo, qhi, qlo, qhi, n_q, plo, phi, n_p, tol, pieces[b])
         ng = 0
         if any_split:
-            ng = _split_gaps(hxy, hstart, ext, cs, sn, ox, oy, d + (k0 + b) * s, glo, ghi)
+            ng = _split_gaps(sxy, sstart, ext, cs, sn, ox, oy, d + (k0 + b) * s, glo, ghi)
         if ng > 0:
             n_s = _split_pieces(qlo, qhi, n_q, glo, ghi, ng, slo, shi, llo, lhi)
             c_s = _count_pieces(slo, shi, llo, lhi, n_s, plo, phi, n_p, tol, split_row)
@@ -491,6 +502,9 @@ def _all(
     hstart,
     delta,
     eta,
+    sxy,
+    sstart,
+    sparent,
     split,
 ):
     n = cs.shape[0]
@@ -538,6 +552,9 @@ def _all(
             first_hi[leaf],
             last_lo[leaf],
             pieces[leaf],
+            sxy,
+            sstart,
+            sparent,
             split,
         )
     return length, count, in_lo, in_hi, out_lo, out_hi, cut, rigid, first_hi, last_lo, pieces
@@ -591,6 +608,12 @@ def band_stats(
     if split:
         gone[:] = True
         gone[outer.hole[(outer.hole >= 0) & (outer.hole < len(gone))]] = False
+    # the holes eroded past the planner's eps: the rigid cuts' and the split gaps' holes
+    rings = rigid.split
+    if rings is None:
+        holes = [rigid.xy[a:b] for a, b in zip(rigid.start[:-1], rigid.start[1:], strict=True)]
+        rings = split_rings(holes, float(spacing), float(tol))
+    gone_ring = gone[rings.parent]
     out = fn(
         np.ascontiguousarray(inner.xy), np.ascontiguousarray(inner.hole),
         np.ascontiguousarray(outer.xy), np.ascontiguousarray(outer.hole),
@@ -601,6 +624,9 @@ def band_stats(
         np.ascontiguousarray(rigid.xy, dtype=np.float64),
         np.ascontiguousarray(rigid.start, dtype=np.int64),
         np.ascontiguousarray(rigid.delta, dtype=np.float64),
-        np.ascontiguousarray(rigid.eta, dtype=np.float64), gone,
+        np.ascontiguousarray(rigid.eta, dtype=np.float64),
+        np.ascontiguousarray(rings.xy, dtype=np.float64),
+        np.ascontiguousarray(rings.start, dtype=np.int64),
+        np.ascontiguousarray(rings.parent, dtype=np.int64), np.ascontiguousarray(gone_ring),
     )  # fmt: skip
     return BandStats(int(k0), *out)

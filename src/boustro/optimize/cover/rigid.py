@@ -10,24 +10,87 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["RigidBoxes"]
+__all__ = ["RigidBoxes", "SplitRings", "split_rings"]
+
+#: The rigid cuts' and split gaps' holes are the holes eroded by this many planner's ``eps``
+#: (``1e-7 max(spacing, tol)``: :func:`boustro.plan.lanes._cut_holes` cuts a line only where
+#: the lines at ``c - eps`` and ``c + eps`` cross the hole too): a line through the eroded hole
+#: passes within a disc of radius above ``eps`` of the hole (the buffer's arcs are inscribed:
+#: at least ``0.98`` of this radius), so the planner cuts it there; near a thin hole's sharp tip
+#: (thinner than ``eps``) it does not (a review: a 1 mm fence's tip 2 mm off a line; a 1 um
+#: thin hole the planner never cuts, whose rigid cut and pass the bound counted).
+SPLIT_ERODE = 4.0
+
+
+class SplitRings(NamedTuple):
+    """The rings of the holes eroded for the split gaps (:func:`split_rings`): vertices ``xy
+    (V, 2)`` (ring ``j``: rows ``start[j]:start[j + 1]``) and the hole each comes from,
+    ``parent (J,)``."""
+
+    xy: NDArray[np.float64]
+    start: NDArray[np.int64]
+    parent: NDArray[np.int64]
+
+
+def split_rings(holes: list[NDArray[np.float64]], spacing: float, tol: float) -> SplitRings:
+    """The holes (rings ``(n, 2)``) eroded by ``SPLIT_ERODE * 1e-7 * max(spacing, tol)``, one
+    ring per connected part (a hole thinner than that anywhere gives none there)."""
+    import shapely  # lazily: ``import boustro`` does not load shapely
+
+    r = SPLIT_ERODE * 1e-7 * max(spacing, tol)
+    rings: list[NDArray[np.float64]] = []
+    parent: list[int] = []
+    for h, ring in enumerate(holes):
+        eroded = shapely.Polygon(ring).buffer(-r, quad_segs=8)
+        for part in getattr(eroded, "geoms", [eroded]):
+            if part.is_empty or part.area <= 0:
+                continue
+            rings.append(np.asarray(part.exterior.coords, dtype=np.float64)[:-1])
+            parent.append(h)
+    xy = np.concatenate(rings) if rings else np.zeros((0, 2))
+    start = np.concatenate([[0], np.cumsum([len(g) for g in rings])]).astype(np.int64)
+    return SplitRings(xy, start, np.asarray(parent, dtype=np.int64))
 
 
 class RigidBoxes(NamedTuple):
     """The holes' vertices ``xy (V, 2)`` (hole ``h``: rows ``start[h]:start[h + 1]``) and the
-    boxes' half-widths ``delta`` (angle) and ``eta`` (offset), ``(L,)``: for ``rigid``."""
+    boxes' half-widths ``delta`` (angle) and ``eta`` (offset), ``(L,)``: for ``rigid``; the
+    holes eroded for the split gaps, ``split`` (:func:`split_rings`; none without)."""
 
     xy: NDArray[np.float64]
     start: NDArray[np.int64]
     delta: NDArray[np.float64]
     eta: NDArray[np.float64]
+    split: SplitRings | None = None
 
 
 def _rigid_cuts(
-    hxy, hstart, cs, sn, d, s, ox, oy, k0, nb, delta, eta, i_start, i_m, i_lo, i_hi, tol, rigid
+    hxy,
+    hstart,
+    parent,
+    cs,
+    sn,
+    d,
+    s,
+    ox,
+    oy,
+    k0,
+    nb,
+    delta,
+    eta,
+    i_start,
+    i_m,
+    i_lo,
+    i_hi,
+    tol,
+    rigid,
 ):
-    """``rigid[h]``: hole ``h`` is cut by every plan of the box (:class:`BandStats`)."""
+    """``rigid[parent[h]]``: the hole of ring ``h`` (of the holes eroded past the planner's eps,
+    :func:`split_rings`: a line through them is cut by the planner) is cut by every plan of the
+    box (:class:`BandStats`)."""
     for h in range(hstart.shape[0] - 1):
+        if rigid[parent[h]]:
+            continue
         n_lo, n_hi, u_lo, u_hi, rho = np.inf, -np.inf, np.inf, -np.inf, 0.0
         for v in range(hstart[h], hstart[h + 1]):
             x, y = hxy[v, 0] - ox, hxy[v, 1] - oy
@@ -49,7 +112,7 @@ def _rigid_cuts(
                     found = True
                     break
             if found:
-                rigid[h] = True
+                rigid[parent[h]] = True
                 break
 
 

@@ -26,6 +26,7 @@ from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
 from .inside_bound import contour_edges, inside_box_bounds, path_floor
 from .one_tree import MAX_LANES, POINT_TREE_STEPS, Multipliers
+from .rigid import split_rings
 from .sandwich import Level, Sandwich
 from .walls import WallCache
 
@@ -142,6 +143,8 @@ class CoverSearch:
         self.hole_xy = np.concatenate(rings) if rings else np.zeros((0, 2))
         self.hole_start = np.concatenate([[0], np.cumsum([len(h) for h in rings])]).astype(np.int64)
         self.tol = 1e-9 * region.diameter
+        # the holes eroded past the planner's eps: rigid cuts, split gaps (rigid.split_rings)
+        self.split_rings = split_rings(rings, spacing, self.tol)
         # the lane-ends bound on a routed tour's moves (not with boundary or headland passes)
         self.ends = not self.boustrophedon and not keep_inside and cost.fixed == 0
         # the 1-tree bound on the moves (optimize/cover/one_tree.py)
@@ -306,7 +309,10 @@ class CoverSearch:
             # rigid hole cuts assume lanes spanning their bands: not with keep_inside
             rigid = None
             if not self.keep_inside:
-                rigid = RigidBoxes(self.hole_xy, self.hole_start, boxes.delta[sel], boxes.eta[sel])
+                rigid = RigidBoxes(
+                    self.hole_xy, self.hole_start, boxes.delta[sel], boxes.eta[sel],
+                    self.split_rings,
+                )  # fmt: skip
             st = band_stats(
                 lv.inner, lv.outer, boxes.theta[sel], boxes.d[sel], self.s, self.band,
                 self.origin, self.k_range(reach_out), self.n_holes, self.tol,
