@@ -102,11 +102,12 @@ KEEP_INSIDE_FACTOR = 2.0
 #: (``"cover-region"``) adds ``c h^kappa n^gamma`` seconds (the passes around the holes and the
 #: moves past them in every plan the search makes, and the plans they add). The
 #: ``"cover-region"`` row was fitted on stars without holes; on issue 21's traced fields it said
-#: 5.3-55 s for 8.8-83 s measured (0.34-0.66x). Fitted (least worst ratio) on
+#: 5.3-55 s for 8.8-83 s measured (0.27-0.66x). Fitted (least worst ratio) on
 #: ``benchmarks/scale.py --part time`` (2026-11-27, load 3.4-5.5, 5 m/s, 10 s a turn, 10 m):
 #: traced fields of 500-5000 vertices with 10 holes (20.4, 25.1, 33.3, 83.0 s) and of 500 and
 #: 2000 vertices with 2 (8.8, 35.6 s): estimate / measured 0.77-1.29 there (the calibration
-#: itself; docs/scale.md). The search's time is irregular: 2000 vertices took longer with 2
+#: itself; docs/scale.md; a held-out field, 1000 vertices and 5 holes at load 13: 0.62, a
+#: review). The search's time is irregular: 2000 vertices took longer with 2
 #: holes than with 10. A small area with one hole gains about 0.4 s.
 COVER_HOLES = (0.0467, 0.25, 0.75)
 
