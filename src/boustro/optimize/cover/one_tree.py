@@ -77,14 +77,14 @@ def _lane_ends(
         for i in range(c):
             lk[n] = k
             ls[n] = 0 if i == 0 else (2 if i == c - 1 else 1)
-            if i == 0:
-                lo[2 * n], hi[2 * n] = out_lo[k] - t, in_lo[k]
+            if i == 0:  # collapsed to the inner extreme (module docstring)
+                lo[2 * n], hi[2 * n] = in_lo[k] - t, in_lo[k]
             elif i == c - 1:
                 lo[2 * n], hi[2 * n] = pieces[k, 2] - t, last_lo[k]
             else:
                 lo[2 * n], hi[2 * n] = pieces[k, 1] - t, min(last_lo[k], pieces[k, 3])
             if i == c - 1:
-                lo[2 * n + 1], hi[2 * n + 1] = in_hi[k], out_hi[k] + t
+                lo[2 * n + 1], hi[2 * n + 1] = in_hi[k], in_hi[k] + t
             elif i == 0:
                 lo[2 * n + 1], hi[2 * n + 1] = first_hi[k], pieces[k, 0] + t
             else:
