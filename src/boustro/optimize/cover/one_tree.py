@@ -1,30 +1,46 @@
-"""A lower bound on a routed tour's connecting moves that sees the tour's structure: the
-Held-Karp 1-tree bound with Lagrangian multipliers over the counted lanes' ends
-(docs/mission_time.md, "The tour's 1-tree").
+"""A lower bound on a routed tour's connecting moves that sees the tour's structure: the Held-Karp
+1-tree bound with Lagrangian multipliers over the counted lanes' ends (docs/mission_time.md,
+"The tour's 1-tree").
 
 Per layout of the centre grid and line ``k`` (the area moves, not the grid) the band statistics
 give ``count_k`` lanes every area ``S`` of the box has, each holding one inner piece, with the
-ranges of their ends: the first lane starts in ``[A_k - t, a_k]`` and the last ends in ``[b_k,
-B_k + t]``; with ``count_k >= 2`` the first lane ends in ``[first_hi_k, P1_k + t]``, the last
-starts in ``[PL_k - t, last_lo_k]``, and every lane between (inside the outer pieces from the
-second to the one before the last, ``[P2_k, Q1_k]``) starts in ``[P2_k - t, min(last_lo_k,
-Q1_k)]`` and ends in ``[max(first_hi_k, P2_k), Q1_k + t]`` (``P1, P2, PL, Q1``:
-:attr:`BandStats.pieces`; ``t`` the run-in). Two ends on lines ``j, k`` are at least
-``sqrt(((j - k) s)^2 + g^2)`` apart, ``g`` the gap between their ranges: a connecting move is
-never shorter.
+ranges of their ends: the first lane starts in ``[a_k - t, a_k]`` and the last ends in ``[b_k,
+b_k + t]`` (``a_k, b_k`` the inner projection's extremes; collapsed, below); with ``count_k >=
+2`` the first lane ends in ``[first_hi_k, P1_k + t]``, the last starts in ``[PL_k - t,
+last_lo_k]``, and every lane between (inside the outer pieces from the second to the one before
+the last, ``[P2_k, Q1_k]``) starts in ``[P2_k - t, min(last_lo_k, Q1_k)]`` and ends in
+``[max(first_hi_k, P2_k), Q1_k + t]`` (``P1, P2, PL, Q1``: :attr:`BandStats.pieces`; ``t`` the
+run-in). Two ends on lines ``j, k`` are at least ``sqrt(((j - k) s)^2 + g^2)`` apart, ``g`` the
+gap between their ranges: a connecting move is never shorter.
 
-**The relaxation.** Contract every hole pass (a closed loop entered and left at one point
-``x``: ``|e - x| + |x - f| >= |e - f|``) and every extra lane (a lane holding no inner piece,
-flown from ``x`` to ``y``: ``|e - f| <= |e - x| + |x - y| + |y - f|``; its flown length is in
-the plan's cost and in no other term of the bound). What remains is a path over the counted
-lanes whose moves are at most ``moves + the extra lanes' flown length``. Close it with a dummy
-node joined to every end at cost 0: a Hamiltonian cycle over the ends and the dummy that holds
-every lane as an edge. Every such cycle is a 1-tree (a spanning tree of the ends holding every
-lane, plus two edges of the dummy); with multipliers ``pi`` on the ends, ``L(pi) = min 1-tree
-under costs c_ij + pi_i + pi_j - 2 sum(pi)`` is at most the cycle's cost for every ``pi``
-(Held and Karp 1970). The spanning tree that must hold the lanes is the lanes plus a minimum
-spanning tree of the lanes contracted (Prim, the cost between two lanes the least over their
-four pairs of ends). ``pi`` is improved by subgradient steps; the best ``L`` is kept.
+**The collapsed outer ends.** A plan's first lane on line ``k`` starts in ``[A_k - t, a_k]``
+(``A_k`` the outer projection's extreme): its covered part starts at ``p <= a_k``, its run-in
+``r <= t`` before. Its part ``[p, a_k)`` lies outside the inner projection, so no other term of
+the bound counts it (the lanes' length is the inner projection's, the run-ins ``t`` each or
+none, the extra lanes' contraction their own flown length), and the point ``max(p - r, a_k -
+t)`` of ``[a_k - t, a_k]`` is at most ``a_k - p`` from the real start: by the triangle
+inequality the path's one move at that end, from the collapsed end, is at most the real move
+plus ``a_k - p``, which the plan flies on top of what the bound counts. So the 1-tree over the
+collapsed ranges is at most ``moves + extra lanes + the lanes' length outside the inner
+projection``, and the bound stays below every plan. The same holds for the last lane's end
+(``[b_k, B_k + t]`` to ``[b_k, b_k + t]``), for a one-lane line at both ends (its two parts
+outside the inner projection are disjoint), with ``t = 0``, and with split gaps (``pieces``:
+only the line's two outermost ends change, every other end keeps its range). A box straddling an
+edge along the lines (random area 35: ``B_k - b_k`` = 105 m) no longer lets the line's lane end
+anywhere in between (docs/mission_time.md, "The tour's 1-tree").
+
+**The relaxation.** Contract every hole pass (a closed loop entered and left at one point ``x``:
+``|e - x| + |x - f| >= |e - f|``) and every extra lane (a lane holding no inner piece, flown
+from ``x`` to ``y``: ``|e - f| <= |e - x| + |x - y| + |y - f|``; its flown length is in the
+plan's cost and in no other term of the bound). What remains is a path over the counted lanes
+whose moves are at most ``moves + the extra lanes' flown length``. Close it with a dummy node
+joined to every end at cost 0: a Hamiltonian cycle over the ends and the dummy that holds every
+lane as an edge. Every such cycle is a 1-tree (a spanning tree of the ends holding every lane,
+plus two edges of the dummy); with multipliers ``pi`` on the ends, ``L(pi) = min 1-tree under
+costs c_ij + pi_i + pi_j - 2 sum(pi)`` is at most the cycle's cost for every ``pi`` (Held and
+Karp 1970). The spanning tree that must hold the lanes is the lanes plus a minimum spanning tree
+of the lanes contracted (Prim, the cost between two lanes the least over their four pairs of
+ends). ``pi`` is improved by subgradient steps; the best ``L`` is kept.
 """
 
 from __future__ import annotations
@@ -77,14 +93,14 @@ def _lane_ends(
         for i in range(c):
             lk[n] = k
             ls[n] = 0 if i == 0 else (2 if i == c - 1 else 1)
-            if i == 0:
-                lo[2 * n], hi[2 * n] = out_lo[k] - t, in_lo[k]
+            if i == 0:  # collapsed to the inner extreme (module docstring)
+                lo[2 * n], hi[2 * n] = in_lo[k] - t, in_lo[k]
             elif i == c - 1:
                 lo[2 * n], hi[2 * n] = pieces[k, 2] - t, last_lo[k]
             else:
                 lo[2 * n], hi[2 * n] = pieces[k, 1] - t, min(last_lo[k], pieces[k, 3])
             if i == c - 1:
-                lo[2 * n + 1], hi[2 * n + 1] = in_hi[k], out_hi[k] + t
+                lo[2 * n + 1], hi[2 * n + 1] = in_hi[k], in_hi[k] + t
             elif i == 0:
                 lo[2 * n + 1], hi[2 * n + 1] = first_hi[k], pieces[k, 0] + t
             else:
