@@ -196,3 +196,27 @@ def test_pieces_keep_a_deep_piece_that_geos_erodes_away_at_utm_coordinates():
     moved = shapely.affinity.translate(piece, -512345, -5412345)
     assert len(_pieces(moved, eps)) == 1
     assert len(_pieces(piece, eps)) == 1
+
+
+def test_the_spur_cache_is_bounded_by_its_points(monkeypatch):
+    """A review: the cache was bounded by its count of stretches (1024 whole rings of a traced
+    field per area); now by their points, the oldest forgotten, the answers the same."""
+    monkeypatch.setattr(inside, "SPUR_CACHE", 60)
+    region = next(iter(_areas()))
+    rng = np.random.default_rng(3)
+    tol = 1e-9 * region.diameter
+    seen = 0
+    for lanes in _layouts(region, rng, 4):
+        half = [inside.clip_lanes(ls, region, tol, SPACING / 2, SPACING) for ls in lanes]
+        geo, residual = inside._residual(region, half, SPACING, SPACING / 2)
+        if residual is None:
+            continue
+        for line in inside._contour_arcs(residual, SPACING / 2, tol, geo.contour, SPACING / 2):
+            got = geo.spurs(line, SPACING / 2)
+            assert np.array_equal(got, _corner_spurs(line, geo.contour, SPACING / 2,
+                                                     SPACING / 2, tol))  # fmt: skip
+            kept = sum(k[1] + len(v) for k, v in geo._spurs.items())
+            assert kept == geo._spur_points
+            assert len(geo._spurs) == 1 or kept <= 60
+            seen += 1
+    assert seen > 0

@@ -57,9 +57,10 @@ MAX_PATCHES = 5000
 BAND_CACHE = 4096
 #: Unions of bands kept (:func:`_bands`).
 UNION_CACHE = 128
-#: Contour stretches whose corner spurs an area's :class:`_Geometry` keeps
-#: (:meth:`_Geometry.spurs`).
-SPUR_CACHE = 1024
+#: Points of the contour stretches (and of their spurs) an area's :class:`_Geometry` keeps for
+#: :meth:`_Geometry.spurs` (the oldest forgotten past it: about 8 MB an area with the keys; a
+#: review: 1024 whole rings of a 2000-vertex trace per area, 32 areas, would hold 2 GB).
+SPUR_CACHE = 1 << 18
 #: Areas whose shapely geometry (:func:`_geometry`) is kept: a search plans one area (or a
 #: decomposition's few cells) hundreds of times.
 AREA_CACHE = 32
@@ -80,6 +81,7 @@ class _Geometry:
         self._contour: Contour | None = None
         self._shrunk: dict[float, Any] = {}
         self._spurs: dict[tuple[bytes, int, float], NDArray[np.float64]] = {}
+        self._spur_points = 0  # of the kept stretches and their spurs (SPUR_CACHE)
 
     @property
     def contour(self) -> Contour:
@@ -95,12 +97,15 @@ class _Geometry:
         key = (np.ascontiguousarray(line, dtype=np.float64).tobytes(), len(line), reach)
         out = self._spurs.get(key)
         if out is None:
-            if len(self._spurs) >= SPUR_CACHE:
-                self._spurs.pop(next(iter(self._spurs)))
             out = _corner_spurs(line, self.contour, self.spacing / 2, reach, self.tol)
             out = np.array(out, dtype=np.float64)  # its own copy, never written
             out.flags.writeable = False
+            while self._spurs and self._spur_points + len(line) + len(out) > SPUR_CACHE:
+                old_key, old = next(iter(self._spurs.items()))
+                self._spur_points -= old_key[1] + len(old)
+                del self._spurs[old_key]
             self._spurs[key] = out
+            self._spur_points += len(line) + len(out)
         return out
 
     def shrunk(self, margin: float) -> Any:
