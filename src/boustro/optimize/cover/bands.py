@@ -406,9 +406,13 @@ def _leaf(
     oh1, oh2, ot1, ot2 = _project(outer_xy, cs, sn, ox, oy)
     i_start, i_m, i_lo, i_hi = _band_intervals(ih1, ih2, it1, it2, d, s, r_in, k0, nb)
     o_start, o_m, o_lo, o_hi = _band_intervals(oh1, oh2, ot1, ot2, d, s, r_out, k0, nb)
+    # the holes eroded past the planner's eps (:func:`.rigid.split_rings`): their extents, the
+    # rigid cuts and the split gaps
+    n_h = sstart.shape[0] - 1
+    ext = np.empty((n_h, 5))
     if delta >= 0:
-        _rigid_cuts(sxy, sstart, sparent, cs, sn, d, s, ox, oy, k0, nb, delta, eta,
-                    i_start, i_m, i_lo, i_hi, tol, rigid)  # fmt: skip
+        _hole_extents(sxy, sstart, cs, sn, ox, oy, delta, eta, tol, ext)
+        _rigid_cuts(ext, sparent, d, s, k0, nb, i_start, i_m, i_lo, i_hi, rigid)
     # chords where the lines tau either side cross the hole too (the planner's rule, with its
     # 1e-7 spacings): the inner set's tau within its holes' margin over the real ones (the
     # sandwich's pad, tol), the outer set's beyond the planner's (fewer chords: a lower bound)
@@ -426,12 +430,7 @@ def _leaf(
     plo, phi = np.empty(room), np.empty(room)
     qlo, qhi = np.empty(room), np.empty(room)
     # the holes' split gaps (:func:`.rigid._split_gaps`): every plan of the box has a gap there
-    # (of the holes eroded past the planner's eps: :func:`.rigid.split_rings`)
-    n_h = sstart.shape[0] - 1
-    ext = np.empty((n_h, 5))
     any_split = delta >= 0 and split.any()
-    if any_split:
-        _hole_extents(sxy, sstart, cs, sn, ox, oy, delta, eta, tol, split, ext)
     glo, ghi = np.empty(n_h + 1), np.empty(n_h + 1)
     slo, shi = np.empty(room + n_h), np.empty(room + n_h)
     llo, lhi = np.empty(room + n_h), np.empty(room + n_h)
@@ -463,7 +462,7 @@ def _leaf(
         c = _count_pieces(qlo, qhi, qlo, qhi, n_q, plo, phi, n_p, tol, pieces[b])
         ng = 0
         if any_split:
-            ng = _split_gaps(sxy, sstart, ext, cs, sn, ox, oy, d + (k0 + b) * s, glo, ghi)
+            ng = _split_gaps(sxy, sstart, ext, split, cs, sn, ox, oy, d + (k0 + b) * s, glo, ghi)
         if ng > 0:
             n_s = _split_pieces(qlo, qhi, n_q, glo, ghi, ng, slo, shi, llo, lhi)
             c_s = _count_pieces(slo, shi, llo, lhi, n_s, plo, phi, n_p, tol, split_row)

@@ -64,33 +64,11 @@ class RigidBoxes(NamedTuple):
     split: SplitRings | None = None
 
 
-def _rigid_cuts(
-    hxy,
-    hstart,
-    parent,
-    cs,
-    sn,
-    d,
-    s,
-    ox,
-    oy,
-    k0,
-    nb,
-    delta,
-    eta,
-    i_start,
-    i_m,
-    i_lo,
-    i_hi,
-    tol,
-    rigid,
-):
-    """``rigid[parent[h]]``: the hole of ring ``h`` (of the holes eroded past the planner's eps,
-    :func:`split_rings`: a line through them is cut by the planner) is cut by every plan of the
-    box (:class:`BandStats`)."""
+def _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, ext):
+    """Per ring ``h``, ``ext[h] = (n_lo, n_hi, u_lo, u_hi, m)``: its extents across and along
+    the lines of the layout and ``m = delta rho + eta + tol``, the most any of its points moves
+    in the box (``rho``: its farthest vertex from the origin)."""
     for h in range(hstart.shape[0] - 1):
-        if rigid[parent[h]]:
-            continue
         n_lo, n_hi, u_lo, u_hi, rho = np.inf, -np.inf, np.inf, -np.inf, 0.0
         for v in range(hstart[h], hstart[h + 1]):
             x, y = hxy[v, 0] - ox, hxy[v, 1] - oy
@@ -98,7 +76,18 @@ def _rigid_cuts(
             n_lo, n_hi = min(n_lo, nv), max(n_hi, nv)
             u_lo, u_hi = min(u_lo, uv), max(u_hi, uv)
             rho = max(rho, math.sqrt(x * x + y * y))
-        m = delta * rho + eta + tol
+        ext[h, 0], ext[h, 1], ext[h, 2], ext[h, 3] = n_lo, n_hi, u_lo, u_hi
+        ext[h, 4] = delta * rho + eta + tol
+
+
+def _rigid_cuts(ext, parent, d, s, k0, nb, i_start, i_m, i_lo, i_hi, rigid):
+    """``rigid[parent[h]]``: the hole of ring ``h`` (of the holes eroded past the planner's eps,
+    :func:`split_rings`: a line through them is cut by the planner; extents ``ext`` from
+    :func:`_hole_extents`) is cut by every plan of the box (:class:`BandStats`)."""
+    for h in range(ext.shape[0]):
+        if rigid[parent[h]]:
+            continue
+        n_lo, n_hi, u_lo, u_hi, m = ext[h, 0], ext[h, 1], ext[h, 2], ext[h, 3], ext[h, 4]
         ka = max(math.ceil((n_lo + m - d) / s), k0)
         kb = min(math.floor((n_hi - m - d) / s), k0 + nb - 1)
         for k in range(ka, kb + 1):
@@ -116,24 +105,7 @@ def _rigid_cuts(
                 break
 
 
-def _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, split, ext):
-    """Per hole ``h``, ``ext[h] = (n_lo, n_hi, u_lo, u_hi, m)``: its extents across and along
-    the lines of the layout and ``m = delta rho + eta + tol``, the most any of its points moves
-    in the box (``rho``: its farthest vertex from the origin); ``m = -1`` without a box or
-    where ``split[h]`` is false (no split gaps of that hole)."""
-    for h in range(hstart.shape[0] - 1):
-        n_lo, n_hi, u_lo, u_hi, rho = np.inf, -np.inf, np.inf, -np.inf, 0.0
-        for v in range(hstart[h], hstart[h + 1]):
-            x, y = hxy[v, 0] - ox, hxy[v, 1] - oy
-            nv, uv = -sn * x + cs * y, cs * x + sn * y
-            n_lo, n_hi = min(n_lo, nv), max(n_hi, nv)
-            u_lo, u_hi = min(u_lo, uv), max(u_hi, uv)
-            rho = max(rho, math.sqrt(x * x + y * y))
-        ext[h, 0], ext[h, 1], ext[h, 2], ext[h, 3] = n_lo, n_hi, u_lo, u_hi
-        ext[h, 4] = delta * rho + eta + tol if delta >= 0 and split[h] else -1.0
-
-
-def _split_gaps(hxy, hstart, ext, cs, sn, ox, oy, c, glo, ghi):
+def _split_gaps(hxy, hstart, ext, split, cs, sn, ox, oy, c, glo, ghi):
     """The *split gaps* of the line at ``c`` (across), sorted and merged into ``glo, ghi``;
     returns their number. A hole whose extent across the lines, shrunk by its ``m``, holds
     ``c`` strictly is crossed by the line at every rigid image of the box (its points move by
@@ -141,11 +113,12 @@ def _split_gaps(hxy, hstart, ext, cs, sn, ox, oy, c, glo, ghi):
     of the hole within ``m`` of it (across) and moved by at most ``m`` (along): its chord lies
     in the hole's part in the slab ``|n - c| <= m``, its extent along the line grown by ``m``
     (the hole's edges clipped to the slab). Every plan of the box has a gap in its lanes
-    there, however thin the hole (a sandwich's outer set may erode it away)."""
+    there, however thin the hole (a sandwich's outer set may erode it away); only the rings
+    whose ``split[h]`` is true."""
     ng = 0
     for h in range(ext.shape[0]):
         m = ext[h, 4]
-        if not (m >= 0 and ext[h, 0] + m < c < ext[h, 1] - m):
+        if not (split[h] and ext[h, 0] + m < c < ext[h, 1] - m):
             continue
         u_lo, u_hi = np.inf, -np.inf
         v0, v1 = hstart[h], hstart[h + 1]
