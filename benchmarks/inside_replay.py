@@ -27,21 +27,10 @@ SRC = os.path.join(os.path.dirname(HERE), "src")
 RECORD = r"""
 import pickle, sys
 sys.path.insert(0, {here!r})
-from estimate import star
-import numpy as np
+from keep_inside_speed import keep_inside_case
 import boustro.plan.region as R
-from boustro.geometry.region import random_region
 from boustro.mission import plan_area
-case = {case!r}
-if case == "star":
-    area, spacing, kw = star(200), 1000 / 36, dict(crs=None)
-else:
-    rng = np.random.default_rng(0)
-    for _ in range(int(case[7:]) + 1):
-        r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
-    k = 300.0 / r.diameter
-    area, spacing = r.shell.vertices * k, 10.0
-    kw = dict(crs=None, holes=[h.vertices * k for h in r.holes])
+area, spacing, kw = keep_inside_case({case!r})
 calls, real = [], R.inside_layout
 def record(*args):
     calls.append(args)

@@ -34,26 +34,10 @@ SRC = os.path.join(os.path.dirname(HERE), "src")
 CHILD = r"""
 import hashlib, json, os, sys, time
 sys.path.insert(0, {here!r})
-from estimate import star
+from keep_inside_speed import keep_inside_case
 import numpy as np
-from boustro.geometry.region import random_region
-from boustro.io import embedded_field, read_areas
 from boustro.mission import plan_area
-case = {case!r}
-if case == "star":
-    area, spacing, kw = star(200), 1000 / 36, dict(crs=None)
-elif case == "test.json":
-    area, spacing, kw = embedded_field(), 10.0, {{}}
-elif case.startswith("random_"):
-    rng = np.random.default_rng(0)
-    for _ in range(int(case[7:]) + 1):
-        r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
-    k = 300.0 / r.diameter
-    area, spacing = r.shell.vertices * k, 10.0
-    kw = dict(crs=None, holes=[h.vertices * k for h in r.holes])
-else:
-    name, index = case.split("#")
-    area, spacing, kw = read_areas(os.path.join({data!r}, name))[int(index) - 1], 10.0, {{}}
+area, spacing, kw = keep_inside_case({case!r}, {data!r})
 t0 = time.process_time()
 m = plan_area(area, spacing, speed=5.0, turn_time=10.0, keep_inside=True, **kw)
 cpu = time.process_time() - t0
@@ -65,6 +49,29 @@ print(json.dumps(dict(cpu=cpu, decomposed=m.optimum.method.startswith("decompose
                       path=hashlib.sha256(np.ascontiguousarray(m.waypoints).tobytes())
                       .hexdigest()[:12])))
 """
+
+
+def keep_inside_case(case: str, data: str = "") -> tuple[object, float, dict]:
+    """The area, spacing and ``plan_area`` keywords of a case (``star``, ``test.json``,
+    ``random_N``, ``<file>#<i>`` of Fields2Cover's ``data``), in the child's tree."""
+    import numpy as np
+    from estimate import star
+
+    from boustro.geometry.region import random_region
+    from boustro.io import embedded_field, read_areas
+
+    if case == "star":
+        return star(200), 1000 / 36, {"crs": None}
+    if case == "test.json":
+        return embedded_field(), 10.0, {}
+    if case.startswith("random_"):
+        rng = np.random.default_rng(0)
+        for _ in range(int(case[7:]) + 1):
+            r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
+        k = 300.0 / r.diameter
+        return r.shell.vertices * k, 10.0, {"crs": None, "holes": [h.vertices * k for h in r.holes]}
+    name, index = case.split("#")
+    return read_areas(os.path.join(data, name))[int(index) - 1], 10.0, {}
 
 
 def _run(src: str, case: str, data: str) -> dict:

@@ -117,6 +117,23 @@ def worker(path: str, spacing: float, part: str) -> None:
     print(json.dumps(out))
 
 
+def _time_stage(module, name: str, stages: dict, calls: dict | None = None) -> None:
+    """Replace ``module.name`` by a wrapper adding its CPU time to ``stages[name]`` (and its
+    calls to ``calls[name]``)."""
+    f = getattr(module, name)
+
+    def g(*a, **k):
+        if calls is not None:
+            calls[name] = calls.get(name, 0) + 1
+        t = time.process_time()
+        try:
+            return f(*a, **k)
+        finally:
+            stages[name] = stages.get(name, 0.0) + time.process_time() - t
+
+    setattr(module, name, g)
+
+
 def area_worker(path: str, spacing: float) -> None:
     """``plan_area`` on the field in ``path`` (npz as :func:`worker`'s), timed per stage."""
     from boustro.mission import estimate_work, plan_area
@@ -127,19 +144,8 @@ def area_worker(path: str, spacing: float) -> None:
     holes = [data[k] for k in sorted(data.files) if k.startswith("hole_")]
     plan_area(data["warm_shell"], 10.0, crs=None, holes=[data["warm_hole"]])
     stages: dict[str, float] = {}
-
-    def timed(name, f):
-        def g(*a, **k):
-            t = time.process_time()
-            try:
-                return f(*a, **k)
-            finally:
-                stages[name] = stages.get(name, 0.0) + time.process_time() - t
-
-        return g
-
     for name in STAGES:
-        setattr(rc, name, timed(name, getattr(rc, name)))
+        _time_stage(rc, name, stages)
     est = estimate_work(shell, spacing, crs=None, holes=holes)
     t0, w0 = time.process_time(), time.perf_counter()
     m = plan_area(shell, spacing, crs=None, holes=holes)
@@ -168,28 +174,17 @@ def time_worker(path: str, spacing: float) -> None:
     kw = {"crs": None, "speed": 5.0, "turn_time": 10.0}
     plan_area(data["warm_shell"], 10.0, holes=[data["warm_hole"]], **kw)
     stages: dict[str, float] = {}
-    plans = [0]
-
-    def timed(name, f):
-        def g(*a, **k):
-            if name == "_plan_cells":
-                plans[0] += 1
-            t = time.process_time()
-            try:
-                return f(*a, **k)
-            finally:
-                stages[name] = stages.get(name, 0.0) + time.process_time() - t
-
-        return g
-
+    calls: dict[str, int] = {}
     for name in PLAN_STAGES:
-        setattr(pr, name, timed(name, getattr(pr, name)))
+        _time_stage(pr, name, stages, calls)
     est = estimate_work(shell, spacing, holes=holes, **kw)
     t0, w0 = time.process_time(), time.perf_counter()
     m = plan_area(shell, spacing, holes=holes, **kw)
     out = {"cpu": time.process_time() - t0, "wall": time.perf_counter() - w0}
     info = m.optimum.info
-    out.update(stages=stages, plans=plans[0], estimate=est.seconds, kind=est.kind)
+    out.update(
+        stages=stages, plans=calls.get("_plan_cells", 0), estimate=est.seconds, kind=est.kind
+    )
     out.update(lanes=m.plan.stats.n_transects, fitness=float(m.optimum.fitness))
     gap = info.get("gap")
     out["gap"] = None if gap is None else float(gap) / float(m.optimum.fitness)
