@@ -63,8 +63,8 @@ def _ranges(st, la, turnaround):
     m = 2 * int(st.count[la].sum())
     lo, hi, v = np.empty(m), np.empty(m), np.empty(m)
     n = one_tree_module._lane_ends(
-        st.count[la], st.out_lo[la], st.in_lo[la], st.in_hi[la], st.out_hi[la],
-        st.first_hi[la], st.last_lo[la], st.pieces[la], 0, SPACING, turnaround, lo, hi, v,
+        st.count[la], st.in_lo[la], st.in_hi[la], st.first_hi[la], st.last_lo[la],
+        st.pieces[la], 0, SPACING, turnaround, lo, hi, v,
         np.empty(m // 2, dtype=np.int64), np.empty(m // 2, dtype=np.int64),
     )  # fmt: skip
     return n, lo, hi, v

@@ -78,9 +78,7 @@ WALL_LINES = 2
 CROSS_ROOM = 1e-9
 
 
-def _lane_ends(
-    count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi, v, lk, ls
-):
+def _lane_ends(count, in_lo, in_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi, v, lk, ls):
     """Fill the end ranges ``[lo, hi]`` (along the lines) and ``v`` (across) of every counted
     lane of one layout, ends ``2i`` (start) and ``2i + 1`` (end) of lane ``i``, and its line
     ``lk`` and slot ``ls`` (0 the first lane of its line, 2 the last, 1 one between); the
@@ -254,10 +252,8 @@ def _store(pi0, n, lk, ls, kofs, best_pi):
 
 def _bounds(
     count,
-    out_lo,
     in_lo,
     in_hi,
-    out_hi,
     first_hi,
     last_lo,
     pieces,
@@ -290,8 +286,8 @@ def _bounds(
     for la in range(n_layouts):
         if not todo[la]:
             continue
-        n = _lane_ends(count[la], out_lo[la], in_lo[la], in_hi[la], out_hi[la], first_hi[la],
-                       last_lo[la], pieces[la], k0, s, t, lo, hi, v, lk, ls)  # fmt: skip
+        n = _lane_ends(count[la], in_lo[la], in_hi[la], first_hi[la], last_lo[la], pieces[la],
+                       k0, s, t, lo, hi, v, lk, ls)  # fmt: skip
         if n < 2:
             continue
         _distances(lo, hi, v, 2 * n, walls[la], (WALL_LINES + 0.5) * s, dist)
@@ -394,8 +390,8 @@ def one_tree_bound(
         pi0, warm = multipliers.values, multipliers.warm
         kofs = int(st.k0 + c0) - multipliers.k0
     moves = _compiled()(
-        crop(st.count), crop(st.out_lo), crop(st.in_lo), crop(st.in_hi), crop(st.out_hi),
-        crop(st.first_hi), crop(st.last_lo), crop(st.pieces), np.ascontiguousarray(ok),
+        crop(st.count), crop(st.in_lo), crop(st.in_hi), crop(st.first_hi), crop(st.last_lo),
+        crop(st.pieces), np.ascontiguousarray(ok),
         np.ascontiguousarray(stop, dtype=np.float64), np.ascontiguousarray(walls, dtype=np.float64),
         int(st.k0 + c0), float(spacing), float(cost.turnaround),
         int(ONE_TREE_STEPS if steps is None else steps), pi0,
