@@ -55,7 +55,8 @@ def split_rings(holes: list[NDArray[np.float64]], spacing: float, tol: float) ->
 class RigidBoxes(NamedTuple):
     """The holes' vertices ``xy (V, 2)`` (hole ``h``: rows ``start[h]:start[h + 1]``) and the
     boxes' half-widths ``delta`` (angle) and ``eta`` (offset), ``(L,)``: for ``rigid``; the
-    holes eroded for the split gaps, ``split`` (:func:`split_rings`; none without)."""
+    holes eroded for the rigid cuts and split gaps, ``split`` (:func:`split_rings`; without,
+    :func:`~.bands.band_stats` erodes ``xy`` itself)."""
 
     xy: NDArray[np.float64]
     start: NDArray[np.int64]
