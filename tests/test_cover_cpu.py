@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import boustro.mission.decomposed as decomposed_module
+import boustro.optimize.cover.plans as plans_module
 import boustro.optimize.cover.search as search_module
 from boustro.geometry.region import Region
 from boustro.mission.decomposed import CUTOFF_MARGIN, _cell_optima, _Search
@@ -48,7 +49,7 @@ def test_layouts_ruled_out_by_their_bound_are_not_planned_the_same_search(seed, 
     region = _region(seed)
     runs, calls = [], []
     for on in (False, True):
-        monkeypatch.setattr(search_module, "SKIP_RULED_OUT", on)
+        monkeypatch.setattr(plans_module, "SKIP_RULED_OUT", on)
         counted: list[int] = []
         runs.append(cover_optimum(region, SPACING, COST, _plans(region, counted)))
         calls.append(len(counted))
@@ -65,13 +66,13 @@ def test_layouts_ruled_out_by_their_bound_are_not_planned_the_same_search(seed, 
 def test_ruled_out_only_with_exact_bounds_and_real_plans():
     region = _region(71)
     s = search_module.CoverSearch(region, SPACING, SPACING / 2, COST, None, False)
-    assert not s.bounds_rule_out()  # the model is the plan: nothing to save
+    assert not plans_module.bounds_rule_out(s)  # the model is the plan: nothing to save
     s = search_module.CoverSearch(region, SPACING, SPACING / 2, COST, lambda a, d: 0.0, False)
-    assert s.bounds_rule_out()
+    assert plans_module.bounds_rule_out(s)
     s = search_module.CoverSearch(
         region, SPACING, SPACING / 2, COST, lambda a, d: 0.0, False, keep_inside=True
     )
-    assert not s.bounds_rule_out() and s.layout_bounds(_one()) is None
+    assert not plans_module.bounds_rule_out(s) and plans_module.layout_bounds(s, _one()) is None
 
 
 def _one() -> Boxes:
@@ -83,7 +84,7 @@ def test_layout_bounds_leave_the_search_state_alone():
     region = _region(71)
     s = search_module.CoverSearch(region, SPACING, SPACING / 2, COST, lambda a, d: 0.0, False)
     before = (s.work, s.bound_evaluations, s.model_min, len(s.points))
-    b = s.layout_bounds(_one())
+    b = plans_module.layout_bounds(s, _one())
     assert b is not None and math.isfinite(float(b[0])) and b[0] > 0
     assert (s.work, s.bound_evaluations, s.model_min, len(s.points)) == before
 

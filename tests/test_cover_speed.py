@@ -10,7 +10,7 @@ import numpy as np
 
 from boustro.geometry.region import Region, random_region
 from boustro.geometry.traced import traced_field
-from boustro.optimize.cover import bands
+from boustro.optimize.cover import band_lines, bands
 from boustro.plan import build_plan, drive_vehicle, edge_index, routing, vehicle_stats
 from boustro.plan.edge_index import EdgeIndex
 from boustro.plan.region import plan_region
@@ -73,11 +73,11 @@ def test_plan_with_the_shared_router_equals_a_fresh_one():
 
 
 def test_band_sorts_sort_in_place_with_their_partners():
-    bands._compiled()  # the numba dispatchers in the module's globals
+    bands._compiled()  # the numba dispatchers in the helpers' module's globals
     rng = np.random.default_rng(11)
     for sort_pairs, sort_keys in (
-        (bands._sort_pairs, bands._sort_keys),
-        (bands._sort_pairs.py_func, bands._sort_keys.py_func),
+        (band_lines._sort_pairs, band_lines._sort_keys),
+        (band_lines._sort_pairs.py_func, band_lines._sort_keys.py_func),
     ):
         for n in (0, 1, 2, 7, 40):
             key = rng.integers(0, 5, n).astype(np.float64)  # ties

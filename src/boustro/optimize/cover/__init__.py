@@ -3,8 +3,8 @@ on any area: convex or concave, with holes (:func:`cover_optimum`)."""
 
 from .bands import BandStats, EdgeSet, band_stats, edge_set
 from .bounds import lower_bounds
-from .centred import centred_offsets
 from .cost import COVER_OBJECTIVES, CoverCost
+from .plans import centred_offsets
 from .sandwich import Sandwich
 from .search import cover_optimum
 

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 from .boxes import Boxes as _Boxes
 from .boxes import box_radius, split_boxes, split_parents
 from .one_tree import Multipliers
+from .plans import try_plans
 
 __all__ = [
     "CERTIFY_FIRST",
@@ -115,7 +116,7 @@ def branch_and_bound(
         if POINT_TOURS_BELOW_MODEL and math.isfinite(search.model_min + search.best[0]):
             tour_keep = search.model_min + (lim.resolve - lim.rtol) * abs(search.best[0])
         points = search.point_values(boxes, multipliers=mult, tour_keep=tour_keep)
-        search.try_plans(boxes, search.ranks, first=rounds == 1, bounds=points)
+        try_plans(search, boxes, search.ranks, first=rounds == 1, bounds=points)
         best = search.best[0]
         # discarded: cannot beat the best plan; resolved: the bound is within rtol of the
         # model at the box's centre, so halving cannot raise it further than the model

@@ -14,13 +14,13 @@ from numpy.typing import NDArray
 
 from ...geometry.region import Region
 from .boxes import Boxes
+from .plans import centred_offsets, try_plans
 
 __all__ = [
     "CENTRED_ANGLES",
     "CENTRED_MAX_PLANS",
     "CENTRED_SEEDS",
     "centred_boxes",
-    "centred_offsets",
     "try_centred",
 ]
 
@@ -35,17 +35,6 @@ CENTRED_SEEDS = 4
 #: would plan most of the 180). Not with keep-inside (its bound at a layout is 5-20% below its
 #: plans: 148 plans a search, 18-24 s a field; and its brute force is not issue 16's).
 CENTRED_MAX_PLANS = 24
-
-
-def centred_offsets(
-    region: Region, angles: NDArray[Any], spacing: float, reach: float
-) -> NDArray[np.float64]:
-    """The offsets (from the shell's vertex mean, in ``[0, spacing)``) that put the first line
-    ``reach`` inside the area's lowest extreme across the lines at each of ``angles``: lanes
-    laid from the edge, as a person (or a brute force over angles) would."""
-    verts = region.shell.vertices - region.centre
-    normal = np.stack([-np.sin(angles), np.cos(angles)], axis=1)
-    return np.mod((normal @ verts.T).min(axis=1) + reach, spacing)
 
 
 def centred_boxes(region: Region, spacing: float, reach: float) -> Boxes:
@@ -70,11 +59,11 @@ def try_centred(search: Any, seeds: int | None = None) -> None:
     boxes = centred_boxes(search.region, search.s, search.reach)
     if seeds is not None:
         bounds = search.point_values(boxes)
-        search.try_plans(boxes, search.ranks, limit=seeds, bounds=bounds)
+        try_plans(search, boxes, search.ranks, limit=seeds, bounds=bounds)
         return
     before = search.plans
     values: NDArray[np.float64] = search.point_values(boxes, exact=True)
-    search.try_plans(boxes, values, limit=CENTRED_MAX_PLANS)
+    try_plans(search, boxes, values, limit=CENTRED_MAX_PLANS)
     search.centred_plans = search.plans - before
     unseen = np.array([boxes.centre_key(i) not in search.seen for i in range(len(boxes.d))])
     search.centred_complete = not bool((unseen & (values < search.best[0])).any())

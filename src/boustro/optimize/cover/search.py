@@ -21,11 +21,12 @@ from .bounds import lower_bounds
 from .boxes import Boxes as _Boxes
 from .boxes import box_radius, initial_boxes, level_radius
 from .branch import CUT_OFF, Limits, branch_and_bound, take_multipliers
-from .centred import CENTRED_SEEDS, centred_offsets, try_centred
+from .centred import CENTRED_SEEDS, try_centred
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
 from .inside_bound import contour_edges, inside_box_bounds, path_floor
 from .one_tree import MAX_LANES, POINT_TREE_STEPS, Multipliers
+from .plans import polish, refine_offsets, try_edges
 from .rigid import split_rings
 from .sandwich import Level, Sandwich
 from .walls import WallCache
@@ -40,11 +41,6 @@ SIMPLIFY_SPACING = 0.1
 #: per million on the project's machine): a count, not a time, so that plans do not depend on
 #: the machine's load.
 MAX_WORK = 4e6
-#: Plans evaluated per round at most (the layouts with the lowest point bound).
-PLANS_PER_ROUND = 3
-#: Plans evaluated at the first round, at angles this far apart (radians) at least.
-FIRST_PLANS = 16
-FIRST_SEPARATION = math.radians(3.0)
 
 
 #: Relative distance between a box's bound and the model at its centre at which a box of a
@@ -52,15 +48,8 @@ FIRST_SEPARATION = math.radians(3.0)
 #: bound took the tour's moves as the lines' span only; the lanes' ends bring the model within
 #: 1e-3 of the plans on Fields2Cover's fields.
 RESOLVE_RTOL = 1e-3
-#: Edge directions (longest edges first) whose best offsets are planned before the search,
-#: and offsets scanned at each.
-EDGE_PLANS = 12
 #: Smallest box radius (relative to the spacing) of a routed plan's search.
 RESOLVE_EPS = 1e-3
-#: Plans of the best modelled layouts (one per degree) after the search of a routed plan.
-POLISH_PLANS = 32
-#: Offsets planned at the best angle after the search of a routed plan.
-REFINE_OFFSETS = 8
 #: Whether a routed tour's moves are also bounded by the 1-tree of its lanes' ends, on areas
 #: with holes (and :data:`TOUR_PLAIN`) of at most :data:`SIMPLIFY_EDGES` edges
 #: (docs/mission_time.md, "The tour's 1-tree").
@@ -96,20 +85,12 @@ STOP_SHARE = 0.1
 #: Whether a box's 1-tree starts from its parent box's best multipliers (and its centre's
 #: from its box's), not from zero.
 WARM_TOUR = True
-#: Whether a layout whose own bound (the exact area, the 1-tree) is above the best plan is not
-#: planned (:meth:`CoverSearch.try_plans`): its plan cannot beat the best one; it still counts
-#: as tried, so the search plans the same layouts otherwise and finds the same plan
-#: (docs/mission_time.md, "The 1-tree's CPU").
-SKIP_RULED_OUT = True
-#: A bound must be above the best plan by this share of it to rule a layout out (rounding).
-RULE_OUT_TOL = 1e-9
 #: Whether a box's lines crossed by every rigid image of a hole count the hole's split of their
 #: lanes (:func:`~.rigid._split_gaps`): a hole thinner than the box's radius, eroded away by its
 #: outer set, still splits every such line (issue 16: random areas 9 and 92's slivers).
 SPLIT_GAPS = True
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
-EDGE_OFFSETS = 64
 
 
 class CoverSearch:
@@ -273,16 +254,6 @@ class CoverSearch:
         self.points.append(np.stack([self.ranks, boxes.theta, boxes.d]))
         return out
 
-    def plan_value(self, boxes: _Boxes, i: int, points: NDArray[np.float64]) -> float:
-        """The cost of the plan at box ``i``'s centre (``evaluate``, or the exact model)."""
-        theta, d = float(boxes.theta[i]), float(boxes.d[i])
-        if self.evaluate is not None:
-            return float(self.evaluate(theta, d))
-        if self.sandwich.tolerance <= 0 and not self.keep_inside:
-            return float(points[i])
-        one = _Boxes(*(a[i : i + 1] for a in boxes))
-        return float(self.point_values(one, exact=True)[0])
-
     def box_bounds(
         self,
         boxes: _Boxes,
@@ -398,64 +369,6 @@ class CoverSearch:
         """The keep-inside bound (:func:`~.inside_bound.inside_box_bounds`)."""
         return inside_box_bounds(self, lv, st, *args)
 
-    def try_edges(self, angles: list[float] | None = None) -> None:
-        """Plan the best offset (by the model) along each of the longest edges' directions:
-        areas with parallel sides often have their optimum exactly there. With the lane-ends
-        bound, also the best offset by the lines' span alone where it differs: both are lower
-        bounds of a routed tour, and either may rank a layout's real tour better (on areas of at
-        most :data:`SIMPLIFY_EDGES` edges, where a plan costs milliseconds). ``angles``: these
-        directions instead (a fixed-angle search)."""
-        for a in _edge_angles(self.region, EDGE_PLANS) if angles is None else angles:
-            d = (np.arange(EDGE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / EDGE_OFFSETS)
-            if not self.keep_inside:
-                # and the lanes laid from either extreme: where the area's width is a whole
-                # number of spacings (a 100 x 60 m rectangle at 10 m), the fewest lanes need
-                # exactly that offset, a single point no box centre hits (the search planned 7
-                # lanes, 212 s, where 6 fly it in 180 s). Not with keep_inside: there its model
-                # ranks them first and the real plans came out up to 0.57% longer (a review)
-                ends = np.array([a, a + math.pi])
-                d = np.concatenate([d, centred_offsets(self.region, ends, self.s, self.reach)])
-                d[-1] = (-d[-1]) % self.s  # the line reach inside the highest extreme
-            boxes = _Boxes(np.full(len(d), a), np.zeros(len(d)), d, np.zeros(len(d)))
-            bounds = self.point_values(boxes)
-            self.try_plans(boxes, self.ranks, limit=1, bounds=bounds)
-            if self.ends and self.evaluate is not None and self.sandwich.tolerance <= 0:
-                span = self.point_values(boxes, span_only=True)
-                self.try_plans(boxes, span, limit=1, bounds=bounds)
-
-    def polish(self) -> None:
-        """Plan the best modelled layout of each degree of angle whose model beats the best
-        plan, lowest model first, :data:`POLISH_PLANS` at most, and the lanes centred on the
-        area at those whole degrees: a routed plan's tour differs between layouts whose bounds
-        are close, so the plans decide."""
-        v, theta, d = np.concatenate(self.points, axis=1)
-        ok = v < self.best[0]
-        v, theta, d = v[ok], theta[ok], d[ok]
-        bins = np.floor(np.degrees(theta % math.pi)).astype(np.int64)
-        order = np.lexsort((v, bins))
-        first = np.ones(len(order), dtype=bool)
-        first[1:] = bins[order][1:] != bins[order][:-1]
-        pick = order[first]
-        pick = pick[np.argsort(v[pick])][:POLISH_PLANS]
-        boxes = _Boxes(theta[pick], np.zeros(len(pick)), d[pick], np.zeros(len(pick)))
-        self.try_plans(boxes, v[pick], limit=len(pick), bounds=self.layout_bounds(boxes))
-        # the first lane half a spacing inside the area's extreme: the layout a person, or a
-        # brute force over degrees, would fly
-        angles = np.radians(bins[pick].astype(np.float64))
-        centred = centred_offsets(self.region, angles, self.s, self.reach)
-        boxes = _Boxes(angles, np.zeros(len(pick)), centred, np.zeros(len(pick)))
-        bounds = self.point_values(boxes)
-        self.try_plans(boxes, self.ranks, limit=len(pick), bounds=bounds)
-
-    def refine_offsets(self) -> None:
-        """Plan :data:`REFINE_OFFSETS` more offsets at the best angle: a routed plan's moves
-        differ between offsets that the bound (lanes, turns) cannot tell apart."""
-        theta = self.best[1]
-        d = (np.arange(REFINE_OFFSETS, dtype=np.float64) + 0.5) * (self.s / REFINE_OFFSETS)
-        boxes = _Boxes(np.full(len(d), theta), np.zeros(len(d)), d, np.zeros(len(d)))
-        bounds = self.point_values(boxes)
-        self.try_plans(boxes, self.ranks, limit=REFINE_OFFSETS, bounds=bounds)
-
     def counts(self) -> dict[str, Any]:
         """The plans made, the layouts ruled out, the brute-force sweep's plans and whether it
         planned every layout below the best plan (where it ran): a result's ``info``."""
@@ -467,93 +380,6 @@ class CoverSearch:
         if self.centred_complete is not None:
             out["centred_complete"] = self.centred_complete
         return out
-
-    def bounds_rule_out(self) -> bool:
-        """Whether a layout's own bound (:meth:`point_values` on the exact area, the 1-tree
-        where computed) is a lower bound of its plan's cost here, so that a layout whose bound
-        is above the best plan need not be planned (:data:`SKIP_RULED_OUT`): with real plans,
-        on areas searched with exact sandwiches, not with keep-inside (its bound at a layout is
-        5-20% below its plans: it would rule out next to nothing, and is tested in boxes only)."""
-        return (
-            SKIP_RULED_OUT
-            and self.evaluate is not None
-            and self.sandwich.tolerance <= 0
-            and not self.keep_inside
-        )
-
-    def layout_bounds(self, boxes: _Boxes) -> NDArray[np.float64] | None:
-        """The bound at each box's centre (:meth:`point_values`, exact, the 1-tree up to the
-        best plan) without touching the search's state (its work, ranks, lowest model), where
-        :meth:`bounds_rule_out`; else ``None``."""
-        if not self.bounds_rule_out() or not len(boxes.theta):
-            return None
-        state = (self.ranks, len(self.points), self.model_min, self.work, self.bound_evaluations)
-        out = self.point_values(boxes, exact=True)
-        self.ranks, n, self.model_min, self.work, self.bound_evaluations = state
-        del self.points[n:]
-        return out
-
-    def try_plans(
-        self,
-        boxes: _Boxes,
-        points: NDArray[np.float64],
-        first: bool = False,
-        limit: int | None = None,
-        bounds: NDArray[np.float64] | None = None,
-    ) -> None:
-        """Evaluate the plans of the boxes' centres with the lowest point values (upper
-        bounds), where they could beat the best plan: :data:`PLANS_PER_ROUND`, or at the first
-        round :data:`FIRST_PLANS` at angles at least :data:`FIRST_SEPARATION` apart.
-
-        ``bounds`` (per box, where :meth:`bounds_rule_out`): lower bounds of the plans at the
-        centres; a layout whose bound is above the best plan is not planned (its plan cannot
-        beat it) but counts as tried, so the same plans win as without ``bounds``
-        (:attr:`ruled_out` counts them)."""
-        if bounds is not None and not self.bounds_rule_out():
-            bounds = None
-        order = np.argsort(points)
-        if limit is None:
-            limit = FIRST_PLANS if first else PLANS_PER_ROUND
-        tried, taken = 0, list[float]()
-        for i in order:
-            if tried >= limit or points[i] >= self.best[0]:
-                break
-            key = boxes.centre_key(int(i))
-            if key in self.seen:
-                continue
-            if first and any(
-                abs((float(boxes.theta[i]) - t + math.pi / 2) % math.pi - math.pi / 2)
-                < FIRST_SEPARATION
-                for t in taken
-            ):
-                continue
-            taken.append(float(boxes.theta[i]))
-            self.seen.add(key)
-            if bounds is not None and bounds[i] > self.best[0] + RULE_OUT_TOL * abs(self.best[0]):
-                self.ruled_out += 1
-                tried += 1
-                continue
-            theta, d = float(boxes.theta[i]), float(boxes.d[i])
-            value = self.plan_value(boxes, int(i), points)
-            self.plans += 1
-            tried += 1
-            if value < self.best[0]:
-                self.best = (value, theta, d)
-
-
-def _edge_angles(region: Region, count: int) -> list[float]:
-    """The directions of the shell's longest edges, distinct by 0.1 degree, at most ``count``."""
-    v = region.shell.vertices
-    e = np.roll(v, -1, axis=0) - v
-    order = np.argsort(-np.hypot(e[:, 0], e[:, 1]))
-    out: list[float] = []
-    for i in order:
-        a = math.atan2(e[i, 1], e[i, 0]) % math.pi
-        if all(abs((a - b + math.pi / 2) % math.pi - math.pi / 2) > math.radians(0.1) for b in out):
-            out.append(a)
-        if len(out) >= count:
-            break
-    return out
 
 
 def _initial(search: CoverSearch, n_angles: int, angle: float | None) -> _Boxes:
@@ -639,13 +465,13 @@ def cover_optimum(
     resolve = rtol if boustrophedon else max(rtol, RESOLVE_RTOL)
     t0 = time.perf_counter()
     if angle is None:
-        search.try_edges()
+        try_edges(search)
         if evaluate is not None and not keep_inside:
             try_centred(search, CENTRED_SEEDS)
     else:
         angle = float(angle) % math.pi
         if not keep_inside:
-            search.try_edges([angle])
+            try_edges(search, [angle])
     boxes = _initial(search, n_angles, angle)
     search.top_eps = float(box_radius(boxes, search.radius).max())
     limits = Limits(rtol, resolve, min_eps, max_work, max_seconds, t0, cutoff)
@@ -653,8 +479,8 @@ def cover_optimum(
     cut_off = stopped == CUT_OFF
     found = math.isfinite(search.best[0]) and not cut_off
     if not boustrophedon and evaluate is not None and found:
-        search.polish()
-        search.refine_offsets()
+        polish(search)
+        refine_offsets(search)
     if centred and angle is None and evaluate is not None and not keep_inside and found:
         try_centred(search)
     value, theta, d = search.best
