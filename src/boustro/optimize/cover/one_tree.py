@@ -88,17 +88,24 @@ def _lane_ends(count, in_lo, in_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi,
         c = count[k]
         if c < 1:
             continue
+        # the first inner piece the last (one piece): its ends are the inner pieces' extremes;
+        # else only bounds on them are known (module docstring, "The lines' extremes")
+        one = last_lo[k] < first_hi[k]
         for i in range(c):
             lk[n] = k
             ls[n] = 0 if i == 0 else (2 if i == c - 1 else 1)
-            if i == 0:  # collapsed to the inner extreme (module docstring)
-                lo[2 * n], hi[2 * n] = in_lo[k] - t, in_lo[k]
+            if i == 0 and one:  # collapsed to the inner pieces' extreme (module docstring)
+                lo[2 * n], hi[2 * n] = last_lo[k] - t, last_lo[k]
+            elif i == 0:
+                lo[2 * n], hi[2 * n] = in_lo[k] - t, first_hi[k]
             elif i == c - 1:
                 lo[2 * n], hi[2 * n] = pieces[k, 2] - t, last_lo[k]
             else:
                 lo[2 * n], hi[2 * n] = pieces[k, 1] - t, min(last_lo[k], pieces[k, 3])
-            if i == c - 1:
-                lo[2 * n + 1], hi[2 * n + 1] = in_hi[k], in_hi[k] + t
+            if i == c - 1 and one:
+                lo[2 * n + 1], hi[2 * n + 1] = first_hi[k], first_hi[k] + t
+            elif i == c - 1:
+                lo[2 * n + 1], hi[2 * n + 1] = last_lo[k], in_hi[k] + t
             elif i == 0:
                 lo[2 * n + 1], hi[2 * n + 1] = first_hi[k], pieces[k, 0] + t
             else:
