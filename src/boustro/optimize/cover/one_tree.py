@@ -56,6 +56,7 @@ from numpy.typing import NDArray
 from ..._jit import jit, jit_globals
 from .bands import BandStats
 from .cost import CoverCost
+from .extremes import line_extremes
 
 __all__ = ["MAX_LANES", "ONE_TREE_STEPS", "POINT_TREE_STEPS", "Multipliers", "one_tree_bound"]
 
@@ -78,34 +79,28 @@ WALL_LINES = 2
 CROSS_ROOM = 1e-9
 
 
-def _lane_ends(count, in_lo, in_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi, v, lk, ls):
+def _lane_ends(count, ext, first_hi, last_lo, pieces, k0, s, t, lo, hi, v, lk, ls):
     """Fill the end ranges ``[lo, hi]`` (along the lines) and ``v`` (across) of every counted
     lane of one layout, ends ``2i`` (start) and ``2i + 1`` (end) of lane ``i``, and its line
     ``lk`` and slot ``ls`` (0 the first lane of its line, 2 the last, 1 one between); the
-    lanes."""
+    lanes. ``ext (B, 4)``: the ranges of the line's first start and last end, run-ins
+    included (:func:`line_extremes`)."""
     n = 0
     for k in range(count.shape[0]):
         c = count[k]
         if c < 1:
             continue
-        # the first inner piece the last (one piece): its ends are the inner pieces' extremes;
-        # else only bounds on them are known (module docstring, "The lines' extremes")
-        one = last_lo[k] < first_hi[k]
         for i in range(c):
             lk[n] = k
             ls[n] = 0 if i == 0 else (2 if i == c - 1 else 1)
-            if i == 0 and one:  # collapsed to the inner pieces' extreme (module docstring)
-                lo[2 * n], hi[2 * n] = last_lo[k] - t, last_lo[k]
-            elif i == 0:
-                lo[2 * n], hi[2 * n] = in_lo[k] - t, first_hi[k]
+            if i == 0:  # collapsed to the inner pieces' extreme (module docstring)
+                lo[2 * n], hi[2 * n] = ext[k, 0], ext[k, 1]
             elif i == c - 1:
                 lo[2 * n], hi[2 * n] = pieces[k, 2] - t, last_lo[k]
             else:
                 lo[2 * n], hi[2 * n] = pieces[k, 1] - t, min(last_lo[k], pieces[k, 3])
-            if i == c - 1 and one:
-                lo[2 * n + 1], hi[2 * n + 1] = first_hi[k], first_hi[k] + t
-            elif i == c - 1:
-                lo[2 * n + 1], hi[2 * n + 1] = last_lo[k], in_hi[k] + t
+            if i == c - 1:
+                lo[2 * n + 1], hi[2 * n + 1] = ext[k, 2], ext[k, 3]
             elif i == 0:
                 lo[2 * n + 1], hi[2 * n + 1] = first_hi[k], pieces[k, 0] + t
             else:
@@ -259,8 +254,7 @@ def _store(pi0, n, lk, ls, kofs, best_pi):
 
 def _bounds(
     count,
-    in_lo,
-    in_hi,
+    ext,
     first_hi,
     last_lo,
     pieces,
@@ -293,8 +287,8 @@ def _bounds(
     for la in range(n_layouts):
         if not todo[la]:
             continue
-        n = _lane_ends(count[la], in_lo[la], in_hi[la], first_hi[la], last_lo[la], pieces[la],
-                       k0, s, t, lo, hi, v, lk, ls)  # fmt: skip
+        n = _lane_ends(count[la], ext[la], first_hi[la], last_lo[la], pieces[la], k0, s, t,
+                       lo, hi, v, lk, ls)  # fmt: skip
         if n < 2:
             continue
         _distances(lo, hi, v, 2 * n, walls[la], (WALL_LINES + 0.5) * s, dist)
@@ -370,13 +364,17 @@ def one_tree_bound(
     walls: NDArray[np.float64] | None = None,
     enough: NDArray[np.float64] | None = None,
     multipliers: Multipliers | None = None,
+    chords: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound, in cost units, on ``per_length`` times the connecting moves plus
     the extra lanes' flown length of every plan of each layout's sandwich (module docstring);
     0 where not ``todo`` or with more than :data:`MAX_LANES` counted lanes. ``walls`` ``(L, W,
     4)``: segments no move crosses, in each layout's frame (:func:`~.walls.walls_in_frames`);
     ``enough`` ``(L,)`` (cost units): a layout's steps stop once its bound reaches it;
-    ``multipliers``: where to start the steps and where to keep their best (read, written)."""
+    ``multipliers``: where to start the steps and where to keep their best (read, written);
+    ``chords`` ``(L, H, 4)``: boxes holding the inner set's dilated holes in each layout's frame
+    (:func:`~.extremes.line_extremes`; ``None``: lines of two inner pieces or more keep wider
+    ranges for their first start and last end)."""
     n_layouts = st.count.shape[0]
     lanes = st.count.sum(axis=1)
     ok = lanes <= MAX_LANES if todo is None else todo & (lanes <= MAX_LANES)
@@ -397,7 +395,8 @@ def one_tree_bound(
         pi0, warm = multipliers.values, multipliers.warm
         kofs = int(st.k0 + c0) - multipliers.k0
     moves = _compiled()(
-        crop(st.count), crop(st.in_lo), crop(st.in_hi), crop(st.first_hi), crop(st.last_lo),
+        crop(st.count), crop(line_extremes(st, spacing, cost.turnaround, chords)),
+        crop(st.first_hi), crop(st.last_lo),
         crop(st.pieces), np.ascontiguousarray(ok),
         np.ascontiguousarray(stop, dtype=np.float64), np.ascontiguousarray(walls, dtype=np.float64),
         int(st.k0 + c0), float(spacing), float(cost.turnaround),
