@@ -33,8 +33,11 @@ def _zeros(st, *args, **kw):
 def _region(case: str) -> Region:
     """An adversarial area: ``notch`` an L whose step edge runs along the lines (angle 0),
     ``sliver`` a rectangle with a 2 cm wide hole and a square one, ``edges`` a rectangle with a
-    rectangular hole (the lines along its edges at angles 0 and pi / 2)."""
+    rectangular hole (the lines along its edges at angles 0 and pi / 2), ``edge_*`` a hole
+    0.5 m from the side (:func:`_edge_hole`)."""
     square = Polygon(np.array([[10, 70], [20, 70], [20, 80], [10, 80]], dtype=float))
+    if case.startswith("edge_"):  # a hole 0.5 m from the side (:func:`_edge_hole`)
+        return _edge_hole(case[5:], 0.5)
     if case == "notch":
         shell = np.array([[0, 0], [100, 0], [100, 50], [40, 50], [40, 100], [0, 100]], float)
         return Region(Polygon(shell), [square])
@@ -62,6 +65,9 @@ CASES = [
     ("edges", "plain", [0.0, math.pi / 2]),
     ("edges", "turnaround", [0.0, math.pi / 2]),
     ("edges", "vehicle", [0.0]),
+    ("edge_right", "plain", [0.0]),
+    ("edge_left", "turnaround", [0.0]),
+    ("edge_both", "vehicle", [0.0]),
 ]
 
 
@@ -168,8 +174,8 @@ def _counted(lanes: list, count: int) -> list:
 def test_counted_lanes_start_and_end_inside_the_one_trees_extremes_by_a_hole_at_the_edge(side, gap):
     """The review's area (``right``, 0.5 m: count 1 on the line at 45 m, the inner projection
     reaching 99.7 m past the hole while every plan's counted lane ends at 40 m) and its kin: in
-    boxes of radius 0.1-1.2 m around that line, every real plan sampled in the box (centre and
-    four random layouts) has its first counted lane (:func:`_counted`) start at or before the
+    boxes of radius 0.1-1.2 m around that line, every real plan sampled in the box (five
+    layouts drawn in it) has its first counted lane (:func:`_counted`) start at or before the
     first lane's start range and its last counted lane end at or beyond the last lane's end
     range, on every counted line, with the holes' boxes and without (before: the
     end range ``[in_hi, in_hi]``, 59.7 m past the plan's lane end; ``both``: two inner pieces on

@@ -59,7 +59,7 @@ def _cut(
     c = chords[:, None, :, :]
     across = (c[..., 0] <= v[None, :, None]) & (c[..., 1] >= v[None, :, None])
     along = (c[..., 2] <= at[..., None] + room) & (c[..., 3] >= at[..., None] - room)
-    return (across & along).any(axis=2)
+    return np.any(across & along, axis=2)
 
 
 def line_extremes(

@@ -5,29 +5,34 @@
 Per layout of the centre grid and line ``k`` (the area moves, not the grid) the band statistics
 give ``count_k`` lanes every area ``S`` of the box has, each holding one inner piece, with the
 ranges of their ends: the first lane starts in ``[a_k - t, a_k]`` and the last ends in ``[b_k,
-b_k + t]`` (``a_k, b_k`` the inner projection's extremes; collapsed, below); with ``count_k >=
-2`` the first lane ends in ``[first_hi_k, P1_k + t]``, the last starts in ``[PL_k - t,
-last_lo_k]``, and every lane between (inside the outer pieces from the second to the one before
-the last, ``[P2_k, Q1_k]``) starts in ``[P2_k - t, min(last_lo_k, Q1_k)]`` and ends in
+b_k + t]`` (``a_k, b_k`` the first inner piece's start and the last one's end; collapsed, below;
+where only bounds on them are known, wider: :mod:`~boustro.optimize.cover.extremes`); with
+``count_k >= 2`` the first lane ends in ``[first_hi_k, P1_k + t]``, the last starts in ``[PL_k -
+t, last_lo_k]``, and every lane between (inside the outer pieces from the second to the one
+before the last, ``[P2_k, Q1_k]``) starts in ``[P2_k - t, min(last_lo_k, Q1_k)]`` and ends in
 ``[max(first_hi_k, P2_k), Q1_k + t]`` (``P1, P2, PL, Q1``: :attr:`BandStats.pieces`; ``t`` the
 run-in). Two ends on lines ``j, k`` are at least ``sqrt(((j - k) s)^2 + g^2)`` apart, ``g`` the
 gap between their ranges: a connecting move is never shorter.
 
-**The collapsed outer ends.** A plan's first lane on line ``k`` starts in ``[A_k - t, a_k]``
-(``A_k`` the outer projection's extreme): its covered part starts at ``p <= a_k``, its run-in
-``r <= t`` before. Its part ``[p, a_k)`` lies outside the inner projection, so no other term of
-the bound counts it (the lanes' length is the inner projection's, the run-ins ``t`` each or
-none, the extra lanes' contraction their own flown length), and the point ``max(p - r, a_k -
-t)`` of ``[a_k - t, a_k]`` is at most ``a_k - p`` from the real start: by the triangle
-inequality the path's one move at that end, from the collapsed end, is at most the real move
-plus ``a_k - p``, which the plan flies on top of what the bound counts. So the 1-tree over the
-collapsed ranges is at most ``moves + extra lanes + the lanes' length outside the inner
-projection``, and the bound stays below every plan. The same holds for the last lane's end
-(``[b_k, B_k + t]`` to ``[b_k, b_k + t]``), for a one-lane line at both ends (its two parts
-outside the inner projection are disjoint), with ``t = 0``, and with split gaps (``pieces``:
-only the line's two outermost ends change, every other end keeps its range). A box straddling an
-edge along the lines (random area 35: ``B_k - b_k`` = 105 m) no longer lets the line's lane end
-anywhere in between (docs/mission_time.md, "The tour's 1-tree").
+**The collapsed outer ends.** Every inner piece (the inner projection minus the dilated holes'
+chords) lies in a counted outer piece, so the plan's first counted lane on line ``k`` (the one
+holding the first inner piece, ``[a_k, first_hi_k]``) starts in ``[A_k - t, a_k]`` (``A_k`` the
+outer projection's extreme): its covered part starts at ``p <= a_k``, its run-in ``r <= t``
+before. Its part ``[p, a_k)`` lies outside the inner pieces, so no other term of the bound counts
+it (the lanes' length is the inner pieces', the run-ins ``t`` each or none, the extra lanes'
+contraction their own flown length), and the point ``max(p - r, a_k - t)`` of ``[a_k - t,
+a_k]`` is at most ``a_k - p`` from the real start: by the triangle inequality the path's one
+move at that end, from the collapsed end, is at most the real move plus ``a_k - p``, which the
+plan flies on top of what the bound counts. So the 1-tree over the collapsed ranges is at most
+``moves + extra lanes + the lanes' length outside the inner pieces``, and the bound stays below
+every plan. The same holds for the last lane's end (``[b_k, B_k + t]`` to ``[b_k, b_k + t]``),
+for a one-lane line at both ends (its two parts outside the inner pieces are disjoint), with ``t
+= 0``, and with split gaps (``pieces``: only the line's two outermost ends change, every other
+end keeps its range). A box straddling an edge along the lines (random area 35: ``B_k - b_k`` =
+105 m) no longer lets the line's lane end anywhere in between (docs/mission_time.md, "The tour's
+1-tree"). Before the eleventh round ``a_k, b_k`` were the inner projection's extremes, which a
+hole's chord can cut: a hole within the box's radius of the area's edge, the band reaching past
+it (docs/mission_time.md, "The lines' extremes").
 
 **The relaxation.** Contract every hole pass (a closed loop entered and left at one point ``x``:
 ``|e - x| + |x - f| >= |e - f|``) and every extra lane (a lane holding no inner piece, flown
