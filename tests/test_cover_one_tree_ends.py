@@ -1,9 +1,12 @@
-"""The 1-tree's collapsed lane-end ranges (optimize/cover/one_tree.py, ``_lane_ends``): a
-counted line's first lane starts in ``[in_lo - t, in_lo]`` and its last lane ends in ``[in_hi,
-in_hi + t]`` whatever the outer projection's extremes (issue 16, random area 35: a box whose
-band catches a wedge beyond a notch let the line's last lane end anywhere in 105 m). Sound on
+"""The 1-tree's collapsed lane-end ranges (optimize/cover/one_tree.py, ``_lane_ends``;
+optimize/cover/extremes.py): a counted line's first lane starts in ``[a - t, a]`` and its last
+lane ends in ``[b, b + t]`` (``a, b`` the inner pieces' extremes; wider where only bounds on them
+are known) whatever the outer projection's extremes (issue 16, random area 35: a box whose band
+catches a wedge beyond a notch let the line's last lane end anywhere in 105 m). Sound on
 adversarial areas (a notch with the lines along its step, thin holes, lines along the edges,
-run-ins, a turn radius), and the outer extremes no longer weaken the bound."""
+holes 0.5 m from the side, run-ins, a turn radius), the real plans' counted lanes start and end
+within the ranges by a hole at the edge (the eleventh round's review), and the outer extremes no
+longer weaken the bound."""
 
 from __future__ import annotations
 
