@@ -130,7 +130,10 @@ def _edge_hole(side: str, gap: float) -> Region:
     the right side (``right``: ``[40, 100 - gap] x [43, 47]``, the review's with ``gap`` 0.5) or
     from the left one (``left``: ``[gap, 60] x [43, 47]``); ``both``: ``[60, 100 - gap] x [43,
     47]`` and a hole ``[20, 30] x [38, 52]`` on the same lines (two inner pieces there, the
-    second's lane ending at 60 m)."""
+    second's lane ending at 60 m); ``notch``: the first reaching the side (``gap`` 0)."""
+    if side == "notch":  # the hole reaching the side: a notch [40, 100] x [43, 47]
+        ring = [[0, 0], [100, 0], [100, 43], [40, 43], [40, 47], [100, 47], [100, 90], [0, 90]]
+        return Region(Polygon(np.array(ring, dtype=float)), [])
     shell = Polygon(np.array([[0, 0], [100, 0], [100, 90], [0, 90]], dtype=float))
     x0, x1 = {"right": (40.0, 100.0 - gap), "left": (gap, 60.0)}.get(side, (60.0, 100.0 - gap))
     holes = [np.array([[x0, 43], [x1, 43], [x1, 47], [x0, 47]], dtype=float)]
@@ -172,7 +175,8 @@ def _counted(lanes: list, count: int) -> list:
 
 
 @pytest.mark.parametrize(
-    ("side", "gap"), [("right", 0.5), ("right", 1.5), ("left", 0.5), ("both", 0.5)]
+    ("side", "gap"),
+    [("right", 0.5), ("right", 1.5), ("left", 0.5), ("both", 0.5), ("notch", 0.0)],
 )
 def test_counted_lanes_start_and_end_inside_the_one_trees_extremes_by_a_hole_at_the_edge(side, gap):
     """The review's area (``right``, 0.5 m: count 1 on the line at 45 m, the inner projection
