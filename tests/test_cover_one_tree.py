@@ -16,6 +16,7 @@ from boustro.geometry import Polygon
 from boustro.geometry.region import Region
 from boustro.optimize.cover import CoverCost, band_stats, cover_optimum
 from boustro.optimize.cover.boxes import Boxes, split_boxes, split_parents
+from boustro.optimize.cover.extremes import line_extremes
 from boustro.optimize.cover.one_tree import Multipliers, one_tree_bound
 from boustro.optimize.cover.search import CoverSearch
 from boustro.plan.region import plan_region
@@ -62,8 +63,9 @@ def _ranges(st, la, turnaround):
     """The counted lanes' end ranges of layout ``la`` (the kernel's own helper, plain)."""
     m = 2 * int(st.count[la].sum())
     lo, hi, v = np.empty(m), np.empty(m), np.empty(m)
+    ext = line_extremes(st, SPACING, turnaround, None)[la]  # as one_tree_bound without boxes
     n = one_tree_module._lane_ends(
-        st.count[la], st.in_lo[la], st.in_hi[la], st.first_hi[la], st.last_lo[la],
+        st.count[la], ext, st.first_hi[la], st.last_lo[la],
         st.pieces[la], 0, SPACING, turnaround, lo, hi, v,
         np.empty(m // 2, dtype=np.int64), np.empty(m // 2, dtype=np.int64),
     )  # fmt: skip

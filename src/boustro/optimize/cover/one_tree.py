@@ -5,29 +5,34 @@
 Per layout of the centre grid and line ``k`` (the area moves, not the grid) the band statistics
 give ``count_k`` lanes every area ``S`` of the box has, each holding one inner piece, with the
 ranges of their ends: the first lane starts in ``[a_k - t, a_k]`` and the last ends in ``[b_k,
-b_k + t]`` (``a_k, b_k`` the inner projection's extremes; collapsed, below); with ``count_k >=
-2`` the first lane ends in ``[first_hi_k, P1_k + t]``, the last starts in ``[PL_k - t,
-last_lo_k]``, and every lane between (inside the outer pieces from the second to the one before
-the last, ``[P2_k, Q1_k]``) starts in ``[P2_k - t, min(last_lo_k, Q1_k)]`` and ends in
+b_k + t]`` (``a_k, b_k`` the first inner piece's start and the last one's end; collapsed, below;
+where only bounds on them are known, wider: :mod:`~boustro.optimize.cover.extremes`); with
+``count_k >= 2`` the first lane ends in ``[first_hi_k, P1_k + t]``, the last starts in ``[PL_k -
+t, last_lo_k]``, and every lane between (inside the outer pieces from the second to the one
+before the last, ``[P2_k, Q1_k]``) starts in ``[P2_k - t, min(last_lo_k, Q1_k)]`` and ends in
 ``[max(first_hi_k, P2_k), Q1_k + t]`` (``P1, P2, PL, Q1``: :attr:`BandStats.pieces`; ``t`` the
 run-in). Two ends on lines ``j, k`` are at least ``sqrt(((j - k) s)^2 + g^2)`` apart, ``g`` the
 gap between their ranges: a connecting move is never shorter.
 
-**The collapsed outer ends.** A plan's first lane on line ``k`` starts in ``[A_k - t, a_k]``
-(``A_k`` the outer projection's extreme): its covered part starts at ``p <= a_k``, its run-in
-``r <= t`` before. Its part ``[p, a_k)`` lies outside the inner projection, so no other term of
-the bound counts it (the lanes' length is the inner projection's, the run-ins ``t`` each or
-none, the extra lanes' contraction their own flown length), and the point ``max(p - r, a_k -
-t)`` of ``[a_k - t, a_k]`` is at most ``a_k - p`` from the real start: by the triangle
-inequality the path's one move at that end, from the collapsed end, is at most the real move
-plus ``a_k - p``, which the plan flies on top of what the bound counts. So the 1-tree over the
-collapsed ranges is at most ``moves + extra lanes + the lanes' length outside the inner
-projection``, and the bound stays below every plan. The same holds for the last lane's end
-(``[b_k, B_k + t]`` to ``[b_k, b_k + t]``), for a one-lane line at both ends (its two parts
-outside the inner projection are disjoint), with ``t = 0``, and with split gaps (``pieces``:
-only the line's two outermost ends change, every other end keeps its range). A box straddling an
-edge along the lines (random area 35: ``B_k - b_k`` = 105 m) no longer lets the line's lane end
-anywhere in between (docs/mission_time.md, "The tour's 1-tree").
+**The collapsed outer ends.** Every inner piece (the inner projection minus the dilated holes'
+chords) lies in a counted outer piece, so the plan's first counted lane on line ``k`` (the one
+holding the first inner piece, ``[a_k, first_hi_k]``) starts in ``[A_k - t, a_k]`` (``A_k`` the
+outer projection's extreme): its covered part starts at ``p <= a_k``, its run-in ``r <= t``
+before. Its part ``[p, a_k)`` lies outside the inner pieces, so no other term of the bound counts
+it (the lanes' length is the inner pieces', the run-ins ``t`` each or none, the extra lanes'
+contraction their own flown length), and the point ``max(p - r, a_k - t)`` of ``[a_k - t,
+a_k]`` is at most ``a_k - p`` from the real start: by the triangle inequality the path's one
+move at that end, from the collapsed end, is at most the real move plus ``a_k - p``, which the
+plan flies on top of what the bound counts. So the 1-tree over the collapsed ranges is at most
+``moves + extra lanes + the lanes' length outside the inner pieces``, and the bound stays below
+every plan. The same holds for the last lane's end (``[b_k, B_k + t]`` to ``[b_k, b_k + t]``),
+for a one-lane line at both ends (its two parts outside the inner pieces are disjoint), with ``t
+= 0``, and with split gaps (``pieces``: only the line's two outermost ends change, every other
+end keeps its range). A box straddling an edge along the lines (random area 35: ``B_k - b_k`` =
+105 m) no longer lets the line's lane end anywhere in between (docs/mission_time.md, "The tour's
+1-tree"). Before the eleventh round ``a_k, b_k`` were the inner projection's extremes, which a
+hole's chord can cut: a hole within the box's radius of the area's edge, the band reaching past
+it (docs/mission_time.md, "The lines' extremes").
 
 **The relaxation.** Contract every hole pass (a closed loop entered and left at one point ``x``:
 ``|e - x| + |x - f| >= |e - f|``) and every extra lane (a lane holding no inner piece, flown
@@ -56,6 +61,7 @@ from numpy.typing import NDArray
 from ..._jit import jit, jit_globals
 from .bands import BandStats
 from .cost import CoverCost
+from .extremes import line_extremes
 
 __all__ = ["MAX_LANES", "ONE_TREE_STEPS", "POINT_TREE_STEPS", "Multipliers", "one_tree_bound"]
 
@@ -78,11 +84,12 @@ WALL_LINES = 2
 CROSS_ROOM = 1e-9
 
 
-def _lane_ends(count, in_lo, in_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi, v, lk, ls):
+def _lane_ends(count, ext, first_hi, last_lo, pieces, k0, s, t, lo, hi, v, lk, ls):
     """Fill the end ranges ``[lo, hi]`` (along the lines) and ``v`` (across) of every counted
     lane of one layout, ends ``2i`` (start) and ``2i + 1`` (end) of lane ``i``, and its line
     ``lk`` and slot ``ls`` (0 the first lane of its line, 2 the last, 1 one between); the
-    lanes."""
+    lanes. ``ext (B, 4)``: the ranges of the line's first start and last end, run-ins
+    included (:func:`line_extremes`)."""
     n = 0
     for k in range(count.shape[0]):
         c = count[k]
@@ -91,14 +98,14 @@ def _lane_ends(count, in_lo, in_hi, first_hi, last_lo, pieces, k0, s, t, lo, hi,
         for i in range(c):
             lk[n] = k
             ls[n] = 0 if i == 0 else (2 if i == c - 1 else 1)
-            if i == 0:  # collapsed to the inner extreme (module docstring)
-                lo[2 * n], hi[2 * n] = in_lo[k] - t, in_lo[k]
+            if i == 0:  # collapsed to the inner pieces' extreme (module docstring)
+                lo[2 * n], hi[2 * n] = ext[k, 0], ext[k, 1]
             elif i == c - 1:
                 lo[2 * n], hi[2 * n] = pieces[k, 2] - t, last_lo[k]
             else:
                 lo[2 * n], hi[2 * n] = pieces[k, 1] - t, min(last_lo[k], pieces[k, 3])
             if i == c - 1:
-                lo[2 * n + 1], hi[2 * n + 1] = in_hi[k], in_hi[k] + t
+                lo[2 * n + 1], hi[2 * n + 1] = ext[k, 2], ext[k, 3]
             elif i == 0:
                 lo[2 * n + 1], hi[2 * n + 1] = first_hi[k], pieces[k, 0] + t
             else:
@@ -252,8 +259,7 @@ def _store(pi0, n, lk, ls, kofs, best_pi):
 
 def _bounds(
     count,
-    in_lo,
-    in_hi,
+    ext,
     first_hi,
     last_lo,
     pieces,
@@ -286,8 +292,8 @@ def _bounds(
     for la in range(n_layouts):
         if not todo[la]:
             continue
-        n = _lane_ends(count[la], in_lo[la], in_hi[la], first_hi[la], last_lo[la], pieces[la],
-                       k0, s, t, lo, hi, v, lk, ls)  # fmt: skip
+        n = _lane_ends(count[la], ext[la], first_hi[la], last_lo[la], pieces[la], k0, s, t,
+                       lo, hi, v, lk, ls)  # fmt: skip
         if n < 2:
             continue
         _distances(lo, hi, v, 2 * n, walls[la], (WALL_LINES + 0.5) * s, dist)
@@ -363,13 +369,17 @@ def one_tree_bound(
     walls: NDArray[np.float64] | None = None,
     enough: NDArray[np.float64] | None = None,
     multipliers: Multipliers | None = None,
+    chords: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound, in cost units, on ``per_length`` times the connecting moves plus
     the extra lanes' flown length of every plan of each layout's sandwich (module docstring);
     0 where not ``todo`` or with more than :data:`MAX_LANES` counted lanes. ``walls`` ``(L, W,
     4)``: segments no move crosses, in each layout's frame (:func:`~.walls.walls_in_frames`);
     ``enough`` ``(L,)`` (cost units): a layout's steps stop once its bound reaches it;
-    ``multipliers``: where to start the steps and where to keep their best (read, written)."""
+    ``multipliers``: where to start the steps and where to keep their best (read, written);
+    ``chords`` ``(L, H, 4)``: boxes holding the inner set's dilated holes in each layout's frame
+    (:func:`~.extremes.line_extremes`; ``None``: lines of two inner pieces or more keep wider
+    ranges for their first start and last end)."""
     n_layouts = st.count.shape[0]
     lanes = st.count.sum(axis=1)
     ok = lanes <= MAX_LANES if todo is None else todo & (lanes <= MAX_LANES)
@@ -390,7 +400,8 @@ def one_tree_bound(
         pi0, warm = multipliers.values, multipliers.warm
         kofs = int(st.k0 + c0) - multipliers.k0
     moves = _compiled()(
-        crop(st.count), crop(st.in_lo), crop(st.in_hi), crop(st.first_hi), crop(st.last_lo),
+        crop(st.count), crop(line_extremes(st, spacing, cost.turnaround, chords)),
+        crop(st.first_hi), crop(st.last_lo),
         crop(st.pieces), np.ascontiguousarray(ok),
         np.ascontiguousarray(stop, dtype=np.float64), np.ascontiguousarray(walls, dtype=np.float64),
         int(st.k0 + c0), float(spacing), float(cost.turnaround),
