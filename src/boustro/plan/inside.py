@@ -47,6 +47,7 @@ __all__ = [
     "boundary_passes",
     "clip_lanes",
     "inside_layout",
+    "path_floor",
 ]
 
 #: Patches (short passes over corners and thin parts) placed at most; more means the area has
@@ -61,6 +62,10 @@ UNION_CACHE = 128
 #: :meth:`_Geometry.spurs` (the oldest forgotten past it: about 8 MB an area with the keys; a
 #: review: 1024 whole rings of a 2000-vertex trace per area, 32 areas, would hold 2 GB).
 SPUR_CACHE = 1 << 18
+#: Results of :func:`inside_layout` kept (keyed by the area, the lanes' bytes, the spacing and
+#: the reach): a search's screen (:func:`path_floor`) lays a layout's lanes and passes, and the
+#: plan of a layout that passes it lays the very same ones again.
+LAYOUT_CACHE = 4
 #: Areas whose shapely geometry (:func:`_geometry`) is kept: a search plans one area (or a
 #: decomposition's few cells) hundreds of times.
 AREA_CACHE = 32
@@ -442,7 +447,35 @@ def _length(cut: list[Lanes], passes: list[NDArray[np.float64]]) -> float:
     return length + sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)
 
 
+_LAYOUTS: dict[bytes, tuple[list[Lanes], list[NDArray[np.float64]], float]] = {}
+
+
 def inside_layout(
+    area: Region, lanes: list[Lanes], spacing: float, reach: float
+) -> tuple[list[Lanes], list[NDArray[np.float64]], float]:
+    """:func:`_inside_layout`, from a cache of the last :data:`LAYOUT_CACHE` calls (keyed by
+    every number it reads: the area's rings, the lanes' arrays, the spacing and the reach), the
+    lists copied (the arrays are the same, never written)."""
+    rings = [area.shell.vertices, *(h.vertices for h in area.holes)]
+    parts = [np.ascontiguousarray(v, dtype=np.float64).tobytes() for v in rings]
+    for ls in lanes:
+        head = np.array([ls.angle, *np.asarray(ls.origin, dtype=np.float64).ravel()])
+        cut = np.array(sorted(ls.cut), dtype=np.int64)
+        cols = [np.asarray(x, dtype=np.float64) for x in (ls.c, ls.t0, ls.t1)]
+        k = np.asarray(ls.k, dtype=np.int64)
+        parts += [head.tobytes(), k.tobytes(), *(x.tobytes() for x in cols), cut.tobytes()]
+    parts.append(np.array([spacing, reach], dtype=np.float64).tobytes())
+    key = b"|".join(p + len(p).to_bytes(8, "little") for p in parts)
+    hit = _LAYOUTS.get(key)
+    if hit is None:
+        hit = _inside_layout(area, lanes, spacing, reach)
+        if len(_LAYOUTS) >= LAYOUT_CACHE:
+            _LAYOUTS.pop(next(iter(_LAYOUTS)))
+        _LAYOUTS[key] = hit
+    return list(hit[0]), list(hit[1]), hit[2]
+
+
+def _inside_layout(
     area: Region, lanes: list[Lanes], spacing: float, reach: float
 ) -> tuple[list[Lanes], list[NDArray[np.float64]], float]:
     """The lanes cut inside ``area`` and the boundary passes that complete their coverage
@@ -483,3 +516,59 @@ def inside_layout(
     if (uncovered_h, length_h) < (uncovered, _length(cut, passes) - tol):
         return half, passes_h, uncovered_h
     return cut, passes, uncovered
+
+
+def path_floor(lanes: list[Lanes], passes: list[NDArray[np.float64]]) -> tuple[float, int]:
+    """A lower bound ``(length, turns)`` of the path and turns of every tour of the cut
+    ``lanes`` and boundary ``passes`` (:func:`inside_layout`), however ordered, routed and
+    driven: the lanes' and passes' own length plus a floor of the moves between them, and the
+    turns (one fewer than the lanes and passes: a ``keep_inside`` plan's count,
+    :mod:`boustro.plan.region`).
+
+    The path drives each *unit* (a lane, a pass) whole, from an entry to an exit: a lane or an
+    open pass from one end to the other (either way), a closed pass from one of its corners
+    round to it. Between consecutive units it goes from the exit of one to the entry of the
+    next (a move, routed or turned: never shorter than the straight line). With ``nn(p)`` the
+    distance from a unit's end ``p`` to the nearest end or corner of any *other* unit, the
+    move from ``x`` to ``y`` is at least ``max(nn(x), nn(y)) >= (nn(x) + nn(y)) / 2``; summed
+    over the moves, every lane's and open pass's two ends count half once each (whichever way
+    it is driven) except the first unit's entry and the last one's exit (the two largest
+    halves are taken off), and a closed pass counts 0. Also, every unit but the first is
+    entered by a move of at least ``min(nn)`` over its ends (0 for a closed pass); the larger
+    of the two floors is returned. The search's screen (:mod:`boustro.optimize.cover`) skips
+    a layout whose floor is above its best plan."""
+    ends, labels, rings, ring_labels = [], [], [], []
+    length, units = 0.0, 0
+    for ls in lanes:
+        if len(ls.k):
+            ends.append(ls.segments.reshape(-1, 2))
+            labels.append(np.repeat(np.arange(units, units + len(ls.k)), 2))
+            length += float(np.sum(ls.t1 - ls.t0))
+            units += len(ls.k)
+    for p in passes:
+        length += float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
+        if len(p) > 3 and bool(np.allclose(p[0], p[-1], rtol=0.0, atol=1e-12)):  # closed
+            rings.append(p)
+            ring_labels.append(np.full(len(p), units))
+        else:
+            ends.append(p[[0, -1]])
+            labels.append(np.array([units, units]))
+        units += 1
+    if units < 2 or not ends:
+        return length, max(units - 1, 0)
+    xy, lab = np.concatenate(ends), np.concatenate(labels)
+    every, every_lab = np.concatenate([xy, *rings]), np.concatenate([lab, *ring_labels])
+    nn = np.full(len(xy), np.inf)
+    for lo in range(0, len(every), 512):  # the ends' nearest other unit, 512 points at a time
+        d = np.hypot(every[lo : lo + 512, None, 0] - xy[None, :, 0],
+                     every[lo : lo + 512, None, 1] - xy[None, :, 1])  # fmt: skip
+        d[every_lab[lo : lo + 512, None] == lab[None, :]] = np.inf
+        nn = np.minimum(nn, d.min(axis=0))
+    nn = np.where(np.isfinite(nn), nn, 0.0)
+    half = np.sort(nn / 2)
+    by_halves = float(half[:-2].sum())
+    entered = np.full(units, np.inf)
+    np.minimum.at(entered, lab, nn)
+    entered = np.where(np.isfinite(entered), entered, 0.0)  # closed passes
+    by_entries = float(entered.sum() - entered.max())
+    return length + max(by_halves, by_entries, 0.0), units - 1
