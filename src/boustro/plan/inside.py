@@ -545,6 +545,7 @@ def path_floor(lanes: list[Lanes], passes: list[NDArray[np.float64]]) -> tuple[f
             labels.append(np.repeat(np.arange(units, units + len(ls.k)), 2))
             length += float(np.sum(ls.t1 - ls.t0))
             units += len(ls.k)
+    n_lanes = units
     for p in passes:
         length += float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
         if len(p) > 3 and bool(np.allclose(p[0], p[-1], rtol=0.0, atol=1e-12)):  # closed
@@ -558,17 +559,26 @@ def path_floor(lanes: list[Lanes], passes: list[NDArray[np.float64]]) -> tuple[f
         return length, max(units - 1, 0)
     xy, lab = np.concatenate(ends), np.concatenate(labels)
     every, every_lab = np.concatenate([xy, *rings]), np.concatenate([lab, *ring_labels])
-    nn = np.full(len(xy), np.inf)
+    n_lane = 2 * n_lanes  # the lanes' ends come first
+    nn, nn_lane = np.full(len(xy), np.inf), np.full(len(xy), np.inf)
     for lo in range(0, len(every), 512):  # the ends' nearest other unit, 512 points at a time
         d = np.hypot(every[lo : lo + 512, None, 0] - xy[None, :, 0],
                      every[lo : lo + 512, None, 1] - xy[None, :, 1])  # fmt: skip
         d[every_lab[lo : lo + 512, None] == lab[None, :]] = np.inf
         nn = np.minimum(nn, d.min(axis=0))
+        if lo < n_lane:  # the nearest other lane's end
+            nn_lane = np.minimum(nn_lane, d[: n_lane - lo].min(axis=0))
     nn = np.where(np.isfinite(nn), nn, 0.0)
+    nn_lane = np.where(np.isfinite(nn_lane), nn_lane, nn)
     half = np.sort(nn / 2)
     by_halves = float(half[:-2].sum())
+    # a move between two lanes' ends is at least half of each one's nn_lane; at most two moves
+    # per pass reach a lane's end from it (in and out), each losing half of nn_lane - nn there
+    charge = np.concatenate([nn_lane[:n_lane], nn[n_lane:]]) / 2
+    loss = np.sort((nn_lane[:n_lane] - nn[:n_lane]) / 2)[::-1][: 2 * len(passes)]
+    by_lanes = float(np.sort(charge)[:-2].sum() - loss.sum())
     entered = np.full(units, np.inf)
     np.minimum.at(entered, lab, nn)
     entered = np.where(np.isfinite(entered), entered, 0.0)  # closed passes
     by_entries = float(entered.sum() - entered.max())
-    return length + max(by_halves, by_entries, 0.0), units - 1
+    return length + max(by_halves, by_lanes, by_entries, 0.0), units - 1
