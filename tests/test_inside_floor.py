@@ -1,5 +1,5 @@
 """The search's screen of ``keep_inside`` layouts (issue 16, eleventh round): the floor of a
-plan from its cut lanes and boundary passes (:func:`boustro.plan.inside.path_floor`,
+plan from its cut lanes and boundary passes (:func:`boustro.plan.tour_floor`,
 :func:`boustro.plan.region_floor.plan_floor`) is below every plan, and the search screening
 by it finds the same plan as without it."""
 
@@ -17,7 +17,7 @@ from boustro.optimize.cover import search as cover_search
 from boustro.plan import inside
 from boustro.plan.lanes import Lanes, region_lanes
 from boustro.plan.region import plan_region
-from boustro.plan.region_floor import plan_floor
+from boustro.plan.region_floor import plan_floor, tour_floor
 
 SPACING, SPEED, TURN = 10.0, 5.0, 10.0
 L_HOLES = Region(
@@ -76,10 +76,10 @@ def test_path_floor_by_hand():
         0.0, np.array([50.0, 15.0]), np.array([-1, 0, 1]), np.array([-10.0, 0.0, 10.0]),
         zeros - 40, zeros + 40, frozenset(),
     )  # fmt: skip
-    assert inside.path_floor([cut], []) == (240.0 + 20.0, 2)
+    assert tour_floor([cut], []) == (240.0 + 20.0, 2)
     ring = np.array([(10, 15), (50, 12), (90, 15), (50, 18), (10, 15)], dtype=float)
     passes = float(np.linalg.norm(np.diff(ring, axis=0), axis=1).sum())
-    length, turns = inside.path_floor([cut], [ring])
+    length, turns = tour_floor([cut], [ring])
     assert turns == 3 and length == pytest.approx(240.0 + passes + 10.0)
 
 

@@ -47,7 +47,6 @@ __all__ = [
     "boundary_passes",
     "clip_lanes",
     "inside_layout",
-    "path_floor",
 ]
 
 #: Patches (short passes over corners and thin parts) placed at most; more means the area has
@@ -63,8 +62,8 @@ UNION_CACHE = 128
 #: review: 1024 whole rings of a 2000-vertex trace per area, 32 areas, would hold 2 GB).
 SPUR_CACHE = 1 << 18
 #: Results of :func:`inside_layout` kept (keyed by the area, the lanes' bytes, the spacing and
-#: the reach): a search's screen (:func:`path_floor`) lays a layout's lanes and passes, and the
-#: plan of a layout that passes it lays the very same ones again.
+#: the reach): a search's screen (:func:`~boustro.plan.region_floor.plan_floor`) lays a
+#: layout's lanes and passes, and the plan of a layout that passes it lays the same again.
 LAYOUT_CACHE = 4
 #: Areas whose shapely geometry (:func:`_geometry`) is kept: a search plans one area (or a
 #: decomposition's few cells) hundreds of times.
@@ -516,69 +515,3 @@ def _inside_layout(
     if (uncovered_h, length_h) < (uncovered, _length(cut, passes) - tol):
         return half, passes_h, uncovered_h
     return cut, passes, uncovered
-
-
-def path_floor(lanes: list[Lanes], passes: list[NDArray[np.float64]]) -> tuple[float, int]:
-    """A lower bound ``(length, turns)`` of the path and turns of every tour of the cut
-    ``lanes`` and boundary ``passes`` (:func:`inside_layout`), however ordered, routed and
-    driven: the lanes' and passes' own length plus a floor of the moves between them, and the
-    turns (one fewer than the lanes and passes: a ``keep_inside`` plan's count,
-    :mod:`boustro.plan.region`).
-
-    The path drives each *unit* (a lane, a pass) whole, from an entry to an exit: a lane or an
-    open pass from one end to the other (either way), a closed pass from one of its corners
-    round to it. Between consecutive units it goes from the exit of one to the entry of the
-    next (a move, routed or turned: never shorter than the straight line). With ``nn(p)`` the
-    distance from a unit's end ``p`` to the nearest end or corner of any *other* unit, the
-    move from ``x`` to ``y`` is at least ``max(nn(x), nn(y)) >= (nn(x) + nn(y)) / 2``; summed
-    over the moves, every lane's and open pass's two ends count half once each (whichever way
-    it is driven) except the first unit's entry and the last one's exit (the two largest
-    halves are taken off), and a closed pass counts 0. Also, every unit but the first is
-    entered by a move of at least ``min(nn)`` over its ends (0 for a closed pass); the larger
-    of the two floors is returned. The search's screen (:mod:`boustro.optimize.cover`) skips
-    a layout whose floor is above its best plan."""
-    ends, labels, rings, ring_labels = [], [], [], []
-    length, units = 0.0, 0
-    for ls in lanes:
-        if len(ls.k):
-            ends.append(ls.segments.reshape(-1, 2))
-            labels.append(np.repeat(np.arange(units, units + len(ls.k)), 2))
-            length += float(np.sum(ls.t1 - ls.t0))
-            units += len(ls.k)
-    n_lanes = units
-    for p in passes:
-        length += float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
-        if len(p) > 3 and bool(np.allclose(p[0], p[-1], rtol=0.0, atol=1e-12)):  # closed
-            rings.append(p)
-            ring_labels.append(np.full(len(p), units))
-        else:
-            ends.append(p[[0, -1]])
-            labels.append(np.array([units, units]))
-        units += 1
-    if units < 2 or not ends:
-        return length, max(units - 1, 0)
-    xy, lab = np.concatenate(ends), np.concatenate(labels)
-    every, every_lab = np.concatenate([xy, *rings]), np.concatenate([lab, *ring_labels])
-    n_lane = 2 * n_lanes  # the lanes' ends come first
-    nn, nn_lane = np.full(len(xy), np.inf), np.full(len(xy), np.inf)
-    for lo in range(0, len(every), 512):  # the ends' nearest other unit, 512 points at a time
-        d = np.hypot(every[lo : lo + 512, None, 0] - xy[None, :, 0],
-                     every[lo : lo + 512, None, 1] - xy[None, :, 1])  # fmt: skip
-        d[every_lab[lo : lo + 512, None] == lab[None, :]] = np.inf
-        nn = np.minimum(nn, d.min(axis=0))
-        if lo < n_lane:  # the nearest other lane's end
-            nn_lane = np.minimum(nn_lane, d[: n_lane - lo].min(axis=0))
-    nn = np.where(np.isfinite(nn), nn, 0.0)
-    nn_lane = np.where(np.isfinite(nn_lane), nn_lane, nn)
-    half = np.sort(nn / 2)
-    by_halves = float(half[:-2].sum())
-    # a move between two lanes' ends is at least half of each one's nn_lane; at most two moves
-    # per pass reach a lane's end from it (in and out), each losing half of nn_lane - nn there
-    charge = np.concatenate([nn_lane[:n_lane], nn[n_lane:]]) / 2
-    loss = np.sort((nn_lane[:n_lane] - nn[:n_lane]) / 2)[::-1][: 2 * len(passes)]
-    by_lanes = float(np.sort(charge)[:-2].sum() - loss.sum())
-    entered = np.full(units, np.inf)
-    np.minimum.at(entered, lab, nn)
-    entered = np.where(np.isfinite(entered), entered, 0.0)  # closed passes
-    by_entries = float(entered.sum() - entered.max())
-    return length + max(by_halves, by_lanes, by_entries, 0.0), units - 1
