@@ -6,8 +6,10 @@ Each case is planned as ``boustro plan --speed 5 --turn-time 10 --keep-inside`` 
 ``src`` (``--baseline``, e.g. a ``git archive`` of 1158b53), each in a fresh process, the two
 interleaved; the CPU time of the planning call (``time.process_time``, the machine is shared),
 the mission time, the certificate's gap, coverage (shapely, on the area itself) and the path
-outside are printed with the ratio of CPU times and whether the two paths are the same (a hash
-of the waypoints' bytes).
+outside are printed with the ratio of CPU times, whether the two paths are the same (a hash
+of the waypoints' bytes) and the plans the final search made (``info["plans"]``; the layouts
+its screen skipped, ``info["screened"]``, in brackets: the one grid's search, or the kept
+decomposition's whole plan).
 
 Cases: a three-lobed 200-vertex star 1000 m across at 36 lanes (``benchmarks/estimate.py``'s),
 Fields2Cover's ``test.json`` (embedded, 10 m), ``--random N`` seeded random concave areas with
@@ -46,6 +48,8 @@ print(json.dumps(dict(cpu=cpu, decomposed=m.optimum.method.startswith("decompose
                       time=m.stats.duration, gap=s.get("gap"),
                       covered=s.get("covered_share"), outside=s.get("outside_length_m", 0.0),
                       lanes=s["n_transects"], method=s["method"],
+                      plans=m.optimum.info.get("plans"),
+                      screened=m.optimum.info.get("screened", 0),
                       path=hashlib.sha256(np.ascontiguousarray(m.waypoints).tobytes())
                       .hexdigest()[:12])))
 """
@@ -97,9 +101,10 @@ def main() -> None:
         cases = [c for c in cases if c in args.only]
     print(
         "| case | baseline: time s / gap s / CPU s | this tree: time s / gap s / CPU s | "
-        "covered | outside m | time ratio | same path | CPU ratio |"
+        "covered | outside m | time ratio | same path | CPU ratio | plans: baseline / this tree "
+        "(+ screened) |"
     )
-    print("|---|---|---|---:|---:|---:|---|---:|")
+    print("|---|---|---|---:|---:|---:|---|---:|---|")
     for src in (args.baseline, SRC):  # numba's caches filled: no compilation timed
         _run(src, "random_0", args.data)
     for case in cases:
@@ -111,7 +116,8 @@ def main() -> None:
             f"{100 * (new['covered'] or 0):.6f}% | {new['outside']:.3g} | "
             f"{new['time'] / base['time']:.4f}{' (cells)' if new['decomposed'] else ''} | "
             f"{'yes' if new['path'] == base['path'] else 'no'} | "
-            f"x{new['cpu'] / base['cpu']:.2f} |",
+            f"x{new['cpu'] / base['cpu']:.2f} | "
+            f"{base['plans']} / {new['plans']} (+{new['screened']}) |",
             flush=True,
         )
 

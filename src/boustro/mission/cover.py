@@ -4,6 +4,7 @@ with the real planner as its upper bound (:func:`boustro.optimize.cover.cover_op
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -15,6 +16,7 @@ from ..optimize import OptimizeResult
 from ..optimize.cover import CoverCost, cover_optimum
 from ..plan import Plan, build_plan, coverage
 from ..plan.region import plan_region
+from ..plan.region_floor import plan_floor
 from ..plan.types import Layout
 from .project import Frame
 from .steps import Planned, _path_options
@@ -69,22 +71,41 @@ def _planner(
 
         return convex
 
-    area = _area(frame, keep_inside)
+    area, kw = _region_call(frame, layout, options, keep_inside)
 
     def region(angle: float, offset: float) -> Plan:
-        return plan_region(
-            area,
-            s_plan,
-            decompose_area=False,
-            angle=angle,
-            offset=offset,
-            layout=lay,
-            start=frame.start if frame.given_start else None,
-            keep_inside=keep_inside,
-            **options,
-        )
+        return plan_region(area, s_plan, angle=angle, offset=offset, **kw)
 
     return region
+
+
+def _region_call(
+    frame: Frame, layout: str, options: dict[str, Any], keep_inside: bool
+) -> tuple[Polygon | Region, dict[str, Any]]:
+    """The area and the keywords (but the angle and offset) of a layout's region plan."""
+    lay: Layout = "chords" if layout == "chords" else "guaranteed"
+    start = frame.start if frame.given_start else None
+    kw = dict(decompose_area=False, layout=lay, start=start, keep_inside=keep_inside, **options)
+    return _area(frame, keep_inside), kw
+
+
+def _screen(
+    frame: Frame, layout: str, options: dict[str, Any], keep_inside: bool, cost: CoverCost
+) -> Callable[[float, float], float] | None:
+    """A floor of :func:`flown_cost` of a ``keep_inside`` layout's plan (not finished),
+    cheaper than the plan (:func:`~boustro.plan.region_floor.plan_floor`: its lanes and
+    passes, a floor of its moves), for the search's screen; ``None`` without ``keep_inside``
+    or with the chords layout."""
+    if not keep_inside or layout == "chords":
+        return None
+    s_plan = frame.sensor.spacing * frame.proj.scale_min
+    area, kw = _region_call(frame, layout, options, keep_inside)
+
+    def screen(angle: float, offset: float) -> float:
+        floor = plan_floor(area, s_plan, angle=angle, offset=offset, **kw)
+        return -math.inf if floor is None else cost.of(*floor)
+
+    return screen
 
 
 def _area(frame: Frame, keep_inside: bool) -> Polygon | Region:
@@ -167,6 +188,7 @@ def plan_cover(
         angle=angle,
         boustrophedon=boustrophedon,
         keep_inside=keep_inside,
+        screen=None if finish is not None else _screen(frame, layout, options, keep_inside, cost),
     )
     if layout == "chords":
         optimum = _uncertified_chords(optimum)

@@ -43,6 +43,7 @@ from ..optimize.result import canonical
 from ..plan import Plan, coverage
 from ..plan.cells import Decomposition, decompose, slab_decomposition, trapezoids
 from ..plan.region import plan_region
+from ..plan.region_floor import plan_floor
 from ..plan.types import Layout
 from .cover import flown_cost
 from .project import Frame
@@ -132,6 +133,17 @@ class _Search:
         st = (plan if self.finish is None else self.finish(plan)).stats
         return self.cost.of(st.path_length * self.options["ground_scale"], st.n_turns)
 
+    def floor(self, cell: Region, angle: float, offset: float) -> float:
+        """A floor of :meth:`value` (without ``finish``), cheaper than the plan: the cell's
+        ``keep_inside`` lanes and passes and a floor of its moves
+        (:func:`~boustro.plan.region_floor.plan_floor`), for the search's screen."""
+        lay: Layout = "chords" if self.layout == "chords" else "guaranteed"
+        floor = plan_floor(
+            cell, self.s, decompose_area=False, angle=angle, offset=offset, layout=lay,
+            keep_inside=self.keep_inside, **self.options,
+        )  # fmt: skip
+        return -math.inf if floor is None else self.cost.of(*floor)
+
     def model(self, cell: Region) -> tuple[float, float, float]:
         """The least modelled cost of the cell and its layout ``(cost, angle, offset)``: its
         lines' segments (:func:`boustro.models.region.segment_moments`) as lanes, a spacing's
@@ -191,7 +203,7 @@ class _Search:
             opt = cover_optimum(
                 cell, self.s, self.cost, lambda a, d: self.value(cell, a, d),
                 reach=self.reach, boustrophedon=False, keep_inside=self.keep_inside,
-                centred=False, cutoff=cutoff,
+                centred=False, cutoff=cutoff, screen=self._screen(cell),
             )  # fmt: skip
         except (NoTransectError, InvalidPolygonError, InvalidParameterError):
             if cutoff is None:  # a search cut off may have stopped before its first plan
@@ -204,6 +216,12 @@ class _Search:
         opt = dataclasses.replace(opt, info={**opt.info, "keep_inside": self.keep_inside})
         self.cache[key] = opt
         return opt
+
+    def _screen(self, cell: Region) -> Callable[[float, float], float] | None:
+        """The search's screen (:meth:`floor`): ``keep_inside`` plans, not finished."""
+        if not self.keep_inside or self.finish is not None or self.layout == "chords":
+            return None
+        return lambda a, d: self.floor(cell, a, d)
 
     def _centred(self, cell: Region, opt: OptimizeResult) -> OptimizeResult:
         """The optimum, or a better plan among the lanes laid from the cell's edge (the first

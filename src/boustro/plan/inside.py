@@ -61,6 +61,10 @@ UNION_CACHE = 128
 #: :meth:`_Geometry.spurs` (the oldest forgotten past it: about 8 MB an area with the keys; a
 #: review: 1024 whole rings of a 2000-vertex trace per area, 32 areas, would hold 2 GB).
 SPUR_CACHE = 1 << 18
+#: Results of :func:`inside_layout` kept (keyed by the area, the lanes' bytes, the spacing and
+#: the reach): a search's screen (:func:`~boustro.plan.region_floor.plan_floor`) lays a
+#: layout's lanes and passes, and the plan of a layout that passes it lays the same again.
+LAYOUT_CACHE = 4
 #: Areas whose shapely geometry (:func:`_geometry`) is kept: a search plans one area (or a
 #: decomposition's few cells) hundreds of times.
 AREA_CACHE = 32
@@ -442,7 +446,35 @@ def _length(cut: list[Lanes], passes: list[NDArray[np.float64]]) -> float:
     return length + sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)
 
 
+_LAYOUTS: dict[bytes, tuple[list[Lanes], list[NDArray[np.float64]], float]] = {}
+
+
 def inside_layout(
+    area: Region, lanes: list[Lanes], spacing: float, reach: float
+) -> tuple[list[Lanes], list[NDArray[np.float64]], float]:
+    """:func:`_inside_layout`, from a cache of the last :data:`LAYOUT_CACHE` calls (keyed by
+    every number it reads: the area's rings, the lanes' arrays, the spacing and the reach), the
+    lists copied (the arrays are the same, never written)."""
+    rings = [area.shell.vertices, *(h.vertices for h in area.holes)]
+    parts = [np.ascontiguousarray(v, dtype=np.float64).tobytes() for v in rings]
+    for ls in lanes:
+        head = np.array([ls.angle, *np.asarray(ls.origin, dtype=np.float64).ravel()])
+        cut = np.array(sorted(ls.cut), dtype=np.int64)
+        cols = [np.asarray(x, dtype=np.float64) for x in (ls.c, ls.t0, ls.t1)]
+        k = np.asarray(ls.k, dtype=np.int64)
+        parts += [head.tobytes(), k.tobytes(), *(x.tobytes() for x in cols), cut.tobytes()]
+    parts.append(np.array([spacing, reach], dtype=np.float64).tobytes())
+    key = b"|".join(p + len(p).to_bytes(8, "little") for p in parts)
+    hit = _LAYOUTS.get(key)
+    if hit is None:
+        hit = _inside_layout(area, lanes, spacing, reach)
+        if len(_LAYOUTS) >= LAYOUT_CACHE:
+            _LAYOUTS.pop(next(iter(_LAYOUTS)))
+        _LAYOUTS[key] = hit
+    return list(hit[0]), list(hit[1]), hit[2]
+
+
+def _inside_layout(
     area: Region, lanes: list[Lanes], spacing: float, reach: float
 ) -> tuple[list[Lanes], list[NDArray[np.float64]], float]:
     """The lanes cut inside ``area`` and the boundary passes that complete their coverage

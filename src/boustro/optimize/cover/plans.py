@@ -108,7 +108,8 @@ def try_plans(
     ``bounds`` (per box, where :func:`bounds_rule_out`): lower bounds of the plans at the
     centres; a layout whose bound is above the best plan is not planned (its plan cannot
     beat it) but counts as tried, so the same plans win as without ``bounds``
-    (:attr:`~.search.CoverSearch.ruled_out` counts them)."""
+    (:attr:`~.search.CoverSearch.ruled_out` counts them); so is a layout whose floor
+    (``search.screen``, a keep-inside plan's) is above it (:attr:`~.search.CoverSearch.screened`)."""
     if bounds is not None and not bounds_rule_out(search):
         bounds = None
     order = np.argsort(points)
@@ -134,11 +135,25 @@ def try_plans(
             tried += 1
             continue
         theta, d = float(boxes.theta[i]), float(boxes.d[i])
+        if _screened_out(search, theta, d):
+            search.screened += 1
+            tried += 1
+            continue
         value = plan_value(search, boxes, int(i), points)
         search.plans += 1
         tried += 1
         if value < search.best[0]:
             search.best = (value, theta, d)
+
+
+def _screened_out(search: Any, theta: float, d: float) -> bool:
+    """Whether the layout's floor (``search.screen``: a lower bound of its plan's cost,
+    cheaper than the plan) is above the best plan: then the plan cannot beat it and is not made;
+    it still counts as tried, as a layout ruled out by its bound, so the search makes the same
+    other plans and finds the same best one."""
+    if search.screen is None or not math.isfinite(search.best[0]):
+        return False
+    return bool(search.screen(theta, d) > search.best[0] + RULE_OUT_TOL * abs(search.best[0]))
 
 
 def plan_value(search: Any, boxes: _Boxes, i: int, points: NDArray[np.float64]) -> float:

@@ -105,8 +105,11 @@ class CoverSearch:
         evaluate: Callable[[float, float], float] | None,
         boustrophedon: bool,
         keep_inside: bool = False,
+        screen: Callable[[float, float], float] | None = None,
     ) -> None:
         self.region, self.s, self.reach, self.cost = region, spacing, reach, cost
+        self.screen = screen if evaluate is not None else None  # a floor of a layout's plan
+        self.screened = 0  # layouts not planned: their floor (screen) is above the best plan
         self.evaluate, self.boustrophedon = evaluate, boustrophedon and not keep_inside
         # lanes cut to the area or to the area shrunk by half a spacing (keep_inside): the
         # bound takes the lines' chords (reach 0) through the shrunk inner set
@@ -375,6 +378,7 @@ class CoverSearch:
         out: dict[str, Any] = {
             "plans": self.plans,
             "ruled_out": self.ruled_out,
+            "screened": self.screened,
             "centred_plans": self.centred_plans,
         }
         if self.centred_complete is not None:
@@ -404,6 +408,7 @@ def cover_optimum(
     progress: Callable[[float], None] | None = None,
     centred: bool = True,
     cutoff: float | None = None,
+    screen: Callable[[float, float], float] | None = None,
 ) -> OptimizeResult:
     """The layout ``(angle, offset)`` whose plan has the least ``cost``, with a certificate.
 
@@ -442,6 +447,11 @@ def cover_optimum(
             box reached it): then ``info["stopped"]`` says so, ``info["cut_off"]`` is true, the
             plan is the best found so far and ``lower_bound`` is at least ``cutoff`` (a
             decomposition's cell whose candidate cannot beat the one grid any more).
+        screen: ``screen(angle, offset)``, a lower bound of ``evaluate(angle, offset)``
+            cheaper than it (a ``keep_inside`` plan's lanes and passes with a floor of its
+            moves, :func:`boustro.plan.region_floor.plan_floor`): a layout whose floor is above
+            the best plan is not planned but counts as tried (``info["screened"]``), so the
+            search finds the same plan.
 
     Returns:
         an :class:`OptimizeResult` with ``fitness`` = the best plan's cost (minimised),
@@ -456,7 +466,7 @@ def cover_optimum(
         raise InvalidParameterError(f"reach must be > 0, got {reach}")
     if boustrophedon is None:
         boustrophedon = not r.holes and r.shell.is_convex
-    search = CoverSearch(r, s, reach, cost, evaluate, boustrophedon, keep_inside)
+    search = CoverSearch(r, s, reach, cost, evaluate, boustrophedon, keep_inside, screen)
     boustrophedon = search.boustrophedon
     if not centred:  # a decomposition's cell: the 1-tree without holes cost more than it gave
         search.tour = search.tour and search.n_holes > 0
