@@ -109,7 +109,7 @@ def try_plans(
     centres; a layout whose bound is above the best plan is not planned (its plan cannot
     beat it) but counts as tried, so the same plans win as without ``bounds``
     (:attr:`~.search.CoverSearch.ruled_out` counts them); so is a layout whose floor
-    (``search.screen``, a keep-inside plan's) is above it (:attr:`~.search.CoverSearch.screened`)."""
+    (``search.screen``, a keep-inside plan's) is above it (counted in ``screened``)."""
     if bounds is not None and not bounds_rule_out(search):
         bounds = None
     order = np.argsort(points)
