@@ -9,12 +9,14 @@ shapely is imported on use (``import boustro`` does not load it).
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..geometry.region import Region, _point_segment_distance
+from .edge_grid import EdgeGrid
 from .visibility_kernel import DENSE_EDGES, points_near
 
 __all__ = ["CHUNK", "EdgeIndex"]
@@ -47,6 +49,11 @@ class EdgeIndex:
         self.hole_boxes = np.array(
             [[*h.vertices.min(axis=0), *h.vertices.max(axis=0)] for h in region.holes]
         ).reshape(-1, 4)
+
+    @cached_property
+    def grid(self) -> EdgeGrid:
+        """The edges in a uniform grid (:mod:`~boustro.plan.edge_grid`), built on first use."""
+        return EdgeGrid(self.e1, self.e2)
 
     def box_pairs(
         self, lo: NDArray[np.float64], hi: NDArray[np.float64]

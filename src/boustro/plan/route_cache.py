@@ -77,6 +77,6 @@ def remembered_pairs(
         out[new] = fresh
         if len(cache) + len(new) > limit:
             cache.clear()
-        for i, v in zip(new.tolist(), fresh.tolist(), strict=True):
-            cache[keys[i]] = v
+        for i, v in zip(new[:limit].tolist(), fresh[:limit].tolist(), strict=True):
+            cache[keys[i]] = v  # a batch over the limit: its first ``limit`` pairs
     return out

@@ -19,7 +19,7 @@ from ..geometry.polygon import _cross
 from .edge_index import CHUNK
 from .visibility_kernel import DENSE_EDGES, segment_crossings
 
-__all__ = ["decide", "visible_many"]
+__all__ = ["decide", "visible_many", "visible_tree"]
 
 
 def visible_many(router: Any, a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.bool_]:
@@ -37,6 +37,16 @@ def visible_many(router: Any, a: NDArray[np.float64], b: NDArray[np.float64]) ->
     if len(e1) <= DENSE_EDGES:  # compiled, every pair: the same tests as below
         hit, touched = segment_crossings(a, b, e1, e2, tol)
         return decide(router, a, b, ~hit, touched)
+    hit, touched = router._index.grid.crossings(a, b, tol)  # the STRtree's candidates
+    return decide(router, a, b, ~hit, touched)
+
+
+def visible_tree(router: Any, a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """:func:`visible_many` above :data:`DENSE_EDGES` edges by the STRtree's candidate pairs in
+    numpy (before :mod:`~boustro.plan.edge_grid`; the reference of its tests)."""
+    m = len(a)
+    e1, e2 = router._e1, router._e2
+    tol = router.tol
     mi, ei = router._index.box_pairs(np.minimum(a, b) - tol, np.maximum(a, b) + tol)
     pa, pb = a[mi], b[mi]
     q1, q2 = e1[ei], e2[ei]

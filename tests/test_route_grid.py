@@ -1,0 +1,77 @@
+"""The router's segment tests on traced fields (issue 21, eleventh round): edges in a uniform
+grid instead of STRtree queries, straight-segment answers and rows through the graph remembered
+by the router. Every answer must equal the one computed from scratch by the previous method, bit
+for bit, so plans do not change."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import boustro.plan.routing as routing
+from boustro.geometry.traced import traced_field
+from boustro.plan.edge_grid import EdgeGrid
+from boustro.plan.route_cache import remembered_pairs
+from boustro.plan.route_visibility import visible_tree
+from boustro.plan.routing import Router
+from boustro.plan.visibility_kernel import segment_crossings
+
+
+@pytest.fixture(scope="module")
+def field():
+    return traced_field(1500, 5)
+
+
+def _segments(r, n, seed):
+    rng = np.random.default_rng(seed)
+    v = np.concatenate([r.shell.vertices] + [h.vertices for h in r.holes])
+    lo, hi = v.min(0), v.max(0)
+    p = rng.uniform(lo - 30, hi + 30, (n, 2))
+    q = p + rng.normal(0, 40, (n, 2))  # short ones, as a tour's nearest neighbours
+    q[: n // 4] = rng.uniform(lo, hi, (n // 4, 2))  # long ones, across the field
+    i = rng.integers(0, len(v), (n // 2, 2))
+    p[n // 4 : 3 * n // 4] = v[i[:, 0]]  # vertex to vertex
+    q[n // 4 : 3 * n // 4] = v[i[:, 0]] + (v[i[:, 1]] - v[i[:, 0]]) * rng.uniform(0, 1, (n // 2, 1))
+    j = rng.integers(0, len(v) - 1, n // 8)  # along an edge, through its vertices
+    p[-(n // 8) :], q[-(n // 8) :] = 2 * v[j] - v[j + 1], 3 * v[j + 1] - 2 * v[j]
+    return p, q
+
+
+def test_grid_crossings_equal_every_edges_tests(field):
+    router = Router(field, 5.0)
+    grid = EdgeGrid(router._e1, router._e2)
+    p, q = _segments(field, 3000, 0)
+    p[0], q[1] = np.nan, np.inf  # no candidates, no crash
+    got = grid.crossings(p, q, router.tol)
+    want = segment_crossings(p, q, router._e1, router._e2, router.tol)
+    assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+    assert got[0].any() and (~got[0]).any() and got[1].any()
+
+
+def test_grid_visibility_equals_the_strtree_candidates(field):
+    router = Router(field, 5.0)
+    assert len(router._e1) > 512  # the grid's path
+    p, q = _segments(field, 2000, 1)
+    got = router._visible_many(p, q)
+    want = visible_tree(router, p, q)
+    assert np.array_equal(got, want) and got.any() and (~got).any()
+
+
+@pytest.mark.parametrize("limit", [40, 500, 1 << 18])
+def test_remembered_pairs_and_matrices_equal_a_fresh_routers(field, monkeypatch, limit):
+    monkeypatch.setattr(routing, "_PAIRS", limit)
+    warm = Router(field, 5.0)
+    rng = np.random.default_rng(2)
+    v = field.shell.vertices
+    pts = v[rng.integers(0, len(v), 120)] + rng.normal(0, 3, (120, 2))
+    for lo, hi in ((0, 60), (30, 90), (0, 120)):  # each batch shares points with the last
+        got = warm.distances(pts[lo:hi])
+        assert np.array_equal(got, Router(field, 5.0).distances(pts[lo:hi]))
+        assert len(warm._pair_cache) <= limit
+    assert warm._pair_cache  # it did remember
+    cache: dict[bytes, bool] = {}
+    p, q = _segments(field, 400, 3)
+    for k in (100, 300, 400):
+        got = remembered_pairs(cache, p[:k], q[:k], warm._visible_many, 250)
+        assert np.array_equal(got, visible_tree(warm, p[:k], q[:k]))
+        assert len(cache) <= 250
