@@ -75,3 +75,20 @@ def test_remembered_pairs_and_matrices_equal_a_fresh_routers(field, monkeypatch,
         got = remembered_pairs(cache, p[:k], q[:k], warm._visible_many, 250)
         assert np.array_equal(got, visible_tree(warm, p[:k], q[:k]))
         assert len(cache) <= 250
+
+
+def test_grid_nearness_equals_the_strtree_candidates(field):
+    router = Router(field, 5.0)
+    index, tol = router._index, router.tol
+    rng = np.random.default_rng(4)
+    v = router._e1
+    p = rng.uniform(v.min(0) - 20, v.max(0) + 20, (3000, 2))
+    p[:1000] = v[rng.integers(0, len(v), 1000)] + rng.normal(0, 3 * tol, (1000, 2))
+    p[1000:1500] = v[rng.integers(0, len(v), 500)] + rng.normal(0, 5.0, (500, 2))
+    n_shell = len(field.shell)
+    got = index.near(p)
+    assert np.array_equal(got, index.near_tree(p, tol, len(v), 2 * tol))
+    assert got.any() and (~got).any()
+    got = index.within(p, 5.0, n_shell)
+    assert np.array_equal(got, index.near_tree(p, 5.0, n_shell, 5.0 * (1 + 1e-6) + tol))
+    assert got.any() and (~got).any()

@@ -11,7 +11,9 @@ closed box meets the segment's (the STRtree's candidates: a box that meets anoth
 cell with it, the cell index being monotone in the coordinate); the tests on them are
 :func:`~boustro.plan.visibility_kernel.segment_crossings`' (the same floating-point operations
 in the same order as the numpy tests), so the answers are identical. Memory ``O(E + cells)``.
-numba is imported on use; without it the plain Python loops run.
+Points near the edges (:meth:`EdgeGrid.near`, the class of a point) are found the same way,
+with :func:`~boustro.plan.visibility_kernel.points_near`'s arithmetic. numba is imported on
+use; without it the plain Python loops run.
 """
 
 from __future__ import annotations
@@ -83,12 +85,37 @@ def _grid_crossings(a, b, e1, e2, tol, x0, y0, inv, nx, ny, start, items, seen, 
                         touched[i] = True
 
 
+def _grid_near(p, e1, e2, n_edges, r, tiny, x0, y0, inv, nx, ny, start, items, seen, out):
+    for i in range(p.shape[0]):
+        px, py = p[i, 0], p[i, 1]
+        for cx in range(_cell(px - 2 * r, x0, inv, nx), _cell(px + 2 * r, x0, inv, nx) + 1):
+            for cy in range(_cell(py - 2 * r, y0, inv, ny), _cell(py + 2 * r, y0, inv, ny) + 1):
+                c = cx * ny + cy
+                for k in range(start[c], start[c + 1]):
+                    e = items[k]
+                    if e >= n_edges or seen[e] == i:
+                        continue
+                    seen[e] = i
+                    # visibility_kernel._near's arithmetic
+                    ax, ay = e1[e, 0], e1[e, 1]
+                    abx, aby = e2[e, 0] - ax, e2[e, 1] - ay
+                    if min(ax, ax + abx) > px + 2 * r or max(ax, ax + abx) < px - 2 * r:
+                        continue
+                    if min(ay, ay + aby) > py + 2 * r or max(ay, ay + aby) < py - 2 * r:
+                        continue
+                    den = max(abx * abx + aby * aby, tiny)
+                    t = min(max(((px - ax) * abx + (py - ay) * aby) / den, 0.0), 1.0)
+                    dx, dy = px - (ax + t * abx), py - (ay + t * aby)
+                    if math.sqrt(dx * dx + dy * dy) <= r:
+                        out[i] = True
+
+
 @cache
 def _compiled() -> Any:
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _grid_crossings
+        return _grid_crossings, _grid_near
     jit_globals(globals(), ("_side", "_cell"))
-    return jit(_grid_crossings)
+    return jit(_grid_crossings), jit(_grid_near)
 
 
 class EdgeGrid:
@@ -126,7 +153,7 @@ class EdgeGrid:
         proper = np.zeros(m, dtype=np.bool_)
         touched = np.zeros(m, dtype=np.bool_)
         seen = np.full(len(self.e1), -1, dtype=np.int64)
-        _compiled()(
+        _compiled()[0](
             np.ascontiguousarray(a, dtype=np.float64),
             np.ascontiguousarray(b, dtype=np.float64),
             self.e1,
@@ -144,3 +171,28 @@ class EdgeGrid:
             touched,
         )
         return proper, touched
+
+    def near(self, p: NDArray[np.float64], r: float, n_edges: int) -> NDArray[np.bool_]:
+        """``(P,)``: whether each point lies within ``r`` of one of the first ``n_edges`` edges,
+        as :func:`~boustro.plan.visibility_kernel.points_near` (the same arithmetic; the grid
+        only skips edges whose box, grown by ``2 r``, misses the point)."""
+        out = np.zeros(len(p), dtype=np.bool_)
+        seen = np.full(len(self.e1), -1, dtype=np.int64)
+        _compiled()[1](
+            np.ascontiguousarray(p, dtype=np.float64),
+            self.e1,
+            self.e2,
+            int(n_edges),
+            float(r),
+            float(np.finfo(np.float64).tiny),
+            self.x0,
+            self.y0,
+            self.inv,
+            self.nx,
+            self.ny,
+            self.start,
+            self.items,
+            seen,
+            out,
+        )
+        return out
