@@ -8,10 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import boustro.plan.routing as routing
 from boustro.geometry.traced import traced_field
 from boustro.plan.edge_grid import EdgeGrid
-from boustro.plan.route_cache import remembered_pairs
 from boustro.plan.route_visibility import visible_tree
 from boustro.plan.routing import Router
 from boustro.plan.visibility_kernel import segment_crossings
@@ -57,9 +55,7 @@ def test_grid_visibility_equals_the_strtree_candidates(field):
     assert np.array_equal(got, want) and got.any() and (~got).any()
 
 
-@pytest.mark.parametrize("limit", [40, 500, 1 << 18])
-def test_remembered_pairs_and_matrices_equal_a_fresh_routers(field, monkeypatch, limit):
-    monkeypatch.setattr(routing, "_PAIRS", limit)
+def test_remembered_rows_through_the_graph_equal_a_fresh_routers(field):
     warm = Router(field, 5.0)
     rng = np.random.default_rng(2)
     v = field.shell.vertices
@@ -67,14 +63,7 @@ def test_remembered_pairs_and_matrices_equal_a_fresh_routers(field, monkeypatch,
     for lo, hi in ((0, 60), (30, 90), (0, 120)):  # each batch shares points with the last
         got = warm.distances(pts[lo:hi])
         assert np.array_equal(got, Router(field, 5.0).distances(pts[lo:hi]))
-        assert len(warm._pair_cache) <= limit
-    assert warm._pair_cache  # it did remember
-    cache: dict[bytes, bool] = {}
-    p, q = _segments(field, 400, 3)
-    for k in (100, 300, 400):
-        got = remembered_pairs(cache, p[:k], q[:k], warm._visible_many, 250)
-        assert np.array_equal(got, visible_tree(warm, p[:k], q[:k]))
-        assert len(cache) <= 250
+    assert warm._coarse is not None and warm._coarse[0]._row_cache["via"]  # remembered
 
 
 def test_grid_nearness_equals_the_strtree_candidates(field):

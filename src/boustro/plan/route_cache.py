@@ -4,10 +4,10 @@ A router is shared by every plan of an area (``router_for``), and the plans of n
 (and a plan's two distance matrices: the order of its chains, then the lane-by-lane
 refinement) share most of their points: the lane ends, the hole passes' ends, the start.
 Answers that depend on one point only (its *rows*: the leg to an inner domain, the visible
-nodes) or on one pair of points only (whether the straight segment between them stays in the
-area) are remembered by the points' bytes, so a plan never depends on what was asked before
-(every answer equals the one computed from scratch, bit for bit). Each store is emptied all
-at once when it would pass its limit; a batch keeps its own answers meanwhile.
+nodes, the shortest lengths through them to every node) are remembered by the point's bytes,
+so a plan never depends on what was asked before (every answer equals the one computed from
+scratch, bit for bit). A store is emptied all at once when it would pass its limit; a batch
+keeps its own answers meanwhile.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["pair_keys", "remembered_pairs", "remembered_rows"]
+__all__ = ["remembered_rows"]
 
 
 def remembered_rows(
@@ -49,34 +49,3 @@ def remembered_rows(
     if not rows:
         return compute(p)
     return tuple(np.array([r[c] for r in rows]) for c in range(len(rows[0])))
-
-
-def pair_keys(a: NDArray[np.float64], b: NDArray[np.float64]) -> list[bytes]:
-    """The bytes of each pair ``(a[i], b[i])`` (32 bytes: the four coordinates)."""
-    buf = np.ascontiguousarray(np.hstack([a, b]), dtype=np.float64).tobytes()
-    return [buf[s : s + 32] for s in range(0, len(buf), 32)]
-
-
-def remembered_pairs(
-    cache: dict[bytes, bool],
-    a: NDArray[np.float64],
-    b: NDArray[np.float64],
-    compute: Callable[[NDArray[np.float64], NDArray[np.float64]], NDArray[np.bool_]],
-    limit: int,
-) -> NDArray[np.bool_]:
-    """``compute(a, b)`` for a yes/no answer that depends on each pair ``a[i] -> b[i]`` only,
-    each pair's answer remembered in ``cache`` by its bytes (at most ``limit`` pairs)."""
-    a = np.asarray(a, dtype=np.float64).reshape(-1, 2)
-    b = np.asarray(b, dtype=np.float64).reshape(-1, 2)
-    keys = pair_keys(a, b)
-    got = [cache.get(k) for k in keys]
-    new = np.fromiter((i for i, g in enumerate(got) if g is None), dtype=np.int64)
-    out = np.array([bool(g) for g in got], dtype=bool)
-    if len(new):
-        fresh = compute(a[new], b[new])
-        out[new] = fresh
-        if len(cache) + len(new) > limit:
-            cache.clear()
-        for i, v in zip(new[:limit].tolist(), fresh[:limit].tolist(), strict=True):
-            cache[keys[i]] = v  # a batch over the limit: its first ``limit`` pairs
-    return out

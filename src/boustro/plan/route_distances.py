@@ -3,12 +3,10 @@
 :func:`distances` tests the straight move only towards each point's ``nearest`` neighbours and
 measures the other pairs through the router's graph (its visibility graph, or the inner
 domains' routers on traced boundaries). A tour asks for two matrices a plan (the order of its
-chains, then the lane-by-lane refinement) and a search plans hundreds of nearby layouts: the
-straight tests depend on the pair only and are remembered by the router
-(:func:`~boustro.plan.route_cache.remembered_pairs`, above
-:data:`~boustro.plan.visibility_kernel.DENSE_EDGES` edges where each test is an STRtree query),
-and so is each point's row of shortest lengths to the graph's nodes; every matrix equals the one
-computed from scratch, bit for bit.
+chains, then the lane-by-lane refinement) and a search plans hundreds of nearby layouts: each
+point's rows of shortest lengths to the graph's nodes are remembered by the router
+(:meth:`~boustro.plan.routing.Router._rows`); every matrix equals the one computed from
+scratch, bit for bit.
 """
 
 from __future__ import annotations
@@ -18,8 +16,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-
-from .visibility_kernel import DENSE_EDGES
 
 __all__ = ["coarse_distances", "distances"]
 
@@ -40,10 +36,7 @@ def distances(router: Any, points: Any, nearest: int = 24) -> NDArray[np.float64
         keep = i < j
         keep |= ~np.isin(j * m + i, i[i < j] * m + j[i < j])
         i, j = i[keep], j[keep]
-        if len(router._e1) > DENSE_EDGES:  # an STRtree query a pair: remembered
-            vis = router._visible_pairs(pa[i], pa[j])
-        else:
-            vis = router._visible_many(pa[i], pa[j])
+        vis = router._visible_many(pa[i], pa[j])
         direct[i[vis], j[vis]] = euclid[i[vis], j[vis]]
         direct[j[vis], i[vis]] = euclid[i[vis], j[vis]]
     np.fill_diagonal(direct, 0.0)

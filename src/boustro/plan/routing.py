@@ -15,7 +15,7 @@ from ..geometry.region import Region, as_region
 from .domain_moves import coarse_path, pull, to_domains
 from .edge_index import EdgeIndex
 from .nearest_edge import DENSE_ANCHOR, index_feet, nearest_feet
-from .route_cache import remembered_pairs, remembered_rows
+from .route_cache import remembered_rows
 from .route_distances import coarse_distances, distances
 from .route_domain import MAX_NODES, inner_domains
 from .route_visibility import visible_many
@@ -28,10 +28,6 @@ _ROUTES = 1 << 16
 
 #: Points whose rows (:meth:`Router._rows`) a :class:`Router` remembers, per computation.
 _ROWS = 1 << 14
-
-#: Segments whose visibility (:meth:`Router._visible_pairs`) a :class:`Router` remembers
-#: (about 150 bytes each).
-_PAIRS = 1 << 18
 
 
 class Route(NamedTuple):
@@ -85,7 +81,6 @@ class Router:
         # and plans of nearby layouts share moves (the hole passes' ends, the start)
         self._routes: dict[bytes, Route] = {}
         self._row_cache: dict[str, dict[bytes, tuple[Any, ...]]] = {}
-        self._pair_cache: dict[bytes, bool] = {}
 
     # -- membership --------------------------------------------------------------------------
     def classify(self, points: ArrayLike) -> NDArray[np.int64]:
@@ -176,11 +171,6 @@ class Router:
         """Whether each segment ``a[i] -> b[i]`` stays in the closed area, ``(M,)``
         (:func:`~boustro.plan.route_visibility.visible_many`)."""
         return visible_many(self, a, b)
-
-    def _visible_pairs(self, a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.bool_]:
-        """:meth:`_visible_many`, each segment's answer remembered by its ends' bytes (at most
-        :data:`_PAIRS` segments)."""
-        return remembered_pairs(self._pair_cache, a, b, self._visible_many, _PAIRS)
 
     # -- the graph ---------------------------------------------------------------------------
     def _graph(self) -> None:
