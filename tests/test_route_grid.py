@@ -12,7 +12,7 @@ from boustro.geometry.traced import traced_field
 from boustro.plan.edge_grid import EdgeGrid
 from boustro.plan.route_visibility import visible_tree
 from boustro.plan.routing import Router
-from boustro.plan.visibility_kernel import segment_crossings
+from boustro.plan.visibility_kernel import points_near, segment_crossings
 
 
 @pytest.fixture(scope="module")
@@ -81,3 +81,20 @@ def test_grid_nearness_equals_the_strtree_candidates(field):
     got = index.within(p, 5.0, n_shell)
     assert np.array_equal(got, index.near_tree(p, 5.0, n_shell, 5.0 * (1 + 1e-6) + tol))
     assert got.any() and (~got).any()
+
+
+def test_a_grid_of_long_edges_is_coarser_and_answers_the_same():
+    """A star of 600 spikes: every edge spans the field, so the grid coarsens (at most 32
+    cells an edge) and still keeps every candidate."""
+    k = np.arange(1200)
+    rad = np.where(k % 2 == 0, 100.0, 3.0)
+    ring = np.stack([rad * np.cos(k * np.pi / 600), rad * np.sin(k * np.pi / 600)], axis=1)
+    e1, e2 = ring, np.roll(ring, -1, axis=0)
+    grid = EdgeGrid(e1, e2)
+    assert len(grid.items) <= 32 * len(e1) and grid.nx < 35
+    rng = np.random.default_rng(5)
+    p, q = rng.uniform(-110, 110, (2000, 2)), rng.uniform(-110, 110, (2000, 2))
+    got, want = grid.crossings(p, q, 1e-7), segment_crossings(p, q, e1, e2, 1e-7)
+    assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1]) and got[0].any()
+    near = grid.near(p, 0.5, len(e1))
+    assert np.array_equal(near, points_near(p, e1, e2, 0.5)) and near.any() and (~near).any()

@@ -129,19 +129,23 @@ class EdgeGrid:
         self.x0, self.y0 = float(lo[:, 0].min()), float(lo[:, 1].min())
         w = max(float(hi[:, 0].max()) - self.x0, float(hi[:, 1].max()) - self.y0, 1e-300)
         n = max(1, min(1024, math.ceil(math.sqrt(len(self.e1)))))  # about an edge a cell
-        self.inv = n / w
+        while True:  # long edges cover many cells: a coarser grid past 32 cells an edge
+            self.inv = n / w
+            origin = np.array([self.x0, self.y0])
+            first = np.floor((lo - origin) * self.inv).clip(0, n - 1).astype(np.int64)
+            last = np.floor((hi - origin) * self.inv).clip(0, n - 1).astype(np.int64)
+            wide, high = last[:, 0] - first[:, 0] + 1, last[:, 1] - first[:, 1] + 1
+            count = wide * high
+            if n == 1 or int(count.sum()) <= 32 * len(self.e1):
+                break
+            n //= 2
         self.nx = self.ny = n
-        cells = np.floor((lo - [self.x0, self.y0]) * self.inv).clip(0, n - 1).astype(np.int64)
-        top = np.floor((hi - [self.x0, self.y0]) * self.inv).clip(0, n - 1).astype(np.int64)
-        owner, cell = [], []
-        for e, (ax, ay, bx, by) in enumerate(np.hstack([cells, top]).tolist()):
-            for cx in range(ax, bx + 1):
-                for cy in range(ay, by + 1):
-                    owner.append(e)
-                    cell.append(cx * n + cy)
-        order = np.argsort(np.asarray(cell, dtype=np.int64), kind="stable")
-        self.items = np.asarray(owner, dtype=np.int64)[order]
-        counts = np.bincount(np.asarray(cell, dtype=np.int64), minlength=n * n)
+        owner = np.repeat(np.arange(len(self.e1)), count)  # each edge's cells, edge by edge
+        k = np.arange(len(owner)) - np.repeat(np.cumsum(count) - count, count)
+        cell = (first[owner, 0] + k // high[owner]) * n + first[owner, 1] + k % high[owner]
+        order = np.argsort(cell, kind="stable")  # by cell, then edge
+        self.items = owner[order].astype(np.int64)
+        counts = np.bincount(cell, minlength=n * n)
         self.start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
 
     def crossings(
