@@ -11,7 +11,7 @@ import numpy as np
 from boustro.geometry.region import Region, random_region
 from boustro.geometry.traced import traced_field
 from boustro.optimize.cover import band_lines, bands
-from boustro.plan import build_plan, drive_vehicle, edge_index, routing, vehicle_stats
+from boustro.plan import build_plan, drive_vehicle, edge_index, route_visibility, vehicle_stats
 from boustro.plan.edge_index import EdgeIndex
 from boustro.plan.region import plan_region
 from boustro.plan.routing import Router, router_for
@@ -156,11 +156,13 @@ def test_compiled_visibility_equals_the_trees(monkeypatch):
         p[:150], q[:150] = v[i[:, 0]], v[i[:, 1]]  # vertex to vertex
         j = rng.integers(0, len(v) - 1, 50)  # along an edge, through its vertices
         p[150:200], q[150:200] = 2 * v[j] - v[j + 1], 3 * v[j + 1] - 2 * v[j]
-        monkeypatch.setattr(routing, "DENSE_EDGES", 10**9)
+        monkeypatch.setattr(route_visibility, "DENSE_EDGES", 10**9)
         dense = router._visible_many(p, q)
-        monkeypatch.setattr(routing, "DENSE_EDGES", 0)
-        tree = router._visible_many(p, q)
+        monkeypatch.setattr(route_visibility, "DENSE_EDGES", 0)
+        grid = router._visible_many(p, q)
+        tree = route_visibility.visible_tree(router, p, q)
         assert np.array_equal(dense, tree) and dense.any() and (~dense).any()
+        assert np.array_equal(grid, tree)
     proper, touched = segment_crossings(
         np.array([[0.0, 0.0], [0.0, 0.0]]), np.array([[2.0, 2.0], [2.0, 0.0]]),
         np.array([[0.0, 2.0], [1.0, 0.0]]), np.array([[2.0, 0.0], [1.0, -1.0]]), 1e-12,

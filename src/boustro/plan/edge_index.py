@@ -9,12 +9,14 @@ shapely is imported on use (``import boustro`` does not load it).
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..geometry.region import Region, _point_segment_distance
+from .edge_grid import EdgeGrid
 from .visibility_kernel import DENSE_EDGES, points_near
 
 __all__ = ["CHUNK", "EdgeIndex"]
@@ -48,6 +50,11 @@ class EdgeIndex:
             [[*h.vertices.min(axis=0), *h.vertices.max(axis=0)] for h in region.holes]
         ).reshape(-1, 4)
 
+    @cached_property
+    def grid(self) -> EdgeGrid:
+        """The edges in a uniform grid (:mod:`~boustro.plan.edge_grid`), built on first use."""
+        return EdgeGrid(self.e1, self.e2)
+
     def box_pairs(
         self, lo: NDArray[np.float64], hi: NDArray[np.float64]
     ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
@@ -72,20 +79,21 @@ class EdgeIndex:
         """``(P,)``: whether each point is within ``tol`` of an edge."""
         if len(self.e1) <= DENSE_EDGES:  # compiled, every pair: the same decisions
             return points_near(p, self.e1, self.e2, self.tol)
-        pad = 2 * self.tol
-        i, e = self.box_pairs(p - pad, p + pad)
-        out = np.zeros(len(p), dtype=bool)
-        if len(i):
-            d = _point_segment_distance(p[i], self.e1[e], self.e2[e])
-            out[i[d <= self.tol]] = True
-        return out
+        return self.grid.near(p, self.tol, len(self.e1))  # compiled, the grid's candidates
 
     def within(self, p: NDArray[np.float64], r: float, n_edges: int) -> NDArray[np.bool_]:
         """``(P,)``: whether each point is within ``r`` of one of the first ``n_edges`` edges
         (the shell's)."""
         if len(self.e1) <= DENSE_EDGES:
             return points_near(p, self.e1[:n_edges], self.e2[:n_edges], r)
-        pad = r * (1 + 1e-6) + self.tol
+        return self.grid.near(p, r, n_edges)
+
+    def near_tree(
+        self, p: NDArray[np.float64], r: float, n_edges: int, pad: float
+    ) -> NDArray[np.bool_]:
+        """:meth:`within` by the STRtree's candidates (boxes grown by ``pad``) in numpy: what
+        :meth:`near` (``pad = 2 tol``) and :meth:`within` (``pad = r (1 + 1e-6) + tol``) did
+        before the grid (:mod:`~boustro.plan.edge_grid`), the reference of its tests."""
         i, e = self.box_pairs(p - pad, p + pad)
         keep = e < n_edges
         i, e = i[keep], e[keep]

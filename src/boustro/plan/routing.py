@@ -10,22 +10,18 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..geometry.polygon import _cross
 from ..geometry.region import Region, as_region
-from .edge_index import CHUNK, EdgeIndex
+from .domain_moves import coarse_path, pull, to_domains
+from .edge_index import EdgeIndex
 from .nearest_edge import DENSE_ANCHOR, index_feet, nearest_feet
-from .route_domain import MAX_NODES, inner_domains, nearest_in
+from .route_cache import remembered_rows
+from .route_distances import coarse_distances, distances
+from .route_domain import MAX_NODES, inner_domains
+from .route_visibility import visible_many
 from .straight_moves import straight_moves
-from .visibility_kernel import DENSE_EDGES, segment_crossings
 
 __all__ = ["Route", "Router", "router_for"]
-
-#: Domain vertices tried at a time from a point whose nearest domain point is hidden.
-_NEAREST = 16
-
-
-def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
 
 #: Routed moves a :class:`Router` remembers (about 100 bytes each plus their corners).
 _ROUTES = 1 << 16
@@ -172,64 +168,9 @@ class Router:
         return straight_moves(self, p, q)
 
     def _visible_many(self, a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.bool_]:
-        """Whether each segment ``a[i] -> b[i]`` stays in the closed area, ``(M,)``.
-
-        Only the edges whose bounding box meets the segment's are tested (an STRtree)."""
-        m = len(a)
-        if m == 0:
-            return np.zeros(0, dtype=bool)
-        if m > CHUNK:  # bounded memory: the candidate pairs in slices
-            return np.concatenate(
-                [self._visible_many(a[k : k + CHUNK], b[k : k + CHUNK]) for k in range(0, m, CHUNK)]
-            )
-        e1, e2 = self._e1, self._e2
-        tol = self.tol
-        if len(e1) <= DENSE_EDGES:  # compiled, every pair: the same tests as below
-            hit, touched = segment_crossings(a, b, e1, e2, tol)
-            return self._decide(a, b, ~hit, touched)
-        mi, ei = self._index.box_pairs(np.minimum(a, b) - tol, np.maximum(a, b) + tol)
-        pa, pb = a[mi], b[mi]
-        q1, q2 = e1[ei], e2[ei]
-        r = pb - pa
-        s = q2 - q1
-        rl = np.linalg.norm(r, axis=1)
-        sl = np.linalg.norm(s, axis=1)
-
-        def side(x: NDArray[np.float64], scale: NDArray[np.float64]) -> NDArray[np.float64]:
-            return np.where(np.abs(x) <= tol * scale, 0.0, np.sign(x))
-
-        o1 = side(_cross(r, q1 - pa), rl)
-        o2 = side(_cross(r, q2 - pa), rl)
-        o3 = side(_cross(s, pa - q1), sl)
-        o4 = side(_cross(s, pb - q1), sl)
-        proper = ((o1 * o2) < 0) & ((o3 * o4) < 0)
-        # A vertex touched in the middle of a segment: check every piece between such vertices.
-        on = (
-            (o1 == 0)
-            & (np.einsum("ij,ij->i", q1 - pa, r) > tol * rl)
-            & (np.einsum("ij,ij->i", q1 - pb, -r) > tol * rl)
-        )
-        ok = np.bincount(mi[proper], minlength=m) == 0
-        touched = np.bincount(mi[on], minlength=m) > 0
-        return self._decide(a, b, ok, touched)
-
-    def _decide(
-        self,
-        a: NDArray[np.float64],
-        b: NDArray[np.float64],
-        ok: NDArray[np.bool_],
-        touched: NDArray[np.bool_],
-    ) -> NDArray[np.bool_]:
-        """Visibility of segments that cross no edge (``ok``): by the midpoint's class, or
-        piece by piece where they touch a vertex."""
-        m = len(a)
-        simple = ok & ~touched
-        res = np.zeros(m, dtype=bool)
-        if simple.any():
-            res[simple] = self.classify(((a + b) / 2)[simple]) == 0
-        for i in np.flatnonzero(ok & touched):
-            res[i] = self.inside(a[i], b[i])
-        return res
+        """Whether each segment ``a[i] -> b[i]`` stays in the closed area, ``(M,)``
+        (:func:`~boustro.plan.route_visibility.visible_many`)."""
+        return visible_many(self, a, b)
 
     # -- the graph ---------------------------------------------------------------------------
     def _graph(self) -> None:
@@ -262,6 +203,18 @@ class Router:
         """Distances ``(P, N)`` from anchored points to the visible nodes (inf if hidden);
         each point's row computed once (:meth:`_rows`)."""
         return self._rows("nodes", p, lambda x: (self._to_nodes_now(x),))[0]
+
+    def _via_nodes(self, p: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+        """``(v, w)``, each ``(P, N)``: :meth:`_to_nodes` and the shortest lengths from each
+        point through its visible nodes to every node; each point's rows computed once."""
+        return self._rows("via", p, self._via_nodes_now)
+
+    def _via_nodes_now(self, p: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+        """:meth:`_via_nodes`, computed (in blocks of rows: memory ``O(64 N^2)``)."""
+        v = self._to_nodes(p)
+        d = self._dist[None]
+        w = [np.min(v[r : r + 64, :, None] + d, axis=1) for r in range(0, len(p), 64)]
+        return v, np.concatenate(w)
 
     def _to_nodes_now(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
         """:meth:`_to_nodes`, computed."""
@@ -350,7 +303,8 @@ class Router:
         return Route(arr, length, legs, False)
 
     def distances(self, points: ArrayLike, *, nearest: int = 24) -> NDArray[np.float64]:
-        """Lengths ``(P, P)`` of the connecting moves between points, for ordering.
+        """Lengths ``(P, P)`` of the connecting moves between points, for ordering
+        (:func:`~boustro.plan.route_distances.distances`).
 
         The straight move is tested only towards each point's ``nearest`` neighbours (by
         straight-line distance); other pairs are measured through the visibility graph (exact
@@ -358,42 +312,7 @@ class Router:
         where no move inside the area is found. Points outside the area are measured from their
         nearest point of it, plus that leg.
         """
-        p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        m = len(p)
-        pa = self.anchor(p)
-        legs = np.linalg.norm(pa - p, axis=1)
-        euclid = np.linalg.norm(pa[:, None] - pa[None], axis=-1)
-        direct = np.full((m, m), math.inf)
-        if m > 1:
-            k = min(nearest, m - 1)
-            near = np.argsort(euclid, axis=1)[:, 1 : k + 1]
-            i = np.repeat(np.arange(m), k)
-            j = near.ravel()
-            keep = i < j
-            keep |= ~np.isin(j * m + i, i[i < j] * m + j[i < j])
-            i, j = i[keep], j[keep]
-            vis = self._visible_many(pa[i], pa[j])
-            direct[i[vis], j[vis]] = euclid[i[vis], j[vis]]
-            direct[j[vis], i[vis]] = euclid[i[vis], j[vis]]
-        np.fill_diagonal(direct, 0.0)
-        if self._coarse is not None:
-            direct = np.minimum(direct, self._coarse_distances(pa))
-        elif len(self.nodes):
-            v = self._to_nodes(pa)  # (M, N)
-            w = np.concatenate(  # (M, N), in blocks of rows: memory O(64 N^2)
-                [np.min(v[r : r + 64, :, None] + self._dist[None], axis=1) for r in range(0, m, 64)]
-            )
-            for r0 in range(0, m, 64):  # (M, M) in blocks of rows: memory O(64 M N)
-                via = np.min(w[r0 : r0 + 64, None, :] + v[None, :, :], axis=-1)
-                direct[r0 : r0 + 64] = np.minimum(direct[r0 : r0 + 64], via)
-        else:  # a convex shell without holes: every straight move stays inside
-            direct = euclid
-        # no move inside the area found (a pocket no route reaches): the straight line, as
-        # :meth:`path` then flies it
-        direct = np.where(np.isfinite(direct), direct, euclid)
-        out = direct + legs[:, None] + legs[None, :]
-        np.fill_diagonal(out, 0.0)
-        return out
+        return distances(self, points, nearest)
 
     def _rows(
         self,
@@ -402,28 +321,9 @@ class Router:
         compute: Callable[[NDArray[np.float64]], tuple[NDArray[Any], ...]],
     ) -> tuple[NDArray[Any], ...]:
         """``compute(p)`` for a computation whose answer for each point depends on that point
-        only (its rows), each point's rows remembered by the point's bytes: the tours of a
-        plan and plans of nearby layouts share points (lane ends, hole passes, the start)."""
-        cache = self._row_cache.setdefault(name, {})
-        p = np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 2)
-        keys = [x.tobytes() for x in p]
-        # the batch's rows kept here: the cache may be emptied below
-        known = {k: cache[k] for k in keys if k in cache}
-        new: dict[bytes, int] = {}
-        for i, k in enumerate(keys):
-            if k not in known and k not in new:
-                new[k] = i
-        if new:
-            if len(cache) + len(new) > _ROWS:
-                cache.clear()
-            idx = np.fromiter(new.values(), dtype=np.int64, count=len(new))
-            got = compute(p[idx])
-            for j, k in enumerate(new):
-                known[k] = cache[k] = tuple(g[j] for g in got)
-        rows = [known[k] for k in keys]
-        if not rows:
-            return compute(p)
-        return tuple(np.array([r[c] for r in rows]) for c in range(len(rows[0])))
+        only (its rows), each point's rows remembered by the point's bytes
+        (:func:`~boustro.plan.route_cache.remembered_rows`, at most :data:`_ROWS` points)."""
+        return remembered_rows(self._row_cache.setdefault(name, {}), p, compute, _ROWS)
 
     # -- traced boundaries: routes through the inner domains ---------------------------------
     def _to_domains(
@@ -438,71 +338,22 @@ class Router:
     def _to_domains_now(
         self, pa: NDArray[np.float64]
     ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
-        """:meth:`_to_domains`, computed."""
-        pd, which = nearest_in(self._domains, pa)
-        ok = self._visible_many(pa, pd)
-        which = np.where(ok, which, -1)
-        blocked = np.flatnonzero(~ok)
-        if len(blocked):  # the nearest point is hidden (a dent): the nearest visible vertex
-            v = np.concatenate([d.vertices for d in self._domains])
-            sizes = [len(d.vertices) for d in self._domains]
-            owner = np.repeat(np.arange(len(self._domains)), sizes)
-            near = np.argsort(np.linalg.norm(pa[blocked, None] - v[None], axis=-1), axis=1)
-            left = np.arange(len(blocked))
-            for k in range(0, len(v), _NEAREST):  # nearest vertices first, a batch at a time
-                cand = near[left, k : k + _NEAREST]  # (B, <= _NEAREST), by distance
-                a = np.repeat(pa[blocked[left]], cand.shape[1], axis=0)
-                vis = self._visible_many(a, v[cand.ravel()]).reshape(cand.shape)
-                hit = vis.any(axis=1)
-                first = cand[np.arange(len(left)), np.argmax(vis, axis=1)]
-                pd[blocked[left[hit]]] = v[first[hit]]
-                which[blocked[left[hit]]] = owner[first[hit]]
-                left = left[~hit]
-                if not len(left):
-                    break
-        return pd, which, np.linalg.norm(pd - pa, axis=1)
+        """:meth:`_to_domains`, computed (:func:`~boustro.plan.domain_moves.to_domains`)."""
+        return to_domains(self, pa)
 
     def _coarse_path(
         self, pa: NDArray[np.float64], qa: NDArray[np.float64]
     ) -> NDArray[np.float64] | None:
-        """The move from ``pa`` to ``qa`` (both in the area) through a domain, its corners
-        pulled tight in the area; ``None`` if none is found."""
-        assert self._coarse is not None
-        pd, which, _ = self._to_domains(np.stack([pa, qa]))
-        if which[0] < 0 or which[0] != which[1]:
-            return None
-        sub = self._coarse[int(which[0])].path(pd[0], pd[1])
-        if not sub.found:
-            return None
-        return self._pull(np.concatenate([pa[None], sub.points, qa[None]]))
+        """:func:`~boustro.plan.domain_moves.coarse_path`."""
+        return coarse_path(self, pa, qa)
 
     def _pull(self, pts: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The polyline with every corner dropped that a straight move in the area skips
-        (greedily, the farthest visible point first)."""
-        out = [0]
-        while out[-1] < len(pts) - 1:
-            i = out[-1]
-            later = np.arange(i + 1, len(pts))
-            vis = self._visible_many(np.repeat(pts[i : i + 1], len(later), axis=0), pts[later])
-            vis[0] = True  # consecutive points of a route are joined by its own moves
-            out.append(int(later[np.flatnonzero(vis)[-1]]))
-        return pts[out]
+        """:func:`~boustro.plan.domain_moves.pull`."""
+        return pull(self, pts)
 
     def _coarse_distances(self, pa: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``(M, M)`` lengths of the moves through the domains (``inf`` between domains)."""
-        assert self._coarse is not None
-        uniq, back = np.unique(pa, axis=0, return_inverse=True)  # passes share their ends
-        if len(uniq) < len(pa):
-            return self._coarse_distances(uniq)[np.ix_(back.ravel(), back.ravel())]
-        m = len(pa)
-        out = np.full((m, m), math.inf)
-        pd, which, leg = self._to_domains(pa)
-        for k, sub in enumerate(self._coarse):
-            idx = np.flatnonzero(which == k)
-            if len(idx):
-                d = sub.distances(pd[idx]) + leg[idx, None] + leg[None, idx]
-                out[np.ix_(idx, idx)] = d
-        return out
+        """:func:`~boustro.plan.route_distances.coarse_distances`."""
+        return coarse_distances(self, pa)
 
 
 @lru_cache(maxsize=8)

@@ -1,0 +1,75 @@
+"""The lengths of the connecting moves between many points (a tour's distance matrix).
+
+:func:`distances` tests the straight move only towards each point's ``nearest`` neighbours and
+measures the other pairs through the router's graph (its visibility graph, or the inner
+domains' routers on traced boundaries). A tour asks for two matrices a plan (the order of its
+chains, then the lane-by-lane refinement) and a search plans hundreds of nearby layouts: each
+point's rows of shortest lengths to the graph's nodes are remembered by the router
+(:meth:`~boustro.plan.routing.Router._rows`); every matrix equals the one computed from
+scratch, bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["coarse_distances", "distances"]
+
+
+def distances(router: Any, points: Any, nearest: int = 24) -> NDArray[np.float64]:
+    """:meth:`Router.distances <boustro.plan.routing.Router.distances>` of ``router``."""
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    m = len(p)
+    pa = router.anchor(p)
+    legs = np.linalg.norm(pa - p, axis=1)
+    euclid = np.linalg.norm(pa[:, None] - pa[None], axis=-1)
+    direct = np.full((m, m), math.inf)
+    if m > 1:
+        k = min(nearest, m - 1)
+        near = np.argsort(euclid, axis=1)[:, 1 : k + 1]
+        i = np.repeat(np.arange(m), k)
+        j = near.ravel()
+        keep = i < j
+        keep |= ~np.isin(j * m + i, i[i < j] * m + j[i < j])
+        i, j = i[keep], j[keep]
+        vis = router._visible_many(pa[i], pa[j])
+        direct[i[vis], j[vis]] = euclid[i[vis], j[vis]]
+        direct[j[vis], i[vis]] = euclid[i[vis], j[vis]]
+    np.fill_diagonal(direct, 0.0)
+    if router._coarse is not None:
+        direct = np.minimum(direct, coarse_distances(router, pa))
+    elif len(router.nodes):
+        v, w = router._via_nodes(pa)  # (M, N) each
+        for r0 in range(0, m, 64):  # (M, M) in blocks of rows: memory O(64 M N)
+            via = np.min(w[r0 : r0 + 64, None, :] + v[None, :, :], axis=-1)
+            direct[r0 : r0 + 64] = np.minimum(direct[r0 : r0 + 64], via)
+    else:  # a convex shell without holes: every straight move stays inside
+        direct = euclid
+    # no move inside the area found (a pocket no route reaches): the straight line, as
+    # :meth:`path` then flies it
+    direct = np.where(np.isfinite(direct), direct, euclid)
+    out = direct + legs[:, None] + legs[None, :]
+    np.fill_diagonal(out, 0.0)
+    return out
+
+
+def coarse_distances(router: Any, pa: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(M, M)`` lengths of the moves through ``router``'s inner domains (``inf`` between
+    domains) from anchored points."""
+    assert router._coarse is not None
+    uniq, back = np.unique(pa, axis=0, return_inverse=True)  # passes share their ends
+    if len(uniq) < len(pa):
+        return coarse_distances(router, uniq)[np.ix_(back.ravel(), back.ravel())]
+    m = len(pa)
+    out = np.full((m, m), math.inf)
+    pd, which, leg = router._to_domains(pa)
+    for k, sub in enumerate(router._coarse):
+        idx = np.flatnonzero(which == k)
+        if len(idx):
+            d = sub.distances(pd[idx]) + leg[idx, None] + leg[None, idx]
+            out[np.ix_(idx, idx)] = d
+    return out
