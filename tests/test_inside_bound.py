@@ -110,8 +110,14 @@ def test_path_floor_and_contour_edges():
     square = Region([(0, 0), (100, 0), (100, 100), (0, 100)])
     assert path_floor(square, 5.0) == pytest.approx(100 * math.sqrt(2) - 10, rel=1e-5)
     edges = contour_edges(square, 10.0, 5.0)
-    # four stretches of 90 m, cores 90 - 2 (5 + step) with the step a quarter spacing at most
-    assert len(edges.core) == 4 and np.all(edges.core > 70) and np.all(edges.core < 90)
+    # four stretches of 90 m, each kept whole: the strip the lanes leave along an edge runs
+    # between feet 5 and 95, and the samples up to sqrt((5 + step)^2 - 5^2) beyond are flagged
+    assert len(edges.core) == 4 and np.allclose(edges.core, 90.0, rtol=1e-5)
+    assert np.all(edges.ring == 0)
+    # an obtuse corner: the stretch runs to feet 2.5 and 97.5 of the 100 m edge, all of it kept
+    hexagon = Region([(0, 0), (100, 0), (130, 40), (100, 80), (0, 80), (-30, 40)])
+    cores = contour_edges(hexagon, 10.0, 5.0).core
+    assert np.isclose(cores.max(), 95.0, rtol=1e-5)
     # lanes at 0 deg: the two vertical stretches count; at 45 deg all four
     assert stretch_length(edges, 0.0) == pytest.approx(2 * edges.core[0], rel=1e-9)
     assert stretch_length(edges, math.pi / 4) == pytest.approx(edges.core.sum(), rel=1e-9)

@@ -62,6 +62,7 @@ class ContourEdges(NamedTuple):
     angle: NDArray[np.float64]
     core: NDArray[np.float64]
     applies: bool  # the reach is half the spacing (else nothing is counted)
+    ring: NDArray[np.int64]  # the contour ring each stretch lies on
 
 
 def _contour_rings(area: Region, half: float) -> list[NDArray[np.float64]]:
@@ -97,8 +98,8 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
     ok = length > 0
     p0, d, length = p0[ok], d[ok], length[ok]
     u = d / length[:, None]
-    angles, cores = [], []
-    for ring in _contour_rings(area, half) if applies else []:
+    angles, cores, rings = [], [], []
+    for index, ring in enumerate(_contour_rings(area, half) if applies else []):
         total = float(np.linalg.norm(np.diff(ring, axis=0), axis=1).sum())
         step = total / max(8, math.ceil(total / (half / 2)))  # the planner's sample step
         a, b = ring[:-1], ring[1:]
@@ -123,16 +124,32 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
         tol = 1e-7 * spacing
         near = (np.abs(across(a) - half) <= tol) & (np.abs(across(b) - half) <= tol)
         fa, fb = foot(a), foot(b)
-        lo = np.maximum(np.minimum(fa, fb), half + step)
-        hi = np.minimum(np.maximum(fa, fb), length[None] - half - step)
-        core = np.where(parallel & near, np.maximum(hi - lo, 0.0), 0.0)
-        best = core.max(axis=1)
-        best = np.where(best > step, best, 0.0)
+        g0, g1 = np.minimum(fa, fb), np.maximum(fa, fb)
+        # the uncovered strip: feet in J (on the stretch and half a spacing from E's ends)
+        j_lo = np.maximum(g0, half)
+        j_hi = np.minimum(g1, length[None] - half)
+        # the samples within reach + step of it: feet within rho of J (heights <= half + tol)
+        rho = _flag_reach(half, step, tol)
+        core = np.minimum(g1, j_hi + rho) - np.maximum(g0, j_lo - rho)
+        strip = parallel & near & (j_hi - j_lo >= step * (1 + 1e-9))
+        best = np.where(strip, core, 0.0).max(axis=1)
         angles.append(np.arctan2(seg[:, 1], seg[:, 0]) % math.pi)
         cores.append(best)
+        rings.append(np.full(len(best), index, dtype=np.int64))
     if not angles:
-        return ContourEdges(np.zeros(0), np.zeros(0), applies)
-    return ContourEdges(np.concatenate(angles), np.concatenate(cores), applies)
+        return ContourEdges(np.zeros(0), np.zeros(0), applies, np.zeros(0, dtype=np.int64))
+    return ContourEdges(
+        np.concatenate(angles), np.concatenate(cores), applies, np.concatenate(rings)
+    )
+
+
+def _flag_reach(half: float, step: float, tol: float) -> float:
+    """How far along a contour stretch (beyond the feet of the strip it lies over) its samples
+    are still within ``reach + step`` of the strip's edge points: ``sqrt((r + step)^2 - h^2)``
+    with the reach ``r`` at least ``half (1 - 1e-8)`` (:class:`ContourEdges`' ``applies``) and
+    the stretch's height ``h`` over the edge at most ``half + tol``, less a millionth."""
+    r, h = half * (1 - 1e-8), half + tol
+    return math.sqrt(max((r + step) ** 2 - h**2, 0.0)) * (1 - 1e-6)
 
 
 def path_floor(area: Region, reach: float) -> float:
@@ -153,23 +170,28 @@ def stretch_length(contour: ContourEdges, theta: float) -> float:
     spacing inside (margin 1/2) need at least (0 where the reach is not half the spacing)."""
     if not contour.applies:
         return 0.0
-    p, _ = _stretches(contour, np.array([theta]), np.zeros(1))
+    p, _, _ = _stretches(contour, np.array([theta]), np.zeros(1))
     return float(p[0])
 
 
 def _stretches(
     contour: ContourEdges, theta: NDArray[np.float64], delta: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(P, A)`` per layout: the cores of the stretches at least :data:`MIN_ANGLE` from every
-    lane angle in ``theta +- delta``, and their least travel along the lanes."""
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """``(P, A, R)`` per layout: the cores of the stretches at least :data:`MIN_ANGLE` from
+    every lane angle in ``theta +- delta``, their least travel along the lanes, and the number
+    of contour rings holding such a core (each is a boundary pass of its own)."""
     if not len(contour.core):
         z = np.zeros(len(theta))
-        return z, z
+        return z, z, np.zeros(len(theta), dtype=np.int64)
     rel = np.abs((contour.angle[None, :] - theta[:, None] + math.pi / 2) % math.pi - math.pi / 2)
     pick = rel - delta[:, None] >= MIN_ANGLE
     core = np.where(pick, contour.core[None, :], 0.0)
     along = core * np.cos(np.minimum(rel + delta[:, None], math.pi / 2))
-    return core.sum(axis=1), along.sum(axis=1)
+    n_rings = int(contour.ring.max()) + 1
+    held = np.zeros((len(theta), n_rings), dtype=bool)
+    rows, cols = np.nonzero(core > 0)
+    held[rows, contour.ring[cols]] = True
+    return core.sum(axis=1), along.sum(axis=1), held.sum(axis=1)
 
 
 def _moves(st: BandStats, spacing: float) -> NDArray[np.float64]:
@@ -208,11 +230,13 @@ def keep_inside_bounds(
     half = lower_bounds(st_half, level_half, cost, spacing, runins=runins, **kw)
     zero = lower_bounds(_no_holes(st_zero), level_zero, cost, spacing, runins=False, **kw)
     if contour.applies and len(contour.core):
-        p, a = _stretches(contour, theta, delta)
+        p, a, passes = _stretches(contour, theta, delta)
         c = _moves(st_half, spacing)
         extra = np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
         plain = lower_bounds(_no_holes(st_half), level_half, cost, spacing, runins=runins, **kw)
-        half = np.maximum(half, plain + cost.per_length * extra)
+        # a turn before each boundary pass (the plan's turns: its lanes and passes less one)
+        turns = np.where(st_half.count.sum(axis=1) > 0, passes, 0)
+        half = np.maximum(half, plain + cost.per_length * extra + cost.per_turn * turns)
     least = cost.per_length * floor + cost.fixed
     return np.maximum(np.minimum(half, zero), least)
 
