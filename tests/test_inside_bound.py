@@ -12,7 +12,13 @@ import pytest
 from boustro.geometry.region import Region
 from boustro.optimize.cover import CoverCost, band_stats, lower_bounds
 from boustro.optimize.cover.boxes import Boxes
-from boustro.optimize.cover.inside_bound import contour_edges, path_floor, stretch_length
+from boustro.optimize.cover.inside_bound import (
+    MIN_ANGLE,
+    _stretches,
+    contour_edges,
+    path_floor,
+    stretch_length,
+)
 from boustro.optimize.cover.search import CoverSearch
 from boustro.plan import inside
 from boustro.plan.lanes import region_lanes
@@ -122,3 +128,45 @@ def test_path_floor_and_contour_edges():
     assert stretch_length(edges, 0.0) == pytest.approx(2 * edges.core[0], rel=1e-9)
     assert stretch_length(edges, math.pi / 4) == pytest.approx(edges.core.sum(), rel=1e-9)
     assert not contour_edges(square, 10.0, 6.0).applies  # overlapping swaths: nothing counted
+
+
+def _adversarial() -> list[Region]:
+    """Areas where a stretch's strip is short or its corner sharp: an obtuse hexagon, a sliver
+    triangle, a thin hole near the side, a notch, a traced (noisy, 120-vertex) boundary, a
+    ring one spacing and a half wide."""
+    rng = np.random.default_rng(3)
+    t = np.linspace(0, 2 * math.pi, 120, endpoint=False)
+    rad = 60 + rng.uniform(-1.5, 1.5, len(t))
+    traced = np.stack([rad * np.cos(t), 0.7 * rad * np.sin(t)], axis=1)
+    return [
+        Region([(0, 0), (100, 0), (130, 40), (100, 80), (0, 80), (-30, 40)]),
+        Region([(0, 0), (150, 0), (150, 14)]),
+        Region([(0, 0), (120, 0), (120, 70), (0, 70)], [[(10, 5.5), (110, 5.5), (110, 7)]]),
+        Region([(0, 0), (60, 0), (60, 40), (64, 40), (64, 0), (120, 0), (120, 60), (0, 60)]),
+        Region(traced),
+        Region(
+            [(0, 0), (80, 0), (80, 80), (0, 80)],
+            [[(13.5, 13.5), (66.5, 13.5), (66.5, 66.5), (13.5, 66.5)]],
+        ),
+    ]
+
+
+@pytest.mark.parametrize("index", range(9))
+def test_stretches_and_rings_below_the_passes_on_adversarial_areas(index):
+    """``P`` below the margin-1/2 passes' length and the rings holding a counted stretch no
+    more than the passes, at random layouts and at layouts along an edge or across a corner."""
+    region = (_adversarial() + _areas()[:3])[index]
+    edges = contour_edges(region, SPACING, SPACING / 2)
+    tol = 1e-9 * region.diameter
+    rng = np.random.default_rng(70 + index)
+    e = region.edges
+    along = np.arctan2(e[:, 1, 1] - e[:, 0, 1], e[:, 1, 0] - e[:, 0, 0]) % math.pi
+    angles = list(rng.uniform(0, math.pi, 5)) + list(rng.choice(along, 3) + MIN_ANGLE + 1e-3)
+    for angle in angles:
+        offset = rng.uniform(0, SPACING)
+        lanes = inside.clip_lanes(_lanes(region, angle, offset), region, tol, SPACING / 2, SPACING)
+        passes, _ = inside.boundary_passes(region, [lanes], SPACING, SPACING / 2)
+        length = sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)
+        p, _, rings = _stretches(edges, np.array([angle]), np.zeros(1))
+        assert p[0] <= length + 1e-9
+        assert rings[0] <= len(passes)
