@@ -14,6 +14,7 @@ from boustro.optimize.cover import CoverCost, band_stats, lower_bounds
 from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.inside_bound import (
     MIN_ANGLE,
+    _line_free,
     _stretches,
     contour_edges,
     path_floor,
@@ -162,11 +163,18 @@ def test_stretches_and_rings_below_the_passes_on_adversarial_areas(index):
     e = region.edges
     along = np.arctan2(e[:, 1, 1] - e[:, 0, 1], e[:, 1, 0] - e[:, 0, 0]) % math.pi
     angles = list(rng.uniform(0, math.pi, 5)) + list(rng.choice(along, 3) + MIN_ANGLE + 1e-3)
+    # along an edge (the parallel rule: counted where no line's swath reaches the strip)
+    angles += list(rng.choice(along, 6) + rng.choice([0.0, 1e-4, -3e-3, 0.02], 6))
+    counted = 0
     for angle in angles:
         offset = rng.uniform(0, SPACING)
         lanes = inside.clip_lanes(_lanes(region, angle, offset), region, tol, SPACING / 2, SPACING)
         passes, _ = inside.boundary_passes(region, [lanes], SPACING, SPACING / 2)
         length = sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)
-        p, _, rings = _stretches(edges, np.array([angle]), np.zeros(1))
+        theta, d = np.array([angle % math.pi]), np.array([offset])
+        free = _line_free(edges, theta, d, np.zeros(1), region.centre, SPACING)
+        p, _, rings = _stretches(edges, theta, np.zeros(1), free)
         assert p[0] <= length + 1e-9
         assert rings[0] <= len(passes)
+        counted += p[0] > stretch_length(edges, angle)
+    assert counted or not edges.core.any()

@@ -46,6 +46,11 @@ __all__ = [
     "stretch_length",
 ]
 
+#: Across the lanes, the band (half-spacings inside a strip's point) where a grid line has a
+#: lane that could cover the point (:func:`_line_free`), widened from 0.9952-1 for the strip's
+#: depth and rounding.
+BAND_LO, BAND_HI = 0.985, 1.01
+
 #: Edges closer than this to the lanes' direction (radians, over the whole box) are left out
 #: of ``P``: the strip the lanes leave along an edge at angle ``phi`` is ``s/2 (1 - cos phi)``
 #: deep (less the 0.5% the planner's polygonised erosion may gain at a reflex vertex), and it
@@ -63,6 +68,8 @@ class ContourEdges(NamedTuple):
     core: NDArray[np.float64]
     applies: bool  # the reach is half the spacing (else nothing is counted)
     ring: NDArray[np.int64]  # the contour ring each stretch lies on
+    strip: NDArray[np.float64]  # (S, 2, 2): the ends of the strip's feet on the edge (J)
+    inward: NDArray[np.float64]  # (S, 2): the edge's unit normal towards the stretch
 
 
 def _contour_rings(area: Region, half: float) -> list[NDArray[np.float64]]:
@@ -98,7 +105,7 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
     ok = length > 0
     p0, d, length = p0[ok], d[ok], length[ok]
     u = d / length[:, None]
-    angles, cores, rings = [], [], []
+    angles, cores, rings, strips, inwards = [], [], [], [], []
     for index, ring in enumerate(_contour_rings(area, half) if applies else []):
         total = float(np.linalg.norm(np.diff(ring, axis=0), axis=1).sum())
         step = total / max(8, math.ceil(total / (half / 2)))  # the planner's sample step
@@ -132,15 +139,27 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
         rho = _flag_reach(half, step, tol)
         core = np.minimum(g1, j_hi + rho) - np.maximum(g0, j_lo - rho)
         strip = parallel & near & (j_hi - j_lo >= step * (1 + 1e-9))
-        best = np.where(strip, core, 0.0).max(axis=1)
+        core = np.where(strip, core, 0.0)
+        best = core.max(axis=1)
+        e = core.argmax(axis=1)
         angles.append(np.arctan2(seg[:, 1], seg[:, 0]) % math.pi)
         cores.append(best)
         rings.append(np.full(len(best), index, dtype=np.int64))
+        rows = np.arange(len(best))
+        ends = np.stack([j_lo[rows, e], j_hi[rows, e]], axis=1)
+        strips.append(p0[e][:, None, :] + ends[..., None] * u[e][:, None, :])
+        normal = np.stack([-u[e][:, 1], u[e][:, 0]], axis=1)
+        side = np.sign(((a - p0[e]) * normal).sum(axis=1))
+        inwards.append(normal * np.where(side == 0, 1.0, side)[:, None])
     if not angles:
-        return ContourEdges(np.zeros(0), np.zeros(0), applies, np.zeros(0, dtype=np.int64))
+        z = np.zeros(0)
+        return ContourEdges(
+            z, z, applies, z.astype(np.int64), np.zeros((0, 2, 2)), np.zeros((0, 2))
+        )
     return ContourEdges(
-        np.concatenate(angles), np.concatenate(cores), applies, np.concatenate(rings)
-    )
+        np.concatenate(angles), np.concatenate(cores), applies, np.concatenate(rings),
+        np.concatenate(strips), np.concatenate(inwards),
+    )  # fmt: skip
 
 
 def _flag_reach(half: float, step: float, tol: float) -> float:
@@ -174,17 +193,52 @@ def stretch_length(contour: ContourEdges, theta: float) -> float:
     return float(p[0])
 
 
+def _line_free(
+    contour: ContourEdges,
+    theta: NDArray[np.float64],
+    d: NDArray[np.float64],
+    eps: NDArray[np.float64],
+    origin: NDArray[np.float64],
+    spacing: float,
+) -> NDArray[np.bool_]:
+    """``(L, S)`` whether no line of the grid ``(theta, d)`` moved across by up to ``eps``
+    passes between :data:`BAND_LO` and :data:`BAND_HI` half-spacings inside any point of a
+    stretch's strip (its edge's feet ``J``): then no lane covers the strip's points at depth
+    0.0048-0.006 half-spacings (docs/mission_time.md, "Keep-inside: the bound")."""
+    half = spacing / 2
+    cs, sn = np.cos(theta)[:, None, None], np.sin(theta)[:, None, None]
+    rel = contour.strip - origin  # (S, 2, 2)
+    h = -sn * rel[None, :, :, 0] + cs * rel[None, :, :, 1]  # (L, S, 2)
+    side = -np.sin(theta)[:, None] * contour.inward[None, :, 0]
+    side = side + np.cos(theta)[:, None] * contour.inward[None, :, 1]
+    sigma = np.where(side >= 0, 1.0, -1.0)  # (L, S): the side of the area across the lanes
+    u = sigma[..., None] * h
+    u_min, u_max = u.min(axis=2), u.max(axis=2)
+    e = np.broadcast_to(np.asarray(eps, dtype=np.float64), theta.shape)[:, None]
+    lo = BAND_LO * half - e
+    width = (BAND_HI - BAND_LO) * half + 2 * e + (u_max - u_min)
+    gap = (sigma * d[:, None] - u_min - lo) % spacing  # the first line past the band's start
+    slack = 1e-9 * spacing
+    return (gap > width + slack) & (gap < spacing - slack) & (width < spacing)
+
+
 def _stretches(
-    contour: ContourEdges, theta: NDArray[np.float64], delta: NDArray[np.float64]
+    contour: ContourEdges,
+    theta: NDArray[np.float64],
+    delta: NDArray[np.float64],
+    free: NDArray[np.bool_] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
     """``(P, A, R)`` per layout: the cores of the stretches at least :data:`MIN_ANGLE` from
-    every lane angle in ``theta +- delta``, their least travel along the lanes, and the number
-    of contour rings holding such a core (each is a boundary pass of its own)."""
+    every lane angle in ``theta +- delta`` or, nearer the lanes' direction, ``free``
+    (:func:`_line_free`), their least travel along the lanes, and the number of contour rings
+    holding such a core (each is a boundary pass of its own)."""
     if not len(contour.core):
         z = np.zeros(len(theta))
         return z, z, np.zeros(len(theta), dtype=np.int64)
     rel = np.abs((contour.angle[None, :] - theta[:, None] + math.pi / 2) % math.pi - math.pi / 2)
     pick = rel - delta[:, None] >= MIN_ANGLE
+    if free is not None:
+        pick |= free & (rel + delta[:, None] < math.pi / 4)
     core = np.where(pick, contour.core[None, :], 0.0)
     along = core * np.cos(np.minimum(rel + delta[:, None], math.pi / 2))
     n_rings = int(contour.ring.max()) + 1
@@ -220,17 +274,25 @@ def keep_inside_bounds(
     *,
     runins: bool,
     floor: float = 0.0,
+    d: NDArray[np.float64] | None = None,
+    eps: float = 0.0,
+    origin: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every keep-inside plan of the layouts (module
     docstring). ``st_half``/``level_half``: the sandwich's inner set shrunk by half a spacing
     (band 0), ``st_zero``/``level_zero`` the same radius not shrunk; ``delta`` the boxes'
     angular half-widths (0 at a layout); ``floor``: :func:`path_floor` (plan units), a path no
-    plan of the area is shorter than."""
+    plan of the area is shorter than; ``d`` the boxes' centre offsets, ``eps`` a radius that
+    holds every box's rigid motion and ``origin`` the grid's centre: with them the stretches
+    near the lanes' direction whose strip no line can reach are counted too."""
     kw: dict[str, Any] = {"boustrophedon": False, "ends": None}
     half = lower_bounds(st_half, level_half, cost, spacing, runins=runins, **kw)
     zero = lower_bounds(_no_holes(st_zero), level_zero, cost, spacing, runins=False, **kw)
     if contour.applies and len(contour.core):
-        p, a, passes = _stretches(contour, theta, delta)
+        free = None
+        if d is not None and origin is not None:
+            free = _line_free(contour, theta, d, np.full(len(theta), eps), origin, spacing)
+        p, a, passes = _stretches(contour, theta, delta, free)
         c = _moves(st_half, spacing)
         extra = np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
         plain = lower_bounds(_no_holes(st_half), level_half, cost, spacing, runins=runins, **kw)
@@ -261,5 +323,5 @@ def inside_box_bounds(
     )  # fmt: skip
     return keep_inside_bounds(
         st, lv, st0, lv0, search.cost, search.s, search.contour, theta, delta,
-        runins=search.n_holes == 0, floor=search.floor,
+        runins=search.n_holes == 0, floor=search.floor, d=d, eps=radius, origin=search.origin,
     )  # fmt: skip
