@@ -14,7 +14,7 @@ from boustro.optimize.cover import CoverCost, band_stats, lower_bounds
 from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.inside_bound import (
     MIN_ANGLE,
-    _line_free,
+    _near_lengths,
     _stretches,
     contour_edges,
     path_floor,
@@ -172,9 +172,30 @@ def test_stretches_and_rings_below_the_passes_on_adversarial_areas(index):
         passes, _ = inside.boundary_passes(region, [lanes], SPACING, SPACING / 2)
         length = sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)
         theta, d = np.array([angle % math.pi]), np.array([offset])
-        free = _line_free(edges, theta, d, np.zeros(1), region.centre, SPACING)
-        p, _, rings = _stretches(edges, theta, np.zeros(1), free)
+        near = _near_lengths(edges, theta, d, np.zeros(1), region.centre, SPACING)
+        p, _, rings = _stretches(edges, theta, np.zeros(1), near)
         assert p[0] <= length + 1e-9
         assert rings[0] <= len(passes)
         counted += p[0] > stretch_length(edges, angle)
     assert counted or not edges.core.any()
+
+
+@pytest.mark.parametrize("index", [0, 2, 3, 6, 7])
+def test_small_boxes_along_an_edge_never_exceed_a_plan(index):
+    """Boxes a few centimetres wide around lanes along an edge (where the stretches near the
+    lanes' direction count, :func:`_near_lengths`): below every real plan sampled in them."""
+    region = (_adversarial() + _areas()[:3])[index]
+    cost = CoverCost.time(5.0, 10.0)
+    evaluate = plan_cost(region, cost, keep_inside=True)
+    search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False, keep_inside=True)
+    rng = np.random.default_rng(90 + index)
+    e = region.edges
+    along = np.arctan2(e[:, 1, 1] - e[:, 0, 1], e[:, 1, 0] - e[:, 0, 0]) % math.pi
+    n = 6
+    theta = (rng.choice(along, n) + rng.choice([0.0, 2e-3, -0.02, 0.1], n)) % math.pi
+    boxes = Boxes(theta, rng.choice([0.0, 1e-4], n), rng.uniform(0, SPACING, n),
+                  rng.choice([1e-3, 0.02], n))  # fmt: skip
+    search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
+    bounds = search.box_bounds(boxes)
+    for i, plans in enumerate(plans_in_boxes(evaluate, boxes, rng, k=2)):
+        assert bounds[i] <= min(plans) + 1e-9

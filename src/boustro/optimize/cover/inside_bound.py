@@ -37,7 +37,11 @@ from .cost import CoverCost
 from .sandwich import Level
 
 __all__ = [
+    "BAND_HI",
+    "BAND_LO",
     "MIN_ANGLE",
+    "MIN_PART",
+    "NEAR_ANGLE",
     "ContourEdges",
     "contour_edges",
     "inside_box_bounds",
@@ -47,9 +51,14 @@ __all__ = [
 ]
 
 #: Across the lanes, the band (half-spacings inside a strip's point) where a grid line has a
-#: lane that could cover the point (:func:`_line_free`), widened from 0.9952-1 for the strip's
+#: lane that could cover the point (:func:`_near_lengths`), widened from 0.9952-1 for the strip's
 #: depth and rounding.
 BAND_LO, BAND_HI = 0.985, 1.01
+#: The parts of a strip shorter than this (spacings) are not counted by :func:`_near_lengths`.
+MIN_PART = 1e-4
+#: Stretches up to this angle from the lanes (radians, over the box) are counted by
+#: :func:`_near_lengths` where :data:`MIN_ANGLE`'s rule does not count them whole.
+NEAR_ANGLE = 0.3
 
 #: Edges closer than this to the lanes' direction (radians, over the whole box) are left out
 #: of ``P``: the strip the lanes leave along an edge at angle ``phi`` is ``s/2 (1 - cos phi)``
@@ -70,6 +79,8 @@ class ContourEdges(NamedTuple):
     ring: NDArray[np.int64]  # the contour ring each stretch lies on
     strip: NDArray[np.float64]  # (S, 2, 2): the ends of the strip's feet on the edge (J)
     inward: NDArray[np.float64]  # (S, 2): the edge's unit normal towards the stretch
+    feet: NDArray[np.float64]  # (S, 4): the stretch's feet g0, g1 and the strip's j_lo, j_hi
+    reach: NDArray[np.float64]  # (S, 2): the ring's sample step and flag reach (rho)
 
 
 def _contour_rings(area: Region, half: float) -> list[NDArray[np.float64]]:
@@ -105,7 +116,7 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
     ok = length > 0
     p0, d, length = p0[ok], d[ok], length[ok]
     u = d / length[:, None]
-    angles, cores, rings, strips, inwards = [], [], [], [], []
+    angles, cores, rings, strips, inwards, feet, reaches = [], [], [], [], [], [], []
     for index, ring in enumerate(_contour_rings(area, half) if applies else []):
         total = float(np.linalg.norm(np.diff(ring, axis=0), axis=1).sum())
         step = total / max(8, math.ceil(total / (half / 2)))  # the planner's sample step
@@ -148,17 +159,21 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
         rows = np.arange(len(best))
         ends = np.stack([j_lo[rows, e], j_hi[rows, e]], axis=1)
         strips.append(p0[e][:, None, :] + ends[..., None] * u[e][:, None, :])
+        feet.append(np.concatenate([np.stack([g0[rows, e], g1[rows, e]], axis=1), ends], axis=1))
+        reaches.append(np.tile([step, rho], (len(best), 1)))
         normal = np.stack([-u[e][:, 1], u[e][:, 0]], axis=1)
         side = np.sign(((a - p0[e]) * normal).sum(axis=1))
         inwards.append(normal * np.where(side == 0, 1.0, side)[:, None])
     if not angles:
         z = np.zeros(0)
         return ContourEdges(
-            z, z, applies, z.astype(np.int64), np.zeros((0, 2, 2)), np.zeros((0, 2))
-        )
+            z, z, applies, z.astype(np.int64), np.zeros((0, 2, 2)), np.zeros((0, 2)),
+            np.zeros((0, 4)), np.zeros((0, 2)),
+        )  # fmt: skip
     return ContourEdges(
         np.concatenate(angles), np.concatenate(cores), applies, np.concatenate(rings),
-        np.concatenate(strips), np.concatenate(inwards),
+        np.concatenate(strips), np.concatenate(inwards), np.concatenate(feet),
+        np.concatenate(reaches),
     )  # fmt: skip
 
 
@@ -193,53 +208,90 @@ def stretch_length(contour: ContourEdges, theta: float) -> float:
     return float(p[0])
 
 
-def _line_free(
+def _near_lengths(
     contour: ContourEdges,
     theta: NDArray[np.float64],
     d: NDArray[np.float64],
     eps: NDArray[np.float64],
     origin: NDArray[np.float64],
     spacing: float,
-) -> NDArray[np.bool_]:
-    """``(L, S)`` whether no line of the grid ``(theta, d)`` moved across by up to ``eps``
-    passes between :data:`BAND_LO` and :data:`BAND_HI` half-spacings inside any point of a
-    stretch's strip (its edge's feet ``J``): then no lane covers the strip's points at depth
-    0.0048-0.006 half-spacings (docs/mission_time.md, "Keep-inside: the bound")."""
+) -> NDArray[np.float64]:
+    """``(L, S)`` per layout and stretch, the length of the stretch the planner keeps for the
+    parts of its strip (feet ``J`` on the edge) that no line of the grid ``(theta, d)``, moved
+    across by up to ``eps``, passes between :data:`BAND_LO` and :data:`BAND_HI` half-spacings
+    inside (then no lane covers their points at depth 0.0048-0.006 half-spacings; the rule
+    for stretches near the lanes' direction, docs/mission_time.md, "Keep-inside: the bound"):
+    each such part (at least :data:`MIN_PART` long) flags the stretch's samples up to
+    ``rho`` beyond it, and a flagged run at least a sample step long is kept whole."""
     half = spacing / 2
+    n_l, n_s = len(theta), len(contour.core)
     cs, sn = np.cos(theta)[:, None, None], np.sin(theta)[:, None, None]
     rel = contour.strip - origin  # (S, 2, 2)
     h = -sn * rel[None, :, :, 0] + cs * rel[None, :, :, 1]  # (L, S, 2)
     side = -np.sin(theta)[:, None] * contour.inward[None, :, 0]
     side = side + np.cos(theta)[:, None] * contour.inward[None, :, 1]
     sigma = np.where(side >= 0, 1.0, -1.0)  # (L, S): the side of the area across the lanes
-    u = sigma[..., None] * h
-    u_min, u_max = u.min(axis=2), u.max(axis=2)
+    u = sigma[..., None] * h  # across, towards the area: at j_lo and at j_hi
     e = np.broadcast_to(np.asarray(eps, dtype=np.float64), theta.shape)[:, None]
-    lo = BAND_LO * half - e
-    width = (BAND_HI - BAND_LO) * half + 2 * e + (u_max - u_min)
-    gap = (sigma * d[:, None] - u_min - lo) % spacing  # the first line past the band's start
-    slack = 1e-9 * spacing
-    return (gap > width + slack) & (gap < spacing - slack) & (width < spacing)
+    lo, hi = BAND_LO * half - e, BAND_HI * half + e  # (L, 1)
+    g0, g1, j_lo, j_hi = (contour.feet[None, :, i] for i in range(4))
+    step, rho = contour.reach[None, :, 0], contour.reach[None, :, 1]
+    sd = sigma * d[:, None]
+    u_min, u_max = u.min(axis=2), u.max(axis=2)
+    angle = np.abs((contour.angle[None, :] - theta[:, None] + math.pi / 2) % math.pi - math.pi / 2)
+    use = (angle <= NEAR_ANGLE) & (hi - lo < spacing) & (contour.core[None, :] > 0)
+    if not use.any():
+        return np.zeros((n_l, n_s))
+    k0 = np.ceil((u_min + lo - sd) / spacing)  # the first line whose band can meet J
+    m = int(np.max(np.where(use, u_max - u_min, 0.0)) / spacing) + 3  # every line up to J's end
+    k = k0[..., None] + np.arange(m)  # (L, S, m) lines
+    line = sd[..., None] + k * spacing
+    du = u[..., 1] - u[..., 0]
+    flat = np.abs(du) <= 1e-12 * spacing
+    scale = (j_hi - j_lo) / np.where(flat, 1.0, du)
+    # the bad u-range [line - hi, line - lo] mapped to feet, clipped to J
+    fa = j_lo[..., None] + (line - hi[..., None] - u[..., 0:1]) * scale[..., None]
+    fb = j_lo[..., None] + (line - lo[..., None] - u[..., 0:1]) * scale[..., None]
+    bl = np.clip(np.minimum(fa, fb), j_lo[..., None], j_hi[..., None])
+    bh = np.clip(np.maximum(fa, fb), j_lo[..., None], j_hi[..., None])
+    bl, bh = np.sort(bl, axis=2), np.sort(bh, axis=2)
+    starts = np.concatenate([np.broadcast_to(j_lo, (n_l, n_s))[..., None], bh], axis=2)
+    ends = np.concatenate([bl, np.broadcast_to(j_hi, (n_l, n_s))[..., None]], axis=2)
+    good = ends - starts >= MIN_PART * spacing
+    ds = np.maximum(g0[..., None], starts - rho[..., None])
+    de = np.minimum(g1[..., None], ends + rho[..., None])
+    good &= de - ds >= step[..., None] * (1 + 1e-9)
+    de = np.where(good, de, -np.inf)
+    before = np.maximum.accumulate(
+        np.concatenate([np.full((n_l, n_s, 1), -np.inf), de[..., :-1]], axis=2), axis=2
+    )
+    length = np.where(good, np.maximum(de - np.maximum(ds, before), 0.0), 0.0).sum(axis=2)
+    # a flat strip (parallel to the lines at the centre): the whole of J or nothing
+    flat_free = ((sd - u_min - lo) % spacing) > (u_max - u_min) + (hi - lo) + 1e-9 * spacing
+    length = np.where(flat, np.where(flat_free, contour.core[None, :], 0.0), length)
+    return np.where(use, length, 0.0)
 
 
 def _stretches(
     contour: ContourEdges,
     theta: NDArray[np.float64],
     delta: NDArray[np.float64],
-    free: NDArray[np.bool_] | None = None,
+    near: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
     """``(P, A, R)`` per layout: the cores of the stretches at least :data:`MIN_ANGLE` from
-    every lane angle in ``theta +- delta`` or, nearer the lanes' direction, ``free``
-    (:func:`_line_free`), their least travel along the lanes, and the number of contour rings
-    holding such a core (each is a boundary pass of its own)."""
+    every lane angle in ``theta +- delta`` and, nearer the lanes' direction, the lengths
+    ``near`` (:func:`_near_lengths`, up to :data:`NEAR_ANGLE`), their least travel along the
+    lanes, and the number of contour rings holding such a core (each a boundary pass of its
+    own)."""
     if not len(contour.core):
         z = np.zeros(len(theta))
         return z, z, np.zeros(len(theta), dtype=np.int64)
     rel = np.abs((contour.angle[None, :] - theta[:, None] + math.pi / 2) % math.pi - math.pi / 2)
     pick = rel - delta[:, None] >= MIN_ANGLE
-    if free is not None:
-        pick |= free & (rel + delta[:, None] < math.pi / 4)
     core = np.where(pick, contour.core[None, :], 0.0)
+    if near is not None:
+        close = ~pick & (rel + delta[:, None] <= NEAR_ANGLE)
+        core = np.where(close, np.minimum(near, contour.core[None, :]), core)
     along = core * np.cos(np.minimum(rel + delta[:, None], math.pi / 2))
     n_rings = int(contour.ring.max()) + 1
     held = np.zeros((len(theta), n_rings), dtype=bool)
@@ -289,10 +341,10 @@ def keep_inside_bounds(
     half = lower_bounds(st_half, level_half, cost, spacing, runins=runins, **kw)
     zero = lower_bounds(_no_holes(st_zero), level_zero, cost, spacing, runins=False, **kw)
     if contour.applies and len(contour.core):
-        free = None
+        near = None
         if d is not None and origin is not None:
-            free = _line_free(contour, theta, d, np.full(len(theta), eps), origin, spacing)
-        p, a, passes = _stretches(contour, theta, delta, free)
+            near = _near_lengths(contour, theta, d, np.full(len(theta), eps), origin, spacing)
+        p, a, passes = _stretches(contour, theta, delta, near)
         c = _moves(st_half, spacing)
         extra = np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
         plain = lower_bounds(_no_holes(st_half), level_half, cost, spacing, runins=runins, **kw)
@@ -323,5 +375,5 @@ def inside_box_bounds(
     )  # fmt: skip
     return keep_inside_bounds(
         st, lv, st0, lv0, search.cost, search.s, search.contour, theta, delta,
-        runins=search.n_holes == 0, floor=search.floor, d=d, eps=radius, origin=search.origin,
+        runins=search.n_holes == 0, floor=search.floor, d=d if radius > 0 else None, eps=radius, origin=search.origin,
     )  # fmt: skip
