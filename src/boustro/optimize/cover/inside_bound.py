@@ -51,9 +51,11 @@ __all__ = [
 ]
 
 #: Across the lanes, the band (half-spacings inside a strip's point) where a grid line has a
-#: lane that could cover the point (:func:`_near_lengths`), widened from 0.9952-1 for the strip's
-#: depth and rounding.
-BAND_LO, BAND_HI = 0.985, 1.01
+#: lane that could cover the strip's points at depth 0.005-0.0055 half-spacings
+#: (:func:`_near_lengths`): lane points are at least ``cos(pi / 32) > 0.9951`` half-spacings
+#: from every edge (the planner's ``quad_segs=8`` erosion), so the line lies between
+#: ``0.9951 - 0.0055`` and ``1 + 0.0055``, widened a little for rounding.
+BAND_LO, BAND_HI = 0.989, 1.006
 #: The parts of a strip shorter than this (spacings) are not counted by :func:`_near_lengths`.
 MIN_PART = 1e-4
 #: Stretches up to this angle from the lanes (radians, over the box) are counted by
@@ -219,7 +221,7 @@ def _near_lengths(
     """``(L, S)`` per layout and stretch, the length of the stretch the planner keeps for the
     parts of its strip (feet ``J`` on the edge) that no line of the grid ``(theta, d)``, moved
     across by up to ``eps``, passes between :data:`BAND_LO` and :data:`BAND_HI` half-spacings
-    inside (then no lane covers their points at depth 0.0048-0.006 half-spacings; the rule
+    inside (then no lane covers their points at depth 0.005-0.0055 half-spacings; the rule
     for stretches near the lanes' direction, docs/mission_time.md, "Keep-inside: the bound"):
     each such part (at least :data:`MIN_PART` long) flags the stretch's samples up to
     ``rho`` beyond it, and a flagged run at least a sample step long is kept whole."""
