@@ -12,14 +12,18 @@ the smaller of two bounds (docs/mission_time.md, "Keep-inside: the bound"):
   the inner set shrunk by half a spacing), with the non-lane part of the path (moves and
   passes) at least the largest of: the moves across the lines, the length ``P`` of the
   contour's stretches along edges at least :data:`MIN_ANGLE` from the lanes (every such stretch
-  is a boundary pass: no lane covers the strip along its edge), and ``sqrt(A^2 + C^2)`` (``A``
-  those stretches' travel along the lanes, ``C`` the moves across them: the lengths of the
-  segments of a path are at least the length of the sum of their (along, across) vectors).
+  is a boundary pass: no lane covers the strip along its edge) and, in boxes, along edges
+  nearer the lanes' direction where no grid line can reach the strip (:func:`_near_lengths`),
+  and ``sqrt(A^2 + C^2)`` (``A`` those stretches' travel along the lanes, ``C`` the moves
+  across them: the lengths of the segments of a path are at least the length of the sum of
+  their (along, across) vectors); and one turn per contour ring holding such a stretch (each
+  ring's passes are its own). A stretch counts over every sample the planner flags (within
+  ``reach + step`` of the strip, :func:`_flag_reach`), whose run it keeps whole.
 
 The contour's stretches (:class:`ContourEdges`) are computed once per area with the planner's
 own construction (``area.buffer(-spacing / 2, quad_segs=8)`` without slivers): a rigid motion
-of the area (a box's layouts) moves them with it, so only their angle to the lanes depends on
-the layout. Shapely is imported inside the functions.
+of the area (a box's layouts) moves them with it, so only their angle and position relative
+to the lines depend on the layout. Shapely is imported inside the functions.
 """
 
 from __future__ import annotations
@@ -63,17 +67,20 @@ MIN_PART = 1e-4
 NEAR_ANGLE = 0.3
 
 #: Edges closer than this to the lanes' direction (radians, over the whole box) are left out
-#: of ``P``: the strip the lanes leave along an edge at angle ``phi`` is ``s/2 (1 - cos phi)``
-#: deep (less the 0.5% the planner's polygonised erosion may gain at a reflex vertex), and it
-#: must stay well above the planner's sliver tolerance.
+#: of ``P`` by the angle rule (:data:`NEAR_ANGLE`'s rule may count them): the strip the lanes
+#: leave along an edge at angle ``phi`` is ``s/2 (1 - cos phi)`` deep (less the 0.5% the
+#: planner's polygonised erosion may gain at a reflex vertex), and it must stay well above the
+#: planner's sliver tolerance.
 MIN_ANGLE = 0.15
 
 
 class ContourEdges(NamedTuple):
     """The straight stretches of the keep-inside contour (the boundary of the area shrunk by
     half a spacing) that run along an edge of the area: per stretch its direction (radians,
-    mod pi) and the length of its *core*, the part whose feet on the edge lie at least half a
-    spacing plus a sample step from the edge's ends (0 when shorter than a sample step)."""
+    mod pi) and the length of its *core*: the part the planner keeps when the strip the lanes
+    leave along the edge (feet ``J``: on the stretch and at least half a spacing from the
+    edge's ends) is uncovered, i.e. its samples within ``rho`` (:func:`_flag_reach`) of ``J``
+    (0 when ``J`` is shorter than a sample step)."""
 
     angle: NDArray[np.float64]
     core: NDArray[np.float64]
