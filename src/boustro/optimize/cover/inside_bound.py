@@ -382,7 +382,10 @@ def inside_box_bounds(
         lv0.inner, lv0.outer, theta, d, search.s, 0.0, search.origin,
         search.k_range(reach_out), search.n_holes, search.tol, inner_reach=0.0,
     )  # fmt: skip
+    # the stretches near the lanes' direction in boxes only: the layouts' own values rank the
+    # layouts the search plans, and with them there it planned longer plans (docs)
+    near = d if radius > 0 else None
     return keep_inside_bounds(
         st, lv, st0, lv0, search.cost, search.s, search.contour, theta, delta,
-        runins=search.n_holes == 0, floor=search.floor, d=d if radius > 0 else None, eps=radius, origin=search.origin,
+        runins=search.n_holes == 0, floor=search.floor, d=near, eps=radius, origin=search.origin,
     )  # fmt: skip
