@@ -12,7 +12,14 @@ import pytest
 from boustro.geometry.region import Region
 from boustro.optimize.cover import CoverCost, band_stats, lower_bounds
 from boustro.optimize.cover.boxes import Boxes
-from boustro.optimize.cover.inside_bound import contour_edges, path_floor, stretch_length
+from boustro.optimize.cover.inside_bound import (
+    MIN_ANGLE,
+    _near_lengths,
+    _stretches,
+    contour_edges,
+    path_floor,
+    stretch_length,
+)
 from boustro.optimize.cover.search import CoverSearch
 from boustro.plan import inside
 from boustro.plan.lanes import region_lanes
@@ -110,9 +117,85 @@ def test_path_floor_and_contour_edges():
     square = Region([(0, 0), (100, 0), (100, 100), (0, 100)])
     assert path_floor(square, 5.0) == pytest.approx(100 * math.sqrt(2) - 10, rel=1e-5)
     edges = contour_edges(square, 10.0, 5.0)
-    # four stretches of 90 m, cores 90 - 2 (5 + step) with the step a quarter spacing at most
-    assert len(edges.core) == 4 and np.all(edges.core > 70) and np.all(edges.core < 90)
+    # four stretches of 90 m, each kept whole: the strip the lanes leave along an edge runs
+    # between feet 5 and 95, and the samples up to sqrt((5 + step)^2 - 5^2) beyond are flagged
+    assert len(edges.core) == 4 and np.allclose(edges.core, 90.0, rtol=1e-5)
+    assert np.all(edges.ring == 0)
+    # an obtuse corner: the stretch runs to feet 2.5 and 97.5 of the 100 m edge, all of it kept
+    hexagon = Region([(0, 0), (100, 0), (130, 40), (100, 80), (0, 80), (-30, 40)])
+    cores = contour_edges(hexagon, 10.0, 5.0).core
+    assert np.isclose(cores.max(), 95.0, rtol=1e-5)
     # lanes at 0 deg: the two vertical stretches count; at 45 deg all four
     assert stretch_length(edges, 0.0) == pytest.approx(2 * edges.core[0], rel=1e-9)
     assert stretch_length(edges, math.pi / 4) == pytest.approx(edges.core.sum(), rel=1e-9)
     assert not contour_edges(square, 10.0, 6.0).applies  # overlapping swaths: nothing counted
+
+
+def _adversarial() -> list[Region]:
+    """Areas where a stretch's strip is short or its corner sharp: an obtuse hexagon, a sliver
+    triangle, a thin hole near the side, a notch, a traced (noisy, 120-vertex) boundary, a
+    ring one spacing and a half wide."""
+    rng = np.random.default_rng(3)
+    t = np.linspace(0, 2 * math.pi, 120, endpoint=False)
+    rad = 60 + rng.uniform(-1.5, 1.5, len(t))
+    traced = np.stack([rad * np.cos(t), 0.7 * rad * np.sin(t)], axis=1)
+    return [
+        Region([(0, 0), (100, 0), (130, 40), (100, 80), (0, 80), (-30, 40)]),
+        Region([(0, 0), (150, 0), (150, 14)]),
+        Region([(0, 0), (120, 0), (120, 70), (0, 70)], [[(10, 5.5), (110, 5.5), (110, 7)]]),
+        Region([(0, 0), (60, 0), (60, 40), (64, 40), (64, 0), (120, 0), (120, 60), (0, 60)]),
+        Region(traced),
+        Region(
+            [(0, 0), (80, 0), (80, 80), (0, 80)],
+            [[(13.5, 13.5), (66.5, 13.5), (66.5, 66.5), (13.5, 66.5)]],
+        ),
+    ]
+
+
+@pytest.mark.parametrize("index", range(9))
+def test_stretches_and_rings_below_the_passes_on_adversarial_areas(index):
+    """``P`` below the margin-1/2 passes' length and the rings holding a counted stretch no
+    more than the passes, at random layouts and at layouts along an edge or across a corner."""
+    region = (_adversarial() + _areas()[:3])[index]
+    edges = contour_edges(region, SPACING, SPACING / 2)
+    tol = 1e-9 * region.diameter
+    rng = np.random.default_rng(70 + index)
+    e = region.edges
+    along = np.arctan2(e[:, 1, 1] - e[:, 0, 1], e[:, 1, 0] - e[:, 0, 0]) % math.pi
+    angles = list(rng.uniform(0, math.pi, 5)) + list(rng.choice(along, 3) + MIN_ANGLE + 1e-3)
+    # along an edge (the parallel rule: counted where no line's swath reaches the strip)
+    angles += list(rng.choice(along, 6) + rng.choice([0.0, 1e-4, -3e-3, 0.02], 6))
+    counted = 0
+    for angle in angles:
+        offset = rng.uniform(0, SPACING)
+        lanes = inside.clip_lanes(_lanes(region, angle, offset), region, tol, SPACING / 2, SPACING)
+        passes, _ = inside.boundary_passes(region, [lanes], SPACING, SPACING / 2)
+        length = sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in passes)
+        theta, d = np.array([angle % math.pi]), np.array([offset])
+        near = _near_lengths(edges, theta, d, np.zeros(1), region.centre, SPACING)
+        p, _, rings = _stretches(edges, theta, np.zeros(1), near)
+        assert p[0] <= length + 1e-9
+        assert rings[0] <= len(passes)
+        counted += p[0] > stretch_length(edges, angle)
+    assert counted or not edges.core.any()
+
+
+@pytest.mark.parametrize("index", [0, 2, 3, 6, 7])
+def test_small_boxes_along_an_edge_never_exceed_a_plan(index):
+    """Boxes a few centimetres wide around lanes along an edge (where the stretches near the
+    lanes' direction count, :func:`_near_lengths`): below every real plan sampled in them."""
+    region = (_adversarial() + _areas()[:3])[index]
+    cost = CoverCost.time(5.0, 10.0)
+    evaluate = plan_cost(region, cost, keep_inside=True)
+    search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False, keep_inside=True)
+    rng = np.random.default_rng(90 + index)
+    e = region.edges
+    along = np.arctan2(e[:, 1, 1] - e[:, 0, 1], e[:, 1, 0] - e[:, 0, 0]) % math.pi
+    n = 6
+    theta = (rng.choice(along, n) + rng.choice([0.0, 2e-3, -0.02, 0.1], n)) % math.pi
+    boxes = Boxes(theta, rng.choice([0.0, 1e-4], n), rng.uniform(0, SPACING, n),
+                  rng.choice([1e-3, 0.02], n))  # fmt: skip
+    search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
+    bounds = search.box_bounds(boxes)
+    for i, plans in enumerate(plans_in_boxes(evaluate, boxes, rng, k=2)):
+        assert bounds[i] <= min(plans) + 1e-9

@@ -12,14 +12,18 @@ the smaller of two bounds (docs/mission_time.md, "Keep-inside: the bound"):
   the inner set shrunk by half a spacing), with the non-lane part of the path (moves and
   passes) at least the largest of: the moves across the lines, the length ``P`` of the
   contour's stretches along edges at least :data:`MIN_ANGLE` from the lanes (every such stretch
-  is a boundary pass: no lane covers the strip along its edge), and ``sqrt(A^2 + C^2)`` (``A``
-  those stretches' travel along the lanes, ``C`` the moves across them: the lengths of the
-  segments of a path are at least the length of the sum of their (along, across) vectors).
+  is a boundary pass: no lane covers the strip along its edge) and, in boxes, along edges
+  nearer the lanes' direction where no grid line can reach the strip (:func:`_near_lengths`),
+  and ``sqrt(A^2 + C^2)`` (``A`` those stretches' travel along the lanes, ``C`` the moves
+  across them: the lengths of the segments of a path are at least the length of the sum of
+  their (along, across) vectors); and one turn per contour ring holding such a stretch (each
+  ring's passes are its own). A stretch counts over every sample the planner flags (within
+  ``reach + step`` of the strip, :func:`_flag_reach`), whose run it keeps whole.
 
 The contour's stretches (:class:`ContourEdges`) are computed once per area with the planner's
 own construction (``area.buffer(-spacing / 2, quad_segs=8)`` without slivers): a rigid motion
-of the area (a box's layouts) moves them with it, so only their angle to the lanes depends on
-the layout. Shapely is imported inside the functions.
+of the area (a box's layouts) moves them with it, so only their angle and position relative
+to the lines depend on the layout. Shapely is imported inside the functions.
 """
 
 from __future__ import annotations
@@ -37,7 +41,11 @@ from .cost import CoverCost
 from .sandwich import Level
 
 __all__ = [
+    "BAND_HI",
+    "BAND_LO",
     "MIN_ANGLE",
+    "MIN_PART",
+    "NEAR_ANGLE",
     "ContourEdges",
     "contour_edges",
     "inside_box_bounds",
@@ -46,22 +54,42 @@ __all__ = [
     "stretch_length",
 ]
 
+#: Across the lanes, the band (half-spacings inside a strip's point) where a grid line has a
+#: lane that could cover the strip's points at depth 0.005-0.0055 half-spacings
+#: (:func:`_near_lengths`): lane points are at least ``cos(pi / 32) > 0.9951`` half-spacings
+#: from every edge (the planner's ``quad_segs=8`` erosion), so the line lies between
+#: ``0.9951 - 0.0055`` and ``1 + 0.0055``, widened a little for rounding.
+BAND_LO, BAND_HI = 0.989, 1.006
+#: The parts of a strip shorter than this (spacings) are not counted by :func:`_near_lengths`.
+MIN_PART = 1e-4
+#: Stretches up to this angle from the lanes (radians, over the box) are counted by
+#: :func:`_near_lengths` where :data:`MIN_ANGLE`'s rule does not count them whole.
+NEAR_ANGLE = 0.3
+
 #: Edges closer than this to the lanes' direction (radians, over the whole box) are left out
-#: of ``P``: the strip the lanes leave along an edge at angle ``phi`` is ``s/2 (1 - cos phi)``
-#: deep (less the 0.5% the planner's polygonised erosion may gain at a reflex vertex), and it
-#: must stay well above the planner's sliver tolerance.
+#: of ``P`` by the angle rule (:data:`NEAR_ANGLE`'s rule may count them): the strip the lanes
+#: leave along an edge at angle ``phi`` is ``s/2 (1 - cos phi)`` deep (less the 0.5% the
+#: planner's polygonised erosion may gain at a reflex vertex), and it must stay well above the
+#: planner's sliver tolerance.
 MIN_ANGLE = 0.15
 
 
 class ContourEdges(NamedTuple):
     """The straight stretches of the keep-inside contour (the boundary of the area shrunk by
     half a spacing) that run along an edge of the area: per stretch its direction (radians,
-    mod pi) and the length of its *core*, the part whose feet on the edge lie at least half a
-    spacing plus a sample step from the edge's ends (0 when shorter than a sample step)."""
+    mod pi) and the length of its *core*: the part the planner keeps when the strip the lanes
+    leave along the edge (feet ``J``: on the stretch and at least half a spacing from the
+    edge's ends) is uncovered, i.e. its samples within ``rho`` (:func:`_flag_reach`) of ``J``
+    (0 when ``J`` is shorter than a sample step)."""
 
     angle: NDArray[np.float64]
     core: NDArray[np.float64]
     applies: bool  # the reach is half the spacing (else nothing is counted)
+    ring: NDArray[np.int64]  # the contour ring each stretch lies on
+    strip: NDArray[np.float64]  # (S, 2, 2): the ends of the strip's feet on the edge (J)
+    inward: NDArray[np.float64]  # (S, 2): the edge's unit normal towards the stretch
+    feet: NDArray[np.float64]  # (S, 4): the stretch's feet g0, g1 and the strip's j_lo, j_hi
+    reach: NDArray[np.float64]  # (S, 2): the ring's sample step and flag reach (rho)
 
 
 def _contour_rings(area: Region, half: float) -> list[NDArray[np.float64]]:
@@ -97,8 +125,8 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
     ok = length > 0
     p0, d, length = p0[ok], d[ok], length[ok]
     u = d / length[:, None]
-    angles, cores = [], []
-    for ring in _contour_rings(area, half) if applies else []:
+    angles, cores, rings, strips, inwards, feet, reaches = [], [], [], [], [], [], []
+    for index, ring in enumerate(_contour_rings(area, half) if applies else []):
         total = float(np.linalg.norm(np.diff(ring, axis=0), axis=1).sum())
         step = total / max(8, math.ceil(total / (half / 2)))  # the planner's sample step
         a, b = ring[:-1], ring[1:]
@@ -123,16 +151,48 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
         tol = 1e-7 * spacing
         near = (np.abs(across(a) - half) <= tol) & (np.abs(across(b) - half) <= tol)
         fa, fb = foot(a), foot(b)
-        lo = np.maximum(np.minimum(fa, fb), half + step)
-        hi = np.minimum(np.maximum(fa, fb), length[None] - half - step)
-        core = np.where(parallel & near, np.maximum(hi - lo, 0.0), 0.0)
+        g0, g1 = np.minimum(fa, fb), np.maximum(fa, fb)
+        # the uncovered strip: feet in J (on the stretch and half a spacing from E's ends)
+        j_lo = np.maximum(g0, half)
+        j_hi = np.minimum(g1, length[None] - half)
+        # the samples within reach + step of it: feet within rho of J (heights <= half + tol)
+        rho = _flag_reach(half, step, tol)
+        core = np.minimum(g1, j_hi + rho) - np.maximum(g0, j_lo - rho)
+        strip = parallel & near & (j_hi - j_lo >= step * (1 + 1e-9))
+        core = np.where(strip, core, 0.0)
         best = core.max(axis=1)
-        best = np.where(best > step, best, 0.0)
+        e = core.argmax(axis=1)
         angles.append(np.arctan2(seg[:, 1], seg[:, 0]) % math.pi)
         cores.append(best)
+        rings.append(np.full(len(best), index, dtype=np.int64))
+        rows = np.arange(len(best))
+        ends = np.stack([j_lo[rows, e], j_hi[rows, e]], axis=1)
+        strips.append(p0[e][:, None, :] + ends[..., None] * u[e][:, None, :])
+        feet.append(np.concatenate([np.stack([g0[rows, e], g1[rows, e]], axis=1), ends], axis=1))
+        reaches.append(np.tile([step, rho], (len(best), 1)))
+        normal = np.stack([-u[e][:, 1], u[e][:, 0]], axis=1)
+        side = np.sign(((a - p0[e]) * normal).sum(axis=1))
+        inwards.append(normal * np.where(side == 0, 1.0, side)[:, None])
     if not angles:
-        return ContourEdges(np.zeros(0), np.zeros(0), applies)
-    return ContourEdges(np.concatenate(angles), np.concatenate(cores), applies)
+        z = np.zeros(0)
+        return ContourEdges(
+            z, z, applies, z.astype(np.int64), np.zeros((0, 2, 2)), np.zeros((0, 2)),
+            np.zeros((0, 4)), np.zeros((0, 2)),
+        )  # fmt: skip
+    return ContourEdges(
+        np.concatenate(angles), np.concatenate(cores), applies, np.concatenate(rings),
+        np.concatenate(strips), np.concatenate(inwards), np.concatenate(feet),
+        np.concatenate(reaches),
+    )  # fmt: skip
+
+
+def _flag_reach(half: float, step: float, tol: float) -> float:
+    """How far along a contour stretch (beyond the feet of the strip it lies over) its samples
+    are still within ``reach + step`` of the strip's edge points: ``sqrt((r + step)^2 - h^2)``
+    with the reach ``r`` at least ``half (1 - 1e-8)`` (:class:`ContourEdges`' ``applies``) and
+    the stretch's height ``h`` over the edge at most ``half + tol``, less a millionth."""
+    r, h = half * (1 - 1e-8), half + tol
+    return math.sqrt(max((r + step) ** 2 - h**2, 0.0)) * (1 - 1e-6)
 
 
 def path_floor(area: Region, reach: float) -> float:
@@ -153,23 +213,100 @@ def stretch_length(contour: ContourEdges, theta: float) -> float:
     spacing inside (margin 1/2) need at least (0 where the reach is not half the spacing)."""
     if not contour.applies:
         return 0.0
-    p, _ = _stretches(contour, np.array([theta]), np.zeros(1))
+    p, _, _ = _stretches(contour, np.array([theta]), np.zeros(1))
     return float(p[0])
 
 
+def _near_lengths(
+    contour: ContourEdges,
+    theta: NDArray[np.float64],
+    d: NDArray[np.float64],
+    eps: NDArray[np.float64],
+    origin: NDArray[np.float64],
+    spacing: float,
+) -> NDArray[np.float64]:
+    """``(L, S)`` per layout and stretch, the length of the stretch the planner keeps for the
+    parts of its strip (feet ``J`` on the edge) that no line of the grid ``(theta, d)``, moved
+    across by up to ``eps``, passes between :data:`BAND_LO` and :data:`BAND_HI` half-spacings
+    inside (then no lane covers their points at depth 0.005-0.0055 half-spacings; the rule
+    for stretches near the lanes' direction, docs/mission_time.md, "Keep-inside: the bound"):
+    each such part (at least :data:`MIN_PART` long) flags the stretch's samples up to
+    ``rho`` beyond it, and a flagged run at least a sample step long is kept whole."""
+    half = spacing / 2
+    n_l, n_s = len(theta), len(contour.core)
+    cs, sn = np.cos(theta)[:, None, None], np.sin(theta)[:, None, None]
+    rel = contour.strip - origin  # (S, 2, 2)
+    h = -sn * rel[None, :, :, 0] + cs * rel[None, :, :, 1]  # (L, S, 2)
+    side = -np.sin(theta)[:, None] * contour.inward[None, :, 0]
+    side = side + np.cos(theta)[:, None] * contour.inward[None, :, 1]
+    sigma = np.where(side >= 0, 1.0, -1.0)  # (L, S): the side of the area across the lanes
+    u = sigma[..., None] * h  # across, towards the area: at j_lo and at j_hi
+    e = np.broadcast_to(np.asarray(eps, dtype=np.float64), theta.shape)[:, None]
+    lo, hi = BAND_LO * half - e, BAND_HI * half + e  # (L, 1)
+    g0, g1, j_lo, j_hi = (contour.feet[None, :, i] for i in range(4))
+    step, rho = contour.reach[None, :, 0], contour.reach[None, :, 1]
+    sd = sigma * d[:, None]
+    u_min, u_max = u.min(axis=2), u.max(axis=2)
+    angle = np.abs((contour.angle[None, :] - theta[:, None] + math.pi / 2) % math.pi - math.pi / 2)
+    use = (angle <= NEAR_ANGLE) & (hi - lo < spacing) & (contour.core[None, :] > 0)
+    if not use.any():
+        return np.zeros((n_l, n_s))
+    k0 = np.ceil((u_min + lo - sd) / spacing)  # the first line whose band can meet J
+    m = int(np.max(np.where(use, u_max - u_min, 0.0)) / spacing) + 3  # every line up to J's end
+    k = k0[..., None] + np.arange(m)  # (L, S, m) lines
+    line = sd[..., None] + k * spacing
+    du = u[..., 1] - u[..., 0]
+    flat = np.abs(du) <= 1e-12 * spacing
+    scale = (j_hi - j_lo) / np.where(flat, 1.0, du)
+    # the bad u-range [line - hi, line - lo] mapped to feet, clipped to J
+    fa = j_lo[..., None] + (line - hi[..., None] - u[..., 0:1]) * scale[..., None]
+    fb = j_lo[..., None] + (line - lo[..., None] - u[..., 0:1]) * scale[..., None]
+    bl = np.clip(np.minimum(fa, fb), j_lo[..., None], j_hi[..., None])
+    bh = np.clip(np.maximum(fa, fb), j_lo[..., None], j_hi[..., None])
+    bl, bh = np.sort(bl, axis=2), np.sort(bh, axis=2)
+    starts = np.concatenate([np.broadcast_to(j_lo, (n_l, n_s))[..., None], bh], axis=2)
+    ends = np.concatenate([bl, np.broadcast_to(j_hi, (n_l, n_s))[..., None]], axis=2)
+    good = ends - starts >= MIN_PART * spacing
+    ds = np.maximum(g0[..., None], starts - rho[..., None])
+    de = np.minimum(g1[..., None], ends + rho[..., None])
+    good &= de - ds >= step[..., None] * (1 + 1e-9)
+    de = np.where(good, de, -np.inf)
+    before = np.maximum.accumulate(
+        np.concatenate([np.full((n_l, n_s, 1), -np.inf), de[..., :-1]], axis=2), axis=2
+    )
+    length = np.where(good, np.maximum(de - np.maximum(ds, before), 0.0), 0.0).sum(axis=2)
+    # a flat strip (parallel to the lines at the centre): the whole of J or nothing
+    flat_free = ((sd - u_min - lo) % spacing) > (u_max - u_min) + (hi - lo) + 1e-9 * spacing
+    length = np.where(flat, np.where(flat_free, contour.core[None, :], 0.0), length)
+    return np.where(use, length, 0.0)
+
+
 def _stretches(
-    contour: ContourEdges, theta: NDArray[np.float64], delta: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(P, A)`` per layout: the cores of the stretches at least :data:`MIN_ANGLE` from every
-    lane angle in ``theta +- delta``, and their least travel along the lanes."""
+    contour: ContourEdges,
+    theta: NDArray[np.float64],
+    delta: NDArray[np.float64],
+    near: NDArray[np.float64] | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """``(P, A, R)`` per layout: the cores of the stretches at least :data:`MIN_ANGLE` from
+    every lane angle in ``theta +- delta`` and, nearer the lanes' direction, the lengths
+    ``near`` (:func:`_near_lengths`, up to :data:`NEAR_ANGLE`), their least travel along the
+    lanes, and the number of contour rings holding such a core (each a boundary pass of its
+    own)."""
     if not len(contour.core):
         z = np.zeros(len(theta))
-        return z, z
+        return z, z, np.zeros(len(theta), dtype=np.int64)
     rel = np.abs((contour.angle[None, :] - theta[:, None] + math.pi / 2) % math.pi - math.pi / 2)
     pick = rel - delta[:, None] >= MIN_ANGLE
     core = np.where(pick, contour.core[None, :], 0.0)
+    if near is not None:
+        close = ~pick & (rel + delta[:, None] <= NEAR_ANGLE)
+        core = np.where(close, np.minimum(near, contour.core[None, :]), core)
     along = core * np.cos(np.minimum(rel + delta[:, None], math.pi / 2))
-    return core.sum(axis=1), along.sum(axis=1)
+    n_rings = int(contour.ring.max()) + 1
+    held = np.zeros((len(theta), n_rings), dtype=bool)
+    rows, cols = np.nonzero(core > 0)
+    held[rows, contour.ring[cols]] = True
+    return core.sum(axis=1), along.sum(axis=1), held.sum(axis=1)
 
 
 def _moves(st: BandStats, spacing: float) -> NDArray[np.float64]:
@@ -198,21 +335,31 @@ def keep_inside_bounds(
     *,
     runins: bool,
     floor: float = 0.0,
+    d: NDArray[np.float64] | None = None,
+    eps: float = 0.0,
+    origin: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every keep-inside plan of the layouts (module
     docstring). ``st_half``/``level_half``: the sandwich's inner set shrunk by half a spacing
     (band 0), ``st_zero``/``level_zero`` the same radius not shrunk; ``delta`` the boxes'
     angular half-widths (0 at a layout); ``floor``: :func:`path_floor` (plan units), a path no
-    plan of the area is shorter than."""
+    plan of the area is shorter than; ``d`` the boxes' centre offsets, ``eps`` a radius that
+    holds every box's rigid motion and ``origin`` the grid's centre: with them the stretches
+    near the lanes' direction whose strip no line can reach are counted too."""
     kw: dict[str, Any] = {"boustrophedon": False, "ends": None}
     half = lower_bounds(st_half, level_half, cost, spacing, runins=runins, **kw)
     zero = lower_bounds(_no_holes(st_zero), level_zero, cost, spacing, runins=False, **kw)
     if contour.applies and len(contour.core):
-        p, a = _stretches(contour, theta, delta)
+        near = None
+        if d is not None and origin is not None:
+            near = _near_lengths(contour, theta, d, np.full(len(theta), eps), origin, spacing)
+        p, a, passes = _stretches(contour, theta, delta, near)
         c = _moves(st_half, spacing)
         extra = np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
         plain = lower_bounds(_no_holes(st_half), level_half, cost, spacing, runins=runins, **kw)
-        half = np.maximum(half, plain + cost.per_length * extra)
+        # a turn before each boundary pass (the plan's turns: its lanes and passes less one)
+        turns = np.where(st_half.count.sum(axis=1) > 0, passes, 0)
+        half = np.maximum(half, plain + cost.per_length * extra + cost.per_turn * turns)
     least = cost.per_length * floor + cost.fixed
     return np.maximum(np.minimum(half, zero), least)
 
@@ -235,7 +382,10 @@ def inside_box_bounds(
         lv0.inner, lv0.outer, theta, d, search.s, 0.0, search.origin,
         search.k_range(reach_out), search.n_holes, search.tol, inner_reach=0.0,
     )  # fmt: skip
+    # the stretches near the lanes' direction in boxes only: the layouts' own values rank the
+    # layouts the search plans, and with them there it planned longer plans (docs)
+    near = d if radius > 0 else None
     return keep_inside_bounds(
         st, lv, st0, lv0, search.cost, search.s, search.contour, theta, delta,
-        runins=search.n_holes == 0, floor=search.floor,
+        runins=search.n_holes == 0, floor=search.floor, d=near, eps=radius, origin=search.origin,
     )  # fmt: skip
