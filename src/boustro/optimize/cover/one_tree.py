@@ -369,17 +369,13 @@ def one_tree_bound(
     walls: NDArray[np.float64] | None = None,
     enough: NDArray[np.float64] | None = None,
     multipliers: Multipliers | None = None,
-    chords: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound, in cost units, on ``per_length`` times the connecting moves plus
     the extra lanes' flown length of every plan of each layout's sandwich (module docstring);
     0 where not ``todo`` or with more than :data:`MAX_LANES` counted lanes. ``walls`` ``(L, W,
     4)``: segments no move crosses, in each layout's frame (:func:`~.walls.walls_in_frames`);
     ``enough`` ``(L,)`` (cost units): a layout's steps stop once its bound reaches it;
-    ``multipliers``: where to start the steps and where to keep their best (read, written);
-    ``chords`` ``(L, H, 4)``: boxes holding the inner set's dilated holes in each layout's frame
-    (:func:`~.extremes.line_extremes`; ``None``: lines of two inner pieces or more keep wider
-    ranges for their first start and last end)."""
+    ``multipliers``: where to start the steps and where to keep their best (read, written)."""
     n_layouts = st.count.shape[0]
     lanes = st.count.sum(axis=1)
     ok = lanes <= MAX_LANES if todo is None else todo & (lanes <= MAX_LANES)
@@ -400,7 +396,7 @@ def one_tree_bound(
         pi0, warm = multipliers.values, multipliers.warm
         kofs = int(st.k0 + c0) - multipliers.k0
     moves = _compiled()(
-        crop(st.count), crop(line_extremes(st, spacing, cost.turnaround, chords)),
+        crop(st.count), crop(line_extremes(st, cost.turnaround)),
         crop(st.first_hi), crop(st.last_lo),
         crop(st.pieces), np.ascontiguousarray(ok),
         np.ascontiguousarray(stop, dtype=np.float64), np.ascontiguousarray(walls, dtype=np.float64),
