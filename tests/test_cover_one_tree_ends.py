@@ -245,7 +245,7 @@ def test_extremes_are_the_inner_pieces_past_a_spike_at_the_bands_edge(turnaround
     (two inner pieces) whose inner projection's end intervals, away from the hole, are shorter
     than ``tol`` and followed by gaps. The ranges are ``[10 - t, 10]`` and ``[90, 90 + t]``
     (``in_lo`` 2.5 and ``in_hi`` 97.5 m, which the ranges took without a hole's box near them:
-    7.5 m before the counted lane's start and after its end)."""
+    7.5 m before the real plan's first lane's start and after its last lane's end)."""
     region = _teeth()
     lv = Sandwich(region).exact
     st = band_stats(
@@ -259,6 +259,17 @@ def test_extremes_are_the_inner_pieces_past_a_spike_at_the_bands_edge(turnaround
     assert (st.first_lo[0, b], st.last_hi[0, b]) == (10.0, 90.0)
     t = turnaround
     np.testing.assert_array_equal(line_extremes(st, t)[0, b], [10.0 - t, 10.0, 90.0, 90.0 + t])
+    # the real plan's lanes on that line: the first starts at 10 m, the last ends at 90 m
+    search = CoverSearch(region, 4.0, 2.0, CoverCost.time(5.0, 10.0), None, False)
+    d0 = (44.0 - search.origin[1]) % 4.0
+    plan = plan_region(region, 4.0, decompose_area=False, angle=0.0, offset=d0, speed=5.0,
+                       turn_time=10.0)  # fmt: skip
+    lanes = sorted(
+        (float(seg[:, 0].min()), float(seg[:, 0].max()))
+        for seg, role in zip(plan.transects, plan.roles, strict=True)
+        if role == "lane" and abs(float(seg[:, 1].mean()) - 44.0) < 1.0
+    )
+    assert lanes == pytest.approx([(10.0, 40.0), (60.0, 90.0)], abs=1e-9)
 
 
 def _inner_pieces(area, holes, o, u, n, c: float, s: float, tol: float) -> list:
