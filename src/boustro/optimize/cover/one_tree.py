@@ -5,8 +5,8 @@
 Per layout of the centre grid and line ``k`` (the area moves, not the grid) the band statistics
 give ``count_k`` lanes every area ``S`` of the box has, each holding one inner piece, with the
 ranges of their ends: the first lane starts in ``[a_k - t, a_k]`` and the last ends in ``[b_k,
-b_k + t]`` (``a_k, b_k`` the first inner piece's start and the last one's end; collapsed, below;
-where only bounds on them are known, wider: :mod:`~boustro.optimize.cover.extremes`); with
+b_k + t]`` (``a_k, b_k`` the first inner piece's start and the last one's end, exported by the
+band kernel; collapsed, below; :mod:`~boustro.optimize.cover.extremes`); with
 ``count_k >= 2`` the first lane ends in ``[first_hi_k, P1_k + t]``, the last starts in ``[PL_k -
 t, last_lo_k]``, and every lane between (inside the outer pieces from the second to the one
 before the last, ``[P2_k, Q1_k]``) starts in ``[P2_k - t, min(last_lo_k, Q1_k)]`` and ends in
