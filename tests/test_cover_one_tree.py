@@ -63,7 +63,7 @@ def _ranges(st, la, turnaround):
     """The counted lanes' end ranges of layout ``la`` (the kernel's own helper, plain)."""
     m = 2 * int(st.count[la].sum())
     lo, hi, v = np.empty(m), np.empty(m), np.empty(m)
-    ext = line_extremes(st, SPACING, turnaround, None)[la]  # as one_tree_bound without boxes
+    ext = line_extremes(st, turnaround)[la]  # as one_tree_bound
     n = one_tree_module._lane_ends(
         st.count[la], ext, st.first_hi[la], st.last_lo[la],
         st.pieces[la], 0, SPACING, turnaround, lo, hi, v,

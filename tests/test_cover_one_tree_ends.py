@@ -14,11 +14,12 @@ import math
 
 import numpy as np
 import pytest
+import shapely
 
 import boustro.optimize.cover.bounds as bounds_module
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region
-from boustro.optimize.cover import CoverCost, band_stats
+from boustro.optimize.cover import CoverCost, Sandwich, band_stats
 from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.extremes import line_extremes
 from boustro.optimize.cover.one_tree import one_tree_bound
@@ -26,6 +27,7 @@ from boustro.optimize.cover.search import CoverSearch
 from boustro.plan.region import plan_region
 from boustro.vehicle import Vehicle
 
+from .conftest import random_regions, shapely_region
 from .plan_samples import SPACING, plan_cost, plans_in_boxes
 
 
@@ -142,10 +144,10 @@ def _edge_hole(side: str, gap: float) -> Region:
     return Region(shell, [Polygon(h) for h in holes])
 
 
-def _extremes(st, chords) -> dict[int, tuple[float, float]]:
+def _extremes(st) -> dict[int, tuple[float, float]]:
     """Per counted line (absolute index) of the first layout: the upper end of its first
     lane's start range and the lower end of its last lane's end range (no run-ins)."""
-    ext = line_extremes(st, SPACING, 0.0, chords)[0]
+    ext = line_extremes(st, 0.0)[0]
     return {st.k0 + int(k): (ext[k, 1], ext[k, 2]) for k in np.nonzero(st.count[0] >= 1)[0]}
 
 
@@ -184,9 +186,10 @@ def test_counted_lanes_start_and_end_inside_the_one_trees_extremes_by_a_hole_at_
     boxes of radius 0.1-1.2 m around that line, every real plan sampled in the box (five
     layouts drawn in it) has its first counted lane (:func:`_counted`) start at or before the
     first lane's start range and its last counted lane end at or beyond the last lane's end
-    range, on every counted line, with the holes' boxes and without (before: the
-    end range ``[in_hi, in_hi]``, 59.7 m past the plan's lane end; ``both``: two inner pieces on
-    the line, where only the boxes say that a chord cuts the projection's end)."""
+    range, on every counted line (the tenth round's end range ``[in_hi, in_hi]`` was 59.7 m
+    past the plan's lane end; ``both``: two inner pieces on the line, where the eleventh
+    round's first ranges needed the holes' boxes to see that a chord cuts the projection's
+    end)."""
     region = _edge_hole(side, gap)
     search = CoverSearch(region, SPACING, SPACING / 2, CoverCost.time(5.0, 10.0), None, False)
     rng = np.random.default_rng(int(gap * 10))
@@ -205,20 +208,151 @@ def test_counted_lanes_start_and_end_inside_the_one_trees_extremes_by_a_hole_at_
             SPACING / 2, search.origin, search.k_range(float(eps[i]) + SPACING),
             search.n_holes, search.tol, inner_reach=search._inner_reach(),
         )  # fmt: skip
-        grow = float(eps[i]) + search.sandwich.slack(float(eps[i]))
-        boxes_i = search._hole_boxes(boxes.theta[i : i + 1], boxes.d[i : i + 1], grow)
-        with_chords = _extremes(st, bounds_module._chord_boxes(boxes_i, lv))
-        without = _extremes(st, None)
+        extremes = _extremes(st)
         for _ in range(5):
             a = boxes.theta[i] + rng.uniform(-boxes.delta[i], boxes.delta[i])
             o = boxes.d[i] + rng.uniform(-boxes.eta[i], boxes.eta[i])
             lanes = _lanes(region, search, float(a), float(o))
-            for k, (start_hi, end_lo) in with_chords.items():
+            for k, (hi, lo) in extremes.items():
                 counted = _counted(lanes.get(k, []), int(st.count[0, k - st.k0]))
                 if not counted:
                     continue
-                for hi, lo in ((start_hi, end_lo), without[k]):
-                    assert counted[0][0] <= hi + 1e-6, (i, k, counted, hi)
-                    assert counted[-1][1] >= lo - 1e-6, (i, k, counted, lo)
+                assert counted[0][0] <= hi + 1e-6, (i, k, counted, hi)
+                assert counted[-1][1] >= lo - 1e-6, (i, k, counted, lo)
                 checked += 1
     assert checked > 100
+
+
+# -- the inner pieces' extremes exported by the band kernel (first_lo, last_hi) --
+
+
+def _teeth() -> Region:
+    """A 100 x 90 m area whose strips ``x < 10`` and ``x > 90`` stop at 38 m, each with a tooth
+    whose apex (2.5 and 97.5 m) touches 42 m, the lower edge of the band of the line at 44 m
+    (spacing 4, offset 0, origin 0), and a hole ``[40, 60] x [40, 48]`` across that line: the
+    band's projection is ``{2.5} + [10, 90] + {97.5}``, its inner pieces ``[10, 40]`` and
+    ``[60, 90]`` (the end intervals shorter than ``tol``, followed by gaps; the hole away from
+    the projection's ends)."""
+    ring = [[0, 0], [100, 0], [100, 38], [97.5, 42], [95, 38], [90, 38], [90, 90], [10, 90],
+            [10, 38], [5, 38], [2.5, 42], [0, 38]]  # fmt: skip
+    hole = [[40, 40], [60, 40], [60, 48], [40, 48]]
+    return Region(Polygon(np.array(ring, dtype=float)), [Polygon(np.array(hole, dtype=float))])
+
+
+@pytest.mark.parametrize("turnaround", [0.0, 3.0])
+def test_extremes_are_the_inner_pieces_past_a_spike_at_the_bands_edge(turnaround):
+    """The degenerate case the eleventh round's first ranges left open: a line crossing a hole
+    (two inner pieces) whose inner projection's end intervals, away from the hole, are shorter
+    than ``tol`` and followed by gaps. The ranges are ``[10 - t, 10]`` and ``[90, 90 + t]``
+    (``in_lo`` 2.5 and ``in_hi`` 97.5 m, which the ranges took without a hole's box near them:
+    7.5 m before the real plan's first lane's start and after its last lane's end)."""
+    region = _teeth()
+    lv = Sandwich(region).exact
+    st = band_stats(
+        lv.inner, lv.outer, np.array([0.0]), np.array([0.0]), 4.0, 2.0, np.zeros(2), (-2, 25),
+        1, 1e-9 * region.diameter,
+    )  # fmt: skip
+    b = 11 - st.k0
+    assert st.count[0, b] == 2
+    assert (st.in_lo[0, b], st.in_hi[0, b]) == (2.5, 97.5)  # the spikes' points
+    assert (st.first_hi[0, b], st.last_lo[0, b]) == (40.0, 60.0)
+    assert (st.first_lo[0, b], st.last_hi[0, b]) == (10.0, 90.0)
+    t = turnaround
+    np.testing.assert_array_equal(line_extremes(st, t)[0, b], [10.0 - t, 10.0, 90.0, 90.0 + t])
+    # the real plan's lanes on that line: the first starts at 10 m, the last ends at 90 m
+    search = CoverSearch(region, 4.0, 2.0, CoverCost.time(5.0, 10.0), None, False)
+    d0 = (44.0 - search.origin[1]) % 4.0
+    plan = plan_region(region, 4.0, decompose_area=False, angle=0.0, offset=d0, speed=5.0,
+                       turn_time=10.0)  # fmt: skip
+    lanes = sorted(
+        (float(seg[:, 0].min()), float(seg[:, 0].max()))
+        for seg, role in zip(plan.transects, plan.roles, strict=True)
+        if role == "lane" and abs(float(seg[:, 1].mean()) - 44.0) < 1.0
+    )
+    assert lanes == pytest.approx([(10.0, 40.0), (60.0, 90.0)], abs=1e-9)
+
+
+def _inner_pieces(area, holes, o, u, n, c: float, s: float, tol: float) -> list:
+    """The band's pieces computed with shapely: the band ``|n . (p - o) - c| <= s / 2`` cut from
+    the area, each part projected on ``u`` (merged), minus the holes' chords on the centre line
+    ``n . (p - o) = c``; pieces longer than ``tol``, in ``u . (p - o)``."""
+    far = 1e4
+    band = shapely.Polygon([o + v * n + w * u for v, w in
+                            ((c - s / 2, -far), (c - s / 2, far), (c + s / 2, far),
+                             (c + s / 2, -far))])  # fmt: skip
+    part = area.intersection(band)
+    spans = sorted(
+        (float(xy.min()), float(xy.max()))
+        for g in getattr(part, "geoms", [part])
+        if not g.is_empty
+        for xy in [np.asarray(g.exterior.coords if hasattr(g, "exterior") else g.coords) @ u]
+    )
+    merged: list[list[float]] = []
+    for lo, hi in spans:
+        if merged and lo <= merged[-1][1]:
+            merged[-1][1] = max(merged[-1][1], hi)
+        else:
+            merged.append([lo, hi])
+    line = shapely.LineString([o + c * n - far * u, o + c * n + far * u])
+    cuts = sorted(
+        (float(xy.min()), float(xy.max()))
+        for h in holes
+        for g in getattr(h.intersection(line), "geoms", [h.intersection(line)])
+        if not g.is_empty and g.length > 0
+        for xy in [np.asarray(g.coords) @ u]
+    )
+    pieces = []
+    for lo, hi in merged:
+        cur = lo
+        for a, b in cuts:
+            if b <= cur or a >= hi:
+                continue
+            if a - cur > tol:
+                pieces.append((cur - o @ u, a - o @ u))
+            cur = max(cur, b)
+        if hi - cur > tol:
+            pieces.append((cur - o @ u, hi - o @ u))
+    return pieces
+
+
+@pytest.mark.parametrize("index", range(6))
+def test_first_lo_and_last_hi_are_the_inner_pieces_extremes(index):
+    """At single layouts (box radius 0: inner = outer = the area) of random areas with holes,
+    ``first_lo`` / ``last_hi`` are the first and last band pieces computed with shapely
+    (:func:`_inner_pieces`), ``first_hi`` / ``last_lo`` their other ends, and ``nan`` exactly
+    where the line has no piece; the 1-tree's ranges are ``[first_lo - t, first_lo]`` and
+    ``[last_hi, last_hi + t]``."""
+    region = random_regions(23, 6, n_holes=(1, 3))[index]
+    area = shapely_region(region)
+    holes = [shapely.Polygon(h.vertices) for h in region.holes]
+    rng = np.random.default_rng(index)
+    s = region.diameter / float(rng.uniform(8, 20))
+    tol = 1e-9 * region.diameter
+    o = region.centre
+    far = np.linalg.norm(region.shell.vertices - o, axis=1).max() + s
+    k_range = (math.floor(-far / s) - 1, math.ceil(far / s) + 1)
+    lv = Sandwich(region).exact
+    checked = 0
+    for _ in range(4):
+        angle, offset = float(rng.uniform(0, math.pi)), float(rng.uniform(0, s))
+        st = band_stats(
+            lv.inner, lv.outer, np.array([angle]), np.array([offset]), s, s / 2, o, k_range,
+            len(region.holes), tol,
+        )  # fmt: skip
+        u = np.array([math.cos(angle), math.sin(angle)])
+        n = np.array([-math.sin(angle), math.cos(angle)])
+        ext = line_extremes(st, 2.0)[0]
+        for b in range(st.count.shape[1]):
+            pieces = _inner_pieces(area, holes, o, u, n, offset + (st.k0 + b) * s, s, tol)
+            if not pieces:
+                assert np.isnan(st.first_lo[0, b]) and np.isnan(st.last_hi[0, b])
+                assert st.count[0, b] == 0
+                continue
+            got = [st.first_lo[0, b], st.first_hi[0, b], st.last_lo[0, b], st.last_hi[0, b]]
+            want = [pieces[0][0], pieces[0][1], pieces[-1][0], pieces[-1][1]]
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-7 * s)
+            assert st.count[0, b] >= 1
+            np.testing.assert_array_equal(ext[b, [1, 2]], [st.first_lo[0, b], st.last_hi[0, b]])
+            np.testing.assert_array_equal(ext[b, [0, 3]], ext[b, [1, 2]] + [-2.0, 2.0])
+            checked += 1
+    assert checked > 20

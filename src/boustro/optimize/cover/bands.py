@@ -109,7 +109,11 @@ class BandStats(NamedTuple):
       first piece ends at ``first_hi`` or beyond (:mod:`~boustro.optimize.cover.ends`);
     * ``pieces (L, B, 4)``: of the outer pieces ``count`` counts, the end of the first, the
       start of the second, the start of the last, the end of the one before (``nan`` if fewer
-      than two; :mod:`~boustro.optimize.cover.piece_ends`).
+      than two; :mod:`~boustro.optimize.cover.piece_ends`);
+    * ``first_lo, last_hi``: the start of the first and the end of the last of those inner
+      pieces (``nan`` where none): the counted lane holding the first starts at ``first_lo`` or
+      before, the one holding the last ends at ``last_hi`` or beyond
+      (:mod:`~boustro.optimize.cover.extremes`).
     """
 
     k0: int
@@ -124,6 +128,8 @@ class BandStats(NamedTuple):
     first_hi: NDArray[np.float64]
     last_lo: NDArray[np.float64]
     pieces: NDArray[np.float64]
+    first_lo: NDArray[np.float64]
+    last_hi: NDArray[np.float64]
 
 
 def _leaf(
@@ -160,6 +166,8 @@ def _leaf(
     sstart,
     sparent,
     split,
+    first_lo,
+    last_hi,
 ):
     ih1, ih2, it1, it2 = _project(inner_xy, cs, sn, ox, oy)
     oh1, oh2, ot1, ot2 = _project(outer_xy, cs, sn, ox, oy)
@@ -214,6 +222,8 @@ def _leaf(
         if n_p > 0:
             first_hi[b] = phi[0]
             last_lo[b] = plo[n_p - 1]
+            first_lo[b] = plo[0]
+            last_hi[b] = phi[n_p - 1]
         go = go_t[go_start[b] : go_start[b + 1]]
         gh = go_h[go_start[b] : go_start[b + 1]]
         n_q = _minus(o_lo[q0 : q0 + mo], o_hi[q0 : q0 + mo], mo, go[0::2], go[1::2], 0.0, qlo, qhi)
@@ -275,6 +285,8 @@ def _all(
     first_hi = np.full((n, nb), np.nan)
     last_lo = np.full((n, nb), np.nan)
     pieces = np.full((n, nb, 4), np.nan)
+    first_lo = np.full((n, nb), np.nan)
+    last_hi = np.full((n, nb), np.nan)
     for leaf in range(n):
         _leaf(
             inner_xy,
@@ -310,8 +322,11 @@ def _all(
             sstart,
             sparent,
             split,
+            first_lo[leaf],
+            last_hi[leaf],
         )
-    return length, count, in_lo, in_hi, out_lo, out_hi, cut, rigid, first_hi, last_lo, pieces
+    return (length, count, in_lo, in_hi, out_lo, out_hi, cut, rigid, first_hi, last_lo, pieces,
+            first_lo, last_hi)  # fmt: skip
 
 
 @cache

@@ -43,21 +43,6 @@ def _boustrophedon_moves(st: BandStats, spacing: float) -> NDArray[np.float64]:
     return np.where(contiguous, moves, np.nan)
 
 
-#: How much farther than the holes' boxes of the lane-ends bound (grown by ``eps`` plus the
-#: level's slack, at most ``eps / 8``, and ``2 tol``) the inner set's dilated holes reach, in
-#: units of the level's ``eps``: they are the holes dilated by ``(eps + slack) ARC_FACTOR`` plus
-#: the pad (``tol``), simplified within ``SIMPLIFY_SHARE slack`` (``sandwich.Sandwich._build``),
-#: at most ``0.26 eps`` farther; doubled for room.
-CHORD_MARGIN = 0.5
-
-
-def _chord_boxes(ends: HoleBoxes, level: Level) -> NDArray[np.float64]:
-    """Boxes holding the inner set's dilated holes (its chords' rings) in each layout's frame:
-    the holes' boxes ``ends`` grown by :data:`CHORD_MARGIN` times the level's radius."""
-    m = CHORD_MARGIN * level.eps
-    return ends + np.array([-m, m, -m, m])
-
-
 def lower_bounds(
     st: BandStats,
     level: Level,
@@ -137,7 +122,7 @@ def lower_bounds(
                 todo &= out < tour_keep
             tree = one_tree_bound(
                 st, spacing, cost, todo=todo, walls=walls, enough=enough,
-                multipliers=multipliers, steps=tour_steps, chords=_chord_boxes(ends, level),
+                multipliers=multipliers, steps=tour_steps,
             )  # fmt: skip
             out = out + np.maximum(tree - move_cost, 0.0)
         return out

@@ -5,8 +5,8 @@
 Per layout of the centre grid and line ``k`` (the area moves, not the grid) the band statistics
 give ``count_k`` lanes every area ``S`` of the box has, each holding one inner piece, with the
 ranges of their ends: the first lane starts in ``[a_k - t, a_k]`` and the last ends in ``[b_k,
-b_k + t]`` (``a_k, b_k`` the first inner piece's start and the last one's end; collapsed, below;
-where only bounds on them are known, wider: :mod:`~boustro.optimize.cover.extremes`); with
+b_k + t]`` (``a_k, b_k`` the first inner piece's start and the last one's end, exported by the
+band kernel; collapsed, below; :mod:`~boustro.optimize.cover.extremes`); with
 ``count_k >= 2`` the first lane ends in ``[first_hi_k, P1_k + t]``, the last starts in ``[PL_k -
 t, last_lo_k]``, and every lane between (inside the outer pieces from the second to the one
 before the last, ``[P2_k, Q1_k]``) starts in ``[P2_k - t, min(last_lo_k, Q1_k)]`` and ends in
@@ -369,17 +369,13 @@ def one_tree_bound(
     walls: NDArray[np.float64] | None = None,
     enough: NDArray[np.float64] | None = None,
     multipliers: Multipliers | None = None,
-    chords: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound, in cost units, on ``per_length`` times the connecting moves plus
     the extra lanes' flown length of every plan of each layout's sandwich (module docstring);
     0 where not ``todo`` or with more than :data:`MAX_LANES` counted lanes. ``walls`` ``(L, W,
     4)``: segments no move crosses, in each layout's frame (:func:`~.walls.walls_in_frames`);
     ``enough`` ``(L,)`` (cost units): a layout's steps stop once its bound reaches it;
-    ``multipliers``: where to start the steps and where to keep their best (read, written);
-    ``chords`` ``(L, H, 4)``: boxes holding the inner set's dilated holes in each layout's frame
-    (:func:`~.extremes.line_extremes`; ``None``: lines of two inner pieces or more keep wider
-    ranges for their first start and last end)."""
+    ``multipliers``: where to start the steps and where to keep their best (read, written)."""
     n_layouts = st.count.shape[0]
     lanes = st.count.sum(axis=1)
     ok = lanes <= MAX_LANES if todo is None else todo & (lanes <= MAX_LANES)
@@ -400,7 +396,7 @@ def one_tree_bound(
         pi0, warm = multipliers.values, multipliers.warm
         kofs = int(st.k0 + c0) - multipliers.k0
     moves = _compiled()(
-        crop(st.count), crop(line_extremes(st, spacing, cost.turnaround, chords)),
+        crop(st.count), crop(line_extremes(st, cost.turnaround)),
         crop(st.first_hi), crop(st.last_lo),
         crop(st.pieces), np.ascontiguousarray(ok),
         np.ascontiguousarray(stop, dtype=np.float64), np.ascontiguousarray(walls, dtype=np.float64),
