@@ -226,8 +226,11 @@ class CoverSearch:
         self.bound_evaluations += len(boxes.theta)
         self.work += len(boxes.theta) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
         ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
-        if self.keep_inside:
-            out = self._inside(lv, st, 0.0, 0.0, boxes.theta, boxes.d, np.zeros(len(boxes.d)))
+        rank = None
+        if self.keep_inside:  # the bound, and the value that ranks the layouts (inside_bound)
+            out, rank = self._inside(
+                lv, st, 0.0, 0.0, boxes.theta, boxes.d, np.zeros(len(boxes.d)), ranking=True
+            )
         else:
             out = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
@@ -237,7 +240,7 @@ class CoverSearch:
             return out
         # the real plans are chosen by the model without the 1-tree, as before it (a routed
         # tour's cost is noisy between layouts: this ranking found the plans of 1158b53 again)
-        self.ranks = out
+        self.ranks = out if rank is None else rank
         if self._tour_below() is not None:
             out = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
@@ -368,9 +371,9 @@ class CoverSearch:
         self.work, self.bound_evaluations = work, evaluations
         return min(lower, float(bounds.min()))
 
-    def _inside(self, lv: Any, st: Any, *args: Any) -> NDArray[np.float64]:
+    def _inside(self, lv: Any, st: Any, *args: Any, **kw: Any) -> NDArray[np.float64]:
         """The keep-inside bound (:func:`~.inside_bound.inside_box_bounds`)."""
-        return inside_box_bounds(self, lv, st, *args)
+        return inside_box_bounds(self, lv, st, *args, **kw)
 
     def counts(self) -> dict[str, Any]:
         """The plans made, the layouts ruled out, the brute-force sweep's plans and whether it
