@@ -30,7 +30,9 @@ def plan_floor(region: Any, spacing: float, **kw: Any) -> tuple[float, int] | No
     """A lower bound ``(path length, turns)`` (plan units) of the plan
     ``plan_region(region, spacing, **kw)``, from its cut lanes and boundary passes; ``None``
     unless it is a ``keep_inside`` plan of the guaranteed layout over one cell
-    (``decompose_area=False``). Raises what ``plan_region`` raises for its lanes."""
+    (``decompose_area=False``). Raises what ``plan_region`` raises for its lanes, not what its
+    tour stage raises (``order="exact"`` over too many passes: the mission's screen never sets
+    ``order``)."""
     bound = inspect.signature(plan_region).bind(region, spacing, **kw)
     bound.apply_defaults()
     args = dict(bound.arguments)
