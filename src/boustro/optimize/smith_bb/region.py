@@ -70,9 +70,20 @@ class _RegionSearch(_Search):
         self.evaluations = 0
         self.tol = -math.inf  # the search's (set by smith_bb_region): a box bounded at most
         # best + tol is discarded, its bound need not be the tightest
+        self.strips = True  # the boxes' bounds from strips (False: the sandwich's, as before)
 
     def bounds(self, boxes: Boxes) -> NDArray[np.float64]:
+        """Each box's bound from strips of the real boundary (:mod:`.region_strips`: within
+        the sandwich of its radius, so no sandwich is built); with ``strips`` False from the
+        sandwich of the smallest level radius that holds the box's ``eps``."""
         eps = box_radius(boxes, self.radius)
+        if self.strips:
+            self.bounded += len(eps)
+            return region_bounds(
+                self.real[0][:0], self.real[0][:0], self.real, boxes.theta, boxes.delta,
+                boxes.d, eps * (1 + 1e-9) + 1e-12, self.s, self.a, self.b, self.tiny,
+                boxes.eta * (1 + 1e-9) + 1e-12, self.margin, self.best + self.tol,
+                radius=self.radius * (1 + 1e-12))  # fmt: skip
         radius = level_radius(eps, self.top_eps)
         out = np.empty(len(radius))
         for r in np.unique(radius):
