@@ -68,7 +68,8 @@ def test_strip_bound_is_sound_in_boxes(seed: int, n: int, holes: int) -> None:
     rng = np.random.default_rng(seed)
     search = _search(seed, n, holes)
     search.best, search.tol = 0.0, 0.0  # every box gets its full bound
-    assert search.strips
+    assert search.strips == (len(search.xy) > 256)
+    search.strips = True
     m = 60
     for delta, eta in ((6e-3, 0.3), (1e-3, 0.05), (1e-4, 0.005)):
         boxes = Boxes(rng.uniform(0, math.pi, m), np.full(m, delta), rng.uniform(0, search.s, m),
@@ -84,6 +85,7 @@ def test_strip_bound_is_sound_in_boxes(seed: int, n: int, holes: int) -> None:
 def test_strips_are_tighter_than_the_sandwich_on_a_noisy_field() -> None:
     search = _search(11, 1000, 6)
     search.best, search.tol = 0.0, 0.0
+    assert search.strips  # the default above 256 edges
     boxes = initial_boxes(search.s, search.radius, 90)
     search.top_eps = float(box_radius(boxes, search.radius).max())
     rng = np.random.default_rng(0)

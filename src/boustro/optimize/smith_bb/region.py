@@ -70,12 +70,15 @@ class _RegionSearch(_Search):
         self.evaluations = 0
         self.tol = -math.inf  # the search's (set by smith_bb_region): a box bounded at most
         # best + tol is discarded, its bound need not be the tightest
-        self.strips = True  # the boxes' bounds from strips (False: the sandwich's, as before)
+        # the boxes' bounds from strips of the real boundary where the sandwich is simplified
+        # (False: the sandwich's; small areas keep it: their searches and plans unchanged)
+        self.strips = simplify
 
     def bounds(self, boxes: Boxes) -> NDArray[np.float64]:
         """Each box's bound from strips of the real boundary (:mod:`.region_strips`: within
-        the sandwich of its radius, so no sandwich is built); with ``strips`` False from the
-        sandwich of the smallest level radius that holds the box's ``eps``."""
+        the sandwich of its radius, so no sandwich is built; areas of more than
+        ``SIMPLIFY_EDGES`` edges), else from the sandwich of the smallest level radius that
+        holds the box's ``eps``."""
         eps = box_radius(boxes, self.radius)
         if self.strips:
             self.bounded += len(eps)

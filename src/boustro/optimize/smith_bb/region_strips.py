@@ -209,35 +209,39 @@ def strip_intervals(xy, cs, sn, d, s, k0, nb, radius, sdelta, eta, keep):
         sh = buf_hi[:n][order]
         mo = _merge(sl, sh, n, oa, ob, mo)
         ost[q + 1] = mo
-        # inner: both edges' intervals intersected, less the clipped edges' ranges
-        np_ = p1 - p0
         porder = np.argsort(plo[p0:p1])
-        ql = plo[p0:p1][porder]
-        qh = phi[p0:p1][porder]
-        ncut = _merge(ql, qh, np_, buf_lo, buf_hi, 0)
-        i, j = l0, h0
-        while i < l1 - 1 and j < h1 - 1:
-            a = max(lt[i], ht[j])
-            b = min(lt[i + 1], ht[j + 1])
-            if a < b:  # [a, b] less the cuts
-                left = a
-                for k in range(ncut):
-                    if buf_hi[k] <= left or buf_lo[k] >= b:
-                        continue
-                    if buf_lo[k] > left:
-                        pa[mi], pb[mi] = left, buf_lo[k]
-                        mi += 1
-                    left = max(left, buf_hi[k])
-                if left < b:
-                    pa[mi], pb[mi] = left, b
-                    mi += 1
-            if lt[i + 1] < ht[j + 1]:
-                i += 2
-            else:
-                j += 2
+        ncut = _merge(plo[p0:p1][porder], phi[p0:p1][porder], p1 - p0, buf_lo, buf_hi, 0)
+        mi = _inner(lt, l0, l1, ht, h0, h1, buf_lo, buf_hi, ncut, pa, pb, mi)
         mi = _prune(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], mi, keep * half[q])
         ist[q + 1] = mi
     return ost, oa[:mo], ob[:mo], ist, pa[:mi], pb[:mi]
+
+
+def _inner(lt, l0, l1, ht, h0, h1, cut_lo, cut_hi, ncut, pa, pb, m):
+    """Append to ``pa, pb`` from ``m`` the inner set of one line: the intervals of the strip's
+    two edges (crossings ``lt[l0:l1]``, ``ht[h0:h1]``, paired) intersected, less the cuts (the
+    clipped edges' ranges, merged and sorted); returns the new end."""
+    i, j = l0, h0
+    while i < l1 - 1 and j < h1 - 1:
+        a = max(lt[i], ht[j])
+        b = min(lt[i + 1], ht[j + 1])
+        if a < b:  # [a, b] less the cuts
+            left = a
+            for k in range(ncut):
+                if cut_hi[k] <= left or cut_lo[k] >= b:
+                    continue
+                if cut_lo[k] > left:
+                    pa[m], pb[m] = left, cut_lo[k]
+                    m += 1
+                left = max(left, cut_hi[k])
+            if left < b:
+                pa[m], pb[m] = left, b
+                m += 1
+        if lt[i + 1] < ht[j + 1]:
+            i += 2
+        else:
+            j += 2
+    return m
 
 
 def _prune(oa, ob, o0, o1, pa, pb, p0, p1, short):
@@ -263,4 +267,6 @@ def _prune(oa, ob, o0, o1, pa, pb, p0, p1, short):
 
 def prepare() -> None:
     """Swap this module's helpers for their numba versions (before a caller compiles)."""
-    jit_globals(globals(), ("strip_halfwidths", "_crossings", "_pieces", "_merge", "_prune"))
+    jit_globals(
+        globals(), ("strip_halfwidths", "_crossings", "_pieces", "_merge", "_inner", "_prune")
+    )
