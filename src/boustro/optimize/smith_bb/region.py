@@ -1,8 +1,10 @@
 """The certified maximum of Eq. 1 over the SEGMENTS of a concave region or one with holes
 (:func:`smith_bb_region`): :mod:`.search`'s branch and bound over boxes of (angle, offset),
 the same boxes, sandwiches, incumbents and polish, with the region's per-box bound
-(:mod:`.region_kernel`). The fitness is that of ``docs/concave.md``: Eq. 1 over every segment
-of every line (population std), in the shell's normalised frame, as ``region-grid`` scores it.
+(:mod:`.region_kernel`; above ``SIMPLIFY_EDGES`` edges the lines' intervals come from strips of
+the real boundary, :mod:`.region_strips`, instead of the simplified sandwich). The fitness
+is that of ``docs/concave.md``: Eq. 1 over every segment of every line (population std), in
+the shell's normalised frame, as ``region-grid`` scores it.
 docs: ``docs/global_optimum.md``, "Concave areas and holes".
 """
 
