@@ -182,8 +182,8 @@ def _owners(oa, ob, o0, o1, pa, pb, p0, p1, tiny, owner):
 def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
            margin, cut, pos, radius):  # fmt: skip
     """The bound of one box: from the strips of the real boundary if ``radius >= 0``
-    (:mod:`.region_strips`; lengths in ``t``, so ``a (1 / cos delta - 1) top`` is added, and
-    the cut is lowered by it), else from the sandwich ``in_xy, out_xy``."""
+    (:mod:`.region_strips`; lengths in ``t``, so ``(a + b) (1 / cos delta - 1) top`` is added,
+    and the cut is lowered by it), else from the sandwich ``in_xy, out_xy``."""
     if radius >= 0:
         ost, oa, ob, ist, pa, pb = strip_intervals(real_xy, cs, sn, d, s, k0, nb, radius,
                                                    sdelta, eta, KEEP)  # fmt: skip
@@ -199,7 +199,9 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb
         pos = np.empty(2 * (pa.shape[0] + 8))
     stretch = 0.0
     if radius >= 0:
-        stretch = a * top * (1.0 / math.sqrt(max(1.0 - sdelta * sdelta, 1e-300)) - 1.0)
+        # a layout's lengths are the t-lengths times 1 / cos(alpha): mean and std (the chain
+        # bound mixes t-lengths with its own) move by at most (1 / cos(delta) - 1) top each
+        stretch = (a + b) * top * (1.0 / math.sqrt(max(1.0 - sdelta * sdelta, 1e-300)) - 1.0)
     return stretch + _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, cs, sn, sdelta, eta,
                                d, s, eps, k0, nb, a, b, tiny, margin, cut - stretch, pos,
                                top)  # fmt: skip
