@@ -97,3 +97,22 @@ def test_strips_are_tighter_than_the_sandwich_on_a_noisy_field() -> None:
     sandwich = search.bounds(boxes)
     assert np.median(strips - sandwich) < -1e-3
     assert (strips < sandwich).mean() > 0.7
+
+
+def test_quarters_of_the_best_boxes_are_scored_with_the_strips() -> None:
+    # the region search's polish of a round's best centres also scores the centres of the
+    # quarters of the DIVE_PER_ROUND best boxes (values only) and offers the best; small areas
+    # (the sandwich's bound) do not
+    s = _search(3, 500, 4)
+    assert s.strips
+    boxes = Boxes(*(np.array(v) for v in ([0.8, 1.9], [0.004, 0.002], [0.01, 0.02], [1e-3, 5e-4])))
+    s.polish_best(boxes, s.values(boxes.theta, boxes.d), False)
+    sides = np.array([-0.5, 0.5])
+    theta = (boxes.theta[:, None] + np.repeat(sides, 2) * boxes.delta[:, None]).ravel()
+    d = (boxes.d[:, None] + np.tile(sides, 2) * boxes.eta[:, None]).ravel()
+    quarters = s.values(theta, d)
+    assert s.best >= np.nanmax(quarters) - 1e-12
+    plain = _search(3, 500, 4)
+    plain.strips = False  # the sandwich's search: only the two best centres polished
+    plain.polish_best(boxes, plain.values(boxes.theta, boxes.d), False)
+    assert s.evaluations >= plain.evaluations + 8 + len(quarters)
