@@ -6,8 +6,9 @@ interleaved (base, new, base again: the lesser CPU of the two base runs), the fi
 call excluded and timed apart, and each process's peak RSS. Targets of issue 21: certified
 (gap <= 1e-4) in 5 s.
 
-    git archive fff0927 src | tar -x -C /tmp/base   # the tree before
+    git archive f49f694 src | tar -x -C /tmp/base   # the tree before (the strips: 11th round)
     PYTHONPATH=src python benchmarks/region_big.py --baseline /tmp/base/src [--budgets 1e7 4e7]
+        [--vertices 1000]
 """
 
 from __future__ import annotations

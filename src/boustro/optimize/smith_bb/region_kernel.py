@@ -39,10 +39,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._jit import jit, jit_globals
-from . import kernel, region_splits
+from . import kernel, region_splits, region_strips
 from .kernel import _sup_w, lines_range
 from .region_chains import _chains, chain_bound, prepare
 from .region_splits import NODES, _line_segments, split_bound
+from .region_strips import strip_intervals
 
 __all__ = ["region_bounds", "region_values", "ring_starts"]
 
@@ -51,6 +52,9 @@ MAX_CHOICES = 8
 #: A sure line's segment whose length interval is wider than this many ``eps`` (the sandwich
 #: gives about 4 to 8) is left to the chain bound (:mod:`.region_chains`).
 LOOSE = 16.0
+#: Inner pieces of a strip shorter than this many strip half widths are dropped (but the
+#: longest of each outer component; :func:`.region_strips._prune`).
+KEEP = 4.0
 #: Added to every box bound (rounding of the closed forms).
 BOUND_SLACK = 1e-10
 
@@ -176,14 +180,36 @@ def _owners(oa, ob, o0, o1, pa, pb, p0, p1, tiny, owner):
 
 
 def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
-           margin, cut, pos):  # fmt: skip
-    ost, oa, ob = _intervals(out_xy, cs, sn, d, s, k0, nb)
-    ist, pa, pb = _intervals(in_xy, cs, sn, d, s, k0, nb)
+           margin, cut, pos, radius):  # fmt: skip
+    """The bound of one box: from the strips of the real boundary if ``radius >= 0``
+    (:mod:`.region_strips`; lengths in ``t``, so ``(a + b) (1 / cos delta - 1) top`` is added,
+    and the cut is lowered by it), else from the sandwich ``in_xy, out_xy``."""
+    if radius >= 0:
+        ost, oa, ob, ist, pa, pb = strip_intervals(real_xy, cs, sn, d, s, k0, nb, radius,
+                                                   sdelta, eta, KEEP)  # fmt: skip
+    else:
+        ost, oa, ob = _intervals(out_xy, cs, sn, d, s, k0, nb)
+        ist, pa, pb = _intervals(in_xy, cs, sn, d, s, k0, nb)
     top = 0.0
     for j in range(oa.shape[0]):
         top = max(top, ob[j] - oa[j])
     if oa.shape[0] == 0:
         return -np.inf
+    if pos.shape[0] < 2 * (pa.shape[0] + 8):
+        pos = np.empty(2 * (pa.shape[0] + 8))
+    stretch = 0.0
+    if radius >= 0:
+        # a layout's lengths are the t-lengths times 1 / cos(alpha): mean and std (the chain
+        # bound mixes t-lengths with its own) move by at most (1 / cos(delta) - 1) top each
+        stretch = (a + b) * top * (1.0 / math.sqrt(max(1.0 - sdelta * sdelta, 1e-300)) - 1.0)
+    return stretch + _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, cs, sn, sdelta, eta,
+                               d, s, eps, k0, nb, a, b, tiny, margin, cut - stretch, pos,
+                               top)  # fmt: skip
+
+
+def _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb,
+              a, b, tiny, margin, cut, pos, top):  # fmt: skip
+    """The bound of one box from its lines' outer and inner intervals (module doc)."""
     crude = a * top + b
     cnt = np.empty(nb, dtype=np.int64)
     _chain_counts(real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, cnt)
@@ -286,13 +312,13 @@ def _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, l
 
 
 def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
-            margin, cut, slack):  # fmt: skip
+            margin, cut, slack, radius):  # fmt: skip
     m = cs.shape[0]
     out = np.empty(m)
-    pos = np.empty(2 * (in_xy.shape[0] + 4) * nb + 8)
+    pos = np.empty(2 * (max(in_xy.shape[0], 2 * real_xy.shape[0]) + 4) * nb + 8)
     for i in range(m):
         v = _bound(in_xy, out_xy, real_xy, rings, cs[i], sn[i], sdelta[i], eta[i], d[i], s,
-                   eps[i], k0, nb, a, b, tiny, margin, cut - 2.0 * slack, pos)  # fmt: skip
+                   eps[i], k0, nb, a, b, tiny, margin, cut - 2.0 * slack, pos, radius)  # fmt: skip
         out[i] = v + slack
     return out
 
@@ -305,9 +331,10 @@ def _compiled() -> tuple[Any, Any]:
     kernel._compiled()  # _sup_w's own helpers (kernel's _g) compiled where it looks them up
     prepare()  # and chain_bound's, in .region_chains
     region_splits.prepare()  # and split_bound's
+    region_strips.prepare()  # and strip_intervals'
     helpers = ("_first_line", "_intervals", "_chains", "_chain_counts", "_sup_w", "_owners",
                "_line_segments", "_enumerated", "chain_bound",
-               "split_bound", "_bound")  # fmt: skip
+               "split_bound", "strip_intervals", "_bound_of", "_bound")  # fmt: skip
     jit_globals(globals(), helpers)
     return jit(_bounds), jit(_values)
 
@@ -334,6 +361,7 @@ def region_bounds(
     eta: NDArray[np.float64] | None = None,
     margin: float = -1.0,
     cut: float = math.inf,
+    radius: float = -1.0,
 ) -> NDArray[np.float64]:
     """``(m,)`` an upper bound of Eq. 1 over the segments of every rigid image of the region
     ``real`` (:func:`ring_starts`) moved by at most ``eps[i]`` (rotation at most ``delta[i]``,
@@ -342,17 +370,28 @@ def region_bounds(
     vertex a line passes where it cuts a segment of length at most ``tiny``
     (:func:`.region_chains.near_margin`; negative: unknown). A box whose first bound is at most
     ``cut`` (it will be discarded) skips the chain bound; ``cut = inf``: the chain bound alone
-    (``inf`` where it does not apply; for tests)."""
-    k0, nb = lines_range(outer, spacing)
+    (``inf`` where it does not apply; for tests). ``radius >= 0`` (every vertex of ``real``
+    within it of 0): the lines' intervals from strips of the real boundary
+    (:mod:`.region_strips`), ``inner`` and ``outer`` unread."""
     th = np.ascontiguousarray(theta, dtype=np.float64)
     sdelta = np.sin(np.minimum(np.asarray(delta, dtype=np.float64), math.pi / 2))
     eta = eps if eta is None else np.minimum(eta, eps)
+    if radius >= 0:  # the lines that a strip of the real region can reach
+        k0, nb = lines_range(real[0], spacing)
+        cd = np.sqrt(np.maximum(1.0 - sdelta * sdelta, 1e-300))
+        half = float(np.max((radius * (1 - cd) + eta + radius * sdelta) / cd, initial=0.0))
+        grow = math.ceil(half / spacing) + 1
+        k0, nb = k0 - grow, nb + 2 * grow
+        inner = outer = np.zeros((0, 4))
+    else:
+        k0, nb = lines_range(outer, spacing)
     fn = _compiled()[0]
     return fn(np.ascontiguousarray(inner), np.ascontiguousarray(outer), real[0], real[1],
               np.cos(th), np.sin(th), sdelta, np.ascontiguousarray(eta, dtype=np.float64),
               np.ascontiguousarray(d, dtype=np.float64),
               float(spacing), np.ascontiguousarray(eps, dtype=np.float64), k0, nb, float(a),
-              float(b), float(tiny), float(margin), float(cut), BOUND_SLACK)  # fmt: skip
+              float(b), float(tiny), float(margin), float(cut), BOUND_SLACK,
+              float(radius))  # fmt: skip
 
 
 def region_values(

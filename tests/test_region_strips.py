@@ -1,0 +1,118 @@
+"""The strips of a region's box (``smith_bb/region_strips.py``): the outer intervals hold every
+layout's segments, the inner pieces lie in them, and the box bound built from them is sound
+and, on noisy traced fields, tighter than the sandwich's."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from boustro.geometry.region import Region
+from boustro.geometry.traced import traced_field
+from boustro.optimize.cover.boxes import Boxes, box_radius, initial_boxes
+from boustro.optimize.smith_bb import region_kernel as rk
+from boustro.optimize.smith_bb.kernel import lines_range
+from boustro.optimize.smith_bb.region import _RegionSearch
+from boustro.optimize.smith_bb.region_strips import strip_intervals
+
+
+def _search(seed: int, n: int, holes: int) -> _RegionSearch:
+    return _RegionSearch(traced_field(n, holes, seed=seed, radius=90.0), 10.0, 0.5, 0.5)
+
+
+def _concave() -> Region:
+    shell = [(0, 0), (60, 0), (60, 40), (35, 40), (35, 15), (25, 15), (25, 40), (0, 40)]
+    holes = [[(5, 5), (15, 5), (15, 30), (5, 30)], [(45, 20), (55, 25), (48, 33)]]
+    return Region(shell, holes=holes)
+
+
+@pytest.mark.parametrize("which", ["traced", "comb"])
+def test_outer_holds_and_inner_lies_in_every_sampled_layout(which: str) -> None:
+    rng = np.random.default_rng(3)
+    if which == "traced":
+        search = _search(7, 300, 3)
+    else:
+        search = _RegionSearch(_concave(), 4.0, 0.5, 0.5)
+    xy, s, radius = search.real[0], search.s, search.radius
+    k0, nb = lines_range(xy, s)
+    k0, nb = k0 - 4, nb + 8
+    checked = 0
+    for _ in range(25):
+        theta = float(rng.choice([rng.uniform(0, math.pi), math.pi / 2, 0.0]))
+        delta, eta = rng.uniform(1e-5, 8e-3), rng.uniform(1e-5, 0.5) * s
+        d = rng.uniform(0, s)
+        ost, oa, ob, ist, pa, pb = strip_intervals(
+            xy, math.cos(theta), math.sin(theta), d, s, k0, nb, radius, math.sin(delta), eta,
+            rk.KEEP)  # fmt: skip
+        for _ in range(15):
+            al, et = rng.uniform(-delta, delta), rng.uniform(-eta, eta)
+            st, lo, hi = rk._intervals(xy, math.cos(theta + al), math.sin(theta + al), d + et,
+                                       s, k0, nb)  # fmt: skip
+            for q in range(nb):
+                h = d + et + (k0 + q) * s  # the layout's line; its t = t' cos(al) - h sin(al)
+                ca, sa = math.cos(al), math.sin(al)
+                seg = [(lo[j] * ca - h * sa, hi[j] * ca - h * sa) for j in range(st[q], st[q + 1])]
+                outer = list(zip(oa[ost[q] : ost[q + 1]], ob[ost[q] : ost[q + 1]], strict=True))
+                for a, b in seg:
+                    assert any(x <= a + 1e-12 and b <= y + 1e-12 for x, y in outer), (q, a, b)
+                    checked += 1
+                for p in range(ist[q], ist[q + 1]):
+                    assert any(a <= pa[p] + 1e-12 and pb[p] <= b + 1e-12 for a, b in seg)
+    assert checked > 1000
+
+
+@pytest.mark.parametrize(("seed", "n", "holes"), [(8, 400, 5), (9, 200, 2)])
+def test_strip_bound_is_sound_in_boxes(seed: int, n: int, holes: int) -> None:
+    rng = np.random.default_rng(seed)
+    search = _search(seed, n, holes)
+    search.best, search.tol = 0.0, 0.0  # every box gets its full bound
+    assert search.strips == (len(search.xy) > 256)
+    search.strips = True
+    m = 60
+    for delta, eta in ((6e-3, 0.3), (1e-3, 0.05), (1e-4, 0.005)):
+        boxes = Boxes(rng.uniform(0, math.pi, m), np.full(m, delta), rng.uniform(0, search.s, m),
+                      np.full(m, eta * search.s))  # fmt: skip
+        bounds = search.bounds(boxes)
+        for _ in range(12):
+            t = boxes.theta + rng.uniform(-delta, delta, m)
+            o = boxes.d + rng.uniform(-1, 1, m) * boxes.eta
+            values = search.values(t, o)
+            assert (values <= bounds + 1e-12).all(), (values - bounds).max()
+
+
+def test_strips_are_tighter_than_the_sandwich_on_a_noisy_field() -> None:
+    search = _search(11, 1000, 6)
+    search.best, search.tol = 0.0, 0.0
+    assert search.strips  # the default above 256 edges
+    boxes = initial_boxes(search.s, search.radius, 90)
+    search.top_eps = float(box_radius(boxes, search.radius).max())
+    rng = np.random.default_rng(0)
+    m = 80
+    boxes = Boxes(rng.uniform(0, math.pi, m), np.full(m, 1.5e-3), rng.uniform(0, search.s, m),
+                  np.full(m, 0.06 * search.s))  # fmt: skip
+    strips = search.bounds(boxes)
+    search.strips = False
+    sandwich = search.bounds(boxes)
+    assert np.median(strips - sandwich) < -1e-3
+    assert (strips < sandwich).mean() > 0.7
+
+
+def test_quarters_of_the_best_boxes_are_scored_with_the_strips() -> None:
+    # the region search's polish of a round's best centres also scores the centres of the
+    # quarters of the DIVE_PER_ROUND best boxes (values only) and offers the best; small areas
+    # (the sandwich's bound) do not
+    s = _search(3, 500, 4)
+    assert s.strips
+    boxes = Boxes(*(np.array(v) for v in ([0.8, 1.9], [0.004, 0.002], [0.01, 0.02], [1e-3, 5e-4])))
+    s.polish_best(boxes, s.values(boxes.theta, boxes.d), False)
+    sides = np.array([-0.5, 0.5])
+    theta = (boxes.theta[:, None] + np.repeat(sides, 2) * boxes.delta[:, None]).ravel()
+    d = (boxes.d[:, None] + np.tile(sides, 2) * boxes.eta[:, None]).ravel()
+    quarters = s.values(theta, d)
+    assert s.best >= np.nanmax(quarters) - 1e-12
+    plain = _search(3, 500, 4)
+    plain.strips = False  # the sandwich's search: only the two best centres polished
+    plain.polish_best(boxes, plain.values(boxes.theta, boxes.d), False)
+    assert s.evaluations >= plain.evaluations + 8 + len(quarters)
