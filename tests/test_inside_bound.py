@@ -11,7 +11,7 @@ import pytest
 
 from boustro.geometry.region import Region
 from boustro.optimize.cover import CoverCost, band_stats, lower_bounds
-from boustro.optimize.cover.boxes import Boxes
+from boustro.optimize.cover.boxes import Boxes, box_radius, level_radius
 from boustro.optimize.cover.inside_bound import (
     MIN_ANGLE,
     _near_lengths,
@@ -199,3 +199,58 @@ def test_small_boxes_along_an_edge_never_exceed_a_plan(index):
     bounds = search.box_bounds(boxes)
     for i, plans in enumerate(plans_in_boxes(evaluate, boxes, rng, k=2)):
         assert bounds[i] <= min(plans) + 1e-9
+
+
+def _split_edges(vertices: list[tuple[float, float]], step: float) -> np.ndarray:
+    """``vertices`` with every edge split into collinear pieces about ``step`` long."""
+    out = []
+    v = np.asarray(vertices, dtype=np.float64)
+    for a, b in zip(v, np.roll(v, -1, axis=0), strict=True):
+        m = max(1, int(np.linalg.norm(b - a) // step))
+        out += [a + (b - a) * t / m for t in range(m)]
+    return np.array(out)
+
+
+def _rect(x0: float, y0: float, x1: float, y1: float) -> list[tuple[float, float]]:
+    return [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+
+
+#: (area, turnaround, a box (theta, delta, d, eta) a review found the bound above every plan
+#: in when the ring turns were counted three times): a rectangle whose edges are split into
+#: collinear 3 m pieces, and a square whose hole leaves a ring one spacing wide (4 contour rings)
+_RING_CASES = [
+    (Region(_split_edges(_rect(0, 0, 100, 70), 3.0)), 0.0, (1e-4, 2e-3, 4.6635, 1e-3)),
+    (Region(_rect(0, 0, 90, 90), [_rect(9, 9, 81, 81)]), 2.0, (1.9717, 0.0, 6.9072, 1e-3)),
+]
+
+
+@pytest.mark.parametrize("index", range(len(_RING_CASES)))
+def test_ring_turns_carry_the_bound_and_stay_below_the_plans(index):
+    """With 100 s a turn the turn per contour ring holding a counted stretch is what lifts the
+    keep-inside box bound: it rises with the turn cost at least one turn faster than the
+    chords-only bound at the same radius, and stays below every real plan sampled in the box
+    (counting each ring's turn three times puts it above them)."""
+    region, turnaround, box = _RING_CASES[index]
+    rng = np.random.default_rng(110 + index)
+    n = 5
+    boxes = Boxes(
+        np.r_[box[0], (rng.choice([0.0, math.pi / 2], n) + rng.choice([0.0, 1e-4, 0.05], n))],
+        np.r_[box[1], rng.choice([0.0, 1e-4, 2e-3], n)],
+        np.r_[box[2], rng.uniform(0, SPACING, n)],
+        np.r_[box[3], rng.choice([1e-3, 0.02], n)],
+    )
+    bounds, chords = {}, {}
+    for turn in (0.0, 100.0):
+        cost = CoverCost.time(5.0, turn, turnaround=turnaround)
+        search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False, keep_inside=True)
+        search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
+        bounds[turn] = search.box_bounds(boxes)
+        radius = level_radius(box_radius(boxes, search.radius), search.top_eps)
+        chords[turn] = _chords_only(search, boxes, radius)
+    # the chords-only bound's rise is its turns (lanes and hole passes); without the ring
+    # turns the keep-inside bound adds none to them (its other terms are lengths)
+    carried = bounds[100.0] - bounds[0.0] >= chords[100.0] - chords[0.0] + 100.0 - 1e-6
+    assert carried[0] and carried.sum() >= 4
+    evaluate = plan_cost(region, cost, turnaround=turnaround, keep_inside=True)
+    for i, plans in enumerate(plans_in_boxes(evaluate, boxes, rng)):
+        assert bounds[100.0][i] <= min(plans) + 1e-9
