@@ -17,11 +17,10 @@ Cases as ``benchmarks/keep_inside_speed.py``'s (``test.json``, ``random_N``, Fie
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
-import subprocess
-import sys
+
+from keep_inside_speed import run_child
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SRC = os.path.join(os.path.dirname(HERE), "src")
@@ -42,12 +41,7 @@ print(json.dumps(dict(cpu=cpu, time=m.stats.duration, gap=s.get("gap") or 0.0,
 
 
 def _run(src: str, case: str, data: str) -> dict:
-    env = {**os.environ, "PYTHONPATH": src}
-    code = CHILD.format(here=HERE, case=case, data=data or "")
-    out = subprocess.run(
-        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
-    )
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    return run_child(src, case, data, CHILD)
 
 
 def main() -> None:

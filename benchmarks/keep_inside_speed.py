@@ -78,9 +78,11 @@ def keep_inside_case(case: str, data: str = "") -> tuple[object, float, dict]:
     return read_areas(os.path.join(data, name))[int(index) - 1], 10.0, {}
 
 
-def _run(src: str, case: str, data: str) -> dict:
+def run_child(src: str, case: str, data: str, child: str | None = None) -> dict:
+    """The last line of JSON the script ``child`` (default :data:`CHILD`; formatted with
+    ``here``, ``case``, ``data``) prints, run with ``src`` on the path."""
     env = {**os.environ, "PYTHONPATH": src}
-    code = CHILD.format(here=HERE, case=case, data=data or "")
+    code = (CHILD if child is None else child).format(here=HERE, case=case, data=data or "")
     out = subprocess.run(
         [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
     )
@@ -106,10 +108,10 @@ def main() -> None:
     )
     print("|---|---|---|---:|---:|---:|---|---:|---|")
     for src in (args.baseline, SRC):  # numba's caches filled: no compilation timed
-        _run(src, "random_0", args.data)
+        run_child(src, "random_0", args.data)
     for case in cases:
-        base = _run(args.baseline, case, args.data)
-        new = _run(SRC, case, args.data)
+        base = run_child(args.baseline, case, args.data)
+        new = run_child(SRC, case, args.data)
         print(
             f"| {case} | {base['time']:.1f} / {base['gap'] or 0:.1f} / {base['cpu']:.1f} | "
             f"{new['time']:.1f} / {new['gap'] or 0:.1f} / {new['cpu']:.1f} | "

@@ -27,15 +27,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._jit import jit, jit_globals
+from .visibility_kernel import _contact, _near_edge, jit_into
 
 __all__ = ["EdgeGrid"]
-
-
-def _side(x, scale):
-    """``0`` where ``|x| <= scale`` (on the line), else the sign of ``x``."""
-    if abs(x) <= scale:
-        return 0.0
-    return 1.0 if x > 0 else -1.0
 
 
 def _cell(x, x0, inv, n):
@@ -64,24 +58,11 @@ def _grid_crossings(a, b, e1, e2, tol, x0, y0, inv, nx, ny, start, items, seen, 
                     if seen[e] == i:
                         continue
                     seen[e] = i
-                    q1x, q1y, q2x, q2y = e1[e, 0], e1[e, 1], e2[e, 0], e2[e, 1]
-                    if min(q1x, q2x) > hix or max(q1x, q2x) < lox:
-                        continue
-                    if min(q1y, q2y) > hiy or max(q1y, q2y) < loy:
-                        continue
-                    sx, sy = q2x - q1x, q2y - q1y
-                    ss = tol * math.sqrt(sx * sx + sy * sy)
-                    o1 = _side(rx * (q1y - pay) - ry * (q1x - pax), rs)
-                    o2 = _side(rx * (q2y - pay) - ry * (q2x - pax), rs)
-                    o3 = _side(sx * (pay - q1y) - sy * (pax - q1x), ss)
-                    o4 = _side(sx * (pby - q1y) - sy * (pbx - q1x), ss)
-                    if o1 * o2 < 0 and o3 * o4 < 0:
+                    hit = _contact(pax, pay, pbx, pby, lox, hix, loy, hiy, rx, ry, rs,
+                                   e1[e, 0], e1[e, 1], e2[e, 0], e2[e, 1], tol)  # fmt: skip
+                    if hit & 1:
                         proper[i] = True
-                    if (
-                        o1 == 0
-                        and (q1x - pax) * rx + (q1y - pay) * ry > rs
-                        and (q1x - pbx) * -rx + (q1y - pby) * -ry > rs
-                    ):
+                    if hit & 2:
                         touched[i] = True
 
 
@@ -96,17 +77,7 @@ def _grid_near(p, e1, e2, n_edges, r, tiny, x0, y0, inv, nx, ny, start, items, s
                     if e >= n_edges or seen[e] == i:
                         continue
                     seen[e] = i
-                    # visibility_kernel._near's arithmetic
-                    ax, ay = e1[e, 0], e1[e, 1]
-                    abx, aby = e2[e, 0] - ax, e2[e, 1] - ay
-                    if min(ax, ax + abx) > px + 2 * r or max(ax, ax + abx) < px - 2 * r:
-                        continue
-                    if min(ay, ay + aby) > py + 2 * r or max(ay, ay + aby) < py - 2 * r:
-                        continue
-                    den = max(abx * abx + aby * aby, tiny)
-                    t = min(max(((px - ax) * abx + (py - ay) * aby) / den, 0.0), 1.0)
-                    dx, dy = px - (ax + t * abx), py - (ay + t * aby)
-                    if math.sqrt(dx * dx + dy * dy) <= r:
+                    if _near_edge(px, py, e1[e, 0], e1[e, 1], e2[e, 0], e2[e, 1], r, tiny):
                         out[i] = True
 
 
@@ -114,7 +85,8 @@ def _grid_near(p, e1, e2, n_edges, r, tiny, x0, y0, inv, nx, ny, start, items, s
 def _compiled() -> Any:
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _grid_crossings, _grid_near
-    jit_globals(globals(), ("_side", "_cell"))
+    jit_into(globals())
+    jit_globals(globals(), ("_cell",))
     return jit(_grid_crossings), jit(_grid_near)
 
 

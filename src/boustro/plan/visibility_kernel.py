@@ -15,6 +15,7 @@ costs more than the tests. numba is imported on use; without it the plain Python
 from __future__ import annotations
 
 import math
+from collections.abc import MutableMapping
 from functools import cache
 from importlib.util import find_spec
 from typing import Any
@@ -24,10 +25,12 @@ from numpy.typing import NDArray
 
 from .._jit import jit, jit_globals
 
-__all__ = ["DENSE_EDGES", "points_near", "segment_crossings"]
+__all__ = ["DENSE_EDGES", "HELPERS", "jit_into", "points_near", "segment_crossings"]
 
 #: Areas with at most this many edges test every segment against every edge (above: the tree).
 DENSE_EDGES = 512
+#: The per-pair tests, shared with :mod:`~boustro.plan.edge_grid`'s kernels.
+HELPERS = ("_side", "_contact", "_near_edge")
 
 
 def _side(x, scale):
@@ -37,34 +40,59 @@ def _side(x, scale):
     return 1.0 if x > 0 else -1.0
 
 
+def _contact(pax, pay, pbx, pby, lox, hix, loy, hiy, rx, ry, rs, q1x, q1y, q2x, q2y, tol):
+    """The segment ``p_a -> p_b`` (its box ``lo/hi`` grown by ``tol``, ``r = p_b - p_a``,
+    ``rs = tol |r|``) against the edge ``q1 -> q2``: bit 1 a proper crossing, bit 2 the edge's
+    first vertex touched strictly between the segment's ends (0 where the boxes miss)."""
+    if min(q1x, q2x) > hix or max(q1x, q2x) < lox:
+        return 0
+    if min(q1y, q2y) > hiy or max(q1y, q2y) < loy:
+        return 0
+    sx, sy = q2x - q1x, q2y - q1y
+    ss = tol * math.sqrt(sx * sx + sy * sy)
+    o1 = _side(rx * (q1y - pay) - ry * (q1x - pax), rs)
+    o2 = _side(rx * (q2y - pay) - ry * (q2x - pax), rs)
+    o3 = _side(sx * (pay - q1y) - sy * (pax - q1x), ss)
+    o4 = _side(sx * (pby - q1y) - sy * (pbx - q1x), ss)
+    out = 0
+    if o1 * o2 < 0 and o3 * o4 < 0:
+        out |= 1
+    if (
+        o1 == 0
+        and (q1x - pax) * rx + (q1y - pay) * ry > rs
+        and (q1x - pbx) * -rx + (q1y - pby) * -ry > rs
+    ):
+        out |= 2
+    return out
+
+
+def _near_edge(px, py, ax, ay, bx, by, r, tiny):
+    """Whether the point ``p`` lies within ``r`` of the edge ``a -> b`` (boxes grown by ``2 r``
+    first: a point within ``r`` of the edge is inside them, rounding and all)."""
+    abx, aby = bx - ax, by - ay
+    if min(ax, ax + abx) > px + 2 * r or max(ax, ax + abx) < px - 2 * r:
+        return False
+    if min(ay, ay + aby) > py + 2 * r or max(ay, ay + aby) < py - 2 * r:
+        return False
+    den = max(abx * abx + aby * aby, tiny)
+    t = min(max(((px - ax) * abx + (py - ay) * aby) / den, 0.0), 1.0)
+    dx, dy = px - (ax + t * abx), py - (ay + t * aby)
+    return math.sqrt(dx * dx + dy * dy) <= r
+
+
 def _crossings(a, b, e1, e2, tol, proper, touched):
-    m = a.shape[0]
-    ne = e1.shape[0]
-    for i in range(m):
+    for i in range(a.shape[0]):
         pax, pay, pbx, pby = a[i, 0], a[i, 1], b[i, 0], b[i, 1]
         lox, hix = min(pax, pbx) - tol, max(pax, pbx) + tol
         loy, hiy = min(pay, pby) - tol, max(pay, pby) + tol
         rx, ry = pbx - pax, pby - pay
         rs = tol * math.sqrt(rx * rx + ry * ry)
-        for e in range(ne):
-            q1x, q1y, q2x, q2y = e1[e, 0], e1[e, 1], e2[e, 0], e2[e, 1]
-            if min(q1x, q2x) > hix or max(q1x, q2x) < lox:
-                continue
-            if min(q1y, q2y) > hiy or max(q1y, q2y) < loy:
-                continue
-            sx, sy = q2x - q1x, q2y - q1y
-            ss = tol * math.sqrt(sx * sx + sy * sy)
-            o1 = _side(rx * (q1y - pay) - ry * (q1x - pax), rs)
-            o2 = _side(rx * (q2y - pay) - ry * (q2x - pax), rs)
-            o3 = _side(sx * (pay - q1y) - sy * (pax - q1x), ss)
-            o4 = _side(sx * (pby - q1y) - sy * (pbx - q1x), ss)
-            if o1 * o2 < 0 and o3 * o4 < 0:
+        for e in range(e1.shape[0]):
+            hit = _contact(pax, pay, pbx, pby, lox, hix, loy, hiy, rx, ry, rs,
+                           e1[e, 0], e1[e, 1], e2[e, 0], e2[e, 1], tol)  # fmt: skip
+            if hit & 1:
                 proper[i] = True
-            if (
-                o1 == 0
-                and (q1x - pax) * rx + (q1y - pay) * ry > rs
-                and (q1x - pbx) * -rx + (q1y - pby) * -ry > rs
-            ):
+            if hit & 2:
                 touched[i] = True
 
 
@@ -72,17 +100,7 @@ def _near(p, e1, e2, n_edges, r, tiny, out):
     for i in range(p.shape[0]):
         px, py = p[i, 0], p[i, 1]
         for e in range(n_edges):
-            ax, ay = e1[e, 0], e1[e, 1]
-            abx, aby = e2[e, 0] - ax, e2[e, 1] - ay
-            # boxes grown by 2 r: a point within r of the edge is inside, rounding and all
-            if min(ax, ax + abx) > px + 2 * r or max(ax, ax + abx) < px - 2 * r:
-                continue
-            if min(ay, ay + aby) > py + 2 * r or max(ay, ay + aby) < py - 2 * r:
-                continue
-            den = max(abx * abx + aby * aby, tiny)
-            t = min(max(((px - ax) * abx + (py - ay) * aby) / den, 0.0), 1.0)
-            dx, dy = px - (ax + t * abx), py - (ay + t * aby)
-            if math.sqrt(dx * dx + dy * dy) <= r:
+            if _near_edge(px, py, e1[e, 0], e1[e, 1], e2[e, 0], e2[e, 1], r, tiny):
                 out[i] = True
                 break
 
@@ -91,8 +109,16 @@ def _near(p, e1, e2, n_edges, r, tiny, out):
 def _compiled() -> Any:
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return _crossings, _near
-    jit_globals(globals(), ("_side",))
+    jit_globals(globals(), HELPERS)
     return jit(_crossings), jit(_near)
+
+
+def jit_into(namespace: MutableMapping[str, Any]) -> None:
+    """Swap :data:`HELPERS` for their compiled versions here (they call each other by name) and
+    in ``namespace``, the globals of a kernel module that imported some of them
+    (:mod:`~boustro.plan.edge_grid`)."""
+    jit_globals(globals(), HELPERS)
+    namespace.update({name: globals()[name] for name in HELPERS if name in namespace})
 
 
 def segment_crossings(
