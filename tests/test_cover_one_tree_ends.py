@@ -269,7 +269,7 @@ def test_extremes_are_the_inner_pieces_past_a_spike_at_the_bands_edge(turnaround
         for seg, role in zip(plan.transects, plan.roles, strict=True)
         if role == "lane" and abs(float(seg[:, 1].mean()) - 44.0) < 1.0
     )
-    assert lanes == pytest.approx([(10.0, 40.0), (60.0, 90.0)], abs=1e-9)
+    np.testing.assert_allclose(np.array(lanes), [[10.0, 40.0], [60.0, 90.0]], rtol=0, atol=1e-9)
 
 
 def _inner_pieces(area, holes, o, u, n, c: float, s: float, tol: float) -> list:
