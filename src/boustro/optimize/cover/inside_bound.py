@@ -355,25 +355,29 @@ def keep_inside_bounds(
     angular half-widths (0 at a layout); ``floor``: :func:`path_floor` (plan units), a path no
     plan of the area is shorter than; ``d`` the boxes' centre offsets, ``eps`` a radius that
     holds every box's rigid motion and ``origin`` the grid's centre: with them the stretches
-    near the lanes' direction whose strip no line can reach are counted too. ``ranking``: the
-    tenth round's bound (trimmed stretches, no turn per pass; lower, so still a bound), which
-    ranks the layouts a search plans."""
+    near the lanes' direction whose strip no line can reach are counted too. ``ranking``:
+    ``(2, L)``, the bound and the value that ranks the layouts a search plans, the tenth
+    round's bound (trimmed stretches, no turn per pass; lower, so still a bound)."""
     kw: dict[str, Any] = {"boustrophedon": False, "ends": None}
     half = lower_bounds(st_half, level_half, cost, spacing, runins=runins, **kw)
     zero = lower_bounds(_no_holes(st_zero), level_zero, cost, spacing, runins=False, **kw)
+    halves = [half, half] if ranking else [half]
     if contour.applies and len(contour.core):
         near = None
         if d is not None and origin is not None:
             near = _near_lengths(contour, theta, d, np.full(len(theta), eps), origin, spacing)
-        p, a, passes = _stretches(contour, theta, delta, near, ranking)
         c = _moves(st_half, spacing)
-        extra = np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
         plain = lower_bounds(_no_holes(st_half), level_half, cost, spacing, runins=runins, **kw)
         # a turn before each boundary pass (the plan's turns: its lanes and passes less one)
-        turns = np.where(st_half.count.sum(axis=1) > 0, passes, 0)
-        half = np.maximum(half, plain + cost.per_length * extra + cost.per_turn * turns)
+        lanes = st_half.count.sum(axis=1) > 0
+        for i, trimmed in enumerate([False, True][: len(halves)]):
+            p, a, passes = _stretches(contour, theta, delta, None if trimmed else near, trimmed)
+            extra = np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
+            turns = np.where(lanes, passes, 0)
+            halves[i] = np.maximum(half, plain + cost.per_length * extra + cost.per_turn * turns)
     least = cost.per_length * floor + cost.fixed
-    return np.maximum(np.minimum(half, zero), least)
+    out = [np.maximum(np.minimum(h, zero), least) for h in halves]
+    return np.stack(out) if ranking else out[0]
 
 
 def inside_box_bounds(
@@ -401,10 +405,7 @@ def inside_box_bounds(
     near = d if radius > 0 else None
     args = (st, lv, st0, lv0, search.cost, search.s, search.contour, theta, delta)
     kw = {"runins": search.n_holes == 0, "floor": search.floor, "origin": search.origin}
-    out = keep_inside_bounds(*args, d=near, eps=radius, **kw)
-    if not ranking:
-        return out
-    # the layouts' own values rank the layouts the search plans: the tenth round's terms there
-    # (with the eleventh round's, 9 of 34 keep-inside plans of the 100-area run came out longer
-    # by 0.1-9.5 s, one shorter: a review)
-    return np.stack([out, keep_inside_bounds(*args, d=None, ranking=True, **kw)])
+    # with ranking, the layouts' own values that rank the layouts the search plans: the tenth
+    # round's terms there (with the eleventh round's, 9 of 34 keep-inside plans of the 100-area
+    # run came out longer by 0.1-9.5 s, one shorter: a review)
+    return keep_inside_bounds(*args, d=near, eps=radius, ranking=ranking, **kw)
