@@ -3,7 +3,9 @@
 Each case runs one ``boustro`` command in-process and compares its JSON output (and the files it
 writes) with ``tests/data/golden/<case>.json``, recorded from the code before the restructuring
 of issue 15. Numbers must agree to 1e-9 (relative); keys that hold timings, dates, versions or
-paths are left out. A deliberate change of results regenerates the files::
+paths are left out. Values that depend on the CPU's floating-point paths as well as on the code
+are compared more loosely (:data:`LOOSE`, :data:`CHAOTIC`). A deliberate change of results
+regenerates the files::
 
     BOUSTRO_REGENERATE_GOLDEN=1 python -m pytest tests/test_golden.py
 
@@ -43,6 +45,20 @@ VOLATILE = {
     "ms",
     "time_ms",
 }
+
+# Relative tolerance of the cases whose numbers pass through the float32 network of the learned
+# planner: on an AMD EPYC (AVX-512) machine they differ from the recording machine's by up to
+# 1.4e-7 relative (torch's and its libraries' kernels round differently per CPU), 1e-6 is kept.
+LOOSE = {"optimize_learned": 1e-6, "train_tiny": 1e-6}
+# Values of the paper's gradient descent from random starts in ``reproduce --quick``: a step that
+# rounds differently on another CPU lands in another local optimum (measured on that machine:
+# one polygon's fitness 0.910 -> 0.938, a share 0.6 -> 0.8), so below these JSON paths only the
+# structure, the counts and a finite number in [-1, 1] (fitness values and their differences)
+# are checked.
+CHAOTIC = (
+    "$.rq/optimizers.json.comparisons.gradient",
+    "$.rq/optimizers.json.methods.gradient.",
+)
 
 # A concave area with a hole, in plain planar coordinates (an L with a square pond).
 L_WITH_HOLE = "POLYGON ((0 0, 60 0, 60 20, 25 20, 25 50, 0 50, 0 0), (5 5, 15 5, 15 15, 5 15, 5 5))"
@@ -164,27 +180,30 @@ def _numeric(text: str):
         return None
 
 
-def _compare(got, want, where: str = "$") -> None:
-    """Assert that ``got`` equals ``want``, numbers to 1e-9 relative (or 1e-12 absolute)."""
+def _compare(got, want, where: str = "$", rel: float = 1e-9) -> None:
+    """Assert that ``got`` equals ``want``, numbers to ``rel`` relative (or 1e-12 absolute);
+    below a :data:`CHAOTIC` path, numbers only finite and in [-1, 1]."""
     if isinstance(want, dict):
         assert isinstance(got, dict), f"{where}: expected an object"
         assert sorted(got) == sorted(want), f"{where}: keys {sorted(got)} != {sorted(want)}"
         for key in want:
-            _compare(got[key], want[key], f"{where}.{key}")
+            _compare(got[key], want[key], f"{where}.{key}", rel)
     elif isinstance(want, list):
         assert isinstance(got, list) and len(got) == len(want), f"{where}: length differs"
         for i, (g, w) in enumerate(zip(got, want, strict=True)):
-            _compare(g, w, f"{where}[{i}]")
+            _compare(g, w, f"{where}[{i}]", rel)
     elif isinstance(want, bool) or want is None:
         assert got == want, f"{where}: {got!r} != {want!r}"
     elif isinstance(want, (int, float)):
         assert isinstance(got, (int, float)) and not isinstance(got, bool), f"{where}: {got!r}"
         if math.isnan(want):
             assert math.isnan(got), f"{where}: {got} is not NaN"
+        elif where.startswith(CHAOTIC) and isinstance(want, float):
+            assert math.isfinite(got) and -1.0 <= got <= 1.0, f"{where}: {got}"
         else:
-            assert math.isclose(got, want, rel_tol=1e-9, abs_tol=1e-12), f"{where}: {got} != {want}"
+            assert math.isclose(got, want, rel_tol=rel, abs_tol=1e-12), f"{where}: {got} != {want}"
     elif isinstance(want, str) and _numeric(want) is not None and _numeric(got) is not None:
-        _compare(_numeric(got), _numeric(want), where)
+        _compare(_numeric(got), _numeric(want), where, rel)
     else:
         assert got == want, f"{where}: {got!r} != {want!r}"
 
@@ -203,4 +222,16 @@ def test_outputs_unchanged(case, tmp_path, capsys, monkeypatch):
     if REGENERATE:
         path.write_text(json.dumps(got, indent=1, sort_keys=True) + "\n", encoding="utf-8")
     want = json.loads(path.read_text(encoding="utf-8"))
-    _compare(json.loads(json.dumps(got)), want)
+    _compare(json.loads(json.dumps(got)), want, rel=LOOSE.get(case, 1e-9))
+
+
+def test_compare_catches_a_change_everywhere_but_below_a_chaotic_path():
+    """The comparison itself: a change beyond the tolerance fails, also in a loose case."""
+    _compare({"a": [1.0, "2.5"]}, {"a": [1.0 + 1e-10, "2.5"]})
+    for got, rel in (({"a": [1.0 + 1e-7, "2.5"]}, 1e-9), ({"a": [1.0, "2.6"]}, 1e-6)):
+        with pytest.raises(AssertionError):
+            _compare(got, {"a": [1.0, "2.5"]}, rel=rel)
+    chaotic = {"rq/optimizers.json": {"methods": {"gradient": {"fitness": [0.5]}}}}
+    _compare({"rq/optimizers.json": {"methods": {"gradient": {"fitness": [0.9]}}}}, chaotic)
+    with pytest.raises(AssertionError):  # out of range or not a number
+        _compare({"rq/optimizers.json": {"methods": {"gradient": {"fitness": [3.0]}}}}, chaotic)
