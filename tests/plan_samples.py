@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
+from typing import Any
 
 import numpy as np
 
@@ -19,7 +20,7 @@ from boustro.plan import vehicle_stats
 from boustro.plan.region import plan_region
 from boustro.vehicle import Vehicle
 
-__all__ = ["SPACING", "plan_cost", "plans_in_boxes", "sample_boxes", "scaled"]
+__all__ = ["SPACING", "bounds_and_plans", "plan_cost", "plans_in_boxes", "sample_boxes", "scaled"]
 
 #: The spacing of the soundness tests' plans, metres.
 SPACING = 9.0
@@ -85,3 +86,19 @@ def plans_in_boxes(
             o = boxes.d[i] + rng.uniform(-boxes.eta[i], boxes.eta[i])
             plans.append(evaluate(float(a), float(o)))
         yield plans
+
+
+def bounds_and_plans(
+    search: Any,
+    evaluate: Callable[[float, float], float],
+    boxes: Boxes,
+    rng: np.random.Generator,
+) -> Iterator[tuple[float, float, list[float]]]:
+    """For each box: ``search``'s bound over the box (its sandwich levels from 1.5 times the
+    widest box's radius), its point value at the box's centre (the exact area) and the plans of
+    :func:`plans_in_boxes` (the centre's first)."""
+    search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
+    box = search.box_bounds(boxes)
+    points = search.point_values(boxes, exact=True)
+    for i, plans in enumerate(plans_in_boxes(evaluate, boxes, rng)):
+        yield float(box[i]), float(points[i]), plans

@@ -25,7 +25,7 @@ from boustro.plan.tour_exact import exact_nodes
 from boustro.vehicle import Vehicle
 
 from .conftest import random_regions
-from .plan_samples import SPACING, plan_cost, plans_in_boxes, sample_boxes, scaled
+from .plan_samples import SPACING, bounds_and_plans, plan_cost, sample_boxes, scaled
 
 
 @pytest.mark.parametrize("case", ["plain", "turnaround", "vehicle"])
@@ -42,14 +42,9 @@ def test_piece_ends_bound_alone_never_exceeds_a_plan_in_the_box(case, index, mon
     vehicle = Vehicle(turn_radius=6.0) if case == "vehicle" else None
     evaluate = plan_cost(region, cost, turnaround=turnaround, vehicle=vehicle)
     search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False)
-    n = 10
-    boxes = sample_boxes(rng, n)
-    search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
-    box = search.box_bounds(boxes)
-    points = search.point_values(boxes, exact=True)
-    for i, plans in enumerate(plans_in_boxes(evaluate, boxes, rng)):
-        assert box[i] <= min(plans) + 1e-9
-        assert points[i] <= plans[0] + 1e-9
+    for box, point, plans in bounds_and_plans(search, evaluate, sample_boxes(rng, 10), rng):
+        assert box <= min(plans) + 1e-9
+        assert point <= plans[0] + 1e-9
 
 
 def _reference(st, spacing, cost):

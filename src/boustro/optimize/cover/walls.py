@@ -10,8 +10,17 @@ routed move where it would enter one) and a pass around a hole never enter a hol
 cross such a wall: crossing it at a point of the hole's interior enters the hole, and at a
 point of its boundary too (a simple ring lies on the far side there).
 
-The walls of a ring are its edges and the diagonals between its vertices that lie inside it
-(shapely), the :data:`WALLS_PER_RING` longest.
+The walls of a ring are the edges and the inner diagonals of the ring *inset* by
+:data:`WALL_INSET` of the set's extent (shapely's mitred ``buffer(-inset)`` of the hole, each
+segment checked to lie inside the hole itself), the :data:`WALLS_PER_RING` longest; the ring
+itself where the inset leaves nothing. Inset, because a lane cut at a hole ends on its ring: a
+move between the two lanes a hole splits (its chord through the hole) meets the ring's own
+edges only at its ends, which is no proper crossing (:func:`~.one_tree._crosses` needs room), so
+with the ring's own edges a triangular hole gave no detour at all (twelfth round: random area 0
+of ``benchmarks/mission_time.py``, a move of 8.2 m straight and 18.7 m around the hole, bounded
+8.2 m; docs/mission_time.md, "Walls inset into the holes"). An inset edge lies strictly inside
+the hole, so such a chord crosses it properly, and the detour past its ends is the way around
+the hole's corner, short of it by the inset only.
 """
 
 from __future__ import annotations
@@ -27,6 +36,11 @@ __all__ = ["WALLS_PER_RING", "WallCache", "hole_walls", "walls_in_frames"]
 
 #: The longest segments kept per hole ring.
 WALLS_PER_RING = 6
+#: How far inside its hole a ring's walls are, relative to the largest extent of the edge set:
+#: far above what a proper crossing needs between two of its ends' ranges
+#: (:data:`~.one_tree.CROSS_ROOM` of the segments' lengths, about ``3e-9`` of the extent), far
+#: below any real detour (0.3 mm on a 300 m area).
+WALL_INSET = 1e-6
 
 
 def _ring_starts(es: EdgeSet) -> NDArray[np.intp]:
@@ -38,33 +52,46 @@ def _ring_starts(es: EdgeSet) -> NDArray[np.intp]:
     return np.concatenate([[0], np.nonzero(brk)[0] + 1]).astype(np.intp)
 
 
-def hole_walls(es: EdgeSet, per_ring: int = WALLS_PER_RING) -> NDArray[np.float64]:
-    """``(W, 4)`` walls ``x1, y1, x2, y2`` inside the hole rings of ``es`` (module docstring)."""
+def _inset_rings(poly: Any, inset: float) -> list[NDArray[np.float64]]:
+    """The rings of ``poly`` inset by ``inset`` (mitred; one per part), or its own ring where
+    nothing is left (a hole thinner than twice the inset)."""
+    small = poly.buffer(-inset, join_style="mitre") if inset > 0 else poly
+    parts = [g for g in getattr(small, "geoms", [small]) if not g.is_empty and g.area > 0]
+    if not parts:
+        parts = [poly]
+    return [np.asarray(g.exterior.coords)[:-1] for g in parts]
+
+
+def hole_walls(
+    es: EdgeSet, per_ring: int = WALLS_PER_RING, inset: float = WALL_INSET
+) -> NDArray[np.float64]:
+    """``(W, 4)`` walls ``x1, y1, x2, y2`` inside the hole rings of ``es`` (module docstring):
+    per hole, the ``per_ring`` longest segments between the vertices of its ring inset by
+    ``inset`` of the set's extent that lie inside the hole."""
     from shapely import LineString, Polygon, covered_by, prepare
 
     starts = _ring_starts(es)
     ends = np.append(starts[1:], len(es.xy))
+    extent = float(np.ptp(es.xy[:, :2], axis=0).max()) if len(es.xy) else 0.0
     out: list[NDArray[np.float64]] = []
     for a, b in zip(starts, ends, strict=True):
         if es.hole[a] < 0 or b - a < 3:
             continue
-        ring = es.xy[a:b, :2]
-        poly: Any = Polygon(ring)
+        poly: Any = Polygon(es.xy[a:b, :2])
         if not poly.is_valid or poly.area <= 0:
             continue
         prepare(poly)
-        i, j = np.triu_indices(len(ring), 1)
-        seg = np.concatenate([ring[i], ring[j]], axis=1)
-        length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
-        order = np.argsort(-length)
-        kept = []
-        for k in order:
-            p, q = seg[k, :2], seg[k, 2:]
-            if covered_by(LineString([p, q]), poly):
-                kept.append(seg[k])
-                if len(kept) >= per_ring:
-                    break
-        out.extend(kept)
+        for ring in _inset_rings(poly, inset * extent):
+            i, j = np.triu_indices(len(ring), 1)
+            seg = np.concatenate([ring[i], ring[j]], axis=1)
+            length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+            kept = []
+            for k in np.argsort(-length):
+                if covered_by(LineString([seg[k, :2], seg[k, 2:]]), poly):  # inside the hole
+                    kept.append(seg[k])
+                    if len(kept) >= per_ring:
+                        break
+            out.extend(kept)
     return np.asarray(out, dtype=np.float64).reshape(-1, 4)
 
 
