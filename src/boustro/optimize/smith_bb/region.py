@@ -31,7 +31,7 @@ from .region_chains import near_margin
 from .region_kernel import region_bounds, region_values, ring_starts
 from .search import DEFAULT_TOL, SEED_ANGLES, _check, _check_angles, _Search, _weights, solve
 
-__all__ = ["REGION_MAX_WORK", "ROBUST_ANGLE", "ROBUST_OFFSET", "robust_values", "smith_bb_region"]
+__all__ = ["REGION_EXTEND", "REGION_MAX_WORK", "ROBUST_ANGLE", "ROBUST_OFFSET", "robust_values", "smith_bb_region"]
 
 #: Segments at most this long (share of the normalised frame) are not counted, as
 #: :func:`~boustro.models.region.segment_moments` is called by ``region-grid``.
@@ -164,6 +164,10 @@ class _RegionSearch(_Search):
 #: (10 m, 1 m) and the pond L converge within it (0.1-0.5 s), the 40 m square ring at 7 m ends at
 #: a gap of 1.05e-4 (converges with 2e7); random concave areas with holes in 0.05-0.2 s.
 REGION_MAX_WORK = 1e7
+#: The default budget doubles, up to this many times :data:`REGION_MAX_WORK`, while the gap
+#: shrinks fast (:data:`~boustro.optimize.smith_bb.search.SHRINK`; an explicit ``max_work`` is
+#: a hard limit).
+REGION_EXTEND = 8.0
 
 
 def robust_values(
@@ -252,6 +256,7 @@ def smith_bb_region(
     r, spacing = _checked(region, spacing)
     a, b = _weights(a, b, fitness)
     tol = _check("tol", tol, 1e-9)
+    extend = REGION_EXTEND if max_work is None else 1.0
     if max_work is None:
         max_work = REGION_MAX_WORK * max(1.0, DEFAULT_TOL / tol)
     max_work = _check("max_work", max_work, 0.0)
@@ -266,4 +271,5 @@ def smith_bb_region(
             search.offer(value, theta, d)
         search.polish(theta, d)
     search.seed(SEED_ANGLES * n_angles)
-    return solve(search, boxes, spacing, tol, max_work, progress, t0, "area", _final, region=True)
+    return solve(search, boxes, spacing, tol, max_work, progress, t0, "area", _final, extend,
+                 region=True)  # fmt: skip
