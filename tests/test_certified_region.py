@@ -230,3 +230,36 @@ def test_grid_layout_is_the_first_incumbent_and_decompose_skips_the_whole_area(
     plan_area(region.shell.vertices, 4.0, crs=None, holes=[h.vertices for h in region.holes],
               decompose=False)  # fmt: skip
     assert searched == [len(region.vertices)]
+
+
+def test_default_budget_doubles_while_the_gap_shrinks_and_an_explicit_one_is_hard(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # the default budget (here made small) doubles while the gap shrinks (up to REGION_EXTEND
+    # times); the same budget given explicitly stops at it; a comb whose bound stalls (ten lines
+    # along tooth edges) stops at its budget with the default as with the explicit budget
+    from boustro.optimize.smith_bb import region as region_mod
+    from boustro.optimize.smith_bb.search import SHRINK
+
+    area = random_region(np.random.default_rng(11), 40, 2)
+    spacing = 0.08 * area.diameter
+    monkeypatch.setattr(region_mod, "REGION_MAX_WORK", 1e6)
+    hard = smith_bb_region(area, spacing, max_work=1e6)
+    extended = smith_bb_region(area, spacing)
+    assert not hard.info["converged"]
+    assert extended.info["boxes"] > hard.info["boxes"]
+    assert extended.gap < hard.gap * SHRINK
+    assert extended.upper_bound >= _dense(area, spacing, 360, 40) - 1e-12
+    if not extended.info["converged"]:  # stopped at a doubled budget, at most the cap
+        assert "budget" in extended.info["stopped"]
+    monkeypatch.setattr(region_mod, "REGION_MAX_WORK", 2e6)
+    teeth = [(0, 0), (90, 0)]
+    for i in range(5):
+        right = 2 * (4 - i) + 1
+        teeth += [(right * 10, 40), (right * 10 - 10, 40)]
+        if right > 1:
+            teeth += [(right * 10 - 10, 10), (right * 10 - 20, 10)]
+    comb = Region(teeth)
+    stalled = smith_bb_region(comb, 5.0)
+    assert not stalled.info["converged"]
+    assert stalled.info["boxes"] == smith_bb_region(comb, 5.0, max_work=2e6).info["boxes"]

@@ -116,3 +116,62 @@ def test_quarters_of_the_best_boxes_are_scored_with_the_strips() -> None:
     plain.strips = False  # the sandwich's search: only the two best centres polished
     plain.polish_best(boxes, plain.values(boxes.theta, boxes.d), False)
     assert s.evaluations >= plain.evaluations + 8 + len(quarters)
+
+
+def _layouts(xy: np.ndarray, s: float, rng: np.random.Generator) -> list[tuple[float, float]]:
+    """Random layouts, layouts at whole angles, and layouts whose lines pass exactly (as the
+    crossing rule computes ``d + k s``) through a vertex: the edges at the quick tests' edge."""
+    out = [(float(rng.uniform(0, math.pi)), float(rng.uniform(0, s))) for _ in range(6)]
+    out += [(0.0, 0.3 * s), (math.pi / 2, 0.7 * s)]
+    for theta in rng.uniform(0, math.pi, 4):
+        v = xy[rng.integers(len(xy)), :2]
+        h = -math.sin(theta) * v[0] + math.cos(theta) * v[1]
+        out.append((float(theta), float(h - math.floor(h / s) * s)))
+    return out
+
+
+@pytest.mark.parametrize("which", ["traced", "comb"])
+def test_sweep_and_intervals_equal_every_edge_against_every_line(which: str) -> None:
+    # the one-pass sweep of the strips (quick rejection of the edges meeting no strip) and the
+    # lines' intervals (quick rejection of the edges crossing no line) against the plain rule
+    # applied to every edge and every line
+    from boustro.optimize.smith_bb.region_strips import _sweep, strip_halfwidths
+
+    rng = np.random.default_rng(5)
+    if which == "traced":
+        search = _search(7, 300, 3)
+    else:
+        search = _RegionSearch(_concave(), 4.0, 0.5, 0.5)
+    xy, s = search.real[0], search.s
+    k0, nb = lines_range(xy, s)
+    k0, nb = k0 - 4, nb + 8
+    lines = 0
+    for theta, d in _layouts(xy, s, rng):
+        cs, sn = math.cos(theta), math.sin(theta)
+        h1, h2 = -sn * xy[:, 0] + cs * xy[:, 1], -sn * xy[:, 2] + cs * xy[:, 3]
+        t1, t2 = cs * xy[:, 0] + sn * xy[:, 1], cs * xy[:, 2] + sn * xy[:, 3]
+        a, b = np.minimum(h1, h2), np.maximum(h1, h2)
+        c = np.array([d + (k0 + q) * s for q in range(nb)])
+        half = np.empty(nb)
+        strip_halfwidths(c, search.radius, math.sin(rng.uniform(0, 3e-3)), 0.02 * s, half)
+        low, high = c - half, c + half
+        lcnt, lt, hcnt, ht, pcnt, plo, phi = _sweep(xy, cs, sn, c, low, high, half.max(), d, s,
+                                                    k0, nb)  # fmt: skip
+        start, lo, hi = rk._intervals(xy, cs, sn, d, s, k0, nb)
+        for q in range(nb):
+            with np.errstate(all="ignore"):
+                for at, cnt, got in ((low[q], lcnt, lt), (high[q], hcnt, ht), (c[q], None, None)):
+                    m = (a <= at) & (at < b)
+                    want = np.sort(t1[m] + (at - h1[m]) * (t2[m] - t1[m]) / (h2[m] - h1[m]))
+                    if cnt is None:  # the line itself: its intervals pair the crossings
+                        assert np.array_equal(lo[start[q] : start[q + 1]], want[0::2])
+                        assert np.array_equal(hi[start[q] : start[q + 1]], want[1::2])
+                    else:
+                        assert np.array_equal(got[cnt[q] : cnt[q + 1]], want)
+            touch = (low[q] <= b) & (high[q] >= a)
+            assert pcnt[q + 1] - pcnt[q] == touch.sum()
+            mid = 0.5 * (plo[pcnt[q] : pcnt[q + 1]] + phi[pcnt[q] : pcnt[q + 1]])
+            lo_t, hi_t = np.minimum(t1, t2)[touch], np.maximum(t1, t2)[touch]
+            assert ((lo_t - 1e-9 <= mid) & (mid <= hi_t + 1e-9)).all()  # each on its edge
+            lines += int(m.sum() > 0)
+    assert lines > 50

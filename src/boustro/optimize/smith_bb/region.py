@@ -31,7 +31,14 @@ from .region_chains import near_margin
 from .region_kernel import region_bounds, region_values, ring_starts
 from .search import DEFAULT_TOL, SEED_ANGLES, _check, _check_angles, _Search, _weights, solve
 
-__all__ = ["REGION_MAX_WORK", "ROBUST_ANGLE", "ROBUST_OFFSET", "robust_values", "smith_bb_region"]
+__all__ = [
+    "REGION_EXTEND",
+    "REGION_MAX_WORK",
+    "ROBUST_ANGLE",
+    "ROBUST_OFFSET",
+    "robust_values",
+    "smith_bb_region",
+]
 
 #: Segments at most this long (share of the normalised frame) are not counted, as
 #: :func:`~boustro.models.region.segment_moments` is called by ``region-grid``.
@@ -162,8 +169,13 @@ class _RegionSearch(_Search):
 #: (more than 8 lines along edges at once, a comb; docs/global_optimum.md, section 10, "The
 #: chain bound") more work does not close the gap. Measured (2026-11-27, load 7): the L, the U
 #: (10 m, 1 m) and the pond L converge within it (0.1-0.5 s), the 40 m square ring at 7 m ends at
-#: a gap of 1.05e-4 (converges with 2e7); random concave areas with holes in 0.05-0.2 s.
+#: a gap of 1.05e-4 (converges with 2e7: by default since the extension, :data:`REGION_EXTEND`);
+#: random concave areas with holes in 0.05-0.2 s.
 REGION_MAX_WORK = 1e7
+#: The default budget doubles, up to this many times :data:`REGION_MAX_WORK`, while the gap
+#: shrinks fast (:data:`~boustro.optimize.smith_bb.search.SHRINK`; an explicit ``max_work`` is
+#: a hard limit).
+REGION_EXTEND = 8.0
 
 
 def robust_values(
@@ -231,7 +243,8 @@ def smith_bb_region(
     over every angle and offset, with a certified upper bound.
 
     Args as :func:`~boustro.optimize.smith_bb.smith_bb` (the budget's default
-    :data:`REGION_MAX_WORK`); ``region`` in user units; ``incumbents``: layouts ``(angle,
+    :data:`REGION_MAX_WORK`, doubled while the gap shrinks by a tenth per doubling, up to
+    :data:`REGION_EXTEND` times; an explicit ``max_work`` is a hard limit); ``region`` in user units; ``incumbents``: layouts ``(angle,
     offset)`` (radians; user units from the shell's vertex mean, as returned, e.g. by
     ``region-grid``) scored and polished before the first boxes: a good first incumbent
     prunes more boxes (the result is as certified without them).
@@ -252,6 +265,7 @@ def smith_bb_region(
     r, spacing = _checked(region, spacing)
     a, b = _weights(a, b, fitness)
     tol = _check("tol", tol, 1e-9)
+    extend = REGION_EXTEND if max_work is None else 1.0
     if max_work is None:
         max_work = REGION_MAX_WORK * max(1.0, DEFAULT_TOL / tol)
     max_work = _check("max_work", max_work, 0.0)
@@ -266,4 +280,5 @@ def smith_bb_region(
             search.offer(value, theta, d)
         search.polish(theta, d)
     search.seed(SEED_ANGLES * n_angles)
-    return solve(search, boxes, spacing, tol, max_work, progress, t0, "area", _final, region=True)
+    return solve(search, boxes, spacing, tol, max_work, progress, t0, "area", _final, extend,
+                 region=True)  # fmt: skip

@@ -50,7 +50,9 @@ from ..._jit import jit_globals
 from . import kernel
 from .kernel import _sup_w
 
-__all__ = ["MAX_COMBOS", "MAX_LINES", "MAX_NEAR", "chain_bound", "near_margin", "prepare"]
+__all__ = [
+    "MAX_COMBOS", "MAX_LINES", "MAX_NEAR", "chain_bound", "edge_lengths", "near_margin", "prepare"
+]
 
 #: Most uncertain lines (``u > r``) of a box for the chain bound.
 MAX_LINES = 8
@@ -77,33 +79,45 @@ DEGENERATE = 1e-11
 MARGIN_CAP = 0.5 * DEGENERATE
 
 
-def _edge_class(xy, i, cs, sn, sdelta):
-    """``(class, h1, h2)`` of edge ``i``: its ends' across-coordinates ``h`` and ``+-1`` where
-    ``h`` rises (falls) along it for every angle of the box, 0 where it may turn parallel."""
+def _edge_class(xy, i, cs, sn, sdelta, ln):
+    """``(class, h1, h2)`` of edge ``i`` (length ``ln[i]``): its ends' across-coordinates
+    ``h`` and ``+-1`` where ``h`` rises (falls) along it for every angle of the box, 0 where it
+    may turn parallel."""
     h1 = -sn * xy[i, 0] + cs * xy[i, 1]
     h2 = -sn * xy[i, 2] + cs * xy[i, 3]
-    ln = math.hypot(xy[i, 2] - xy[i, 0], xy[i, 3] - xy[i, 1])
     cls = 0
-    if abs(h2 - h1) > ln * sdelta * (1.0 + 1e-9) + 1e-15:
+    if abs(h2 - h1) > ln[i] * sdelta * (1.0 + 1e-9) + 1e-15:
         cls = 1 if h2 > h1 else -1
     return cls, h1, h2
 
 
-def _chains(xy, rings, cs, sn, sdelta, ci, cf):
+def edge_lengths(xy):
+    """``ln[i]``: the length of edge ``i`` (``math.hypot``, as :func:`_edge_class` reads it)."""
+    ln = np.empty(xy.shape[0])
+    for i in range(xy.shape[0]):
+        ln[i] = math.hypot(xy[i, 2] - xy[i, 0], xy[i, 3] - xy[i, 1])
+    return ln
+
+
+def _chains(xy, rings, cs, sn, sdelta, ln, ci, cf):
     """The chains of the real rings: ``ci[k] = (first edge, end edge, class, end vertex)``
     (a vertex is the index of the edge it starts), ``cf[k] = (low, high)`` of their
     across-coordinate ``h``; class ``+-1``: monotone for every angle of the box, 0: one edge
-    that may turn parallel to the lines. Returns their count."""
+    that may turn parallel to the lines (edge lengths ``ln``, :func:`edge_lengths`). Returns
+    their count."""
     n = 0
     for r in range(rings.shape[0] - 1):
         i = rings[r]
+        cls, h1, h2 = 0, 0.0, 0.0
+        cj, g1, g2 = 0, 0.0, 0.0
+        if i < rings[r + 1]:
+            cls, h1, h2 = _edge_class(xy, i, cs, sn, sdelta, ln)
         while i < rings[r + 1]:
-            cls, h1, h2 = _edge_class(xy, i, cs, sn, sdelta)
             lo_h, hi_h = min(h1, h2), max(h1, h2)
             j = i + 1
-            while cls != 0 and j < rings[r + 1]:
-                cj, _g1, g2 = _edge_class(xy, j, cs, sn, sdelta)
-                if cj != cls:
+            while j < rings[r + 1]:  # the class of edge j is carried to the next chain
+                cj, g1, g2 = _edge_class(xy, j, cs, sn, sdelta, ln)
+                if cls == 0 or cj != cls:
                     break
                 lo_h, hi_h = min(lo_h, g2), max(hi_h, g2)
                 j += 1
@@ -112,6 +126,8 @@ def _chains(xy, rings, cs, sn, sdelta, ci, cf):
             cf[n, 0], cf[n, 1] = lo_h, hi_h
             n += 1
             i = j
+            if j < rings[r + 1]:
+                cls, h1, h2 = cj, g1, g2
     return n
 
 
@@ -333,18 +349,15 @@ def _line_options(xy, ci, cf, nch, cs, sn, su, cd, eta, c, eps, tiny, margin, op
     return most
 
 
-def chain_bound(xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, lines, nlines, lo, hi, n_fixed,
-                a, b, tiny, margin):  # fmt: skip
+def chain_bound(xy, ci, cf, nch, cs, sn, sdelta, eta, d, s, eps, k0, lines, nlines, lo, hi,
+                n_fixed, a, b, tiny, margin):  # fmt: skip
     """The chain bound (module doc) of a box (rotation at most ``asin(sdelta)``, shift at most
-    ``eta``) whose lines ``k0 + lines[:nlines]`` are uncertain and whose sure lines have the
-    segment intervals ``lo/hi[:n_fixed]``; ``inf`` where it does not apply; ``margin`` as
+    ``eta``; its ``nch`` chains ``ci, cf`` of the real edges ``xy``, :func:`_chains`) whose
+    lines ``k0 + lines[:nlines]`` are uncertain and whose sure lines have the segment intervals
+    ``lo/hi[:n_fixed]``; ``inf`` where it does not apply; ``margin`` as
     :func:`_line_options`'s."""
     if nlines == 0 or nlines > MAX_LINES:
         return np.inf
-    ne = xy.shape[0]
-    ci = np.empty((ne, 4), dtype=np.int64)
-    cf = np.empty((ne, 2))
-    nch = _chains(xy, rings, cs, sn, sdelta, ci, cf)
     cap = MAX_OPTIONS * nlines
     opt = np.zeros((cap, 4), dtype=np.int64)
     olo = np.empty(cap * (nch // 2 + 1))
@@ -455,7 +468,7 @@ def near_margin(rings: list[NDArray[np.float64]], tiny: float) -> float:
 def prepare() -> None:
     """Swap this module's helpers for their numba versions (before a caller compiles)."""
     kernel._compiled()
-    helpers = ("_edge_class", "_chains", "_crossing_range", "_feasible", "_side",
+    helpers = ("_edge_class", "edge_lengths", "_chains", "_crossing_range", "_feasible", "_side",
                "_near_index", "_collect", "_condition", "_emit", "_line_options", "_combine",
                "_sup_w")  # fmt: skip
     jit_globals(globals(), helpers)

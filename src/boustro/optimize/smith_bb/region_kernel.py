@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 from ..._jit import jit, jit_globals
 from . import kernel, region_splits, region_strips
 from .kernel import _sup_w, lines_range
-from .region_chains import _chains, chain_bound, prepare
+from .region_chains import _chains, chain_bound, edge_lengths, prepare
 from .region_splits import NODES, _line_segments, split_bound
 from .region_strips import strip_intervals
 
@@ -74,10 +74,22 @@ def _intervals(xy, cs, sn, d, s, k0, nb):
     """``(start (nb + 1,), lo, hi)``: the intervals of the rings ``xy`` on each line (line
     ``k0 + b`` holds intervals ``start[b]:start[b + 1]``, sorted)."""
     cnt = np.zeros(nb + 1, dtype=np.int64)
-    for i in range(xy.shape[0]):
+    ne = xy.shape[0]
+    hit = np.empty(ne, dtype=np.int64)  # the edges crossing a line, and their first line
+    first = np.empty(ne, dtype=np.int64)
+    nh = 0
+    inv = 1.0 / s
+    for i in range(ne):
         h1 = -sn * xy[i, 0] + cs * xy[i, 1]
         h2 = -sn * xy[i, 2] + cs * xy[i, 3]
+        # most edges cross no line: no whole number within 1e-9 (far above the rounding of
+        # d + k s) of [(min - d) / s, (max - d) / s]
+        if math.ceil((min(h1, h2) - d) * inv - 1e-9) > (max(h1, h2) - d) * inv + 1e-9:
+            continue
         k = _first_line(min(h1, h2), d, s, k0)
+        if k < k0 + nb and (h1 <= d + k * s) != (h2 <= d + k * s):
+            hit[nh], first[nh] = i, k
+            nh += 1
         while k < k0 + nb and (h1 <= d + k * s) != (h2 <= d + k * s):
             cnt[k - k0 + 1] += 1
             k += 1
@@ -85,15 +97,14 @@ def _intervals(xy, cs, sn, d, s, k0, nb):
         cnt[q + 1] += cnt[q]
     t = np.empty(cnt[nb])
     fill = cnt[:nb].copy()
-    for i in range(xy.shape[0]):
+    for e in range(nh):
+        i = hit[e]
         x1, y1, x2, y2 = xy[i, 0], xy[i, 1], xy[i, 2], xy[i, 3]
         h1 = -sn * x1 + cs * y1
         h2 = -sn * x2 + cs * y2
-        if h1 == h2:
-            continue
         t1 = cs * x1 + sn * y1
         t2 = cs * x2 + sn * y2
-        k = _first_line(min(h1, h2), d, s, k0)
+        k = first[e]
         while k < k0 + nb and (h1 <= d + k * s) != (h2 <= d + k * s):
             c = d + k * s
             j = k - k0
@@ -143,14 +154,21 @@ def _values(xy, cs, sn, d, s, k0, nb, a, b, tiny):
 def _chain_counts(xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, cnt):
     """``cnt[b]``: h-monotone chains of the real rings (or single edges that may turn parallel
     to the lines; :func:`.region_chains._chains`) whose h-range grown by ``eps`` holds line
+    ``k0 + b`` (:func:`_count_chains`)."""
+    ci = np.empty((xy.shape[0], 4), dtype=np.int64)
+    cf = np.empty((xy.shape[0], 2))
+    nch = _chains(xy, rings, cs, sn, sdelta, edge_lengths(xy), ci, cf)
+    _count_chains(cf, nch, d, s, eps, k0, nb, cnt)
+
+
+def _count_chains(cf, nch, d, s, eps, k0, nb, cnt):
+    """``cnt[b]``: the chains (h-ranges ``cf[:nch]``) whose h-range grown by ``eps`` holds line
     ``k0 + b``: at least the crossings of every moved region's boundary with the line (the
     half-open rule crosses a monotone chain at most once, a straight edge at most once, an edge
     along the line never)."""
     for q in range(nb):
         cnt[q] = 0
-    ci = np.empty((xy.shape[0], 4), dtype=np.int64)
-    cf = np.empty((xy.shape[0], 2))
-    for m in range(_chains(xy, rings, cs, sn, sdelta, ci, cf)):
+    for m in range(nch):
         lo_h, hi_h = cf[m, 0], cf[m, 1]
         ka = max(math.floor((lo_h - eps - d) / s), k0)
         kb = min(math.ceil((hi_h + eps - d) / s), k0 + nb - 1)
@@ -179,8 +197,8 @@ def _owners(oa, ob, o0, o1, pa, pb, p0, p1, tiny, owner):
     return True
 
 
-def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
-           margin, cut, pos, radius):  # fmt: skip
+def _bound(in_xy, out_xy, real_xy, rings, ln, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b,
+           tiny, margin, cut, pos, radius):  # fmt: skip
     """The bound of one box: from the strips of the real boundary if ``radius >= 0``
     (:mod:`.region_strips`; lengths in ``t``, so ``(a + b) (1 / cos delta - 1) top`` is added,
     and the cut is lowered by it), else from the sandwich ``in_xy, out_xy``."""
@@ -202,17 +220,21 @@ def _bound(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb
         # a layout's lengths are the t-lengths times 1 / cos(alpha): mean and std (the chain
         # bound mixes t-lengths with its own) move by at most (1 / cos(delta) - 1) top each
         stretch = (a + b) * top * (1.0 / math.sqrt(max(1.0 - sdelta * sdelta, 1e-300)) - 1.0)
-    return stretch + _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, cs, sn, sdelta, eta,
+    return stretch + _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, ln, cs, sn, sdelta, eta,
                                d, s, eps, k0, nb, a, b, tiny, margin, cut - stretch, pos,
                                top)  # fmt: skip
 
 
-def _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb,
-              a, b, tiny, margin, cut, pos, top):  # fmt: skip
-    """The bound of one box from its lines' outer and inner intervals (module doc)."""
+def _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, ln, cs, sn, sdelta, eta, d, s, eps, k0,
+              nb, a, b, tiny, margin, cut, pos, top):  # fmt: skip
+    """The bound of one box from its lines' outer and inner intervals (module doc); ``ln``:
+    the real edges' lengths (:func:`.region_chains.edge_lengths`)."""
     crude = a * top + b
     cnt = np.empty(nb, dtype=np.int64)
-    _chain_counts(real_xy, rings, cs, sn, sdelta, d, s, eps, k0, nb, cnt)
+    ci = np.empty((real_xy.shape[0], 4), dtype=np.int64)  # the chains, for the counts and
+    cf = np.empty((real_xy.shape[0], 2))  # the chain bound
+    nch = _chains(real_xy, rings, cs, sn, sdelta, ln, ci, cf)
+    _count_chains(cf, nch, d, s, eps, k0, nb, cnt)
     owner = np.empty(pa.shape[0], dtype=np.int64)
     extra = np.zeros(nb, dtype=np.int64)
     gaps = np.zeros(nb, dtype=np.int64)
@@ -276,8 +298,8 @@ def _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, cs, sn, sdelta, eta, d, 
     elif old <= cut:  # the box is discarded anyway
         return old
     # the chain bound (segment ends tied to the chains, .region_chains) where it applies
-    return min(old, chain_bound(real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, unc, n_unc,
-                                clo, chi, n_sure, a, b, tiny, margin))  # fmt: skip
+    return min(old, chain_bound(real_xy, ci, cf, nch, cs, sn, sdelta, eta, d, s, eps, k0, unc,
+                                n_unc, clo, chi, n_sure, a, b, tiny, margin))  # fmt: skip
 
 
 def _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, lo, hi, w, n_fixed,
@@ -316,8 +338,9 @@ def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, n
     m = cs.shape[0]
     out = np.empty(m)
     pos = np.empty(2 * (max(in_xy.shape[0], 2 * real_xy.shape[0]) + 4) * nb + 8)
+    ln = edge_lengths(real_xy)
     for i in range(m):
-        v = _bound(in_xy, out_xy, real_xy, rings, cs[i], sn[i], sdelta[i], eta[i], d[i], s,
+        v = _bound(in_xy, out_xy, real_xy, rings, ln, cs[i], sn[i], sdelta[i], eta[i], d[i], s,
                    eps[i], k0, nb, a, b, tiny, margin, cut - 2.0 * slack, pos, radius)  # fmt: skip
         out[i] = v + slack
     return out
@@ -332,7 +355,8 @@ def _compiled() -> tuple[Any, Any]:
     prepare()  # and chain_bound's, in .region_chains
     region_splits.prepare()  # and split_bound's
     region_strips.prepare()  # and strip_intervals'
-    helpers = ("_first_line", "_intervals", "_chains", "_chain_counts", "_sup_w", "_owners",
+    helpers = ("_first_line", "_intervals", "_chains", "edge_lengths", "_count_chains",
+               "_chain_counts", "_sup_w", "_owners",
                "_line_segments", "_enumerated", "chain_bound",
                "split_bound", "strip_intervals", "_bound_of", "_bound")  # fmt: skip
     jit_globals(globals(), helpers)

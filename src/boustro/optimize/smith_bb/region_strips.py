@@ -36,6 +36,7 @@ import math
 import numpy as np
 
 from ..._jit import jit_globals
+from ..cover.band_lines import _sort_keys, _sort_pairs, jit_into
 
 __all__ = ["prepare", "strip_halfwidths", "strip_intervals"]
 
@@ -50,81 +51,141 @@ def strip_halfwidths(c, radius, sdelta, eta, out):
         out[q] = ((abs(c[q]) * (1.0 - cd) + eta + t * sdelta) / cd) * (1.0 + 1e-9) + 1e-12
 
 
-def _crossings(ha, hb, ta, tb, h, nb, cnt_out):
-    """``t``: the sorted ``t`` of the rings' crossings with each line ``h[q]`` (``h`` sorted
-    ascending; edges from ``(ta, ha)`` to ``(tb, hb)``; half-open rule ``(h1 <= c) != (h2 <=
-    c)``), line ``q``'s from ``cnt_out[q]`` to ``cnt_out[q + 1]``."""
-    cnt = np.zeros(nb + 1, dtype=np.int64)
-    first = np.empty(ha.shape[0], dtype=np.int64)
-    for i in range(ha.shape[0]):
-        h1, h2 = ha[i], hb[i]
-        q = np.searchsorted(h, min(h1, h2))
-        first[i] = q
-        while q < nb and (h1 <= h[q]) != (h2 <= h[q]):
-            cnt[q + 1] += 1
-            q += 1
-    for q in range(nb):
-        cnt[q + 1] += cnt[q]
-    t = np.empty(cnt[nb])
-    fill = cnt[:nb].copy()
-    for i in range(ha.shape[0]):
-        h1, h2 = ha[i], hb[i]
-        if h1 == h2:
-            continue
-        t1, t2 = ta[i], tb[i]
-        q = first[i]
-        while q < nb and (h1 <= h[q]) != (h2 <= h[q]):
-            t[fill[q]] = t1 + (h[q] - h1) * (t2 - t1) / (h2 - h1)
-            fill[q] += 1
-            q += 1
-    for q in range(nb):
-        t[cnt[q] : cnt[q + 1]] = np.sort(t[cnt[q] : cnt[q + 1]])
-    cnt_out[:] = cnt
-    return t
+def _first_strip(c, nb, at, d, s, k0):
+    """The first line ``q`` with ``c[q] >= at`` (``c[q] = d + (k0 + q) s``, ascending; ``nb``
+    if none): ``searchsorted(c, at)`` by arithmetic, fixed against ``c`` itself."""
+    x = (at - d) / s - k0
+    if not x < nb:  # also NaN
+        return nb
+    q = min(max(math.ceil(x), 0), nb)
+    while q > 0 and c[q - 1] >= at:
+        q -= 1
+    while q < nb and c[q] < at:
+        q += 1
+    return q
 
 
-def _pieces(ha, hb, ta, tb, c, half, nb):
-    """``(start (nb + 1,), lo, hi)``: per line ``q``, the ``t``-ranges of the edges clipped to
-    its strip ``|h - c[q]| <= half[q]`` (unsorted; ``c`` ascending)."""
-    lo_h = c - half
-    hi_h = c + half
-    widest = half.max()
-    cnt = np.zeros(nb + 1, dtype=np.int64)
-    first = np.empty(ha.shape[0], dtype=np.int64)
-    for i in range(ha.shape[0]):
-        a, b = min(ha[i], hb[i]), max(ha[i], hb[i])
-        q = np.searchsorted(c, a - widest)  # strips in c order, their widths vary
-        first[i] = q
-        while q < nb and c[q] - widest <= b:
-            if lo_h[q] <= b and hi_h[q] >= a:
-                cnt[q + 1] += 1
-            q += 1
-    for q in range(nb):
-        cnt[q + 1] += cnt[q]
-    lo = np.empty(cnt[nb])
-    hi = np.empty(cnt[nb])
-    fill = cnt[:nb].copy()
-    for i in range(ha.shape[0]):
-        h1, h2, t1, t2 = ha[i], hb[i], ta[i], tb[i]
+def _sweep(xy, cs, sn, c, low, high, widest, d, s, k0, nb):
+    """One pass over the edges ``xy`` seen in the box centre's frame (``h`` across, ``t``
+    along): per line ``q`` the ``t`` of the boundary's crossings with the strip's lower edge
+    ``h = low[q]`` and its upper edge ``high[q]`` (sorted; half-open rule ``(h1 <= h) != (h2
+    <= h)``), and the ``t``-ranges of the edges clipped to the strip ``[low[q], high[q]]``
+    (closed; in edge order, padded by ``1e-12 (1 + |u0| + |u1|)``). Only the lines whose
+    strip can meet an edge (``c[q] - widest <= max h``, ``c[q] + widest >= min h``) are
+    visited, found by arithmetic (:func:`_first_strip`), and an edge meeting none costs its
+    two ``h`` only. Returns ``(lcnt, lt, hcnt, ht, pcnt, plo, phi)``, line ``q``'s entries
+    from ``cnt[q]`` to ``cnt[q + 1]``."""
+    ne = xy.shape[0]
+    lcnt = np.zeros(nb + 1, dtype=np.int64)
+    hcnt = np.zeros(nb + 1, dtype=np.int64)
+    pcnt = np.zeros(nb + 1, dtype=np.int64)
+    hit = np.empty(ne, dtype=np.int64)  # the edges meeting a strip, and their first line
+    first = np.empty(ne, dtype=np.int64)
+    ha = np.empty(ne)
+    hb = np.empty(ne)
+    nh = 0
+    inv = 1.0 / s
+    for i in range(ne):
+        h1 = -sn * xy[i, 0] + cs * xy[i, 1]
+        h2 = -sn * xy[i, 2] + cs * xy[i, 3]
         a, b = min(h1, h2), max(h1, h2)
-        q = first[i]
+        # most edges meet no strip: no whole number within 1e-9 (far above the rounding of
+        # c = d + k s) of [(a - widest - d) / s, (b + widest - d) / s]
+        if math.ceil((a - widest - d) * inv - 1e-9) > (b + widest - d) * inv + 1e-9:
+            continue
+        q = _first_strip(c, nb, a - widest, d, s, k0)
+        if q >= nb or c[q] - widest > b:
+            continue
+        hit[nh], first[nh], ha[nh], hb[nh] = i, q, h1, h2
+        nh += 1
         while q < nb and c[q] - widest <= b:
-            if lo_h[q] > b or hi_h[q] < a:
+            if low[q] <= b and high[q] >= a:
+                pcnt[q + 1] += 1
+                if a <= low[q] < b:
+                    lcnt[q + 1] += 1
+                if a <= high[q] < b:
+                    hcnt[q + 1] += 1
+            q += 1
+    for q in range(nb):
+        lcnt[q + 1] += lcnt[q]
+        hcnt[q + 1] += hcnt[q]
+        pcnt[q + 1] += pcnt[q]
+    lt = np.empty(lcnt[nb])
+    ht = np.empty(hcnt[nb])
+    plo = np.empty(pcnt[nb])
+    phi = np.empty(pcnt[nb])
+    lfill = lcnt[:nb].copy()
+    hfill = hcnt[:nb].copy()
+    pfill = pcnt[:nb].copy()
+    for e in range(nh):
+        i = hit[e]
+        h1, h2 = ha[e], hb[e]
+        t1 = cs * xy[i, 0] + sn * xy[i, 1]
+        t2 = cs * xy[i, 2] + sn * xy[i, 3]
+        a, b = min(h1, h2), max(h1, h2)
+        q = first[e]
+        while q < nb and c[q] - widest <= b:
+            if low[q] > b or high[q] < a:
                 q += 1
                 continue
+            if a <= low[q] < b:
+                lt[lfill[q]] = t1 + (low[q] - h1) * (t2 - t1) / (h2 - h1)
+                lfill[q] += 1
+            if a <= high[q] < b:
+                ht[hfill[q]] = t1 + (high[q] - h1) * (t2 - t1) / (h2 - h1)
+                hfill[q] += 1
             if h1 == h2:
                 u0, u1 = t1, t2
             else:  # the edge's t at the strip's edges, clamped to the edge
-                ua = min(max((lo_h[q] - h1) / (h2 - h1), 0.0), 1.0)
-                ub = min(max((hi_h[q] - h1) / (h2 - h1), 0.0), 1.0)
+                ua = min(max((low[q] - h1) / (h2 - h1), 0.0), 1.0)
+                ub = min(max((high[q] - h1) / (h2 - h1), 0.0), 1.0)
                 u0 = t1 + ua * (t2 - t1)
                 u1 = t1 + ub * (t2 - t1)
             pad = 1e-12 * (1.0 + abs(u0) + abs(u1))
-            lo[fill[q]] = min(u0, u1) - pad
-            hi[fill[q]] = max(u0, u1) + pad
-            fill[q] += 1
+            plo[pfill[q]] = min(u0, u1) - pad
+            phi[pfill[q]] = max(u0, u1) + pad
+            pfill[q] += 1
             q += 1
-    return cnt, lo, hi
+    for q in range(nb):
+        _sort_keys(lt, lcnt[q], lcnt[q + 1])
+        _sort_keys(ht, hcnt[q], hcnt[q + 1])
+    return lcnt, lt, hcnt, ht, pcnt, plo, phi
+
+
+def _union(lt, l0, l1, ht, h0, h1, cut_lo, cut_hi, ncut, out_lo, out_hi, m):
+    """Append to ``out`` from ``m`` the union of three sorted runs of intervals: the pairs of
+    crossings ``lt[l0:l1]`` and ``ht[h0:h1]`` and the ``ncut`` cuts (touching ones merged, as
+    :func:`_merge`); returns the new count."""
+    i, j, k = l0, h0, 0
+    have = False
+    a, b = 0.0, 0.0
+    while True:
+        x, y, which = np.inf, np.inf, -1
+        if i < l1 - 1 and lt[i] < x:
+            x, y, which = lt[i], lt[i + 1], 0
+        if j < h1 - 1 and ht[j] < x:
+            x, y, which = ht[j], ht[j + 1], 1
+        if k < ncut and cut_lo[k] < x:
+            x, y, which = cut_lo[k], cut_hi[k], 2
+        if which < 0:
+            break
+        if which == 0:
+            i += 2
+        elif which == 1:
+            j += 2
+        else:
+            k += 1
+        if have and x <= b:
+            b = max(b, y)
+        else:
+            if have:
+                out_lo[m], out_hi[m] = a, b
+                m += 1
+            a, b, have = x, y, True
+    if have:
+        out_lo[m], out_hi[m] = a, b
+        m += 1
+    return m
 
 
 def _merge(lo, hi, n, out_lo, out_hi, m):
@@ -154,31 +215,10 @@ def strip_intervals(xy, cs, sn, d, s, k0, nb, radius, sdelta, eta, keep):
         c[q] = d + (k0 + q) * s
     half = np.empty(nb)
     strip_halfwidths(c, radius, sdelta, eta, half)
-    # the strips' edges, sorted (the widths vary: an edge of a strip may pass its neighbour's)
     low = c - half
     high = c + half
-    lorder = np.argsort(low)
-    horder = np.argsort(high)
-    ne = xy.shape[0]
-    ha = np.empty(ne)
-    hb = np.empty(ne)
-    ta = np.empty(ne)
-    tb = np.empty(ne)
-    for i in range(ne):
-        ha[i] = -sn * xy[i, 0] + cs * xy[i, 1]
-        hb[i] = -sn * xy[i, 2] + cs * xy[i, 3]
-        ta[i] = cs * xy[i, 0] + sn * xy[i, 1]
-        tb[i] = cs * xy[i, 2] + sn * xy[i, 3]
-    lcnt = np.empty(nb + 1, dtype=np.int64)
-    hcnt = np.empty(nb + 1, dtype=np.int64)
-    lt = _crossings(ha, hb, ta, tb, low[lorder], nb, lcnt)
-    ht = _crossings(ha, hb, ta, tb, high[horder], nb, hcnt)
-    lrow = np.empty(nb, dtype=np.int64)
-    hrow = np.empty(nb, dtype=np.int64)
-    for i in range(nb):
-        lrow[lorder[i]] = i
-        hrow[horder[i]] = i
-    pcnt, plo, phi = _pieces(ha, hb, ta, tb, c, half, nb)
+    lcnt, lt, hcnt, ht, pcnt, plo, phi = _sweep(xy, cs, sn, c, low, high, half.max(), d, s, k0,
+                                                nb)  # fmt: skip
     size = lt.shape[0] + ht.shape[0] + plo.shape[0] + 1
     oa = np.empty(size)
     ob = np.empty(size)
@@ -190,27 +230,15 @@ def strip_intervals(xy, cs, sn, d, s, k0, nb, radius, sdelta, eta, keep):
     buf_hi = np.empty(size)
     mo, mi = 0, 0
     for q in range(nb):
-        l0, l1 = lcnt[lrow[q]], lcnt[lrow[q] + 1]
-        h0, h1 = hcnt[hrow[q]], hcnt[hrow[q] + 1]
+        l0, l1 = lcnt[q], lcnt[q + 1]
+        h0, h1 = hcnt[q], hcnt[q + 1]
         p0, p1 = pcnt[q], pcnt[q + 1]
-        # outer: the union of both edges' intervals and the clipped edges' ranges
-        n = 0
-        for j in range(l0, l1 - 1, 2):
-            buf_lo[n], buf_hi[n] = lt[j], lt[j + 1]
-            n += 1
-        for j in range(h0, h1 - 1, 2):
-            buf_lo[n], buf_hi[n] = ht[j], ht[j + 1]
-            n += 1
-        for j in range(p0, p1):
-            buf_lo[n], buf_hi[n] = plo[j], phi[j]
-            n += 1
-        order = np.argsort(buf_lo[:n])
-        sl = buf_lo[:n][order]
-        sh = buf_hi[:n][order]
-        mo = _merge(sl, sh, n, oa, ob, mo)
+        # the clipped edges' ranges, sorted and merged: the inner set's cuts
+        _sort_pairs(plo, phi, p0, p1)
+        ncut = _merge(plo[p0:p1], phi[p0:p1], p1 - p0, buf_lo, buf_hi, 0)
+        # outer: the union of both edges' intervals and the cuts (three sorted runs)
+        mo = _union(lt, l0, l1, ht, h0, h1, buf_lo, buf_hi, ncut, oa, ob, mo)
         ost[q + 1] = mo
-        porder = np.argsort(plo[p0:p1])
-        ncut = _merge(plo[p0:p1][porder], phi[p0:p1][porder], p1 - p0, buf_lo, buf_hi, 0)
         mi = _inner(lt, l0, l1, ht, h0, h1, buf_lo, buf_hi, ncut, pa, pb, mi)
         mi = _prune(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], mi, keep * half[q])
         ist[q + 1] = mi
@@ -267,6 +295,7 @@ def _prune(oa, ob, o0, o1, pa, pb, p0, p1, short):
 
 def prepare() -> None:
     """Swap this module's helpers for their numba versions (before a caller compiles)."""
-    jit_globals(
-        globals(), ("strip_halfwidths", "_crossings", "_pieces", "_merge", "_inner", "_prune")
-    )
+    jit_into(globals())  # the insertion sorts of cover's band lines
+    helpers = ("strip_halfwidths", "_first_strip", "_sweep", "_union", "_merge", "_inner",
+               "_prune")  # fmt: skip
+    jit_globals(globals(), helpers)

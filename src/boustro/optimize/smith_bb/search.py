@@ -52,6 +52,10 @@ DEFAULT_TOL = 1e-4
 #: search's worst case, spend it before the default ``tol`` (regular 100- to 2000-gons stop at
 #: gaps 2e-4 to 1e-3, reported); every other area measured converges far below it.
 MAX_WORK = 1e8
+#: A search allowed to extend its budget (``solve(extend=...)``, the region's default) doubles it
+#: while the gap at the budget is at most this share of the gap at half of it (it shrank by a
+#: tenth at least; a search whose bound stalls, e.g. a comb's lines along edges, stops).
+SHRINK = 0.9
 #: A box's cost that does not grow with the edges, in edge units (measured: regular 100- and
 #: 2000-gons, 13 and 55 us a box).
 BOX_OVERHEAD = 500
@@ -257,14 +261,17 @@ def _evaluate(search: _Search, boxes: Boxes) -> NDArray[np.float64]:
 
 
 def _run(
-    search: _Search, boxes: Boxes, tol: float, max_work: float, bar: Any
+    search: _Search, boxes: Boxes, tol: float, max_work: float, bar: Any, extend: float = 1.0
 ) -> tuple[float, int, str]:
     """Best first, in batches: halve the boxes of the highest bounds (:data:`BATCH`, or a
     :data:`BATCH_SHARE` of the pool if more), discard those within ``tol`` of the best layout,
     until no box is left or a limit is reached: ``(the largest bound of a box taken out,
-    rounds, why it stopped early or "")``."""
+    rounds, why it stopped early or "")``. With ``extend > 1`` the budget doubles, up to
+    ``extend`` times ``max_work``, while the gap shrinks: each time the work reaches the
+    budget, if the gap is at most :data:`SHRINK` times the gap at half of it."""
     closed, rounds, stopped, shown = -math.inf, 0, "", 0
     edges = len(search.xy) + BOX_OVERHEAD
+    limit, half_gap = max_work, math.inf
     bounds = _evaluate(search, boxes)
     while True:
         keep = bounds > search.best + tol
@@ -285,10 +292,17 @@ def _run(
             boxes, bounds = boxes.take(~fine), bounds[~fine]
             if not len(bounds):
                 break
-        if (search.bounded + 4 * BATCH) * edges > max_work:
-            closed = max(closed, float(bounds.max()))
-            stopped = f"the work budget ({max_work:.0e} box edges) was spent"
-            break
+        work = (search.bounded + 4 * BATCH) * edges
+        if work > 0.5 * limit and half_gap == math.inf:
+            half_gap = max(closed, float(bounds.max())) - search.best
+        if work > limit:
+            gap = max(closed, float(bounds.max())) - search.best
+            if 2 * limit <= extend * max_work * (1 + 1e-12) and gap <= SHRINK * half_gap:
+                limit, half_gap = 2 * limit, gap  # the gap at half of the doubled budget
+            else:
+                closed = max(closed, float(bounds.max()))
+                stopped = f"the work budget ({limit:.0e} box edges) was spent"
+                break
         rounds += 1
         size = max(BATCH, int(BATCH_SHARE * len(bounds)))
         order = np.argsort(-bounds)
@@ -389,17 +403,18 @@ def solve(
     t0: float,
     what: str,
     final: Any,
+    extend: float = 1.0,
     **info: Any,
 ) -> OptimizeResult:
     """Run a seeded search (:class:`_Search` or the region's) over its first ``boxes`` to
     ``tol`` or ``max_work`` and return its certified result; ``final(search)`` gives the
     returned ``(value, theta, d)``, ``what`` names the area in the error of no transect,
-    ``info`` is added to the result's."""
+    ``info`` is added to the result's; ``extend``: as :func:`_run`'s."""
     search.top_eps = float(box_radius(boxes, search.radius).max())
     bar = _progress_bar(100, progress, "certified-bb", unit="%")
     try:
         with np.errstate(all="ignore"):
-            closed, rounds, stopped = _run(search, boxes, tol, max_work, bar)
+            closed, rounds, stopped = _run(search, boxes, tol, max_work, bar, extend)
     finally:
         if bar is not None:
             bar.close()
