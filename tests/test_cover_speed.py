@@ -159,9 +159,9 @@ def test_compiled_visibility_equals_the_trees(monkeypatch):
         p[:150], q[:150] = v[i[:, 0]], v[i[:, 1]]  # vertex to vertex
         j = rng.integers(0, len(v) - 1, 50)  # along an edge, through its vertices
         p[150:200], q[150:200] = 2 * v[j] - v[j + 1], 3 * v[j + 1] - 2 * v[j]
-        monkeypatch.setattr(route_visibility, "DENSE_CROSSING_EDGES", 10**9)
+        monkeypatch.setattr(route_visibility, "DENSE_EDGES", 10**9)
         dense = router._visible_many(p, q)
-        monkeypatch.setattr(route_visibility, "DENSE_CROSSING_EDGES", 0)
+        monkeypatch.setattr(route_visibility, "DENSE_EDGES", 0)
         grid = router._visible_many(p, q)
         tree = route_visibility.visible_tree(router, p, q)
         assert np.array_equal(dense, tree) and dense.any() and (~dense).any()

@@ -1,7 +1,6 @@
 """Segments against a region's edges through a uniform grid of the edges, compiled by numba.
 
-Above :data:`~boustro.plan.visibility_kernel.DENSE_EDGES` edges (now
-:data:`~boustro.plan.visibility_kernel.DENSE_CROSSING_EDGES`) the router's segment test
+Above :data:`~boustro.plan.visibility_kernel.DENSE_EDGES` edges the router's segment test
 (:func:`~boustro.plan.route_visibility.visible_many`) asked a GEOS STRtree for the edges whose
 bounding box meets each segment's, then ran the orientation tests on those pairs in numpy: on
 a traced field the query (building a box a segment, the tree walk, sorting the pairs) cost as

@@ -3,7 +3,7 @@
 A segment is visible when it properly crosses no ring edge and its midpoint lies in the closed
 area; a segment that touches a ring vertex in its middle is decided piece by piece between the
 breakpoints (:meth:`~boustro.plan.routing.Router.inside`). Up to
-:data:`~boustro.plan.visibility_kernel.DENSE_CROSSING_EDGES` edges every pair is tested by a
+:data:`~boustro.plan.visibility_kernel.DENSE_EDGES` edges every pair is tested by a
 compiled kernel; above, only the edges whose bounding box meets the segment's (the grid of
 :mod:`~boustro.plan.edge_grid`; before it an STRtree, :func:`visible_tree`), with the same
 arithmetic.
@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from ..geometry.polygon import _cross
 from .edge_index import CHUNK
-from .visibility_kernel import DENSE_CROSSING_EDGES, segment_crossings
+from .visibility_kernel import DENSE_EDGES, segment_crossings
 
 __all__ = ["decide", "visible_many", "visible_tree"]
 
@@ -35,7 +35,7 @@ def visible_many(router: Any, a: NDArray[np.float64], b: NDArray[np.float64]) ->
         )
     e1, e2 = router._e1, router._e2
     tol = router.tol
-    if len(e1) <= DENSE_CROSSING_EDGES:  # compiled, every pair: the same tests as below
+    if len(e1) <= DENSE_EDGES:  # compiled, every pair: the same tests as below
         hit, touched = segment_crossings(a, b, e1, e2, tol)
         return decide(router, a, b, ~hit, touched)
     hit, touched = router._index.grid.crossings(a, b, tol)  # the STRtree's candidates
