@@ -401,14 +401,14 @@ def test_or_tools_arc_matrix_gives_the_tour_of_the_python_callback(monkeypatch, 
 
     asked = []
 
-    class Model(pywrapcp.RoutingModel):  # type: ignore[misc]
+    class Model(pywrapcp.RoutingModel):
         """The model registering a Python callback over node indices (the code before)."""
 
         def __init__(self, manager):
             super().__init__(manager)
             self.manager = manager
 
-        def RegisterTransitMatrix(self, table):  # noqa: N802 - OR-Tools' name
+        def RegisterTransitMatrix(self, table):
             def callback(i: int, j: int) -> int:
                 asked.append(1)
                 return int(table[self.manager.IndexToNode(i)][self.manager.IndexToNode(j)])
