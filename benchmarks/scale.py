@@ -61,7 +61,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 BASELINE = "42b81be"  # main when issue 21's work started
 AREA_BASELINE = "8882b43"  # main before the vectorised trace and links (parts area*)
-TIME_BASELINE = "21da16c"  # main before the router's candidate anchors and routed-move cache
+TIME_BASELINE = "bc75ccd"  # main before the twelfth round (OR-Tools matrix, compiled moves)
 #: The plan's stages in :mod:`boustro.plan.region` timed by part ``time``.
 PLAN_STAGES = ("_plan_cells", "_plan_lanes", "_order", "refine_tour", "_drive", "_assemble")
 STAGES = (

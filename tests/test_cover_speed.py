@@ -29,6 +29,9 @@ def _moves(region, rng, n=150):
     q[20:25] = p[20:25]  # zero length
     if region.holes:
         q[25:30] = region.holes[0].vertices.mean(axis=0)  # into a hole
+    k = rng.integers(0, len(v), 10)  # along an edge's line, through both its vertices
+    d = v[(k + 1) % len(v)] - v[k]
+    p[30:40], q[30:40] = v[k] - 0.5 * d, v[k] + 1.5 * d
     return p, q
 
 

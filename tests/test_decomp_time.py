@@ -382,3 +382,41 @@ def test_cells_searched_largest_first_and_stopped_once_their_bounds_reach_the_gr
     asked.clear()
     assert _cell_optima(Search(), cells, beat=70.0) is None  # 50 + 30 >= 70: no third search
     assert asked == [5.0, 3.0]
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_or_tools_arc_matrix_gives_the_tour_of_the_python_callback(monkeypatch, seed):
+    """The arc costs registered as a matrix (looked up in C++) give OR-Tools' search the same
+    costs as the Python callback they replace, so the same tour (random passes, some arcs
+    forbidden)."""
+    from ortools.constraint_solver import pywrapcp
+
+    rng = np.random.default_rng(seed)
+    passes = _random_passes(rng, EXACT_PASSES + 4 + 4 * seed)
+    router = router_for(Region(Polygon([(-10, -10), (110, -10), (110, 110), (-10, 110)])), 0.0)
+    pb = cell_order._Problem(passes, np.zeros(2), router, force_start=seed == 1)
+    if seed == 2:  # some moves impossible (routed through nothing): the big cost
+        pb.move[rng.random(pb.move.shape) < 0.05] = math.inf
+    found, _ = cell_order._ortools(pb)
+
+    asked = []
+
+    class Model(pywrapcp.RoutingModel):
+        """The model registering a Python callback over node indices (the code before)."""
+
+        def __init__(self, manager):
+            super().__init__(manager)
+            self.manager = manager
+
+        def RegisterTransitMatrix(self, table):
+            def callback(i: int, j: int) -> int:
+                asked.append(1)
+                return int(table[self.manager.IndexToNode(i)][self.manager.IndexToNode(j)])
+
+            self.kept = callback  # alive while the model is
+            return self.RegisterTransitCallback(callback)
+
+    monkeypatch.setattr(pywrapcp, "RoutingModel", Model)
+    old, _ = cell_order._ortools(pb)
+    assert asked  # the callback was the one asked
+    assert found is not None and found == old

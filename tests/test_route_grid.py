@@ -35,7 +35,10 @@ def _segments(r, n, seed):
     return p, q
 
 
-def test_grid_crossings_equal_every_edges_tests(field):
+@pytest.mark.parametrize("small", [False, True])
+def test_grid_crossings_equal_every_edges_tests(field, small):
+    if small:  # a few hundred edges: inner domains and cells, through the grid too
+        field = traced_field(150, 3, seed=2)
     router = Router(field, 5.0)
     grid = EdgeGrid(router._e1, router._e2)
     p, q = _segments(field, 3000, 0)

@@ -135,12 +135,9 @@ def _ortools(pb: _Problem) -> tuple[list[int] | None, bool]:
     arc[1:, 1:] = np.where(np.isfinite(pb.move), np.round(pb.move * unit), big)
     manager = pywrapcp.RoutingIndexManager(m + 1, 1, 0)
     routing = pywrapcp.RoutingModel(manager)
-    table = arc.tolist()
-
-    def callback(i: int, j: int) -> int:
-        return int(table[manager.IndexToNode(i)][manager.IndexToNode(j)])
-
-    routing.SetArcCostEvaluatorOfAllVehicles(routing.RegisterTransitCallback(callback))
+    # the arc costs as a matrix by node, looked up in C++ (a Python callback was asked 2.2
+    # million times on a 2000-vertex field: 1.9 s of its 2.0 s); the same costs, the same tour
+    routing.SetArcCostEvaluatorOfAllVehicles(routing.RegisterTransitMatrix(arc.tolist()))
     for opts in pb.options:  # exactly one option of every pass is driven
         routing.AddDisjunction([manager.NodeToIndex(int(o) + 1) for o in opts], -1, 1)
     params = pywrapcp.DefaultRoutingSearchParameters()

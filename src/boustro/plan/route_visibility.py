@@ -3,9 +3,10 @@
 A segment is visible when it properly crosses no ring edge and its midpoint lies in the closed
 area; a segment that touches a ring vertex in its middle is decided piece by piece between the
 breakpoints (:meth:`~boustro.plan.routing.Router.inside`). Up to
-:data:`~boustro.plan.visibility_kernel.DENSE_EDGES` edges every pair is tested by a compiled
-kernel; above, only the edges whose bounding box meets the segment's (an STRtree,
-:class:`~boustro.plan.edge_index.EdgeIndex`), with the same arithmetic.
+:data:`~boustro.plan.visibility_kernel.DENSE_EDGES` edges every pair is tested by a
+compiled kernel; above, only the edges whose bounding box meets the segment's (the grid of
+:mod:`~boustro.plan.edge_grid`; before it an STRtree, :func:`visible_tree`), with the same
+arithmetic.
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ def visible_many(router: Any, a: NDArray[np.float64], b: NDArray[np.float64]) ->
 
 
 def visible_tree(router: Any, a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """:func:`visible_many` above :data:`DENSE_EDGES` edges by the STRtree's candidate pairs in
+    """:func:`visible_many` above the dense edges by the STRtree's candidate pairs in
     numpy (before :mod:`~boustro.plan.edge_grid`; the reference of its tests)."""
     m = len(a)
     e1, e2 = router._e1, router._e2

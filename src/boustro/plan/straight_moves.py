@@ -7,16 +7,28 @@ such test a dozen small numpy calls; :func:`straight_moves` runs the same arithm
 of them at once (dot products rounded as numpy's matmul rounds ``r @ r``, the breakpoints of
 each move sorted and deduplicated as ``np.unique`` does), so its answers equal the one-at-a-time
 test bit for bit (tested).
+
+The tests of every move against every edge (the crossings' parameters, and which edges' first
+vertices lie within ``tol`` of a move's line) run in a compiled loop (numba, :func:`_edge_tests`)
+with numpy's floating-point operations in numpy's order, element by element (numba contracts
+nothing into fused multiply-adds without ``fastmath``), instead of a dozen ``(M, E)`` arrays.
+The position of a vertex along its move is a dot product that numpy's ``matmul`` rounds with its
+BLAS (fused multiply-adds on this machine: a plain loop differs in the last bit), so it is still
+computed by ``matmul``, only for the moves with a vertex near their line (a few), each such
+move's row whole as before: the same rounding.
 """
 
 from __future__ import annotations
 
 import math
+from functools import cache
+from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .._jit import jit
 from ..geometry.polygon import _cross
 
 __all__ = ["straight_moves"]
@@ -37,25 +49,16 @@ def straight_moves(
     # dot products as numpy's matmul rounds them (as ``r @ r`` in ``Router._breaks``)
     rr = np.matmul(r[:, None, :], r[:, :, None])[:, 0, 0]
     rn = np.sqrt(rr)
-    den = _cross(r[:, None], s[None])  # (M, E)
-    good = np.abs(den) > 1e-15 * (rn[:, None] * np.linalg.norm(s, axis=1)[None] + 1e-300)
-    safe = np.where(good, den, 1.0)
-    w = router._e1[None] - p[:, None]  # (M, E, 2)
-    t = _cross(w, s[None]) / safe
-    u = _cross(w, r[:, None]) / safe
-    eps = 1e-12
-    hit = good & (t >= -eps) & (t <= 1 + eps) & (u >= -eps) & (u <= 1 + eps)
-    seg_i, _ = np.nonzero(hit)
-    ids, params = [seg_i], [t[hit]]
-    pos = rr > 0
-    if pos.any():  # vertices on the segment (collinear edges included)
-        rp = r[pos]
-        vp = router._e1[None] - p[pos][:, None]  # (M', E, 2)
-        tv = np.matmul(vp, rp[:, :, None])[..., 0] / rr[pos][:, None]
-        dist = np.abs(_cross(rp[:, None], vp)) / np.sqrt(rr[pos])[:, None]
+    seg_i, t_hit, near = _tests(p, r, rn, rr > 0, router._e1, s, router.tol)
+    ids, params = [seg_i], [t_hit]
+    if near.any():  # vertices on the segment (collinear edges included)
+        rp = r[near]
+        vp = router._e1[None] - p[near][:, None]  # (M', E, 2)
+        tv = np.matmul(vp, rp[:, :, None])[..., 0] / rr[near][:, None]
+        dist = np.abs(_cross(rp[:, None], vp)) / np.sqrt(rr[near])[:, None]
         sel = (dist <= router.tol) & (tv > 0) & (tv < 1)
         vi, _ = np.nonzero(sel)
-        ids.append(np.flatnonzero(pos)[vi])
+        ids.append(np.flatnonzero(near)[vi])
         params.append(tv[sel])
     ids += [np.arange(m), np.arange(m)]
     params += [np.zeros(m), np.ones(m)]
@@ -99,3 +102,63 @@ def straight_moves(
         fail = np.bincount(who[~near], minlength=m) > 0
         ok[any_out & ~in_hole & ~fail] = True
     return ok, outside
+
+
+def _edge_tests(p, r, rn, pos, e1, s, snorm, tol, seg, par, near):
+    """Every move ``p[i] -> p[i] + r[i]`` against every edge ``e1[e] -> e1[e] + s[e]``, with
+    the arithmetic of the dense ``(M, E)`` arrays it replaces: the crossings' ``(move, t)``
+    written to ``seg``, ``par`` (their count returned, ``-1`` when those are full) and
+    ``near[i]`` set where a first vertex lies within ``tol`` of the line of a move of positive
+    length (``pos``)."""
+    eps = 1e-12
+    k = 0
+    for i in range(p.shape[0]):
+        px, py, rx, ry = p[i, 0], p[i, 1], r[i, 0], r[i, 1]
+        for e in range(e1.shape[0]):
+            sx, sy = s[e, 0], s[e, 1]
+            wx, wy = e1[e, 0] - px, e1[e, 1] - py
+            den = rx * sy - ry * sx
+            if abs(den) > 1e-15 * (rn[i] * snorm[e] + 1e-300):
+                t = (wx * sy - wy * sx) / den
+                u = (wx * ry - wy * rx) / den
+                if t >= -eps and t <= 1 + eps and u >= -eps and u <= 1 + eps:
+                    if k == seg.shape[0]:
+                        return -1
+                    seg[k] = i
+                    par[k] = t
+                    k += 1
+            if pos[i] and not near[i] and abs(rx * wy - ry * wx) / rn[i] <= tol:
+                near[i] = True
+    return k
+
+
+@cache
+def _compiled() -> Any:
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
+        return _edge_tests
+    return jit(_edge_tests)
+
+
+def _tests(
+    p: NDArray[np.float64],
+    r: NDArray[np.float64],
+    rn: NDArray[np.float64],
+    pos: NDArray[np.bool_],
+    e1: NDArray[np.float64],
+    s: NDArray[np.float64],
+    tol: float,
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.bool_]]:
+    """``(move of each crossing, its parameter t, whether a move has a vertex near its line)``
+    (:func:`_edge_tests`), the crossings in move order, then edge order."""
+    snorm = np.linalg.norm(s, axis=1)
+    f64 = [np.ascontiguousarray(x, dtype=np.float64) for x in (p, r, rn)]
+    e1, s = np.ascontiguousarray(e1, dtype=np.float64), np.ascontiguousarray(s, dtype=np.float64)
+    cap = 8 * len(p) + 64
+    while True:
+        seg = np.empty(cap, dtype=np.int64)
+        par = np.empty(cap, dtype=np.float64)
+        near = np.zeros(len(p), dtype=np.bool_)
+        k = _compiled()(*f64, np.ascontiguousarray(pos), e1, s, snorm, float(tol), seg, par, near)
+        if k >= 0:
+            return seg[:k], par[:k], near
+        cap *= 4
