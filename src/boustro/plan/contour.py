@@ -22,7 +22,6 @@ class _Ring(NamedTuple):
     at: NDArray[np.float64]
     total: float
     samples: Any  # shapely points
-    xy: NDArray[np.float64]  # their coordinates
 
 
 class Contour(NamedTuple):
@@ -55,7 +54,7 @@ def contour_of(target: Any, half: float, tol: float) -> Contour:
             n = max(8, math.ceil(total / step))
             s = np.linspace(0.0, total, n + 1)[:-1]
             pts = np.stack([np.interp(s, at, v[:, 0]), np.interp(s, at, v[:, 1])], axis=1)
-            rings.append(_Ring(v, at, total, shapely.points(pts), pts))
+            rings.append(_Ring(v, at, total, shapely.points(pts)))
     corners = shapely.get_coordinates(shapely.boundary(target))
     _, first = np.unique(corners, axis=0, return_index=True)
     grown = target.buffer(tol, join_style="mitre")
@@ -113,17 +112,12 @@ def _contour_arcs(
     if not contour.rings:
         return []
     shapely.prepare(residual)
-    boxes = shapely.bounds(shapely.get_parts(residual))  # of its pieces: (m, 4), NaN if empty
     out: list[NDArray[np.float64]] = []
     for ring in contour.rings:
         v, at, total = ring.v, ring.at, ring.total
         n = len(ring.samples)
         s = np.linspace(0.0, total, n + 1)[:-1]
-        far = reach + total / n
-        near = np.zeros(n, dtype=bool)
-        maybe = np.flatnonzero(_box_near(ring.xy, boxes, far * (1 + 1e-6)))
-        if len(maybe):
-            near[maybe] = shapely.dwithin(ring.samples[maybe], residual, far)  # prepared
+        near = shapely.dwithin(ring.samples, residual, reach + total / n)  # prepared
         runs = _runs(near, s, total, MERGE_GAP * 2 * half)
         if runs is None:
             out.append(v)
@@ -131,23 +125,6 @@ def _contour_arcs(
         for a, b in runs:
             out.append(_arc(v, at, a, b))
     return [line for line in out if np.linalg.norm(np.diff(line, axis=0), axis=1).sum() > tol]
-
-
-def _box_near(xy: NDArray[np.float64], boxes: NDArray[np.float64], far: float) -> NDArray[np.bool_]:
-    """Per point of ``xy``, whether it is within ``far`` of one of the boxes
-    ``(xmin, ymin, xmax, ymax)`` (NaN boxes: none). A point farther than ``far`` from every
-    box of a geometry's pieces is farther than that from the geometry (each piece lies in its
-    box): with ``far`` above the distance asked by a relative ``1e-6``, far more than the
-    distances' rounding, :func:`_contour_arcs` tests only the other points (``dwithin``),
-    the same flags."""
-    out = np.zeros(len(xy), dtype=bool)
-    step = max(1, (1 << 18) // max(len(boxes), 1))  # points a block: bounded memory
-    for lo in range(0, len(xy) if len(boxes) else 0, step):
-        x, y = xy[lo : lo + step, :1], xy[lo : lo + step, 1:]
-        dx = np.maximum(np.maximum(boxes[None, :, 0] - x, x - boxes[None, :, 2]), 0.0)
-        dy = np.maximum(np.maximum(boxes[None, :, 1] - y, y - boxes[None, :, 3]), 0.0)
-        out[lo : lo + step] = np.any(dx * dx + dy * dy <= far * far, axis=1)
-    return out
 
 
 def _corner_spurs(
