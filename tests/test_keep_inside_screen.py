@@ -87,3 +87,52 @@ def test_keep_inside_search_only_after_the_free_search_passes(monkeypatch, shape
     full, _ = _spied(monkeypatch, shape, screen=False)  # every candidate searched both ways
     assert m.stats.duration <= full.stats.duration + 1e-9
     assert (m.optimum.method == "decomposed-cover") == (not screened)
+
+
+def _centred_values(monkeypatch, shape, holes, screen: bool) -> tuple[object, int]:
+    """The plan, and the cell plans ``_Search._centred`` made (its screen on or off)."""
+    made = [0]
+    real_centred, real_value = decomposed._Search._centred, decomposed._Search.value
+
+    def centred(self, cell, opt):
+        self._in_centred = True
+        try:
+            return real_centred(self, cell, opt)
+        finally:
+            self._in_centred = False
+
+    def value(self, cell, angle, offset):
+        made[0] += bool(getattr(self, "_in_centred", False))
+        return real_value(self, cell, angle, offset)
+
+    monkeypatch.setattr(decomposed._Search, "_centred", centred)
+    monkeypatch.setattr(decomposed._Search, "value", value)
+    if not screen:
+        monkeypatch.setattr(decomposed, "rules_out", lambda floor, best: False)
+    kw = dict(crs=None, speed=SPEED, turn_time=TURN, keep_inside=True, holes=holes)
+    m = plan_area(shape, 10.0, **kw)
+    monkeypatch.undo()
+    return m, made[0]
+
+
+@pytest.mark.parametrize(
+    ("shape", "holes"),
+    [
+        (L_SHAPE, []),
+        pytest.param(
+            [(0, 0), (100, 0), (100, 30), (60, 45), (30, 30), (30, 100), (0, 100)],
+            [[(10, 10), (20, 10), (15, 20)]],
+            marks=pytest.mark.slow,  # 20 s
+        ),
+    ],
+)
+def test_centred_layouts_screened_keep_the_same_plan(monkeypatch, shape, holes):
+    """Twelfth round: the lanes laid from a keep-inside cell's edges (``_Search._centred``)
+    are planned only where their floor is below the cell's best plan: the same plan and
+    optimum as planning every one, fewer cell plans."""
+    with_screen, fewer = _centred_values(monkeypatch, shape, holes, screen=True)
+    without, every = _centred_values(monkeypatch, shape, holes, screen=False)
+    assert np.array_equal(with_screen.waypoints, without.waypoints)
+    assert with_screen.optimum.fitness == without.optimum.fitness
+    assert with_screen.optimum.info["decomposed"] == without.optimum.info["decomposed"]
+    assert fewer < every

@@ -39,6 +39,7 @@ from ..geometry.region import Region
 from ..models.region import segment_moments
 from ..optimize import OptimizeResult
 from ..optimize.cover import CoverCost, centred_offsets, cover_optimum
+from ..optimize.cover.plans import rules_out
 from ..optimize.result import canonical
 from ..plan import Plan, coverage
 from ..plan.cells import Decomposition, decompose, slab_decomposition, trapezoids
@@ -232,8 +233,11 @@ class _Search:
         angles = _edge_angles(cell)
         offsets = centred_offsets(cell, angles, self.s, self.reach)
         best = (opt.fitness, opt.angle, opt.offset)
+        screen = self._screen(cell)
         for a, d in zip(angles, offsets, strict=True):
             try:
+                if screen is not None and rules_out(screen(float(a), float(d)), best[0]):
+                    continue  # its floor is above the best plan: it cannot replace it
                 value = self.value(cell, float(a), float(d))
             except NoTransectError:
                 continue

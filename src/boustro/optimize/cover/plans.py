@@ -33,6 +33,7 @@ __all__ = [
     "plan_value",
     "polish",
     "refine_offsets",
+    "rules_out",
     "try_edges",
     "try_plans",
 ]
@@ -130,7 +131,7 @@ def try_plans(
             continue
         taken.append(float(boxes.theta[i]))
         search.seen.add(key)
-        if bounds is not None and bounds[i] > search.best[0] + RULE_OUT_TOL * abs(search.best[0]):
+        if bounds is not None and rules_out(float(bounds[i]), search.best[0]):
             search.ruled_out += 1
             tried += 1
             continue
@@ -153,7 +154,14 @@ def _screened_out(search: Any, theta: float, d: float) -> bool:
     other plans and finds the same best one."""
     if search.screen is None or not math.isfinite(search.best[0]):
         return False
-    return bool(search.screen(theta, d) > search.best[0] + RULE_OUT_TOL * abs(search.best[0]))
+    return rules_out(search.screen(theta, d), search.best[0])
+
+
+def rules_out(floor: float, best: float) -> bool:
+    """Whether a layout whose cost is at least ``floor`` (a lower bound, or a screen's floor)
+    cannot beat the ``best`` plan: ``floor`` above it by more than :data:`RULE_OUT_TOL` of it
+    (room for the rounding of the two sums)."""
+    return bool(floor > best + RULE_OUT_TOL * abs(best))
 
 
 def plan_value(search: Any, boxes: _Boxes, i: int, points: NDArray[np.float64]) -> float:
