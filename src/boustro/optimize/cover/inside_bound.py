@@ -389,6 +389,7 @@ def keep_inside_bounds(
     eps: float = 0.0,
     origin: NDArray[np.float64] | None = None,
     ranking: bool = False,
+    tight: list[NDArray[np.float64]] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every keep-inside plan of the layouts (module
     docstring). ``st_half``/``level_half``: the sandwich's inner set shrunk by half a spacing
@@ -398,13 +399,18 @@ def keep_inside_bounds(
     holds every box's rigid motion and ``origin`` the grid's centre: with them the stretches
     near the lanes' direction whose strip no line can reach are counted too. ``ranking``:
     ``(2, L)``, the bound and the value that ranks the layouts a search plans, the tenth
-    round's bound (trimmed stretches, no turn per pass; lower, so still a bound)."""
+    round's bound (trimmed stretches, no turn per pass; lower, so still a bound). ``tight``:
+    a list that gets ``(L,)``, the bound with the moves on top of the passes
+    (:mod:`~.inside_moves`, :data:`MOVES_ON_PASSES`), which the certificate takes where the
+    search decides by the bound returned (docs/mission_time.md)."""
     kw: dict[str, Any] = {"boustrophedon": False, "ends": None}
     half = lower_bounds(st_half, level_half, cost, spacing, runins=runins, **kw)
     zero = lower_bounds(_no_holes(st_zero), level_zero, cost, spacing, runins=False, **kw)
     halves = [half, half] if ranking else [half]
+    moved = half
     if contour.applies and len(contour.core):
-        near, parts = None, []
+        near = None
+        parts: list[NDArray[np.int64]] = []
         if d is not None and origin is not None:
             e = np.full(len(theta), eps)
             near = _near_lengths(contour, theta, d, e, origin, spacing, parts=parts)
@@ -419,12 +425,15 @@ def keep_inside_bounds(
                 parts=parts[0] if parts else None, spacing=spacing, passes=held,
             )  # fmt: skip
             extra = np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
-            if held and MOVES_ON_PASSES:  # the moves no such pass serves, on top of them
-                extra = np.maximum(extra, p + line_moves(st_half.count, spacing, held[0]) - c)
             turns = np.where(lanes, rings, 0)
             halves[i] = np.maximum(half, plain + cost.per_length * extra + cost.per_turn * turns)
+            if held and MOVES_ON_PASSES and tight is not None:  # the moves no pass serves
+                more = np.maximum(extra, p + line_moves(st_half.count, spacing, held[0]) - c)
+                moved = np.maximum(half, plain + cost.per_length * more + cost.per_turn * turns)
     least = cost.per_length * floor + cost.fixed
     out = [np.maximum(np.minimum(h, zero), least) for h in halves]
+    if tight is not None:
+        tight.append(np.maximum(np.minimum(np.maximum(moved, halves[0]), zero), least))
     return np.stack(out) if ranking else out[0]
 
 
@@ -438,11 +447,12 @@ def inside_box_bounds(
     d: NDArray[np.float64],
     delta: NDArray[np.float64],
     ranking: bool = False,
+    tight: list[NDArray[np.float64]] | None = None,
 ) -> NDArray[np.float64]:
     """:func:`keep_inside_bounds` for a :class:`~.search.CoverSearch` with ``keep_inside``:
     ``lv, st`` its level at ``radius`` shrunk by half a spacing, the level not shrunk bounded
     here (lines within ``reach_out``); with ``ranking``, the bound and the ranking value
-    stacked ``(2, L)``."""
+    stacked ``(2, L)``; ``tight``, a list that gets the certificate's bound."""
     lv0 = search.sandwich.level(radius, 0.0)
     st0 = band_stats(
         lv0.inner, lv0.outer, theta, d, search.s, 0.0, search.origin,
@@ -456,4 +466,4 @@ def inside_box_bounds(
     # with ranking, the layouts' own values that rank the layouts the search plans: the tenth
     # round's terms there (with the eleventh round's, 9 of 34 keep-inside plans of the 100-area
     # run came out longer by 0.1-9.5 s, one shorter: a review)
-    return keep_inside_bounds(*args, d=near, eps=radius, ranking=ranking, **kw)
+    return keep_inside_bounds(*args, d=near, eps=radius, ranking=ranking, tight=tight, **kw)
