@@ -413,13 +413,15 @@ def keep_inside_bounds(
         parts: list[NDArray[np.int64]] = []
         if d is not None and origin is not None:
             e = np.full(len(theta), eps)
-            near = _near_lengths(contour, theta, d, e, origin, spacing, parts=parts)
+            sink = parts if tight is not None and MOVES_ON_PASSES else None
+            near = _near_lengths(contour, theta, d, e, origin, spacing, parts=sink)
         c = _moves(st_half, spacing)
         plain = lower_bounds(_no_holes(st_half), level_half, cost, spacing, runins=runins, **kw)
         # a turn before each boundary pass (the plan's turns: its lanes and passes less one)
         lanes = st_half.count.sum(axis=1) > 0
         for i, trimmed in enumerate([False, True][: len(halves)]):
-            held: list[NDArray[np.int64]] | None = None if trimmed else []
+            want = tight is not None and MOVES_ON_PASSES and not trimmed
+            held: list[NDArray[np.int64]] | None = [] if want else None
             p, a, rings = _stretches(
                 contour, theta, delta, None if trimmed else near, trimmed,
                 parts=parts[0] if parts else None, spacing=spacing, passes=held,
@@ -427,7 +429,7 @@ def keep_inside_bounds(
             extra = np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
             turns = np.where(lanes, rings, 0)
             halves[i] = np.maximum(half, plain + cost.per_length * extra + cost.per_turn * turns)
-            if held and MOVES_ON_PASSES and tight is not None:  # the moves no pass serves
+            if held:  # the moves no pass holding a counted stretch serves
                 more = np.maximum(extra, p + line_moves(st_half.count, spacing, held[0]) - c)
                 moved = np.maximum(half, plain + cost.per_length * more + cost.per_turn * turns)
     least = cost.per_length * floor + cost.fixed
