@@ -11,7 +11,10 @@ Cases as ``benchmarks/keep_inside_speed.py``'s (``test.json``, ``random_N``, Fie
 
     git archive f49f694 src | tar -x -C /tmp/base11
     python benchmarks/inside_bound_gap.py --baseline /tmp/base11/src --data F2C/data \\
-        --random 20 [--first 4] [--skip 4]
+        --random 20 [--first 4] [--skip 4] [--moves-decide all]
+
+``--moves-decide`` sets this tree's ``boustro.optimize.cover.search.MOVES_DECIDE`` (what the
+keep-inside search decides by with the moves on top of its passes; docs/mission_time.md).
 """
 
 from __future__ import annotations
@@ -26,22 +29,26 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 SRC = os.path.join(os.path.dirname(HERE), "src")
 
 CHILD = r"""
-import json, sys, time
+import hashlib, json, sys, time
+import numpy as np
 sys.path.insert(0, {here!r})
 from keep_inside_speed import keep_inside_case
 from boustro.mission import plan_area
+#SETUP
 area, spacing, kw = keep_inside_case({case!r}, {data!r})
 t0 = time.process_time()
 m = plan_area(area, spacing, speed=5.0, turn_time=10.0, keep_inside=True, **kw)
 cpu = time.process_time() - t0
 s = m.summary()
 print(json.dumps(dict(cpu=cpu, time=m.stats.duration, gap=s.get("gap") or 0.0,
-                      certified=bool(s.get("certified")), method=s["method"])))
+                      certified=bool(s.get("certified")), method=s["method"],
+                      path=hashlib.sha256(np.ascontiguousarray(m.waypoints).tobytes())
+                      .hexdigest()[:12])))
 """
 
 
-def _run(src: str, case: str, data: str) -> dict:
-    return run_child(src, case, data, CHILD)
+def _run(src: str, case: str, data: str, setup: str = "") -> dict:
+    return run_child(src, case, data, CHILD.replace("#SETUP", setup))
 
 
 def main() -> None:
@@ -53,7 +60,15 @@ def main() -> None:
     ap.add_argument("--skip", type=int, default=0, help="leave out the first N cases")
     ap.add_argument("--first", type=int, default=0, help="only N cases (after --skip)")
     ap.add_argument("--warm", action="store_true", help="plan random_0 once per tree first")
+    ap.add_argument(
+        "--moves-decide",
+        help="this tree's optimize.cover.search.MOVES_DECIDE (certificate, boxes, all)",
+    )
     args = ap.parse_args()
+    setup = ""
+    if args.moves_decide:
+        setup = "import boustro.optimize.cover.search as _s\n"
+        setup += f"_s.MOVES_DECIDE = {args.moves_decide!r}"
     cases = ["test.json"]
     if args.data:
         cases += ["test_2_cell.json#1", "test_2_cell.json#2"]
@@ -68,13 +83,13 @@ def main() -> None:
             _run(src, "random_0", args.data)
     print(
         "| case | baseline: time s / gap s (%) / cert / CPU s | this tree: time s / gap s (%) / "
-        "cert / CPU s | gap ratio | CPU ratio |"
+        "cert / CPU s | gap ratio | CPU ratio | same path |"
     )
-    print("|---|---|---|---:|---:|")
+    print("|---|---|---|---:|---:|---|")
     ratios = []
     for case in cases:
         base = _run(args.baseline, case, args.data)
-        new = _run(SRC, case, args.data)
+        new = _run(SRC, case, args.data, setup)
 
         def cell(r: dict) -> str:
             pct = 100 * r["gap"] / r["time"]
@@ -87,7 +102,7 @@ def main() -> None:
         ratios.append(ratio)
         print(
             f"| {case} | {cell(base)} | {cell(new)} | {ratio:.3f} | "
-            f"x{new['cpu'] / base['cpu']:.2f} |",
+            f"x{new['cpu'] / base['cpu']:.2f} | {'yes' if new['path'] == base['path'] else 'NO'} |",
             flush=True,
         )
     good = [r for r in ratios if r == r]

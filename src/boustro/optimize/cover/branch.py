@@ -103,8 +103,11 @@ def branch_and_bound(
     progress: Callable[[float], None] | None,
 ) -> tuple[float, int, str]:
     """Bound, plan, discard or retire, and halve the boxes until none is left or a limit is
-    reached: ``(the lowest bound of a box taken out, rounds, why it stopped early or "")``."""
+    reached: ``(the lowest bound of a box taken out, rounds, why it stopped early or "")``;
+    the boxes are kept by :meth:`box_bounds`' values, the bound returned is of the
+    certificate's (``search.tight``, at least those: the same search, a higher floor)."""
     floor = math.inf  # the lowest bound of a discarded box
+    certified = math.inf  # the same with the certificate's bounds (search.tight): not lower
     rounds, stopped = 0, ""
     mult = search.multipliers(len(boxes.theta))
     while len(boxes.theta):
@@ -128,6 +131,9 @@ def branch_and_bound(
         # joins the certificate's floor later (settle_deferred), with it where it matters
         bounds = search.box_bounds(boxes, keep_at if search.defer else None, multipliers=mult)
         keep = bounds < keep_at
+        # the certificate's bounds (search.tight: keep-inside's moves on top of its passes),
+        # at least the bounds the boxes are kept by: the same boxes, a higher floor
+        tight = search.tight
         skipped = search.skipped
         if skipped.any():
             later = (boxes.take(skipped), bounds[skipped], take_multipliers(mult, skipped))
@@ -135,33 +141,37 @@ def branch_and_bound(
         done = ~keep & ~search.skipped
         if done.any():
             floor = min(floor, float(bounds[done].min()))
+            certified = min(certified, float(tight[done].min()))
         boxes, bounds, mult = boxes.take(keep), bounds[keep], take_multipliers(mult, keep)
+        tight = tight[keep]
         low = min(floor, search.deferred_min(), float(bounds.min()) if len(bounds) else math.inf)
         if progress is not None and math.isfinite(best):
             progress(max(0.0, min(1.0, 1.0 - (best - low) / max(abs(best), 1e-300))))
         if not len(boxes.theta):
             break
         if lim.cutoff is not None and low >= lim.cutoff:  # no layout is below the cutoff
-            floor = low
+            certified = min(certified, search.deferred_min(), float(tight.min()))
             stopped = CUT_OFF
             break
         eps = box_radius(boxes, search.radius)
         fine = eps <= lim.min_eps
         if fine.any():
             floor = min(floor, float(bounds[fine].min()))
+            certified = min(certified, float(tight[fine].min()))
             stopped = stopped or "the boxes reached the smallest radius"
             boxes, mult = boxes.take(~fine), take_multipliers(mult, ~fine)
+            bounds, tight = bounds[~fine], tight[~fine]
             if not len(boxes.theta):
                 break
         if search.work_spent(len(boxes.theta)) > lim.max_work:
-            floor = min(floor, float(bounds[~fine].min()))
+            certified = min(certified, float(tight.min()))
             stopped = f"the work budget ({lim.max_work:.0e} box edges) was spent"
             break
         if lim.max_seconds is not None and time.perf_counter() - lim.t0 > lim.max_seconds:
-            floor = min(floor, float(bounds[~fine].min()))
+            certified = min(certified, float(tight.min()))
             stopped = f"{lim.max_seconds} s passed"
             break
         if mult is not None:  # the halves start from their box's multipliers
             mult = take_multipliers(mult, split_parents(boxes, search.radius))
         boxes = split_boxes(boxes, search.radius)
-    return floor, rounds, stopped
+    return certified, rounds, stopped

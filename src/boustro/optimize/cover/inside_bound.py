@@ -38,6 +38,7 @@ from ...geometry.region import Region
 from .bands import BandStats, band_stats
 from .bounds import lower_bounds
 from .cost import CoverCost
+from .inside_moves import line_moves, pass_count
 from .sandwich import Level
 
 __all__ = [
@@ -66,6 +67,10 @@ MIN_PART = 1e-4
 #: :func:`_near_lengths` where :data:`MIN_ANGLE`'s rule does not count them whole.
 NEAR_ANGLE = 0.3
 
+#: Whether the margin-1/2 bound adds the moves between lanes that no pass holding a counted
+#: stretch can serve to those stretches (:mod:`~.inside_moves`), not the larger of the two.
+MOVES_ON_PASSES = True
+
 #: Edges closer than this to the lanes' direction (radians, over the whole box) are left out
 #: of ``P`` by the angle rule (:data:`NEAR_ANGLE`'s rule may count them): the strip the lanes
 #: leave along an edge at angle ``phi`` is ``s/2 (1 - cos phi)`` deep (less the 0.5% the
@@ -93,6 +98,10 @@ class ContourEdges(NamedTuple):
     #: the tenth round's cores (feet at least half a spacing plus a sample step from the edge's
     #: ends): the layouts' own values that rank the layouts a search plans (``ranking``)
     trimmed: NDArray[np.float64]
+    #: (S, 2): the core along its contour ring (arc lengths from the ring's first point) and
+    #: (S,) the ring's length: which counted stretches one pass holds (:mod:`~.inside_moves`)
+    arc: NDArray[np.float64]
+    total: NDArray[np.float64]
 
 
 def _contour_rings(area: Region, half: float) -> list[NDArray[np.float64]]:
@@ -129,14 +138,16 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
     p0, d, length = p0[ok], d[ok], length[ok]
     u = d / length[:, None]
     angles, cores, rings, strips, inwards, feet, reaches, trims = [], [], [], [], [], [], [], []
+    arcs, totals = [], []
     for index, ring in enumerate(_contour_rings(area, half) if applies else []):
         total = float(np.linalg.norm(np.diff(ring, axis=0), axis=1).sum())
         step = total / max(8, math.ceil(total / (half / 2)))  # the planner's sample step
         a, b = ring[:-1], ring[1:]
         seg = b - a
         seg_len = np.hypot(seg[:, 0], seg[:, 1])
+        start = np.concatenate([[0.0], np.cumsum(seg_len)[:-1]])  # arc length at a
         keep = seg_len > step
-        a, b, seg, seg_len = a[keep], b[keep], seg[keep], seg_len[keep]
+        a, b, seg, seg_len, start = a[keep], b[keep], seg[keep], seg_len[keep], start[keep]
         if not len(a):
             continue
         # per (stretch, edge): parallel, both ends half a spacing from the edge's line, feet
@@ -160,9 +171,9 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
         j_hi = np.minimum(g1, length[None] - half)
         # the samples within reach + step of it: feet within rho of J (heights <= half + tol)
         rho = _flag_reach(half, step, tol)
-        core = np.minimum(g1, j_hi + rho) - np.maximum(g0, j_lo - rho)
+        k_lo, k_hi = np.maximum(g0, j_lo - rho), np.minimum(g1, j_hi + rho)
         strip = parallel & near & (j_hi - j_lo >= step * (1 + 1e-9))
-        core = np.where(strip, core, 0.0)
+        core = np.where(strip, k_hi - k_lo, 0.0)
         best = core.max(axis=1)
         e = core.argmax(axis=1)
         lo = np.maximum(g0, half + step)
@@ -173,6 +184,11 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
         cores.append(best)
         rings.append(np.full(len(best), index, dtype=np.int64))
         rows = np.arange(len(best))
+        # the core along the ring: feet measured from a's foot, forwards or backwards
+        fa_e, fwd = fa[rows, e], fb[rows, e] >= fa[rows, e]
+        c0 = np.where(fwd, k_lo[rows, e] - fa_e, fa_e - k_hi[rows, e])
+        arcs.append(start[:, None] + np.stack([c0, c0 + best], axis=1))
+        totals.append(np.full(len(best), total))
         ends = np.stack([j_lo[rows, e], j_hi[rows, e]], axis=1)
         strips.append(p0[e][:, None, :] + ends[..., None] * u[e][:, None, :])
         feet.append(np.concatenate([np.stack([g0[rows, e], g1[rows, e]], axis=1), ends], axis=1))
@@ -184,12 +200,13 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
         z = np.zeros(0)
         return ContourEdges(
             z, z, applies, z.astype(np.int64), np.zeros((0, 2, 2)), np.zeros((0, 2)),
-            np.zeros((0, 4)), np.zeros((0, 2)), z,
+            np.zeros((0, 4)), np.zeros((0, 2)), z, np.zeros((0, 2)), z,
         )  # fmt: skip
     return ContourEdges(
         np.concatenate(angles), np.concatenate(cores), applies, np.concatenate(rings),
         np.concatenate(strips), np.concatenate(inwards), np.concatenate(feet),
-        np.concatenate(reaches), np.concatenate(trims),
+        np.concatenate(reaches), np.concatenate(trims), np.concatenate(arcs),
+        np.concatenate(totals),
     )  # fmt: skip
 
 
@@ -231,6 +248,7 @@ def _near_lengths(
     eps: NDArray[np.float64],
     origin: NDArray[np.float64],
     spacing: float,
+    parts: list[NDArray[np.int64]] | None = None,
 ) -> NDArray[np.float64]:
     """``(L, S)`` per layout and stretch, the length of the stretch the planner keeps for the
     parts of its strip (feet ``J`` on the edge) that no line of the grid ``(theta, d)``, moved
@@ -238,7 +256,9 @@ def _near_lengths(
     inside (then no lane covers their points at depth 0.005-0.0055 half-spacings; the rule
     for stretches near the lanes' direction, docs/mission_time.md, "Keep-inside: the bound"):
     each such part (at least :data:`MIN_PART` long) flags the stretch's samples up to
-    ``rho`` beyond it, and a flagged run at least a sample step long is kept whole."""
+    ``rho`` beyond it, and a flagged run at least a sample step long is kept whole.
+    ``parts``: a list that gets ``(L, S)``, the number of separate parts of that union (each a
+    run of consecutive flagged samples, :mod:`~.inside_moves`)."""
     half = spacing / 2
     n_l, n_s = len(theta), len(contour.core)
     cs, sn = np.cos(theta)[:, None, None], np.sin(theta)[:, None, None]
@@ -257,6 +277,8 @@ def _near_lengths(
     angle = np.abs((contour.angle[None, :] - theta[:, None] + math.pi / 2) % math.pi - math.pi / 2)
     use = (angle <= NEAR_ANGLE) & (hi - lo < spacing) & (contour.core[None, :] > 0)
     if not use.any():
+        if parts is not None:
+            parts.append(np.zeros((n_l, n_s), dtype=np.int64))
         return np.zeros((n_l, n_s))
     k0 = np.ceil((u_min + lo - sd) / spacing)  # the first line whose band can meet J
     m = int(np.max(np.where(use, u_max - u_min, 0.0)) / spacing) + 3  # every line up to J's end
@@ -285,6 +307,10 @@ def _near_lengths(
     # a flat strip (parallel to the lines at the centre): the whole of J or nothing
     flat_free = ((sd - u_min - lo) % spacing) > (u_max - u_min) + (hi - lo) + 1e-9 * spacing
     length = np.where(flat, np.where(flat_free, contour.core[None, :], 0.0), length)
+    if parts is not None:  # a part starts where no earlier flagged stretch reaches
+        n = (good & (ds > before)).sum(axis=2)
+        n = np.where(flat, flat_free.astype(np.int64), n)
+        parts.append(np.where(use & (length > 0), n, 0))
     return np.where(use, length, 0.0)
 
 
@@ -294,21 +320,36 @@ def _stretches(
     delta: NDArray[np.float64],
     near: NDArray[np.float64] | None = None,
     ranking: bool = False,
+    *,
+    parts: NDArray[np.int64] | None = None,
+    spacing: float = 0.0,
+    passes: list[NDArray[np.int64]] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
     """``(P, A, R)`` per layout: the cores of the stretches at least :data:`MIN_ANGLE` from
     every lane angle in ``theta +- delta`` and, nearer the lanes' direction, the lengths
     ``near`` (:func:`_near_lengths`, up to :data:`NEAR_ANGLE`), their least travel along the
     lanes, and the number of contour rings holding such a core (each a boundary pass of its
-    own). ``ranking``: the tenth round's cores (:attr:`ContourEdges.trimmed`) and no rings."""
+    own). ``ranking``: the tenth round's cores (:attr:`ContourEdges.trimmed`) and no rings.
+    ``passes``: a list that gets ``(L,)``, at most how many passes hold those stretches
+    (:func:`~.inside_moves.pass_count`; ``parts``: the near lengths' parts, ``spacing``)."""
     if not len(contour.core):
         z = np.zeros(len(theta))
+        if passes is not None:
+            passes.append(np.zeros(len(theta), dtype=np.int64))
         return z, z, np.zeros(len(theta), dtype=np.int64)
     rel = np.abs((contour.angle[None, :] - theta[:, None] + math.pi / 2) % math.pi - math.pi / 2)
     pick = rel - delta[:, None] >= MIN_ANGLE
     core = np.where(pick, (contour.trimmed if ranking else contour.core)[None, :], 0.0)
+    close = np.zeros_like(pick)
     if near is not None:
         close = ~pick & (rel + delta[:, None] <= NEAR_ANGLE)
         core = np.where(close, np.minimum(near, contour.core[None, :]), core)
+    if passes is not None:
+        far = pick & (core > 0)
+        in_near = None if parts is None else np.where(close & (core > 0), parts, 0)
+        if in_near is None and close.any():
+            raise ValueError("the near lengths' parts are needed to count the passes")
+        passes.append(pass_count(contour.arc, contour.total, contour.ring, far, in_near, spacing))
     along = core * np.cos(np.minimum(rel + delta[:, None], math.pi / 2))
     n_rings = int(contour.ring.max()) + 1
     held = np.zeros((len(theta), n_rings), dtype=bool)
@@ -348,6 +389,7 @@ def keep_inside_bounds(
     eps: float = 0.0,
     origin: NDArray[np.float64] | None = None,
     ranking: bool = False,
+    tight: list[NDArray[np.float64]] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every keep-inside plan of the layouts (module
     docstring). ``st_half``/``level_half``: the sandwich's inner set shrunk by half a spacing
@@ -357,26 +399,43 @@ def keep_inside_bounds(
     holds every box's rigid motion and ``origin`` the grid's centre: with them the stretches
     near the lanes' direction whose strip no line can reach are counted too. ``ranking``:
     ``(2, L)``, the bound and the value that ranks the layouts a search plans, the tenth
-    round's bound (trimmed stretches, no turn per pass; lower, so still a bound)."""
+    round's bound (trimmed stretches, no turn per pass; lower, so still a bound). ``tight``:
+    a list that gets ``(L,)``, the bound with the moves on top of the passes
+    (:mod:`~.inside_moves`, :data:`MOVES_ON_PASSES`), which the certificate takes where the
+    search decides by the bound returned (docs/mission_time.md)."""
     kw: dict[str, Any] = {"boustrophedon": False, "ends": None}
     half = lower_bounds(st_half, level_half, cost, spacing, runins=runins, **kw)
     zero = lower_bounds(_no_holes(st_zero), level_zero, cost, spacing, runins=False, **kw)
     halves = [half, half] if ranking else [half]
+    moved = half
     if contour.applies and len(contour.core):
         near = None
+        parts: list[NDArray[np.int64]] = []
         if d is not None and origin is not None:
-            near = _near_lengths(contour, theta, d, np.full(len(theta), eps), origin, spacing)
+            e = np.full(len(theta), eps)
+            sink = parts if tight is not None and MOVES_ON_PASSES else None
+            near = _near_lengths(contour, theta, d, e, origin, spacing, parts=sink)
         c = _moves(st_half, spacing)
         plain = lower_bounds(_no_holes(st_half), level_half, cost, spacing, runins=runins, **kw)
         # a turn before each boundary pass (the plan's turns: its lanes and passes less one)
         lanes = st_half.count.sum(axis=1) > 0
         for i, trimmed in enumerate([False, True][: len(halves)]):
-            p, a, passes = _stretches(contour, theta, delta, None if trimmed else near, trimmed)
+            want = tight is not None and MOVES_ON_PASSES and not trimmed
+            held: list[NDArray[np.int64]] | None = [] if want else None
+            p, a, rings = _stretches(
+                contour, theta, delta, None if trimmed else near, trimmed,
+                parts=parts[0] if parts else None, spacing=spacing, passes=held,
+            )  # fmt: skip
             extra = np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
-            turns = np.where(lanes, passes, 0)
+            turns = np.where(lanes, rings, 0)
             halves[i] = np.maximum(half, plain + cost.per_length * extra + cost.per_turn * turns)
+            if held:  # the moves no pass holding a counted stretch serves
+                more = np.maximum(extra, p + line_moves(st_half.count, spacing, held[0]) - c)
+                moved = np.maximum(half, plain + cost.per_length * more + cost.per_turn * turns)
     least = cost.per_length * floor + cost.fixed
     out = [np.maximum(np.minimum(h, zero), least) for h in halves]
+    if tight is not None:
+        tight.append(np.maximum(np.minimum(np.maximum(moved, halves[0]), zero), least))
     return np.stack(out) if ranking else out[0]
 
 
@@ -390,11 +449,12 @@ def inside_box_bounds(
     d: NDArray[np.float64],
     delta: NDArray[np.float64],
     ranking: bool = False,
+    tight: list[NDArray[np.float64]] | None = None,
 ) -> NDArray[np.float64]:
     """:func:`keep_inside_bounds` for a :class:`~.search.CoverSearch` with ``keep_inside``:
     ``lv, st`` its level at ``radius`` shrunk by half a spacing, the level not shrunk bounded
     here (lines within ``reach_out``); with ``ranking``, the bound and the ranking value
-    stacked ``(2, L)``."""
+    stacked ``(2, L)``; ``tight``, a list that gets the certificate's bound."""
     lv0 = search.sandwich.level(radius, 0.0)
     st0 = band_stats(
         lv0.inner, lv0.outer, theta, d, search.s, 0.0, search.origin,
@@ -408,4 +468,4 @@ def inside_box_bounds(
     # with ranking, the layouts' own values that rank the layouts the search plans: the tenth
     # round's terms there (with the eleventh round's, 9 of 34 keep-inside plans of the 100-area
     # run came out longer by 0.1-9.5 s, one shorter: a review)
-    return keep_inside_bounds(*args, d=near, eps=radius, ranking=ranking, **kw)
+    return keep_inside_bounds(*args, d=near, eps=radius, ranking=ranking, tight=tight, **kw)

@@ -89,6 +89,11 @@ WARM_TOUR = True
 #: lanes (:func:`~.rigid._split_gaps`): a hole thinner than the box's radius, eroded away by its
 #: outer set, still splits every such line (issue 16: random areas 9 and 92's slivers).
 SPLIT_GAPS = True
+#: What a keep-inside search decides by with the moves on top of its passes
+#: (:mod:`~.inside_moves`): ``"certificate"`` the certificate's floor only (the same plans),
+#: ``"boxes"`` also which boxes it keeps, ``"all"`` also the layouts' bounds (docs/mission_time.md,
+#: "Keep-inside: moves on top of passes").
+MOVES_DECIDE = "certificate"
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 
@@ -138,6 +143,7 @@ class CoverSearch:
         self.walls = WallCache()
         self.defer = DEFER_TOUR  # read by the branch and bound (optimize/cover/branch.py)
         self.skipped: NDArray[np.bool_] = np.zeros(0, dtype=bool)  # see box_bounds
+        self.tight: NDArray[np.float64] = np.zeros(0)  # see box_bounds
         # boxes taken out before their 1-tree, their bounds and multipliers (settle_deferred)
         self.deferred: list[tuple[_Boxes, NDArray[np.float64], Multipliers | None]] = []
         self.top_eps = 0.0
@@ -228,9 +234,12 @@ class CoverSearch:
         ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
         rank = None
         if self.keep_inside:  # the bound, and the value that ranks the layouts (inside_bound)
+            tight: list[NDArray[np.float64]] | None = [] if MOVES_DECIDE == "all" else None
             out, rank = self._inside(
-                lv, st, 0.0, 0.0, boxes.theta, boxes.d, np.zeros(len(boxes.d)), ranking=True
-            )
+                lv, st, 0.0, 0.0, boxes.theta, boxes.d, np.zeros(len(boxes.d)), ranking=True,
+                tight=tight,
+            )  # fmt: skip
+            out = tight[0] if tight else out
         else:
             out = lower_bounds(
                 st, lv, self.cost, self.s, boustrophedon=self.boustrophedon, ends=ends,
@@ -274,10 +283,14 @@ class CoverSearch:
         below it (a box at or above it is taken out anyway); the boxes where it was skipped so
         but could still raise the bound (below the best plan) are marked in :attr:`skipped`.
         ``tour_below``: the 1-tree's stopping value instead of the best plan; ``multipliers``
-        (per box): where its steps start, and where the best ones are kept."""
+        (per box): where its steps start, and where the best ones are kept. :attr:`tight`
+        gets the bounds the certificate takes: with ``keep_inside`` higher (the moves on top
+        of the passes, :mod:`~.inside_moves`) than those returned, by which the search decides
+        (so it plans the same layouts), else the same."""
         eps = box_radius(boxes, self.radius)
         radius = level_radius(eps, self.top_eps)  # >= eps: a level of the sandwich
         out = np.empty(len(eps))
+        self.tight = out
         self.skipped = np.zeros(len(eps), dtype=bool)
         for r in np.unique(radius):
             sel = radius == r
@@ -298,9 +311,14 @@ class CoverSearch:
             ends = self._hole_boxes(boxes.theta[sel], boxes.d[sel], reach_out)
             self.work += int(sel.sum()) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
             if self.keep_inside:
+                cert: list[NDArray[np.float64]] = []
                 out[sel] = self._inside(
-                    lv, st, float(r), reach_out, boxes.theta[sel], boxes.d[sel], boxes.delta[sel]
-                )
+                    lv, st, float(r), reach_out, boxes.theta[sel], boxes.d[sel], boxes.delta[sel],
+                    tight=cert,
+                )  # fmt: skip
+                if self.tight is out and MOVES_DECIDE == "certificate":
+                    self.tight = out.copy()
+                self.tight[sel] = cert[0]
                 continue
             below = self._tour_below(float(r))
             if below is not None and tour_below is not None:
