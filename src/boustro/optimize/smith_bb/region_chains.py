@@ -51,7 +51,13 @@ from . import kernel
 from .kernel import _sup_w
 
 __all__ = [
-    "MAX_COMBOS", "MAX_LINES", "MAX_NEAR", "chain_bound", "edge_lengths", "near_margin", "prepare"
+    "MAX_COMBOS",
+    "MAX_LINES",
+    "MAX_NEAR",
+    "chain_bound",
+    "edge_lengths",
+    "near_margin",
+    "prepare",
 ]
 
 #: Most uncertain lines (``u > r``) of a box for the chain bound.
