@@ -246,8 +246,8 @@ def smith_bb_region(
     :data:`REGION_MAX_WORK`, doubled while the gap shrinks by a tenth per doubling, up to
     :data:`REGION_EXTEND` times; an explicit ``max_work`` is a hard limit); ``region`` in user
     units; ``incumbents``: layouts ``(angle, offset)`` (radians; user units from the shell's
-    vertex mean, as returned, e.g. by ``region-grid``) scored and polished before the first boxes: a good first incumbent
-    prunes more boxes (the result is as certified without them).
+    vertex mean, as returned, e.g. by ``region-grid``) scored and polished before the first
+    boxes: a good first incumbent prunes more boxes (the result is as certified without them).
 
     Returns:
         :class:`OptimizeResult` with ``method="certified-bb"``, the offset from the shell's
