@@ -49,6 +49,19 @@ def test_a_cache_folder_of_other_sources_loses_its_kernels_once(tmp_path):
     assert (stale / "kernel._search-40.py311.nbi").read_bytes() == b"new"
 
 
+def test_a_missing_cache_folder_is_made_and_stamped_so_the_next_process_keeps_it(tmp_path):
+    """Where Python writes no ``__pycache__`` (``PYTHONDONTWRITEBYTECODE``) the folder is
+    missing at first use: unstamped, the next process dropped every kernel compiled there."""
+    folder = tmp_path / "pkg" / "__pycache__"
+    fresh_cache(folder)
+    stamp = f"boustro-sources-{sources_digest()}.stamp"
+    assert [p.name for p in folder.iterdir()] == [stamp]
+    (folder / "kernel._search-40.py311.nbi").write_bytes(b"compiled")  # numba saves
+    _CHECKED.discard(folder)  # the next process
+    fresh_cache(folder)
+    assert (folder / "kernel._search-40.py311.nbi").read_bytes() == b"compiled"
+
+
 def test_compiling_with_the_disk_cache_checks_its_folder():
     compiled, on_disk = jit_cached(_twice)
     if on_disk:  # the tests' folder is writable here; elsewhere numba compiles in memory

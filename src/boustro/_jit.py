@@ -45,17 +45,21 @@ def sources_digest() -> str:
 def fresh_cache(folder: str | Path) -> None:
     """Make numba's cache ``folder`` hold only kernels compiled from the package's present
     sources: unless it carries this digest's stamp, its cached kernels (``*.nbi``, ``*.nbc``)
-    and old stamps are removed and the stamp written. Once per folder and process; a folder
-    that cannot be changed is left as it is."""
+    and old stamps are removed and the stamp written. A missing folder is made and stamped
+    (numba would make it unstamped, and the next process would drop what this one compiles:
+    a fresh installation compiled twice where Python writes no ``__pycache__``, e.g. under
+    ``PYTHONDONTWRITEBYTECODE``). Once per folder and process; a folder that cannot be made
+    or changed is left as it is."""
     folder = Path(folder)
     with LOCK:
         if folder in _CHECKED:
             return
         _CHECKED.add(folder)
         stamp = folder / f"boustro-sources-{sources_digest()}.stamp"
-        if stamp.exists() or not folder.is_dir():
+        if stamp.exists():
             return
         try:
+            folder.mkdir(parents=True, exist_ok=True)
             for old in [*folder.glob("*.nb[ic]"), *folder.glob("boustro-sources-*.stamp")]:
                 old.unlink(missing_ok=True)
             stamp.touch()
