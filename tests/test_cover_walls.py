@@ -153,3 +153,46 @@ def test_the_one_tree_with_inset_walls_never_exceeds_a_plan_in_the_box(case, ind
         hole_walls(outer, inset=0.0), th, d, o
     )
     assert (np.array(points) > flat.point_values(boxes, exact=True) + 1e-6).any()
+
+
+def test_a_plan_with_a_move_through_a_hole_is_not_called_certified(monkeypatch):
+    """The router's straight fallback (no way found inside the area: coarse routing of a traced
+    side, a hole 1 m from the shell) flies through the hole, which the walls' premise rules out:
+    such a plan keeps no certificate (a review's area; forced certified to test the rule)."""
+    import dataclasses
+
+    from boustro.io.area import Area
+    from boustro.mission import cover as mission_cover
+    from boustro.mission import plan_area
+
+    real = mission_cover.cover_optimum
+
+    def certified(*args, **kwargs):
+        result = real(*args, **kwargs)
+        return dataclasses.replace(result, info={**result.info, "certified": True, "gap": 0.0})
+
+    monkeypatch.setattr(mission_cover, "cover_optimum", certified)
+    left = [(0.1 * (i % 2), 100 - 0.2 * i) for i in range(501)]
+    shell = np.array([(0, 0), (200, 0), (200, 100), *left[:-1]], float)
+    tri = np.array([(80, 1.0), (100, 99.0), (120, 1.0)])
+    area = Area(shell, "planar", "x", "t", (tri,))
+    mission = plan_area(area, 9.0, speed=5.0, turn_time=10.0, angle=90.0)
+    assert any(n.startswith("no connecting move inside the area") for n in mission.plan.notes)
+    assert mission.optimum.info["certified"] is False
+    assert "crosses a hole" in mission.optimum.info["uncertified"]
+    clear = plan_area(area, 9.0, speed=5.0, turn_time=10.0, angle=2.864788975654116)
+    assert not any(n.startswith("no connecting") for n in clear.plan.notes)
+    assert clear.optimum.info["certified"] is True  # the rule leaves other plans alone
+
+
+def test_walls_of_a_concave_hole_stay_inside_it():
+    """An L-shaped hole: its long inset diagonals leave it, and a wall outside a hole would
+    charge moves that fly there (a review's mutant without the inside check passed the rest)."""
+    from boustro.optimize.cover.bands import edge_set
+
+    hole = np.array([[40, 20], [40, 60], [50, 60], [50, 30], [80, 30], [80, 20]], float)
+    shell = np.array([[0, 0], [120, 0], [120, 80], [0, 80]], float)
+    walls = hole_walls(edge_set([shell, hole[::-1]], [-1, 0]))
+    assert len(walls) >= 3
+    inside = shapely.Polygon(hole)
+    assert all(inside.covers(shapely.LineString([w[:2], w[2:]])) for w in walls)

@@ -15,7 +15,7 @@ from ..objectives import FewestTransects, MissionTime
 from ..optimize import OptimizeResult
 from ..optimize.cover import CoverCost, cover_optimum
 from ..plan import Plan, build_plan, coverage
-from ..plan.region import plan_region
+from ..plan.region import BLOCKED_NOTE, plan_region
 from ..plan.region_floor import plan_floor
 from ..plan.types import Layout
 from .project import Frame
@@ -134,11 +134,13 @@ def _cost_key(plan: Plan) -> tuple[float, int]:
     return (plan.stats.path_length, plan.stats.n_turns)
 
 
-def _uncertified_chords(optimum: OptimizeResult) -> OptimizeResult:
-    """The search's result without its certificate: its bound counts coverage-guaranteed
-    lanes, which the chords layout's lanes (shorter, sometimes fewer) can undercut."""
+def _uncertified(optimum: OptimizeResult, why: str) -> OptimizeResult:
+    """The search's result without its certificate, saying ``why``: the chords layout's
+    bound counts coverage-guaranteed lanes, which its lanes (shorter, sometimes fewer) can
+    undercut; a plan with a move the router found no way for inside the area flies straight
+    through a hole, which the bound's walls (and its premise) rule out."""
     info = {k: v for k, v in optimum.info.items() if k != "lower_bound"}
-    info.update(certified=False, gap=None, uncertified="the chords layout has no certificate")
+    info.update(certified=False, gap=None, uncertified=why)
     return dataclasses.replace(optimum, info=info)
 
 
@@ -191,8 +193,10 @@ def plan_cover(
         screen=None if finish is not None else _screen(frame, layout, options, keep_inside, cost),
     )
     if layout == "chords":
-        optimum = _uncertified_chords(optimum)
+        optimum = _uncertified(optimum, "the chords layout has no certificate")
     plan = planner(optimum.angle, optimum.offset)
+    if optimum.info.get("certified") and any(n.startswith(BLOCKED_NOTE) for n in plan.notes):
+        optimum = _uncertified(optimum, "a move of the plan crosses a hole or leaves the area")
     if plan.cells:  # the one cell carries the certificate
         cells = tuple(
             dataclasses.replace(c, fitness=optimum.fitness, optimum=optimum) for c in plan.cells

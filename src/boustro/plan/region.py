@@ -439,6 +439,11 @@ def _drive(tour: _Tour, cl: _CellLanes, opts: PlanOptions) -> _Path:
 
 
 # -- step 6: assemble -------------------------------------------------------------------------
+#: The start of a plan's note on a move the router found no way for inside the area (it flies
+#: the straight line, through a hole or outside the area).
+BLOCKED_NOTE = "no connecting move inside the area"
+
+
 def _assemble(
     r: Region, cl: _CellLanes, tour: _Tour, path: _Path, opts: PlanOptions, notes: list[str]
 ) -> Plan:
@@ -451,7 +456,7 @@ def _assemble(
     n_turns = n_lanes + sum(1 for p in tour.passes if p.kind != "chain") - 1  # passes - 1
     for a, b in path.blocked:
         notes.append(
-            f"no connecting move inside the area from {a.round(3).tolist()} to "
+            f"{BLOCKED_NOTE} from {a.round(3).tolist()} to "
             f"{b.round(3).tolist()}: the straight line is used"
         )
     scale = opts.ground_scale
