@@ -399,7 +399,7 @@ def test_or_tools_arc_matrix_gives_the_tour_of_the_python_callback(monkeypatch, 
         pb.move[rng.random(pb.move.shape) < 0.05] = math.inf
     found, _ = cell_order._ortools(pb)
 
-    asked = []
+    asked, tables = [], []
 
     class Model(pywrapcp.RoutingModel):
         """The model registering a Python callback over node indices (the code before)."""
@@ -409,6 +409,8 @@ def test_or_tools_arc_matrix_gives_the_tour_of_the_python_callback(monkeypatch, 
             self.manager = manager
 
         def RegisterTransitMatrix(self, table):
+            tables.append(table)
+
             def callback(i: int, j: int) -> int:
                 asked.append(1)
                 return int(table[self.manager.IndexToNode(i)][self.manager.IndexToNode(j)])
@@ -420,3 +422,14 @@ def test_or_tools_arc_matrix_gives_the_tour_of_the_python_callback(monkeypatch, 
     old, _ = cell_order._ortools(pb)
     assert asked  # the callback was the one asked
     assert found is not None and found == old
+    # the matrix holds the moves' costs by node (row: from, column: to; node 0 the start),
+    # in the same integer unit, independently of how OR-Tools reads it
+    table = np.array(tables[0], dtype=float)
+    move, first = pb.move, pb.first
+    unit = 1e6 / max(np.concatenate([move[np.isfinite(move)], first[np.isfinite(first)]]))
+    np.testing.assert_array_equal(
+        table[1:, 1:], np.where(np.isfinite(move), np.round(move * unit), 1e12)
+    )
+    np.testing.assert_array_equal(
+        table[0, 1:], np.where(np.isfinite(first), np.round(first * unit), 1e12)
+    )

@@ -215,3 +215,25 @@ def test_the_search_plans_the_same_layouts_with_a_higher_floor():
         assert new.info.get(key) == old.info.get(key)
     assert new.info["lower_bound"] > old.info["lower_bound"]
     assert new.info["lower_bound"] <= new.fitness
+
+
+def test_a_decomposition_decides_its_keep_inside_cells_without_the_moves_term(monkeypatch):
+    """A decomposition's cell searches decide which candidates it plans by their floor (a
+    screen: a cell alone counts passes along its cut edges): they keep the floor without the
+    moves on top of the passes, so the decomposition decides as before the term (a review saw
+    the L with a pond's cell floors rise 274.565 -> 276.565 with it)."""
+    from boustro.mission import decomposed, plan_area
+
+    seen = []
+    real = decomposed.cover_optimum
+
+    def spy(*args, **kwargs):
+        seen.append((kwargs.get("keep_inside"), kwargs.get("moves_on_passes", True)))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(decomposed, "cover_optimum", spy)
+    shell = np.array([(0, 0), (200, 0), (200, 60), (60, 60), (60, 200), (0, 200)], float)
+    hole = np.array([(20, 20), (40, 20), (40, 40), (20, 40)], float)
+    plan_area(shell, 10.0, crs=None, holes=[hole], speed=5.0, turn_time=10.0, keep_inside=True)
+    assert any(k for k, _ in seen)  # keep-inside cells were searched
+    assert all(not moves for k, moves in seen if k)

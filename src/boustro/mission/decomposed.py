@@ -205,6 +205,7 @@ class _Search:
                 cell, self.s, self.cost, lambda a, d: self.value(cell, a, d),
                 reach=self.reach, boustrophedon=False, keep_inside=self.keep_inside,
                 centred=False, cutoff=cutoff, screen=self._screen(cell),
+                moves_on_passes=False,  # its floor decides (below): the decisions of bc75ccd
             )  # fmt: skip
         except (NoTransectError, InvalidPolygonError, InvalidParameterError):
             if cutoff is None:  # a search cut off may have stopped before its first plan

@@ -144,6 +144,9 @@ class CoverSearch:
         self.defer = DEFER_TOUR  # read by the branch and bound (optimize/cover/branch.py)
         self.skipped: NDArray[np.bool_] = np.zeros(0, dtype=bool)  # see box_bounds
         self.tight: NDArray[np.float64] = np.zeros(0)  # see box_bounds
+        #: keep-inside's moves on top of its passes in the certificate (cover_optimum's
+        #: ``moves_on_passes``)
+        self.moves_on_passes = True
         # boxes taken out before their 1-tree, their bounds and multipliers (settle_deferred)
         self.deferred: list[tuple[_Boxes, NDArray[np.float64], Multipliers | None]] = []
         self.top_eps = 0.0
@@ -311,14 +314,15 @@ class CoverSearch:
             ends = self._hole_boxes(boxes.theta[sel], boxes.d[sel], reach_out)
             self.work += int(sel.sum()) * (len(lv.inner.xy) + len(lv.outer.xy)) / 2
             if self.keep_inside:
-                cert: list[NDArray[np.float64]] = []
+                cert: list[NDArray[np.float64]] | None = [] if self.moves_on_passes else None
                 out[sel] = self._inside(
                     lv, st, float(r), reach_out, boxes.theta[sel], boxes.d[sel], boxes.delta[sel],
                     tight=cert,
                 )  # fmt: skip
-                if self.tight is out and MOVES_DECIDE == "certificate":
-                    self.tight = out.copy()
-                self.tight[sel] = cert[0]
+                if cert is not None:
+                    if self.tight is out and MOVES_DECIDE == "certificate":
+                        self.tight = out.copy()
+                    self.tight[sel] = cert[0]
                 continue
             below = self._tour_below(float(r))
             if below is not None and tour_below is not None:
@@ -430,6 +434,7 @@ def cover_optimum(
     centred: bool = True,
     cutoff: float | None = None,
     screen: Callable[[float, float], float] | None = None,
+    moves_on_passes: bool = True,
 ) -> OptimizeResult:
     """The layout ``(angle, offset)`` whose plan has the least ``cost``, with a certificate.
 
@@ -473,6 +478,11 @@ def cover_optimum(
             moves, :func:`boustro.plan.region_floor.plan_floor`): a layout whose floor is above
             the best plan is not planned but counts as tried (``info["screened"]``), so the
             search finds the same plan.
+        moves_on_passes: with ``keep_inside``, the certificate's floor counts the moves
+            between lanes on top of the boundary passes (:mod:`~.inside_moves`; the search
+            decides as without). ``False`` for a decomposition's cells, whose floor decides
+            which candidates are planned (a screen: a cell planned alone counts passes along
+            its cut edges that the whole plan never flies), so they decide as before.
 
     Returns:
         an :class:`OptimizeResult` with ``fitness`` = the best plan's cost (minimised),
@@ -488,6 +498,7 @@ def cover_optimum(
     if boustrophedon is None:
         boustrophedon = not r.holes and r.shell.is_convex
     search = CoverSearch(r, s, reach, cost, evaluate, boustrophedon, keep_inside, screen)
+    search.moves_on_passes = moves_on_passes
     boustrophedon = search.boustrophedon
     if not centred:  # a decomposition's cell: the 1-tree without holes cost more than it gave
         search.tour = search.tour and search.n_holes > 0
