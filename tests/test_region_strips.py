@@ -175,3 +175,37 @@ def test_sweep_and_intervals_equal_every_edge_against_every_line(which: str) -> 
             assert ((lo_t - 1e-9 <= mid) & (mid <= hi_t + 1e-9)).all()  # each on its edge
             lines += int(m.sum() > 0)
     assert lines > 50
+
+
+def test_an_edge_on_a_line_far_from_the_origin_is_not_dropped():
+    """The quick rejection's margin grows with the line index: at raw UTM-like coordinates
+    (line 5e7 at 0.1 m) a fixed 1e-9 dropped an edge lying on a line (values -inf; a review)."""
+    from boustro.optimize.smith_bb.region_kernel import region_values, ring_starts
+
+    s, inv = 0.1, 10.0
+    k = next(k for k in range(50_000_000, 50_001_000) if math.ceil(k * s * inv - 1e-9) > k)
+    y0 = k * s
+    ring = np.array([(0.0, y0), (100.0, y0), (100.0, y0 + 0.05), (0.0, y0 + 0.05)])
+    xy, _ = ring_starts([ring])
+    value = region_values(xy, np.array([0.0]), np.array([0.0]), s, 0.5, 0.5, 1e-9)
+    assert np.isfinite(value).all() and value[0] > 0
+
+
+def test_long_runs_sort_stably_as_the_insertion_sort():
+    """Runs above LONG_RUN go to numpy's stable sort: the same order (ties keep their order)."""
+    from boustro.optimize.cover import band_lines
+
+    band_lines.jit_into({})  # the compiled sorts, as the kernels call them
+    assert hasattr(band_lines._sort_pairs, "py_func")
+    rng = np.random.default_rng(3)
+    for n in (5, band_lines.LONG_RUN + 1, 400):
+        key, other = np.round(rng.random(n + 6) * 7), rng.random(n + 6)
+        want = np.argsort(key[2 : 2 + n], kind="stable")
+        k2, o2 = key.copy(), other.copy()
+        band_lines._sort_pairs(k2, o2, 2, 2 + n)
+        np.testing.assert_array_equal(k2[2 : 2 + n], key[2 : 2 + n][want])
+        np.testing.assert_array_equal(o2[2 : 2 + n], other[2 : 2 + n][want])
+        np.testing.assert_array_equal(k2[:2], key[:2])
+        k3 = key[::-1].copy()
+        band_lines._sort_keys(k3, 0, n + 6)
+        np.testing.assert_array_equal(k3, np.sort(key))

@@ -82,9 +82,12 @@ def _intervals(xy, cs, sn, d, s, k0, nb):
     for i in range(ne):
         h1 = -sn * xy[i, 0] + cs * xy[i, 1]
         h2 = -sn * xy[i, 2] + cs * xy[i, 3]
-        # most edges cross no line: no whole number within 1e-9 (far above the rounding of
-        # d + k s) of [(min - d) / s, (max - d) / s]
-        if math.ceil((min(h1, h2) - d) * inv - 1e-9) > (max(h1, h2) - d) * inv + 1e-9:
+        # most edges cross no line: no whole number within a margin (far above the rounding
+        # of d + k s, relative to the line index: raw UTM coordinates reach 1e8) of
+        # [(min - d) / s, (max - d) / s]
+        lo, hi = (min(h1, h2) - d) * inv, (max(h1, h2) - d) * inv
+        margin = 1e-9 + 1e-14 * (abs(lo) + abs(hi))
+        if math.ceil(lo - margin) > hi + margin:
             continue
         k = _first_line(min(h1, h2), d, s, k0)
         if k < k0 + nb and (h1 <= d + k * s) != (h2 <= d + k * s):

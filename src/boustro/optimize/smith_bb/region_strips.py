@@ -89,9 +89,12 @@ def _sweep(xy, cs, sn, c, low, high, widest, d, s, k0, nb):
         h1 = -sn * xy[i, 0] + cs * xy[i, 1]
         h2 = -sn * xy[i, 2] + cs * xy[i, 3]
         a, b = min(h1, h2), max(h1, h2)
-        # most edges meet no strip: no whole number within 1e-9 (far above the rounding of
-        # c = d + k s) of [(a - widest - d) / s, (b + widest - d) / s]
-        if math.ceil((a - widest - d) * inv - 1e-9) > (b + widest - d) * inv + 1e-9:
+        # most edges meet no strip: no whole number within a margin (far above the rounding
+        # of c = d + k s, relative to the line index as in region_kernel._intervals) of
+        # [(a - widest - d) / s, (b + widest - d) / s]
+        lo, hi = (a - widest - d) * inv, (b + widest - d) * inv
+        margin = 1e-9 + 1e-14 * (abs(lo) + abs(hi))
+        if math.ceil(lo - margin) > hi + margin:
             continue
         q = _first_strip(c, nb, a - widest, d, s, k0)
         if q >= nb or c[q] - widest > b:
