@@ -297,7 +297,8 @@ def _run(
             half_gap = max(closed, float(bounds.max())) - search.best
         if work > limit:
             gap = max(closed, float(bounds.max())) - search.best
-            if 2 * limit <= extend * max_work * (1 + 1e-12) and gap <= SHRINK * half_gap:
+            shrank = math.isfinite(gap) and gap <= SHRINK * half_gap  # no layout yet: stop
+            if 2 * limit <= extend * max_work * (1 + 1e-12) and shrank:
                 limit, half_gap = 2 * limit, gap  # the gap at half of the doubled budget
             else:
                 closed = max(closed, float(bounds.max()))
