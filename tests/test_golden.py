@@ -19,6 +19,7 @@ import math
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from .conftest import run_cli
@@ -52,12 +53,15 @@ VOLATILE = {
 LOOSE = {"optimize_learned": 1e-6, "train_tiny": 1e-6}
 # Values of the paper's gradient descent from random starts in ``reproduce --quick``: a step that
 # rounds differently on another CPU lands in another local optimum (measured on that machine:
-# one polygon's fitness 0.910 -> 0.938, a share 0.6 -> 0.8), so below these JSON paths only the
-# structure, the counts and a finite number in [-1, 1] (fitness values and their differences)
-# are checked.
+# one polygon's fitness 0.910 -> 0.938, a share 0.6 -> 0.8), so below these JSON paths numbers
+# are checked as finite and in [-1, 1] only, and :func:`_gradient_consistent` checks how they
+# hang together (its options, counts and every other method's values stay exact).
 CHAOTIC = (
-    "$.rq/optimizers.json.comparisons.gradient",
-    "$.rq/optimizers.json.methods.gradient.",
+    "$.rq/optimizers.json.comparisons.gradient.",
+    "$.rq/optimizers.json.comparisons.gradient-final.",
+    "$.rq/optimizers.json.methods.gradient.fitness[",
+    "$.rq/optimizers.json.methods.gradient.final_iterate_fitness[",
+    "$.rq/optimizers.json.methods.gradient.mean_fitness",
 )
 
 # A concave area with a hole, in plain planar coordinates (an L with a square pond).
@@ -223,6 +227,26 @@ def test_outputs_unchanged(case, tmp_path, capsys, monkeypatch):
         path.write_text(json.dumps(got, indent=1, sort_keys=True) + "\n", encoding="utf-8")
     want = json.loads(path.read_text(encoding="utf-8"))
     _compare(json.loads(json.dumps(got)), want, rel=LOOSE.get(case, 1e-9))
+    if case == "reproduce_quick":
+        _gradient_consistent(got["rq/optimizers.json"])
+
+
+def _gradient_consistent(run: dict) -> None:
+    """The :data:`CHAOTIC` values agree with each other and with the exact grid's: the mean is
+    the mean, the answer is the best iterate (never below the final one), the comparisons are
+    of these values, the shares add up to 1."""
+    methods, comparisons = run["methods"], run["comparisons"]
+    grid = np.array(methods["grid"]["fitness"])
+    best = np.array(methods["gradient"]["fitness"])
+    final = np.array(methods["gradient"]["final_iterate_fitness"])
+    assert len(best) == len(final) == len(grid)
+    assert ((best >= 0) & (best <= 1) & (best >= final)).all()
+    assert math.isclose(methods["gradient"]["mean_fitness"], best.mean(), rel_tol=1e-9)
+    for key, other in (("gradient", best), ("gradient-final", final)):
+        row = comparisons[key]
+        assert math.isclose(row["mean_grid_minus_other"], (grid - other).mean(), abs_tol=1e-12)
+        shares = row["share_grid_higher"] + row["share_other_higher"] + row["share_equal"]
+        assert math.isclose(shares, 1.0) and row["n"] == len(grid)
 
 
 def test_compare_catches_a_change_everywhere_but_below_a_chaotic_path():
@@ -235,3 +259,26 @@ def test_compare_catches_a_change_everywhere_but_below_a_chaotic_path():
     _compare({"rq/optimizers.json": {"methods": {"gradient": {"fitness": [0.9]}}}}, chaotic)
     with pytest.raises(AssertionError):  # out of range or not a number
         _compare({"rq/optimizers.json": {"methods": {"gradient": {"fitness": [3.0]}}}}, chaotic)
+    with pytest.raises(AssertionError):  # the descent's options stay exact
+        _compare(
+            {"rq/optimizers.json": {"methods": {"gradient": {"options": {"momentum": 0.5}}}}},
+            {"rq/optimizers.json": {"methods": {"gradient": {"options": {"momentum": 0.8}}}}},
+        )
+
+
+def test_the_gradient_values_must_hang_together():
+    """A review's mutations of the recorded run that the range check alone let through."""
+    want = json.loads((GOLDEN / "reproduce_quick.json").read_text(encoding="utf-8"))
+    run = want["rq/optimizers.json"]
+    _gradient_consistent(run)  # the recorded run itself
+    n = len(run["methods"]["gradient"]["fitness"])
+    for where, key, value in (
+        (("methods", "gradient"), "fitness", [0.0] * n),  # below the final iterates
+        (("methods", "gradient"), "mean_fitness", 0.99),
+        (("comparisons", "gradient-final"), "share_grid_higher", 0.0),
+        (("comparisons", "gradient"), "mean_grid_minus_other", -0.9),
+    ):
+        broken = json.loads(json.dumps(run))
+        broken[where[0]][where[1]][key] = value
+        with pytest.raises(AssertionError):
+            _gradient_consistent(broken)

@@ -46,10 +46,10 @@ def fresh_cache(folder: str | Path) -> None:
     """Make numba's cache ``folder`` hold only kernels compiled from the package's present
     sources: unless it carries this digest's stamp, its cached kernels (``*.nbi``, ``*.nbc``)
     and old stamps are removed and the stamp written. A missing folder is made and stamped
-    (numba would make it unstamped, and the next process would drop what this one compiles:
-    a fresh installation compiled twice where Python writes no ``__pycache__``, e.g. under
-    ``PYTHONDONTWRITEBYTECODE``). Once per folder and process; a folder that cannot be made
-    or changed is left as it is."""
+    (left unstamped but checked, as when the first-use check looked at it before numba made
+    it, the next process would drop what this one compiles: a fresh installation compiled
+    twice where Python writes no ``__pycache__``, e.g. under ``PYTHONDONTWRITEBYTECODE``).
+    Once per folder and process; a folder that cannot be made or changed is left as it is."""
     folder = Path(folder)
     with LOCK:
         if folder in _CHECKED:

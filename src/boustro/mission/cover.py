@@ -15,7 +15,7 @@ from ..objectives import FewestTransects, MissionTime
 from ..optimize import OptimizeResult
 from ..optimize.cover import CoverCost, cover_optimum
 from ..plan import Plan, build_plan, coverage
-from ..plan.region import BLOCKED_NOTE, plan_region
+from ..plan.region import BLOCKED_NOTE, OUTSIDE_NOTE, plan_region
 from ..plan.region_floor import plan_floor
 from ..plan.types import Layout
 from .project import Frame
@@ -134,6 +134,11 @@ def _cost_key(plan: Plan) -> tuple[float, int]:
     return (plan.stats.path_length, plan.stats.n_turns)
 
 
+#: A plan's notes that void its certificate: a move flown straight through a hole or out of the
+#: area (the bound's premise), or a keep-inside path that leaves the area (never seen).
+LEFT_NOTES = (BLOCKED_NOTE, OUTSIDE_NOTE)
+
+
 def _uncertified(optimum: OptimizeResult, why: str) -> OptimizeResult:
     """The search's result without its certificate, saying ``why``: the chords layout's
     bound counts coverage-guaranteed lanes, which its lanes (shorter, sometimes fewer) can
@@ -195,7 +200,7 @@ def plan_cover(
     if layout == "chords":
         optimum = _uncertified(optimum, "the chords layout has no certificate")
     plan = planner(optimum.angle, optimum.offset)
-    if optimum.info.get("certified") and any(n.startswith(BLOCKED_NOTE) for n in plan.notes):
+    if optimum.info.get("certified") and any(n.startswith(LEFT_NOTES) for n in plan.notes):
         optimum = _uncertified(optimum, "a move of the plan crosses a hole or leaves the area")
     if plan.cells:  # the one cell carries the certificate
         cells = tuple(

@@ -442,6 +442,8 @@ def _drive(tour: _Tour, cl: _CellLanes, opts: PlanOptions) -> _Path:
 #: The start of a plan's note on a move the router found no way for inside the area (it flies
 #: the straight line, through a hole or outside the area).
 BLOCKED_NOTE = "no connecting move inside the area"
+#: The start of a keep-inside plan's note on a path that leaves the area (never seen).
+OUTSIDE_NOTE = "keep_inside: "
 
 
 def _assemble(
@@ -462,7 +464,7 @@ def _assemble(
     scale = opts.ground_scale
     outside = outside_length(path.waypoints, r)
     if opts.keep_inside and outside > 0:  # never seen; said rather than hidden
-        notes.append(f"keep_inside: {outside / scale:.6g} m of the path leaves the area")
+        notes.append(f"{OUTSIDE_NOTE}{outside / scale:.6g} m of the path leaves the area")
     speed = opts.speed
     duration = None if speed is None else path_length / scale / speed + n_turns * opts.turn_time
     cells = cl.cells

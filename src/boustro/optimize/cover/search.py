@@ -237,7 +237,8 @@ class CoverSearch:
         ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
         rank = None
         if self.keep_inside:  # the bound, and the value that ranks the layouts (inside_bound)
-            tight: list[NDArray[np.float64]] | None = [] if MOVES_DECIDE == "all" else None
+            decide = MOVES_DECIDE == "all" and self.moves_on_passes
+            tight: list[NDArray[np.float64]] | None = [] if decide else None
             out, rank = self._inside(
                 lv, st, 0.0, 0.0, boxes.theta, boxes.d, np.zeros(len(boxes.d)), ranking=True,
                 tight=tight,
