@@ -132,3 +132,33 @@ def test_command_line_one_file_per_sortie(tmp_path, capsys):
     assert len(doc["boustro"]) >= 2  # one file with every sortie
     assert main(["plan", "--max-flight-time", "300"]) == 2
     assert "speed" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "extra",
+    [
+        ["--home", "6.06,91"],  # the start taken from the home
+        ["--start", "1000,1000"],
+        ["--start", "6.0625,51.512", "--home", "6.06,91", "--out", "OUT"],  # home alone bad
+        ["--start", "6.0625,51.512", "--home", "6.06,91", "--max-flight-time", "2000"],
+    ],
+)
+def test_a_start_or_home_off_the_globe_is_named_in_one_line(tmp_path, capsys, extra):
+    # QA 2026-11-28: a latitude outside [-90, 90] projected to inf and was refused as "start
+    # must be a finite (x, y) pair, got array([inf, inf])", "mission.home_lonlat[0] is not a
+    # finite number" or "lane 1 alone takes inf s", never naming the point given.
+    out = tmp_path / "m.waypoints"
+    extra = [str(out) if a == "OUT" else a for a in extra]
+    args = ["-q", "plan", "--speed", "8", "--altitude", "30", *extra]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "inf" not in err.replace("info", "")
+    assert "latitude" in err and "[-90, 90]" in err
+    assert ("home" if "6.06,91" in extra else "start") in err
+    assert not list(tmp_path.iterdir())
+
+
+def test_split_mission_refuses_a_home_that_cannot_be_projected(mission):
+    with pytest.raises(InvalidParameterError, match=r"home \(6\.06, 91\)"):
+        split_mission(mission, home=(6.06, 91.0), max_distance=5000.0)

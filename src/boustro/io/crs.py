@@ -250,6 +250,29 @@ class Projection:
         """Source coordinates ``(..., 2)`` to the plan frame."""
         return self._apply(self._fwd, points)
 
+    def point_to_plan(self, point: ArrayLike, what: str) -> NDArray[np.float64]:
+        """One point ``(x, y)`` of the source coordinates (a start, a home) in the plan frame.
+
+        Raises:
+            InvalidParameterError: not a finite pair, or a point the projection cannot map
+                (e.g. a latitude outside [-90, 90]), named by ``what`` with its coordinates.
+        """
+        p = np.asarray(point, dtype=np.float64).reshape(-1)
+        if p.shape != (2,) or not np.all(np.isfinite(p)):
+            raise InvalidParameterError(f"{what} must be a finite (x, y) pair, got {point!r}")
+        out = self.to_plan(p)
+        if not np.all(np.isfinite(out)):
+            hint = (
+                ": longitude, latitude expected, in that order, latitude within [-90, 90]"
+                if self.geographic
+                else " (outside the CRS's area of use?)"
+            )
+            raise InvalidParameterError(
+                f"{what} ({p[0]:g}, {p[1]:g}) cannot be projected from {self.source_crs} to "
+                f"{self.plan_crs}{hint}"
+            )
+        return out
+
     def to_source(self, points: ArrayLike) -> NDArray[np.float64]:
         """Plan-frame points ``(..., 2)`` back to the source coordinates."""
         return self._apply(self._inv, points)

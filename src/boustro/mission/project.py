@@ -159,7 +159,11 @@ def project(
             "planning the hull",
             depth / k_lo,
         )
-    start_plan = ring_plan[0] if start is None else proj.to_plan(np.asarray(start, float))
+    start_plan = (
+        ring_plan[0]
+        if start is None
+        else proj.point_to_plan(start, "the start point (also the mission's home)")
+    )
     if start is not None:
         _warn_far_start(ring_plan, start_plan, k_lo)
     ground_area = proj.ground_area(ring_plan) - sum(proj.ground_area(h) for h in holes_plan)

@@ -119,7 +119,7 @@ def with_home(mission: Mission, home: ArrayLike) -> Mission:
     """``mission`` with its home at ``home`` (the area's coordinates)."""
     h = np.asarray(home, dtype=np.float64).reshape(2)
     proj = mission.projection
-    lonlat = None if proj.planar else proj.to_lonlat(proj.to_plan(h))
+    lonlat = None if proj.planar else proj.to_lonlat(proj.point_to_plan(h, "home"))
     return dataclasses.replace(mission, home=h, home_lonlat=lonlat)
 
 
