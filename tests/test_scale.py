@@ -176,6 +176,32 @@ def test_coarse_router_moves_stay_inside_the_area():
     assert np.all(d >= straight - 1e-9)
 
 
+def _pocket_field():
+    """200 x 120 m with a sawtooth south edge (200 teeth: hundreds of reflex vertices, so the
+    router routes through inner domains) and, out of its west edge, an L-shaped slot 0.4 m
+    wide whose end sees no point of the area eroded by more than 0.2 m."""
+    south = [(x, 0.6 * (i % 2)) for i, x in enumerate(np.linspace(0, 200, 401))]
+    slot = [(0.0, 60.4), (-3.0, 60.4), (-3.0, 64.0), (-3.4, 64.0), (-3.4, 60.0), (0.0, 60.0)]
+    return Region(Polygon(np.array([*south, (200.0, 120.0), (0.0, 120.0), *slot])))
+
+
+def test_a_move_from_a_pocket_out_of_sight_of_the_domains_stays_inside():
+    # QA 2026-11-28: a keep-inside plan of a 3000-vertex traced field flew 6.9 m outside
+    # ("no connecting move inside the area"): a lane end in a pocket saw no domain vertex
+    r = _pocket_field()
+    router = Router(r, reach=0.0)
+    assert router._coarse is not None
+    pocket, far = np.array([-3.2, 63.9]), np.array([150.0, 100.0])
+    area = shapely_region(r).buffer(1e-6 * r.diameter)
+    for p, q in ((pocket, far), (far, pocket)):
+        route = router.path(p, q)
+        assert route.found and not route.straight
+        assert area.covers(shapely.LineString(route.points))
+        np.testing.assert_array_equal(route.points[[0, -1]], [p, q])
+    d = router.distances(np.stack([pocket, far]))
+    assert np.isfinite(d).all() and d[0, 1] >= route.length - 1e-9  # the walk: not shorter
+
+
 def test_plan_of_a_traced_field_covers_it_with_no_blocked_move():
     r = traced_field(2000, 10)
     plan = plan_region(r, 10.0, decompose_area=False, angle=0.3, offset=1.0)

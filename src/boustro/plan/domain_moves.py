@@ -1,17 +1,26 @@
 """Moves on traced boundaries through the router's inner domains
 (:mod:`boustro.plan.route_domain`): the leg from a point to a domain, a move through a domain
-with its corners pulled tight in the area."""
+with its corners pulled tight in the area.
+
+A point in a pocket of the boundary (a slot narrower than the erosion, bent so that no domain
+point is in sight) reaches a domain along the boundary instead (:func:`walk_to_domain`): the
+straight leg to its nearest boundary point stays in the area (the open disc of that radius
+lies inside it), the ring's edges are part of the closed area, and the walk ends at the
+first ring vertex, either way round, that sees its nearest domain point. The move is then
+pulled tight in the area like any other."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .nearest_edge import pair_feet
 from .route_domain import nearest_in
 
-__all__ = ["coarse_path", "pull", "to_domains"]
+__all__ = ["coarse_path", "pull", "to_domains", "walk_to_domain"]
 
 #: Domain vertices tried at a time from a point whose nearest domain point is hidden.
 _NEAREST = 16
@@ -20,31 +29,93 @@ _NEAREST = 16
 def to_domains(
     router: Any, pa: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
-    """Each anchored point's nearest point of a domain of ``router``, the domain (``-1``: none
-    reached by a straight move inside the area) and the length of that leg."""
+    """Each anchored point's nearest point of a domain of ``router`` if in sight, else the
+    nearer of its nearest domain vertex in sight and the end of its :func:`walk_to_domain`;
+    the domain (``-1``: none reached) and the length of that leg (of the walk for a walk)."""
     domains = router._domains
     pd, which = nearest_in(domains, pa)
     ok = router._visible_many(pa, pd)
     which = np.where(ok, which, -1)
+    leg = np.linalg.norm(pd - pa, axis=1)
     blocked = np.flatnonzero(~ok)
-    if len(blocked):  # the nearest point is hidden (a dent): the nearest visible vertex
-        v = np.concatenate([d.vertices for d in domains])
-        sizes = [len(d.vertices) for d in domains]
-        owner = np.repeat(np.arange(len(domains)), sizes)
-        near = np.argsort(np.linalg.norm(pa[blocked, None] - v[None], axis=-1), axis=1)
-        left = np.arange(len(blocked))
-        for k in range(0, len(v), _NEAREST):  # nearest vertices first, a batch at a time
-            cand = near[left, k : k + _NEAREST]  # (B, <= _NEAREST), by distance
-            a = np.repeat(pa[blocked[left]], cand.shape[1], axis=0)
-            vis = router._visible_many(a, v[cand.ravel()]).reshape(cand.shape)
-            hit = vis.any(axis=1)
-            first = cand[np.arange(len(left)), np.argmax(vis, axis=1)]
-            pd[blocked[left[hit]]] = v[first[hit]]
-            which[blocked[left[hit]]] = owner[first[hit]]
-            left = left[~hit]
-            if not len(left):
-                break
-    return pd, which, np.linalg.norm(pd - pa, axis=1)
+    if not len(blocked):
+        return pd, which, leg
+    # the nearest point is hidden (a dent): the walk, unless a domain vertex nearer than the
+    # walk's length is in sight
+    walks = [walk_to_domain(router, pa[i]) for i in blocked]
+    bound = np.array([math.inf if w is None else _length(w[0]) for w in walks])
+    v = np.concatenate([d.vertices for d in domains])
+    owner = np.repeat(np.arange(len(domains)), [len(d.vertices) for d in domains])
+    dist = np.linalg.norm(pa[blocked, None] - v[None], axis=-1)
+    near = np.argsort(dist, axis=1)
+    seen = np.zeros(len(blocked), dtype=bool)
+    left = np.arange(len(blocked))
+    for k in range(0, len(v), _NEAREST):  # nearest vertices first, a batch at a time
+        cand = near[left, k : k + _NEAREST]  # (B, <= _NEAREST), by distance
+        nearer = np.take_along_axis(dist[left], cand, axis=1) < bound[left, None]
+        a = np.repeat(pa[blocked[left]], cand.shape[1], axis=0)
+        vis = router._visible_many(a, v[cand.ravel()]).reshape(cand.shape) & nearer
+        hit = vis.any(axis=1)
+        first = cand[np.arange(len(left)), np.argmax(vis, axis=1)]
+        pd[blocked[left[hit]]] = v[first[hit]]
+        which[blocked[left[hit]]] = owner[first[hit]]
+        seen[left[hit]] = True
+        left = left[~hit & nearer[:, -1]]  # points with nearer vertices still to try
+        if not len(left):
+            break
+    leg[blocked] = np.linalg.norm(pd[blocked] - pa[blocked], axis=1)
+    for j in np.flatnonzero(~seen):  # no domain vertex in sight nearer than the walk
+        walk = walks[j]
+        if walk is not None:
+            i = blocked[j]
+            pd[i], which[i], leg[i] = walk[0][-1], walk[1], bound[j]
+    return pd, which, leg
+
+
+def _length(line: NDArray[np.float64]) -> float:
+    return float(np.linalg.norm(np.diff(line, axis=0), axis=1).sum())
+
+
+def _sights(router: Any) -> list[tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.bool_]]]:
+    """Per ring of ``router``'s area: each vertex's nearest domain point, its domain and
+    whether the vertex sees it (computed once per router)."""
+    if router._sights is None:
+        out = []
+        for ring in router.region.rings:
+            pd, which = nearest_in(router._domains, ring)
+            out.append((pd, which, (which >= 0) & router._visible_many(ring, pd)))
+        router._sights = out
+    return router._sights
+
+
+def walk_to_domain(
+    router: Any, point: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], int] | None:
+    """``(polyline, domain)``: from ``point`` (in the closed area) straight to its nearest
+    boundary point, along that ring to the first vertex, either way round, that sees its
+    nearest domain point, and there; the shorter way. ``None`` if no ring vertex sees one."""
+    best: tuple[float, int, int, NDArray[np.float64]] | None = None
+    rings = router.region.rings
+    for ri, ring in enumerate(rings):
+        foot, dist = pair_feet(np.repeat(point[None], len(ring), 0), ring, np.roll(ring, -1, 0))
+        e = int(np.argmin(dist))
+        if best is None or dist[e] < best[0]:
+            best = (float(dist[e]), ri, e, foot[e])
+    assert best is not None
+    _, ri, e, foot = best
+    ring = rings[ri]
+    pd, which, sees = _sights(router)[ri]
+    n = len(ring)
+    out: tuple[NDArray[np.float64], int] | None = None
+    for way in (np.arange(e + 1, e + 1 + n) % n, np.arange(e, e - n, -1) % n):
+        hit = np.flatnonzero(sees[way])
+        if not len(hit):
+            return None
+        vs = way[: hit[0] + 1]
+        line = np.concatenate([point[None], foot[None], ring[vs], pd[vs[-1]][None]])
+        if out is None or _length(line) < _length(out[0]):
+            out = (line, int(which[vs[-1]]))
+    return out
 
 
 def coarse_path(
@@ -53,13 +124,19 @@ def coarse_path(
     """The move from ``pa`` to ``qa`` (both in the area) through a domain, its corners pulled
     tight in the area; ``None`` if none is found."""
     assert router._coarse is not None
-    pd, which, _ = router._to_domains(np.stack([pa, qa]))
+    ends = np.stack([pa, qa])
+    pd, which, leg = router._to_domains(ends)
     if which[0] < 0 or which[0] != which[1]:
         return None
     sub = router._coarse[int(which[0])].path(pd[0], pd[1])
     if not sub.found:
         return None
-    return pull(router, np.concatenate([pa[None], sub.points, qa[None]]))
+    lead = [e[None] for e in ends]
+    for i in np.flatnonzero(leg > np.linalg.norm(pd - ends, axis=1) * (1 + 1e-12) + router.tol):
+        walk = walk_to_domain(router, ends[i])  # the leg is a walk along the boundary
+        assert walk is not None
+        lead[i] = walk[0][:-1]
+    return pull(router, np.concatenate([lead[0], sub.points, lead[1][::-1]]))
 
 
 def pull(router: Any, pts: NDArray[np.float64]) -> NDArray[np.float64]:

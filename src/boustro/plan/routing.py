@@ -70,6 +70,7 @@ class Router:
         # Too many reflex vertices (a traced boundary): route through the reflex vertices of
         # inner simplified domains instead (:mod:`boustro.plan.route_domain`).
         self._coarse: list[Router] | None = None
+        self._sights: list[Any] | None = None  # the rings' sights of the domains, on use
         if len(self.nodes) > MAX_NODES:
             self._domains = inner_domains(self.region, self.reach)
             if self._domains:  # else (eroded away: a sliver) the exact graph, however slow
