@@ -387,3 +387,30 @@ def test_a_plan_without_a_polygon_is_one_line(capsys, tmp_path):
     path.write_text(json.dumps({"type": "Polygon"}))
     code, _, err = run_cli(capsys, "plan", path, "--spacing", "20")
     assert "not a QGroundControl plan" in _one_line(code, err, path)
+
+
+def test_an_open_geojson_ring_is_read_closed_with_a_warning(tmp_path, caplog):
+    # QA 2026-11-28: Fields2Cover's strips.geojson ends each ring 1.1 km from its first
+    # position (a typo in the last position); the ring was closed silently and the spike was
+    # refused as a self-intersection with no word of the open ring
+    square = [[6.0, 51.0], [6.001, 51.0], [6.001, 51.001], [6.0, 51.001]]
+    doc = {
+        "type": "Polygon",
+        "coordinates": [square, [[6.0004, 51.0004], [6.0006, 51.0004], [6.0006, 51.0006]]],
+    }
+    path = tmp_path / "open.geojson"
+    path.write_text(json.dumps(doc))
+    with caplog.at_level("WARNING"):
+        area = read_area(path)
+    np.testing.assert_array_equal(area.ring, square)
+    assert len(area.holes) == 1 and len(area.holes[0]) == 3
+    said = [r.getMessage() for r in caplog.records if "not closed" in r.getMessage()]
+    assert len(said) == 2
+    assert any("[6.0, 51.001]" in m and "hole" not in m for m in said)
+    assert any("hole 0" in m and "[6.0006, 51.0006]" in m for m in said)
+    caplog.clear()
+    doc["coordinates"] = [[*square, square[0]]]
+    path.write_text(json.dumps(doc))
+    with caplog.at_level("WARNING"):
+        np.testing.assert_array_equal(read_area(path).ring, square)
+    assert "not closed" not in caplog.text

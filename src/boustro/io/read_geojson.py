@@ -82,8 +82,25 @@ def _geometry_rings(geom: Any, where: str) -> tuple[np.ndarray, list[np.ndarray]
         raise PolygonFileError(f"{where}: expected a Polygon geometry, got {kind!r}")
     if not isinstance(coords, list) or not coords:
         raise PolygonFileError(f"{where}: a Polygon needs at least one ring")
-    holes = [_ring(h, f"{where}: hole {i}") for i, h in enumerate(coords[1:])]
-    return _ring(coords[0], where), holes
+    holes = [
+        _closed(_ring(h, f"{where}: hole {i}"), f"{where}: hole {i}")
+        for i, h in enumerate(coords[1:])
+    ]
+    return _closed(_ring(coords[0], where), where), holes
+
+
+def _closed(ring: np.ndarray, where: str) -> np.ndarray:
+    """``ring``; a warning if it is open (RFC 7946 repeats the first position last): it is
+    closed by a straight edge, which a wrong last position turns into a spike."""
+    if len(ring) > 2 and not np.array_equal(ring[0], ring[-1]):
+        log.warning(
+            "%s: the ring is not closed: its last position %s differs from its first %s; "
+            "closed by a straight edge between them",
+            where,
+            ring[-1].tolist(),
+            ring[0].tolist(),
+        )
+    return ring
 
 
 def _polygon_geometry(data: dict[str, Any], where: str) -> tuple[Any, str, Any]:
