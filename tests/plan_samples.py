@@ -20,7 +20,15 @@ from boustro.plan import vehicle_stats
 from boustro.plan.region import plan_region
 from boustro.vehicle import Vehicle
 
-__all__ = ["SPACING", "bounds_and_plans", "plan_cost", "plans_in_boxes", "sample_boxes", "scaled"]
+__all__ = [
+    "SPACING",
+    "bounds_and_plans",
+    "inside_areas",
+    "plan_cost",
+    "plans_in_boxes",
+    "sample_boxes",
+    "scaled",
+]
 
 #: The spacing of the soundness tests' plans, metres.
 SPACING = 9.0
@@ -32,6 +40,19 @@ def scaled(region: Region, size: float) -> Region:
     return Region(
         Polygon(region.shell.vertices * k), [Polygon(h.vertices * k) for h in region.holes]
     )
+
+
+def inside_areas(seed: int, count: int) -> list[Region]:
+    """A square, an L, a quadrilateral with a hole and ``count`` random areas with one or two
+    holes (150 m): the keep-inside layouts' test areas."""
+    from .conftest import random_regions
+
+    square = [(0, 0), (100, 0), (100, 100), (0, 100)]
+    ell = [(0, 0), (120, 0), (120, 40), (50, 40), (50, 100), (0, 100)]
+    quad = [(0, 0), (160, 10), (140, 90), (20, 120)]
+    holes = [[(70, 30), (95, 35), (85, 60)]]
+    out = [Region(square), Region(ell), Region(quad, holes)]
+    return out + [scaled(r, 150.0) for r in random_regions(seed, count, n_holes=(1, 2))]
 
 
 def plan_cost(

@@ -13,17 +13,11 @@ from boustro.geometry.region import Region
 from boustro.plan import inside
 from boustro.plan.lanes import region_lanes
 
-from .conftest import random_regions
-from .plan_samples import SPACING, scaled
+from .plan_samples import SPACING, inside_areas
 
 
 def _areas() -> list[Region]:
-    square = [(0, 0), (100, 0), (100, 100), (0, 100)]
-    ell = [(0, 0), (120, 0), (120, 40), (50, 40), (50, 100), (0, 100)]
-    quad = [(0, 0), (160, 10), (140, 90), (20, 120)]
-    holes = [[(70, 30), (95, 35), (85, 60)]]
-    out = [Region(square), Region(ell), Region(quad, holes)]
-    return out + [scaled(r, 150.0) for r in random_regions(23, 2, n_holes=(1, 2))]
+    return inside_areas(23, 2)
 
 
 def _both_in_full(region, lanes):

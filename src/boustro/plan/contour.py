@@ -96,7 +96,12 @@ def _lines(geometry: Any, tol: float) -> list[NDArray[np.float64]]:
 
 
 def _contour_arcs(
-    residual: Any, reach: float, tol: float, contour: Contour, half: float
+    residual: Any,
+    reach: float,
+    tol: float,
+    contour: Contour,
+    half: float,
+    known: list[NDArray[np.bool_]] | None = None,
 ) -> list[NDArray[np.float64]]:
     """The parts of the contour (:func:`contour_of`: the area's boundary shrunk by
     ``half``) within reach of the uncovered ``residual``: each covers its side of the residual
@@ -106,18 +111,25 @@ def _contour_arcs(
     residual (so every needed point is kept), and kept stretches less than :data:`MERGE_GAP`
     spacings apart are driven as one pass. The passes are these stretches with their corner
     spurs (:func:`_corner_spurs`, which only add length: a spur leaves the contour and comes
-    back to the same point)."""
+    back to the same point). ``known`` (per ring): samples already known to be within reach
+    plus the step of the residual (:func:`~boustro.plan.margin_floor.kept_samples`), not
+    tested again."""
     import shapely
 
     if not contour.rings:
         return []
     shapely.prepare(residual)
     out: list[NDArray[np.float64]] = []
-    for ring in contour.rings:
+    for i, ring in enumerate(contour.rings):
         v, at, total = ring.v, ring.at, ring.total
         n = len(ring.samples)
         s = np.linspace(0.0, total, n + 1)[:-1]
-        near = shapely.dwithin(ring.samples, residual, reach + total / n)  # prepared
+        if known is None:
+            near = shapely.dwithin(ring.samples, residual, reach + total / n)  # prepared
+        else:
+            near = known[i].copy()
+            rest = np.flatnonzero(~near)
+            near[rest] = shapely.dwithin(ring.samples[rest], residual, reach + total / n)
         runs = _runs(near, s, total, MERGE_GAP * 2 * half)
         if runs is None:
             out.append(v)

@@ -37,6 +37,7 @@ from .cells import _frame
 from .contour import Contour, _contour_arcs, _corner_spurs, _lines, _pieces, contour_of
 from .coverage import _aligned_boxes, _axes
 from .lanes import Lanes, _intervals_on_lines
+from .margin_floor import RingTests, kept_samples, stretch_floor, test_points
 from .outside import shapely_area
 
 __all__ = [
@@ -86,6 +87,7 @@ class _Geometry:
         self._shrunk: dict[float, Any] = {}
         self._spurs: dict[tuple[bytes, int, float], NDArray[np.float64]] = {}
         self._spur_points = 0  # of the kept stretches and their spurs (SPUR_CACHE)
+        self._tests: dict[float, list[RingTests]] = {}
 
     @property
     def contour(self) -> Contour:
@@ -111,6 +113,32 @@ class _Geometry:
             self._spurs[key] = out
             self._spur_points += len(line) + len(out)
         return out
+
+    def stretch_floor(self, lanes: list[Lanes], reach: float) -> tuple[float, int]:
+        """A floor of the length of the contour stretches the residual of the cut ``lanes``
+        keeps (:func:`~boustro.plan.margin_floor.stretch_floor`; its test points built once
+        per reach), and at most how many points those stretches hold (each ring's points and
+        two per sample: the stretches are disjoint, at most one per two samples)."""
+        import shapely
+
+        perimeter = float(shapely.length(self.target))
+        vertices = int(shapely.get_num_coordinates(self.target))
+        tests = self._tests_of(reach)
+        floor = stretch_floor(tests, lanes, reach, self.spacing, perimeter, vertices)
+        points = sum(len(r.v) + len(r.samples) + 2 for r in self.contour.rings)
+        return floor, points
+
+    def known(self, lanes: list[Lanes], reach: float) -> list[NDArray[np.bool_]]:
+        """Per contour ring, the samples known to be within reach of the residual of ``lanes``
+        (:func:`~boustro.plan.margin_floor.kept_samples`)."""
+        return kept_samples(self._tests_of(reach), lanes, reach, self.spacing)
+
+    def _tests_of(self, reach: float) -> list[RingTests]:
+        """The contour's test points (:func:`~boustro.plan.margin_floor.test_points`), built
+        once per reach."""
+        if reach not in self._tests:
+            self._tests[reach] = test_points(self.target, self.contour.rings, self.spacing, reach)
+        return self._tests[reach]
 
     def shrunk(self, margin: float) -> Any:
         """The area shrunk by ``margin`` (``quad_segs=8``), prepared."""
@@ -272,7 +300,8 @@ def boundary_passes(
     geo, residual = _residual(area, lanes, spacing, reach)
     if residual is None:
         return [], 0.0
-    arcs = _contour_arcs(residual, reach, geo.tol, geo.contour, spacing / 2)
+    known = geo.known(lanes, reach)
+    arcs = _contour_arcs(residual, reach, geo.tol, geo.contour, spacing / 2, known)
     return _completed(geo, residual, arcs, reach)
 
 
@@ -485,7 +514,9 @@ def _inside_layout(
     their cost) only when its lanes and the contour stretches it keeps (each pass holds one,
     whole: the spurs and patches only add length) are not already longer than margin 1/2's
     lanes and passes: the same choice as laying both in full, for a third of the work where
-    margin 1/2 wins (docs/keep_inside.md, "Margin screen").
+    margin 1/2 wins (docs/keep_inside.md, "Margin screen"). Before margin 0's residual, a floor
+    of the stretches it keeps, from its lanes' arrays alone
+    (:mod:`~boustro.plan.margin_floor`), screens it the same way (thirteenth round).
 
     Returns:
         ``(lanes, passes, uncovered)``, as :func:`clip_lanes` and :func:`boundary_passes`.
@@ -504,11 +535,16 @@ def _inside_layout(
 
     if loses(_length(cut, [])):
         return half, passes_h, uncovered_h
+    # the stretches margin 0's residual keeps, bounded from below without it (margin_floor)
+    stretches, points = _geometry(area, spacing).stretch_floor(cut, reach)
+    if stretches > 0 and loses(_length(cut, []) + stretches - 2 * tol * points):
+        return half, passes_h, uncovered_h
     geo, residual = _residual(area, cut, spacing, reach)
     passes: list[NDArray[np.float64]] = []
     uncovered = 0.0
     if residual is not None:
-        arcs = _contour_arcs(residual, reach, geo.tol, geo.contour, spacing / 2)
+        known = geo.known(cut, reach)
+        arcs = _contour_arcs(residual, reach, geo.tol, geo.contour, spacing / 2, known)
         if loses(_length(cut, arcs) - 2 * tol * sum(len(a) for a in arcs)):
             return half, passes_h, uncovered_h
         passes, uncovered = _completed(geo, residual, arcs, reach)

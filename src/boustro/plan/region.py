@@ -353,15 +353,7 @@ def _plan_lanes(r: Region, cells: _Cells, opts: PlanOptions) -> _CellLanes:
             value = math.nan
         else:
             cell_angle, cell_offset, value = opt.angle, opt.offset, opt.fitness
-        lanes = region_lanes(
-            cell,
-            opts.spacing,
-            cell_angle,
-            cell_offset,
-            reach=opts.reach,
-            holes=r.holes,
-            layout=opts.layout,
-        )
+        lanes = _region_lanes(cell, cell_angle, cell_offset, r.holes, opts)
         out.lanes.append(lanes)
         out.cells.append(PlanCell(cell, cell_angle, cell_offset, value, len(lanes.k), opt))
     if sum(len(lanes.k) for lanes in out.lanes) == 0:
@@ -374,6 +366,42 @@ def _plan_lanes(r: Region, cells: _Cells, opts: PlanOptions) -> _CellLanes:
         ]
         return _CellLanes(counted, cut, boundary, uncovered)
     return out
+
+
+#: :func:`region_lanes` results kept for ``keep_inside`` plans (keyed by every number it
+#: reads): a search's screen (:func:`~boustro.plan.region_floor.plan_floor`) lays a layout's
+#: lanes, and the plan of a layout that passes it lays the same again.
+LANES_CACHE = 8
+_LANES: dict[bytes, Lanes] = {}
+
+
+def _region_lanes(
+    cell: Region, angle: float, offset: float, holes: Sequence[Polygon], opts: PlanOptions
+) -> Lanes:
+    """:func:`region_lanes` of the cell (the area's ``holes`` avoided), from the cache of the
+    last :data:`LANES_CACHE` calls with ``keep_inside`` (the arrays are the same, never
+    written: :func:`~boustro.plan.inside.inside_layout` cuts new ones)."""
+
+    def lay() -> Lanes:
+        return region_lanes(
+            cell, opts.spacing, angle, offset, reach=opts.reach, holes=holes, layout=opts.layout
+        )
+
+    if not opts.keep_inside:
+        return lay()
+    rings = [cell.shell.vertices, *(h.vertices for h in cell.holes), *(h.vertices for h in holes)]
+    parts = [np.ascontiguousarray(v, dtype=np.float64).tobytes() for v in rings]
+    numbers = [len(cell.holes), len(holes), opts.spacing, angle, offset, opts.reach]
+    parts.append(np.array(numbers, dtype=np.float64).tobytes())
+    key = b"|".join(p + len(p).to_bytes(8, "little") for p in parts)
+    key += opts.layout.encode()
+    hit = _LANES.get(key)
+    if hit is None:
+        hit = lay()
+        if len(_LANES) >= LANES_CACHE:
+            _LANES.pop(next(iter(_LANES)))
+        _LANES[key] = hit
+    return hit
 
 
 # -- step 4: tour -----------------------------------------------------------------------------

@@ -1,0 +1,158 @@
+"""The floor of margin 0's contour stretches (:mod:`boustro.plan.margin_floor`): below the
+stretches its residual keeps, on one and two lane directions, and
+:func:`boustro.plan.inside.inside_layout` makes the same choice with and without it."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from boustro.geometry.region import Region
+from boustro.plan import inside, margin_floor
+from boustro.plan.contour import _contour_arcs
+from boustro.plan.lanes import region_lanes
+
+from .plan_samples import SPACING, inside_areas
+
+REACH = SPACING / 2
+
+
+def _areas() -> list[Region]:
+    return inside_areas(31, 3)
+
+
+def _lanes(region: Region, layouts: list[tuple[float, float]]) -> list:
+    """One grid of lanes per layout over the whole area (two: two directions crossing)."""
+    return [
+        region_lanes(region, SPACING, a, d, reach=REACH, holes=region.holes) for a, d in layouts
+    ]
+
+
+def _cases() -> list[tuple[Region, list]]:
+    rng = np.random.default_rng(5)
+    out = []
+    for region in _areas():
+        out.append((region, _lanes(region, [(0.0, SPACING / 2)])))
+        for _ in range(4):
+            layout = (rng.uniform(0, math.pi), rng.uniform(0, SPACING))
+            out.append((region, _lanes(region, [layout])))
+        two = [(rng.uniform(0, math.pi), rng.uniform(0, SPACING)) for _ in range(2)]
+        out.append((region, _lanes(region, two)))
+    # a decomposed plan's lanes: each cell of the L its own direction, over the whole L
+    ell = _areas()[1]
+    cells = [
+        Region([(0, 0), (120, 0), (120, 40), (0, 40)]),
+        Region([(0, 40), (50, 40), (50, 100), (0, 100)]),
+    ]
+    for a in (0.0, 0.4):
+        grids = [(cells[0], a), (cells[1], a + math.pi / 2)]
+        lanes = [region_lanes(c, SPACING, g, 1.0, reach=REACH) for c, g in grids]
+        out.append((ell, lanes))
+    return out
+
+
+def _stretches(region: Region, cut: list) -> float:
+    """The length of the contour stretches margin 0's residual keeps (0: none)."""
+    geo, residual = inside._residual(region, cut, SPACING, REACH)
+    if residual is None:
+        return 0.0
+    arcs = _contour_arcs(residual, REACH, geo.tol, geo.contour, SPACING / 2)
+    return sum(float(np.linalg.norm(np.diff(a, axis=0), axis=1).sum()) for a in arcs)
+
+
+def test_the_floor_is_below_the_stretches_and_near_them():
+    shares = []
+    for region, lanes in _cases():
+        tol = 1e-9 * region.diameter
+        cut = [inside.clip_lanes(ls, region, tol, 0.0, SPACING) for ls in lanes]
+        floor, points = inside._geometry(region, SPACING).stretch_floor(cut, REACH)
+        true = _stretches(region, cut)
+        assert floor <= true, (floor, true)
+        assert points > 0
+        if true > 0:
+            shares.append(floor / true)
+    # it bounds most of them (the test points lie along the boundary, where the lanes' ends
+    # leave the triangles): margin 0 is screened on it
+    assert len(shares) >= 30
+    assert np.median(shares) > 0.6
+
+
+def test_a_covered_area_has_no_floor():
+    # lanes along a rectangle four spacings high whose bands tile it exactly: nothing is left
+    h = 4 * SPACING
+    region = Region([(0, 0), (100, 0), (100, h), (0, h)])
+    lanes = _lanes(region, [(0.0, SPACING / 2)])  # lines half a spacing from the bottom on
+    tol = 1e-9 * region.diameter
+    cut = [inside.clip_lanes(ls, region, tol, 0.0, SPACING) for ls in lanes]
+    assert _stretches(region, cut) == 0.0
+    assert inside._geometry(region, SPACING).stretch_floor(cut, REACH)[0] == 0.0
+    # at 45 degrees the lanes' ends leave triangles along every edge
+    slant = _lanes(region, [(math.pi / 4, 0.0)])
+    cut = [inside.clip_lanes(ls, region, tol, 0.0, SPACING) for ls in slant]
+    floor = inside._geometry(region, SPACING).stretch_floor(cut, REACH)[0]
+    assert 0.0 < floor <= _stretches(region, cut)
+
+
+def test_the_test_points_lie_within_reach_of_their_samples_and_deep_enough(monkeypatch):
+    # convex and reflex corners and a hole: points near corners are dropped
+    region = Region(
+        [(0, 0), (200, 0), (200, 60), (100, 20), (0, 60)], [[(20, 10), (40, 10), (30, 20)]]
+    )
+    geo = inside._Geometry(region, SPACING)
+    monkeypatch.setattr(margin_floor, "ALONG", (-2.0, -0.5, 0.0, 0.5, 2.0))  # some too far
+    tests = margin_floor.test_points(geo.target, geo.contour.rings, SPACING, REACH)
+    import shapely
+
+    boundary = shapely.boundary(geo.target)
+    for ring, t in zip(geo.contour.rings, tests, strict=True):
+        q = shapely.get_coordinates(ring.samples)[t.sample]
+        assert len(t.points) > 0 and t.n == len(ring.samples)
+        assert np.all(np.linalg.norm(t.points - q, axis=1) <= REACH + t.step)
+        depth = shapely.distance(shapely.points(t.points), boundary)
+        assert np.all(depth >= margin_floor.DEPTH * SPACING)
+        assert np.all(shapely.contains_xy(geo.target, t.points[:, 0], t.points[:, 1]))
+
+
+def test_the_area_rule_gives_no_floor_where_a_kept_piece_is_not_sure():
+    region = Region([(0, 0), (100, 0), (100, 100), (0, 100)])
+    cut = [
+        inside.clip_lanes(ls, region, 1e-9 * region.diameter, 0.0, SPACING)
+        for ls in _lanes(region, [(0.3, 1.0)])
+    ]
+    geo = inside._geometry(region, SPACING)
+    assert geo.stretch_floor(cut, REACH)[0] > 0
+    tests = geo._tests[REACH]
+    # a perimeter this long would let the residual's polygons be slivers (_pieces' area rule)
+    assert margin_floor.stretch_floor(tests, cut, REACH, SPACING, 1e12, 4) == 0.0
+    assert margin_floor.stretch_floor(tests, cut, REACH, SPACING, 400.0, 4) > 0
+
+
+def _layouts(monkeypatch, floor_on: bool) -> tuple[list, int]:
+    """Every case's inside_layout (bytes) and how many residuals it computed."""
+    residuals = []
+    real = inside._residual
+
+    def counted(*args, **kwargs):
+        residuals.append(1)
+        return real(*args, **kwargs)
+
+    with monkeypatch.context() as m:
+        m.setattr(inside, "_residual", counted)
+        if not floor_on:
+            m.setattr(inside._Geometry, "stretch_floor", lambda self, lanes, reach: (0.0, 0))
+        out = []
+        for region, lanes in _cases():
+            inside._LAYOUTS.clear()
+            cut, passes, uncovered = inside.inside_layout(region, lanes, SPACING, REACH)
+            rows = [(x.k.tobytes(), x.c.tobytes(), x.t0.tobytes(), x.t1.tobytes()) for x in cut]
+            out.append((rows, [p.tobytes() for p in passes], uncovered))
+    return out, len(residuals)
+
+
+def test_inside_layout_is_the_same_with_the_floor(monkeypatch):
+    on, with_floor = _layouts(monkeypatch, True)
+    off, without = _layouts(monkeypatch, False)
+    assert on == off  # the same lanes, passes and uncovered area
+    # margin 0's residual skipped on most layouts (margin 1/2's is always laid)
+    assert with_floor < 0.7 * without
