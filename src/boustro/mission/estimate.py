@@ -110,12 +110,13 @@ KEEP_INSIDE_FACTOR = 2.0
 #: with more lines (the strips and the split choices are per line; the budget counts edges): on
 #: a large noisy area at a fine spacing the search spends its whole extended budget (issue 21's
 #: field, 2120 vertices, at 3 m: the row alone said 7.2 s, ``plan_area`` took 48.6 s, 33.8 s
-#: since the thirteenth round). Fitted (least squares on the log, the row held) on 19
+#: since the thirteenth round). Fitted (least squares on the log, the row held) on 20
 #: ``plan_area`` runs (2026-11-28, load 7-11, CPU s): the nine areas of
 #: ``benchmarks/region_certified.py`` and traced fields of 500-2000 vertices with 0 or 10 holes
-#: at 2-10 m: estimate / measured 0.40-2.46 (the row alone 0.21-2.43); on the traced fields
-#: 0.52-2.29 (the row alone 0.21-0.95); docs/concave.md, "The estimate before planning".
-REGION_EXTENDED = (8.2e-7, 1.42, 0.85)
+#: at 2-10 m: estimate / measured 0.40-3.63 (the row alone 0.21-2.43); on the traced fields with
+#: holes 0.50-1.38 (the row alone 0.21-0.82), without holes 3.6 (a plan without cells);
+#: docs/concave.md, "The estimate before planning".
+REGION_EXTENDED = (1.14e-6, 1.26, 0.92)
 #: ``(c, kappa, gamma)``: an area with ``h`` holes planned by the cover search
 #: (``"cover-region"``) adds ``c h^kappa n^gamma`` seconds (the passes around the holes and the
 #: moves past them in every plan the search makes, and the plans they add). The
