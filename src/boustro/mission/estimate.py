@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, NamedTuple
 from .._validate import MAX_TRANSECTS
 from ..errors import TooMuchWorkError
 from ..optimize.exact import WORK_LIMIT, global_work
+from ..optimize.smith_bb import region as region_search
 from .defaults import DEFAULT_METHOD, SCALE_METHOD
 
 if TYPE_CHECKING:
@@ -29,6 +30,7 @@ __all__ = [
     "MAX_AREA_KM2",
     "MAX_LANES",
     "MAX_SECONDS",
+    "REGION_EXTENDED",
     "SAY_SECONDS",
     "WorkEstimate",
     "check_work",
@@ -73,8 +75,8 @@ SAY_SECONDS = 3.0
 #: converging, 0.14-0.17 s): estimate / measured 0.50-1.98. A budget-bound search costs about
 #: the same whatever the area (its budget), so the constant dominates on small areas. Since the
 #: twelfth round a search whose gap keeps shrinking doubles its budget up to 8 times
-#: (:data:`~boustro.optimize.smith_bb.region.REGION_EXTEND`), which this row (not refitted)
-#: does not see: issue 21's field at 3 m, estimate / measured 0.36 (a review: 7.2 s, 20.1 s).
+#: (:data:`~boustro.optimize.smith_bb.region.REGION_EXTEND`): :data:`REGION_EXTENDED` adds
+#: what those doublings cost.
 COST_MODEL: dict[str, tuple[float, ...]] = {
     "certified": (0.05, 3.18e-7),
     "certified-bb": (0.05, 0.005, 1.0, 4.2e-6, 1.6),
@@ -101,6 +103,20 @@ COST_MODEL: dict[str, tuple[float, ...]] = {
 #: estimate within a factor 2.7 of the CPU measured (it was 10 when every cell was searched
 #: with and without keep-inside: measured 4.3-21x then).
 KEEP_INSIDE_FACTOR = 2.0
+#: ``(c, kappa, gamma)``: the doublings of the certified region search's budget
+#: (``"region-certified"``): ``(REGION_EXTEND - 1) c L^kappa n^gamma`` seconds more. A search
+#: whose gap keeps shrinking at its budget doubles it, up to
+#: :data:`~boustro.optimize.smith_bb.region.REGION_EXTEND` times (8), and its boxes cost more
+#: with more lines (the strips and the split choices are per line; the budget counts edges): on
+#: a large noisy area at a fine spacing the search spends its whole extended budget (issue 21's
+#: field, 2120 vertices, at 3 m: the row alone said 7.2 s, ``plan_area`` took 48.6 s, 33.8 s
+#: since the thirteenth round). Fitted (least squares on the log, the row held) on 20
+#: ``plan_area`` runs (2026-11-28, load 7-11, CPU s): the nine areas of
+#: ``benchmarks/region_certified.py`` and traced fields of 500-2000 vertices with 0 or 10 holes
+#: at 2-10 m: estimate / measured 0.40-3.63 (the row alone 0.21-2.43); on the traced fields with
+#: holes 0.50-1.38 (the row alone 0.21-0.82), without holes 3.6 (a plan without cells);
+#: docs/concave.md, "The estimate before planning".
+REGION_EXTENDED = (1.14e-6, 1.26, 0.92)
 #: ``(c, kappa, gamma)``: an area with ``h`` holes planned by the cover search
 #: (``"cover-region"``) adds ``c h^kappa n^gamma`` seconds (the passes around the holes and the
 #: moves past them in every plan the search makes, and the plans they add). The
@@ -147,7 +163,8 @@ def estimate_seconds(
     kind: str, vertices: int, lanes: float, work: float = 0.0, holes: int = 0
 ) -> float:
     """The cost model :data:`COST_MODEL` (row ``kind``) at ``vertices``, ``lanes``, ``work``;
-    with ``holes`` the cover search's time per hole (:data:`COVER_HOLES`)."""
+    with ``holes`` the cover search's time per hole (:data:`COVER_HOLES`); the certified region
+    search's with the doublings of its budget (:data:`REGION_EXTENDED`)."""
     if kind == "certified":
         a, b = COST_MODEL["certified"]
         return a + b * work
@@ -157,6 +174,9 @@ def estimate_seconds(
     if kind == "cover-region" and holes > 0:
         c3, kappa, gamma = COVER_HOLES
         out += c3 * holes**kappa * n**gamma
+    if kind == "region-certified":  # the doublings of the search's budget
+        c3, kappa, gamma = REGION_EXTENDED
+        out += (region_search.REGION_EXTEND - 1.0) * c3 * max(lanes, 1.0) ** kappa * n**gamma
     return out
 
 

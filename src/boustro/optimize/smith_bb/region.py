@@ -27,12 +27,15 @@ from ..cover.sandwich import Sandwich
 from ..cover.search import SIMPLIFY_EDGES, SIMPLIFY_SPACING
 from ..region_grid import evaluate_region_grid
 from ..result import OptimizeResult
+from .kernel import lines_range
 from .region_chains import near_margin
 from .region_kernel import region_bounds, region_values, ring_starts
+from .region_splits import split_nodes
 from .search import DEFAULT_TOL, SEED_ANGLES, _check, _check_angles, _Search, _weights, solve
 
 __all__ = [
     "REGION_EXTEND",
+    "REGION_EXTEND_POOLED",
     "REGION_MAX_WORK",
     "ROBUST_ANGLE",
     "ROBUST_OFFSET",
@@ -176,6 +179,12 @@ REGION_MAX_WORK = 1e7
 #: shrinks fast (:data:`~boustro.optimize.smith_bb.search.SHRINK`; an explicit ``max_work`` is
 #: a hard limit).
 REGION_EXTEND = 8.0
+#: As :data:`REGION_EXTEND` for an area whose boxes keep the pooled split bound (more lines
+#: than :data:`~boustro.optimize.smith_bb.region_splits.NODE_LINES`): such a box costs about
+#: 0.35-0.45 of a branched one (issue 21's field at 3 m: 160 against 460 us) but needs more
+#: splitting, so its budget may double once more and spends about the CPU the branched boxes
+#: did (docs/global_optimum.md, section 10, "Finer spacing").
+REGION_EXTEND_POOLED = 16.0
 
 
 def robust_values(
@@ -244,7 +253,8 @@ def smith_bb_region(
 
     Args as :func:`~boustro.optimize.smith_bb.smith_bb` (the budget's default
     :data:`REGION_MAX_WORK`, doubled while the gap shrinks by a tenth per doubling, up to
-    :data:`REGION_EXTEND` times; an explicit ``max_work`` is a hard limit); ``region`` in user
+    :data:`REGION_EXTEND` times, :data:`REGION_EXTEND_POOLED` where the boxes keep the pooled
+    split bound; an explicit ``max_work`` is a hard limit); ``region`` in user
     units; ``incumbents``: layouts ``(angle, offset)`` (radians; user units from the shell's
     vertex mean, as returned, e.g. by ``region-grid``) scored and polished before the first
     boxes: a good first incumbent prunes more boxes (the result is as certified without them).
@@ -265,13 +275,15 @@ def smith_bb_region(
     r, spacing = _checked(region, spacing)
     a, b = _weights(a, b, fitness)
     tol = _check("tol", tol, 1e-9)
-    extend = REGION_EXTEND if max_work is None else 1.0
+    hard = max_work is not None
     if max_work is None:
         max_work = REGION_MAX_WORK * max(1.0, DEFAULT_TOL / tol)
     max_work = _check("max_work", max_work, 0.0)
     n_angles = _check_angles(n_angles)
     search = _RegionSearch(r, spacing, a, b)
     search.tol = tol
+    pooled = split_nodes(lines_range(search.real[0], search.s)[1]) == 0
+    extend = 1.0 if hard else (REGION_EXTEND_POOLED if pooled else REGION_EXTEND)
     boxes = initial_boxes(search.s, search.radius, n_angles)
     for angle, offset in incumbents:
         theta, d = float(angle), float(offset) / search.frame.scale

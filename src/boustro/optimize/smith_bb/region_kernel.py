@@ -42,7 +42,7 @@ from ..._jit import jit, jit_globals
 from . import kernel, region_splits, region_strips
 from .kernel import _sup_w, lines_range
 from .region_chains import _chains, chain_bound, edge_lengths, prepare
-from .region_splits import NODES, _line_segments, split_bound
+from .region_splits import _line_segments, split_bound, split_nodes
 from .region_strips import strip_intervals
 
 __all__ = ["region_bounds", "region_values", "ring_starts"]
@@ -201,7 +201,7 @@ def _owners(oa, ob, o0, o1, pa, pb, p0, p1, tiny, owner):
 
 
 def _bound(in_xy, out_xy, real_xy, rings, ln, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b,
-           tiny, margin, cut, pos, radius):  # fmt: skip
+           tiny, margin, cut, pos, radius, nodes):  # fmt: skip
     """The bound of one box: from the strips of the real boundary if ``radius >= 0``
     (:mod:`.region_strips`; lengths in ``t``, so ``(a + b) (1 / cos delta - 1) top`` is added,
     and the cut is lowered by it), else from the sandwich ``in_xy, out_xy``."""
@@ -225,13 +225,14 @@ def _bound(in_xy, out_xy, real_xy, rings, ln, cs, sn, sdelta, eta, d, s, eps, k0
         stretch = (a + b) * top * (1.0 / math.sqrt(max(1.0 - sdelta * sdelta, 1e-300)) - 1.0)
     return stretch + _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, ln, cs, sn, sdelta, eta,
                                d, s, eps, k0, nb, a, b, tiny, margin, cut - stretch, pos,
-                               top)  # fmt: skip
+                               top, nodes)  # fmt: skip
 
 
 def _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, ln, cs, sn, sdelta, eta, d, s, eps, k0,
-              nb, a, b, tiny, margin, cut, pos, top):  # fmt: skip
+              nb, a, b, tiny, margin, cut, pos, top, nodes):  # fmt: skip
     """The bound of one box from its lines' outer and inner intervals (module doc); ``ln``:
-    the real edges' lengths (:func:`.region_chains.edge_lengths`)."""
+    the real edges' lengths (:func:`.region_chains.edge_lengths`); ``nodes``: of the split
+    choices' branch and bound (:func:`.region_splits.split_bound`)."""
     crude = a * top + b
     cnt = np.empty(nb, dtype=np.int64)
     ci = np.empty((real_xy.shape[0], 4), dtype=np.int64)  # the chains, for the counts and
@@ -292,7 +293,7 @@ def _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, ln, cs, sn, sdelta, eta,
             gfree = max(gfree, ob[o] - left)
     if total_gaps > 30 or (1 << total_gaps) > MAX_CHOICES:  # branched (.region_splits)
         old = split_bound(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_fixed,
-                          gfree, a, b, pos, cut, NODES)  # fmt: skip
+                          gfree, a, b, pos, cut, nodes)  # fmt: skip
     else:
         old = _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, lo, hi,
                           w, n_fixed, a, b, pos)  # fmt: skip
@@ -337,14 +338,15 @@ def _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, l
 
 
 def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
-            margin, cut, slack, radius):  # fmt: skip
+            margin, cut, slack, radius, nodes):  # fmt: skip
     m = cs.shape[0]
     out = np.empty(m)
     pos = np.empty(2 * (max(in_xy.shape[0], 2 * real_xy.shape[0]) + 4) * nb + 8)
     ln = edge_lengths(real_xy)
     for i in range(m):
         v = _bound(in_xy, out_xy, real_xy, rings, ln, cs[i], sn[i], sdelta[i], eta[i], d[i], s,
-                   eps[i], k0, nb, a, b, tiny, margin, cut - 2.0 * slack, pos, radius)  # fmt: skip
+                   eps[i], k0, nb, a, b, tiny, margin, cut - 2.0 * slack, pos, radius,
+                   nodes)  # fmt: skip
         out[i] = v + slack
     return out
 
@@ -399,12 +401,14 @@ def region_bounds(
     ``cut`` (it will be discarded) skips the chain bound; ``cut = inf``: the chain bound alone
     (``inf`` where it does not apply; for tests). ``radius >= 0`` (every vertex of ``real``
     within it of 0): the lines' intervals from strips of the real boundary
-    (:mod:`.region_strips`), ``inner`` and ``outer`` unread."""
+    (:mod:`.region_strips`), ``inner`` and ``outer`` unread. The split choices are branched
+    (:func:`.region_splits.split_nodes`) unless more lines cross ``real``."""
     th = np.ascontiguousarray(theta, dtype=np.float64)
     sdelta = np.sin(np.minimum(np.asarray(delta, dtype=np.float64), math.pi / 2))
     eta = eps if eta is None else np.minimum(eta, eps)
+    k0, nb = lines_range(real[0], spacing)  # the lines across the real region
+    nodes = split_nodes(nb)
     if radius >= 0:  # the lines that a strip of the real region can reach
-        k0, nb = lines_range(real[0], spacing)
         cd = np.sqrt(np.maximum(1.0 - sdelta * sdelta, 1e-300))
         half = float(np.max((radius * (1 - cd) + eta + radius * sdelta) / cd, initial=0.0))
         grow = math.ceil(half / spacing) + 1
@@ -418,7 +422,7 @@ def region_bounds(
               np.ascontiguousarray(d, dtype=np.float64),
               float(spacing), np.ascontiguousarray(eps, dtype=np.float64), k0, nb, float(a),
               float(b), float(tiny), float(margin), float(cut), BOUND_SLACK,
-              float(radius))  # fmt: skip
+              float(radius), nodes)  # fmt: skip
 
 
 def region_values(

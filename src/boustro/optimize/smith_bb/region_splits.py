@@ -20,7 +20,8 @@ choice or the caller's ``cut`` are not branched. The lines with the longest poss
 groups are branched first (they make the pooled bound loose). Free segments (holding no
 piece) are counted as in the pooled bound. Lines with more than :data:`MAX_GAPS` gaps stay
 pooled. After :data:`NODES` nodes the bound is the largest of the best complete choice, the
-nodes cut, and the nodes left.
+nodes cut, and the nodes left; boxes of more than :data:`NODE_LINES` lines keep the pooled
+bound (no node; any number of nodes gives a bound, fewer a looser one).
 """
 
 from __future__ import annotations
@@ -31,13 +32,29 @@ from ..._jit import jit_globals
 from . import kernel
 from .kernel import _sup_w
 
-__all__ = ["MAX_GAPS", "NODES", "prepare", "split_bound"]
+__all__ = ["MAX_GAPS", "NODES", "NODE_LINES", "prepare", "split_bound", "split_nodes"]
 
 #: Nodes of the branch and bound per box (each: four exact maxima of Eq. 1). Measured on issue
 #: 21's field: 8 gives the gaps of 24 at two thirds of its CPU (4: wider gaps, 64: more CPU).
 NODES = 8
+#: Boxes of more lines than this (``lines_range`` of the region: about its circumscribed
+#: diameter over the spacing) are not branched (:func:`split_nodes`; their bound is the pooled
+#: one, the root): a node is four exact maxima over every segment of the box, so its cost grows
+#: with the lines while what it recovers does not. Measured on issue 21's field (2026-11-28,
+#: docs/global_optimum.md, section 10, "Finer spacing"): at 10, 7 and 5 m (94, 130, 180 lines)
+#: the branching certifies or halves the gap at the default budget (without it: 0.008, 0.016,
+#: 0.017); at 3 m (296) it took 60% of the CPU for 0.0016 of bound a box: 0.019 in 20 s with
+#: it, 0.0205 in 8.2 s without at the same budget (0.018 in 12.8 s with
+#: :data:`~boustro.optimize.smith_bb.region.REGION_EXTEND_POOLED`).
+NODE_LINES = 200
 #: Lines with more gaps than this (``2^gaps`` choices) are never branched, only pooled.
 MAX_GAPS = 3
+
+
+def split_nodes(lines: int) -> int:
+    """The nodes of :func:`split_bound` for a box of ``lines`` lines: :data:`NODES` up to
+    :data:`NODE_LINES` lines, none beyond (the pooled bound)."""
+    return NODES if lines <= NODE_LINES else 0
 
 
 def _extent(oa, ob, o0, o1, p0, p1, pa, pb, owner):
