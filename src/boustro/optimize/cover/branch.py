@@ -40,12 +40,16 @@ SETTLE_SHARE = 0.15
 
 
 #: Whether boxes are only discarded (never resolved or settled below the discard value) when
-#: the lowest model, less :data:`SETTLE_SHARE` of its distance to the best plan, is at or above
-#: that value: the certificate is then within reach (:func:`retire_at`).
+#: the lowest model, less :data:`CERTIFY_SHARE` of its distance to the best plan, is at or
+#: above that value: the certificate is then within reach (:func:`certifying`).
 CERTIFY_FIRST = True
 
 
-#: The share of (best plan - lowest model) kept below the lowest model by :func:`certifying`.
+#: The share of (best plan - lowest model) kept below the lowest model by :func:`certifying`:
+#: :data:`SETTLE_SHARE` (0.15) before :data:`REOPEN`; with the boxes settled before then
+#: reopened, a margin only delays certifying (the benchmark's random area 21: its lowest model
+#: 0.15 s above the discard value, 0.03 s short of that margin; docs/mission_time.md, "Where the
+#: certificates are lost, and the search's last boxes").
 CERTIFY_SHARE = 0.0
 
 
@@ -99,7 +103,7 @@ def take_multipliers(mult: Multipliers | None, index: NDArray[Any]) -> Multiplie
 
 def certifying(best: float, model_min: float, lim: Limits) -> bool:
     """Whether boxes are only discarded (:data:`CERTIFY_FIRST`): the lowest model less
-    :data:`SETTLE_SHARE` of its distance to the best plan is at or above the discard value."""
+    :data:`CERTIFY_SHARE` of its distance to the best plan is at or above the discard value."""
     discard = best - lim.rtol * abs(best)
     return CERTIFY_FIRST and model_min - CERTIFY_SHARE * max(best - model_min, 0.0) >= discard
 
@@ -115,11 +119,10 @@ def retire_at(
     took another ``rtol`` off the floor: Fields2Cover's ``test_2_cell.json#1``, 0.05% of its
     gap; where the share is larger the sum stays, the CPU of a wide gap's boxes: random area 9
     of ``benchmarks/mission_time.py`` took 1.3x with the larger of the two).
-    Where the lowest model less that share is at or above the discard value
-    (:data:`CERTIFY_FIRST`), no box is resolved or settled: one retired below the discard value
-    leaves the certificate's floor there, uncertified however far the others go (Fields2Cover's
-    ``test1.xml``: boxes settled at 3987.54 s, where the plan of 3991.70 s certifies at 3987.70
-    s)."""
+    Where :func:`certifying`, no box is resolved or settled: one retired below the discard
+    value leaves the certificate's floor there (unless :data:`REOPEN` brings it back),
+    uncertified however far the others go (Fields2Cover's ``test1.xml``: boxes settled at
+    3987.54 s, where the plan of 3991.70 s certifies at 3987.70 s)."""
     discard = best - lim.rtol * abs(best)
     unavoidable = SETTLE_SHARE * max(best - model_min, 0.0)
     if certifying(best, model_min, lim):
