@@ -47,6 +47,17 @@ def _detour(walls, a, b, search, theta):
     return lower, straight
 
 
+def _routed_and_bound(router, walls, a, b, search, theta):
+    """The router's move from ``a`` to ``b`` (``None`` where it found no way), checked never
+    below the walls' bound; that bound and the straight distance."""
+    route = router.path(a, b)
+    if not route.found:
+        return None, 0.0, 0.0
+    lower, straight = _detour(walls, a, b, search, theta)
+    assert route.length >= lower - 1e-9
+    return route, lower, straight
+
+
 def _search(region):
     return CoverSearch(region, SPACING, SPACING / 2, CoverCost.time(5.0, 10.0), None, False)
 
@@ -99,12 +110,8 @@ def test_moves_between_points_on_the_holes_rings_are_never_below_the_walls_bound
             b = a + rng.uniform(-25, 25, 2)
             if not region.contains(b):
                 continue
-        route = router.path(a, b)
-        if not route.found:
-            continue
-        lower, straight = _detour(walls, a, b, search, theta)
-        assert route.length >= lower - 1e-9
-        longer += lower > straight + 0.5
+        route, lower, straight = _routed_and_bound(router, walls, a, b, search, theta)
+        longer += route is not None and lower > straight + 0.5
     assert longer >= 10
 
 

@@ -139,6 +139,24 @@ def _cost_key(plan: Plan) -> tuple[float, int]:
 LEFT_NOTES = (BLOCKED_NOTE, OUTSIDE_NOTE)
 
 
+#: How far from the area a plan's path may lie, in lanes' reach plus run-ins (a factor above
+#: 1): a lane within ``reach`` of the area (it spans its band's projection), a run-in
+#: ``turnaround`` beyond its lane, a straight connecting move within ``max(reach, turnaround)``
+#: at points ``1/16`` of that apart (:meth:`~boustro.plan.routing.Router.path`: within
+#: ``1 + 1/32`` of it between them), a routed one inside the area; a move the router found no
+#: way for voids the certificate (:data:`LEFT_NOTES`).
+OUTSIDE_FACTOR = 1.0 + 1.0 / 16
+
+
+def _outside(options: dict[str, Any], keep_inside: bool, finish: Any) -> float | None:
+    """How far from the area any point of a plan lies (:data:`OUTSIDE_FACTOR`), for the
+    search's walls outside the shell; ``None`` with ``finish`` (a vehicle's turns may reach
+    farther) or ``keep_inside`` (no 1-tree)."""
+    if finish is not None or keep_inside:
+        return None
+    return OUTSIDE_FACTOR * (float(options["reach"]) + float(options["turnaround"]))
+
+
 def _uncertified(optimum: OptimizeResult, why: str) -> OptimizeResult:
     """The search's result without its certificate, saying ``why``: the chords layout's
     bound counts coverage-guaranteed lanes, which its lanes (shorter, sometimes fewer) can
@@ -196,6 +214,7 @@ def plan_cover(
         boustrophedon=boustrophedon,
         keep_inside=keep_inside,
         screen=None if finish is not None else _screen(frame, layout, options, keep_inside, cost),
+        outside=_outside(options, keep_inside, finish),
     )
     if layout == "chords":
         optimum = _uncertified(optimum, "the chords layout has no certificate")

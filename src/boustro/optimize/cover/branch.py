@@ -20,10 +20,14 @@ from .plans import try_plans
 __all__ = [
     "CERTIFY_FIRST",
     "CUT_OFF",
+    "FINE_BOXES",
+    "FINE_LEVELS",
     "POINT_TOURS_BELOW_MODEL",
+    "REOPEN",
     "SETTLE_SHARE",
     "Limits",
     "branch_and_bound",
+    "certifying",
     "retire_at",
     "take_multipliers",
 ]
@@ -36,9 +40,17 @@ SETTLE_SHARE = 0.15
 
 
 #: Whether boxes are only discarded (never resolved or settled below the discard value) when
-#: the lowest model, less :data:`SETTLE_SHARE` of its distance to the best plan, is at or above
-#: that value: the certificate is then within reach (:func:`retire_at`).
+#: the lowest model, less :data:`CERTIFY_SHARE` of its distance to the best plan, is at or
+#: above that value: the certificate is then within reach (:func:`certifying`).
 CERTIFY_FIRST = True
+
+
+#: The share of (best plan - lowest model) kept below the lowest model by :func:`certifying`:
+#: :data:`SETTLE_SHARE` (0.15) before :data:`REOPEN`; with the boxes settled before then
+#: reopened, a margin only delays certifying (the benchmark's random area 21: its lowest model
+#: 0.15 s above the discard value, 0.03 s short of that margin; docs/mission_time.md, "Where the
+#: certificates are lost, and the search's last boxes").
+CERTIFY_SHARE = 0.0
 
 
 #: Whether a round computes the 1-tree at a box centre only where the bound without it is
@@ -46,6 +58,24 @@ CERTIFY_FIRST = True
 #: change which boxes are kept, so the same search for less CPU (the points' 1-trees were
 #: half of the 1-tree's CPU; docs/mission_time.md, "The 1-tree's CPU").
 POINT_TOURS_BELOW_MODEL = True
+
+
+#: Whether the boxes retired below the discard value (settled or resolved) come back into the
+#: search once it is certifying (:func:`certifying`): retired in the first rounds, before the
+#: lowest model rose (or the best plan fell) into the certificate's reach, they held its floor
+#: below the discard value for good. Any box may be bounded again: only the search's work
+#: changes.
+REOPEN = True
+
+
+#: Halvings past the smallest radius (``min_eps``) for the boxes left once the certificate is
+#: within reach (:func:`certifying`: every box is only discarded), when at most
+#: :data:`FINE_BOXES` are left: a box straddling a layout where the plan changes (random area 4
+#: of ``benchmarks/mission_time.py``: one box of radius 5.2 mm held the floor 0.05 s below
+#: the certificate) loses less to the sandwich at a smaller radius. Any box's bound is a lower
+#: bound, whatever its radius: only the search's work changes.
+FINE_LEVELS = 4
+FINE_BOXES = 32
 
 
 #: Why a search with a ``cutoff`` stopped once its lower bound reached it (``info["stopped"]``).
@@ -71,6 +101,13 @@ def take_multipliers(mult: Multipliers | None, index: NDArray[Any]) -> Multiplie
     return Multipliers(mult.values[index], mult.warm[index], mult.k0)
 
 
+def certifying(best: float, model_min: float, lim: Limits) -> bool:
+    """Whether boxes are only discarded (:data:`CERTIFY_FIRST`): the lowest model less
+    :data:`CERTIFY_SHARE` of its distance to the best plan is at or above the discard value."""
+    discard = best - lim.rtol * abs(best)
+    return CERTIFY_FIRST and model_min - CERTIFY_SHARE * max(best - model_min, 0.0) >= discard
+
+
 def retire_at(
     points: NDArray[np.float64], best: float, model_min: float, lim: Limits
 ) -> NDArray[np.float64]:
@@ -82,18 +119,33 @@ def retire_at(
     took another ``rtol`` off the floor: Fields2Cover's ``test_2_cell.json#1``, 0.05% of its
     gap; where the share is larger the sum stays, the CPU of a wide gap's boxes: random area 9
     of ``benchmarks/mission_time.py`` took 1.3x with the larger of the two).
-    Where the lowest model less that share is at or above the discard value
-    (:data:`CERTIFY_FIRST`), no box is resolved or settled: one retired below the discard value
-    leaves the certificate's floor there, uncertified however far the others go (Fields2Cover's
-    ``test1.xml``: boxes settled at 3987.54 s, where the plan of 3991.70 s certifies at 3987.70
-    s)."""
+    Where :func:`certifying`, no box is resolved or settled: one retired below the discard
+    value leaves the certificate's floor there (unless :data:`REOPEN` brings it back),
+    uncertified however far the others go (Fields2Cover's ``test1.xml``: boxes settled at
+    3987.54 s, where the plan of 3991.70 s certifies at 3987.70 s)."""
     discard = best - lim.rtol * abs(best)
     unavoidable = SETTLE_SHARE * max(best - model_min, 0.0)
-    if CERTIFY_FIRST and model_min - unavoidable >= discard:
+    if certifying(best, model_min, lim):
         return np.full(len(points), discard)
     near = unavoidable < lim.rtol * abs(best)  # the share alone would settle above resolution
     settle = model_min - lim.rtol * abs(best) - (0.0 if near else unavoidable)
     return np.minimum(np.minimum(discard, points - lim.resolve * abs(best)), settle)
+
+
+_Part = tuple[_Boxes, NDArray[np.float64], NDArray[np.float64], Multipliers | None]
+
+
+def _joined(parts: list[_Part]) -> _Part:
+    """Boxes, bounds, certificate's bounds and multipliers of several parts, concatenated."""
+    boxes = _Boxes(*(np.concatenate([p[0][f] for p in parts]) for f in range(4)))
+    bounds = np.concatenate([p[1] for p in parts])
+    tight = np.concatenate([p[2] for p in parts])
+    kept = [p[3] for p in parts if p[3] is not None]
+    mult = None
+    if len(kept) == len(parts):
+        values = np.concatenate([m.values for m in kept])
+        mult = Multipliers(values, np.concatenate([m.warm for m in kept]), kept[0].k0)
+    return boxes, bounds, tight, mult
 
 
 def branch_and_bound(
@@ -110,6 +162,7 @@ def branch_and_bound(
     certified = math.inf  # the same with the certificate's bounds (search.tight): not lower
     rounds, stopped = 0, ""
     mult = search.multipliers(len(boxes.theta))
+    retired: list[_Part] = []  # boxes taken out below the discard value (REOPEN)
     while len(boxes.theta):
         rounds += 1
         # a point's 1-tree changes keep_at below only where its bound without it is below
@@ -139,12 +192,22 @@ def branch_and_bound(
             later = (boxes.take(skipped), bounds[skipped], take_multipliers(mult, skipped))
             search.deferred.append(later)
         done = ~keep & ~search.skipped
+        if REOPEN:  # settled or resolved below the discard value: back once certifying
+            low_done = done & (bounds < best - lim.rtol * abs(best))
+            if low_done.any():
+                retired.append((boxes.take(low_done), bounds[low_done], tight[low_done],
+                                take_multipliers(mult, low_done)))  # fmt: skip
+            done &= ~low_done
         if done.any():
             floor = min(floor, float(bounds[done].min()))
             certified = min(certified, float(tight[done].min()))
         boxes, bounds, mult = boxes.take(keep), bounds[keep], take_multipliers(mult, keep)
         tight = tight[keep]
+        if retired and certifying(best, model_min, lim):
+            boxes, bounds, tight, mult = _joined([(boxes, bounds, tight, mult), *retired])
+            retired = []
         low = min(floor, search.deferred_min(), float(bounds.min()) if len(bounds) else math.inf)
+        low = min([low, *(float(r[1].min()) for r in retired)])
         if progress is not None and math.isfinite(best):
             progress(max(0.0, min(1.0, 1.0 - (best - low) / max(abs(best), 1e-300))))
         if not len(boxes.theta):
@@ -154,7 +217,10 @@ def branch_and_bound(
             stopped = CUT_OFF
             break
         eps = box_radius(boxes, search.radius)
-        fine = eps <= lim.min_eps
+        smallest = lim.min_eps  # smaller for the last few boxes once certifying (FINE_LEVELS)
+        if len(boxes.theta) <= FINE_BOXES and certifying(best, model_min, lim):
+            smallest = lim.min_eps / 2.0**FINE_LEVELS
+        fine = eps <= smallest
         if fine.any():
             floor = min(floor, float(bounds[fine].min()))
             certified = min(certified, float(tight[fine].min()))
@@ -174,4 +240,4 @@ def branch_and_bound(
         if mult is not None:  # the halves start from their box's multipliers
             mult = take_multipliers(mult, split_parents(boxes, search.radius))
         boxes = split_boxes(boxes, search.radius)
-    return certified, rounds, stopped
+    return min([certified, *(float(r[2].min()) for r in retired)]), rounds, stopped

@@ -111,6 +111,7 @@ class CoverSearch:
         boustrophedon: bool,
         keep_inside: bool = False,
         screen: Callable[[float, float], float] | None = None,
+        outside: float | None = None,
     ) -> None:
         self.region, self.s, self.reach, self.cost = region, spacing, reach, cost
         self.screen = screen if evaluate is not None else None  # a floor of a layout's plan
@@ -140,7 +141,7 @@ class CoverSearch:
         plain = TOUR_PLAIN and len(region.edges) <= TOUR_PLAIN_EDGES
         self.tour = TOUR_BOUND and (self.n_holes > 0 or plain) and not simplify
         self.tour_eps = (TOUR_EPS if self.n_holes else TOUR_PLAIN_EPS) * spacing
-        self.walls = WallCache()
+        self.walls = WallCache(outside)
         self.defer = DEFER_TOUR  # read by the branch and bound (optimize/cover/branch.py)
         self.skipped: NDArray[np.bool_] = np.zeros(0, dtype=bool)  # see box_bounds
         self.tight: NDArray[np.float64] = np.zeros(0)  # see box_bounds
@@ -436,6 +437,7 @@ def cover_optimum(
     cutoff: float | None = None,
     screen: Callable[[float, float], float] | None = None,
     moves_on_passes: bool = True,
+    outside: float | None = None,
 ) -> OptimizeResult:
     """The layout ``(angle, offset)`` whose plan has the least ``cost``, with a certificate.
 
@@ -484,6 +486,11 @@ def cover_optimum(
             decides as without). ``False`` for a decomposition's cells, whose floor decides
             which candidates are planned (a screen: a cell planned alone counts passes along
             its cut edges that the whole plan never flies), so they decide as before.
+        outside: how far from the area any point of any plan ``evaluate`` returns may lie
+            (its lanes, run-ins, connecting moves and passes; plan units), if known: the
+            1-tree's moves then also go round the shell's pockets farther than that from it
+            (:func:`~.walls.shell_walls`; docs/mission_time.md, "Walls outside the shell").
+            ``None``: not known (a vehicle's turns, a decomposition's cells), no such walls.
 
     Returns:
         an :class:`OptimizeResult` with ``fitness`` = the best plan's cost (minimised),
@@ -498,7 +505,9 @@ def cover_optimum(
         raise InvalidParameterError(f"reach must be > 0, got {reach}")
     if boustrophedon is None:
         boustrophedon = not r.holes and r.shell.is_convex
-    search = CoverSearch(r, s, reach, cost, evaluate, boustrophedon, keep_inside, screen)
+    search = CoverSearch(
+        r, s, reach, cost, evaluate, boustrophedon, keep_inside, screen, outside=outside
+    )
     search.moves_on_passes = moves_on_passes
     boustrophedon = search.boustrophedon
     if not centred:  # a decomposition's cell: the 1-tree without holes cost more than it gave

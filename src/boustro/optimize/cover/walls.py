@@ -21,6 +21,19 @@ of ``benchmarks/mission_time.py``, a move of 8.2 m straight and 18.7 m around th
 8.2 m; docs/mission_time.md, "Walls inset into the holes"). An inset edge lies strictly inside
 the hole, so such a chord crosses it properly, and the detour past its ends is the way around
 the hole's corner, short of it by the inset only.
+
+**Walls outside the shell** (:func:`shell_walls`, where the search is told ``outside``: how far
+from the area any point of a plan lies; ``plan_cover`` passes it without a vehicle's turns,
+headland passes or keep-inside). A lane lies within its reach of the area (it spans its band's
+projection), a run-in within the reach plus the run-in, a straight connecting move within the
+router's allowance (``max(reach, run-in)`` at points a sixteenth of it apart), a routed one and
+a hole pass inside the area; a move the router found no way for voids the certificate. Every
+area ``S`` of a box lies in the outer set, so every plan of the box lies within ``outside`` of
+the outer set. The pockets of the outer set's shells dilated by ``outside`` (shapely's mitred
+dilation, which holds the round one: the parts of its convex hull outside it) lie farther than
+``outside`` from them, so no lane, run-in, move or pass enters them, and a segment inside a
+pocket is a wall as a hole's is (each is also checked, with shapely's exact distance, to lie
+farther than ``outside`` from the shells).
 """
 
 from __future__ import annotations
@@ -32,7 +45,7 @@ from numpy.typing import NDArray
 
 from .bands import EdgeSet
 
-__all__ = ["WALLS_PER_RING", "WallCache", "hole_walls", "walls_in_frames"]
+__all__ = ["WALLS_PER_RING", "WallCache", "hole_walls", "shell_walls", "walls_in_frames"]
 
 #: The longest segments kept per hole ring.
 WALLS_PER_RING = 6
@@ -62,13 +75,39 @@ def _inset_rings(poly: Any, inset: float) -> list[NDArray[np.float64]]:
     return [np.asarray(g.exterior.coords)[:-1] for g in parts]
 
 
+def _ring_walls(poly: Any, inset: float, per_ring: int, far: Any = None) -> list[Any]:
+    """The ``per_ring`` longest segments between the vertices of ``poly``'s ring inset by
+    ``inset`` that lie inside ``poly`` (and, with ``far = (geometry, distance)``, farther than
+    ``distance`` from ``geometry``, measured exactly)."""
+    from shapely import LineString, covered_by, prepare
+
+    prepare(poly)
+    kept: list[Any] = []
+    for ring in _inset_rings(poly, inset):
+        i, j = np.triu_indices(len(ring), 1)
+        seg = np.concatenate([ring[i], ring[j]], axis=1)
+        length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+        found = 0
+        for k in np.argsort(-length):
+            line = LineString([seg[k, :2], seg[k, 2:]])
+            if not covered_by(line, poly):  # inside the hole (the pocket)
+                continue
+            if far is not None and not line.distance(far[0]) > far[1]:
+                continue
+            kept.append(seg[k])
+            found += 1
+            if found >= per_ring:
+                break
+    return kept
+
+
 def hole_walls(
     es: EdgeSet, per_ring: int = WALLS_PER_RING, inset: float = WALL_INSET
 ) -> NDArray[np.float64]:
     """``(W, 4)`` walls ``x1, y1, x2, y2`` inside the hole rings of ``es`` (module docstring):
     per hole, the ``per_ring`` longest segments between the vertices of its ring inset by
     ``inset`` of the set's extent that lie inside the hole."""
-    from shapely import LineString, Polygon, covered_by, prepare
+    from shapely import Polygon
 
     starts = _ring_starts(es)
     ends = np.append(starts[1:], len(es.xy))
@@ -80,18 +119,41 @@ def hole_walls(
         poly: Any = Polygon(es.xy[a:b, :2])
         if not poly.is_valid or poly.area <= 0:
             continue
-        prepare(poly)
-        for ring in _inset_rings(poly, inset * extent):
-            i, j = np.triu_indices(len(ring), 1)
-            seg = np.concatenate([ring[i], ring[j]], axis=1)
-            length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
-            kept = []
-            for k in np.argsort(-length):
-                if covered_by(LineString([seg[k, :2], seg[k, 2:]]), poly):  # inside the hole
-                    kept.append(seg[k])
-                    if len(kept) >= per_ring:
-                        break
-            out.extend(kept)
+        out.extend(_ring_walls(poly, inset * extent, per_ring))
+    return np.asarray(out, dtype=np.float64).reshape(-1, 4)
+
+
+def shell_walls(
+    es: EdgeSet, outside: float, per_ring: int = WALLS_PER_RING, inset: float = WALL_INSET
+) -> NDArray[np.float64]:
+    """``(W, 4)`` walls in the shell's pockets (module docstring, "Walls outside the shell"):
+    the parts of the convex hull of ``es``'s outer rings dilated by ``outside`` outside that
+    dilation (shapely's mitred one, which holds the round one), per part the ``per_ring`` longest
+    segments between the vertices of its ring inset by ``inset`` of the set's extent that lie
+    inside it and, measured exactly, farther than ``outside`` from every outer ring."""
+    from shapely import Polygon, unary_union
+
+    if not len(es.xy) or not outside > 0:
+        return np.zeros((0, 4))
+    starts = _ring_starts(es)
+    ends = np.append(starts[1:], len(es.xy))
+    shells = [
+        Polygon(es.xy[a:b, :2])
+        for a, b in zip(starts, ends, strict=True)
+        if es.hole[a] < 0 and b - a >= 3
+    ]
+    shells = [p if p.is_valid else p.buffer(0) for p in shells]
+    if not shells:
+        return np.zeros((0, 4))
+    body: Any = unary_union(shells)
+    extent = float(np.ptp(es.xy[:, :2], axis=0).max())
+    grown = body.buffer(outside, join_style="mitre")  # holds the round dilation
+    pockets: Any = grown.convex_hull.difference(grown)
+    out: list[NDArray[np.float64]] = []
+    for part in getattr(pockets, "geoms", [pockets]):
+        if part.is_empty or part.geom_type != "Polygon" or part.area <= 0:
+            continue
+        out.extend(_ring_walls(Polygon(part.exterior), inset * extent, per_ring, (body, outside)))
     return np.asarray(out, dtype=np.float64).reshape(-1, 4)
 
 
@@ -118,8 +180,9 @@ class WallCache:
     level of a search: the levels are cached, so their arrays (the keys, by identity, kept
     alive here) live as long as the search."""
 
-    def __init__(self) -> None:
+    def __init__(self, outside: float | None = None) -> None:
         self._walls: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
+        self.outside = outside  # walls in the shell's pockets too (shell_walls), if given
 
     def frames(
         self,
@@ -131,5 +194,8 @@ class WallCache:
         """:func:`walls_in_frames` of the walls of the level whose outer set is ``outer``."""
         key = id(outer.xy)
         if key not in self._walls:
-            self._walls[key] = (outer.xy, hole_walls(outer))
+            walls = hole_walls(outer)
+            if self.outside is not None:
+                walls = np.concatenate([walls, shell_walls(outer, self.outside)])
+            self._walls[key] = (outer.xy, walls)
         return walls_in_frames(self._walls[key][1], theta, d, origin)
