@@ -237,3 +237,27 @@ def test_a_decomposition_decides_its_keep_inside_cells_without_the_moves_term(mo
     plan_area(shell, 10.0, crs=None, holes=[hole], speed=5.0, turn_time=10.0, keep_inside=True)
     assert any(k for k, _ in seen)  # keep-inside cells were searched
     assert all(not moves for k, moves in seen if k)
+
+
+def test_an_invalid_moves_decide_is_refused_where_it_is_read(monkeypatch):
+    """``search.MOVES_DECIDE`` outside its three values raises a clear error where a keep-inside
+    search reads it (a layout's bound and a box's), rather than deciding as ``"boxes"``; the
+    three values are read without error."""
+    from boustro.errors import InvalidParameterError
+    from boustro.optimize.cover import search as search_mod
+
+    region = _areas()[0]
+    cost = CoverCost.time(5.0, 10.0)
+    boxes = Boxes(np.array([0.3, 1.2]), np.zeros(2), np.array([1.0, 4.0]), np.full(2, 1e-3))
+    search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False, keep_inside=True)
+    search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
+    for value in search_mod.MOVES_DECIDE_VALUES:
+        monkeypatch.setattr(search_mod, "MOVES_DECIDE", value)
+        assert np.isfinite(search.point_values(boxes)).all()
+        assert np.isfinite(search.box_bounds(boxes)).all()
+    monkeypatch.setattr(search_mod, "MOVES_DECIDE", "certificates")
+    for bound in (search.point_values, search.box_bounds):
+        with pytest.raises(
+            InvalidParameterError, match=r"MOVES_DECIDE must be one of.*'certificates'"
+        ):
+            bound(boxes)
