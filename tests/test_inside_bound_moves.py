@@ -62,6 +62,58 @@ def test_pass_count_by_hand():
     assert got.tolist() == [4]
 
 
+def test_pass_count_is_the_planners_merge_of_flagged_runs():
+    """The passes :func:`pass_count` counts are those the planner drives (``plan/contour._runs``
+    with its ``MERGE_GAP``, on rings sampled every hundredth of a spacing, the samples in the
+    counted cores flagged): random cores on three rings, gaps between counted cores from a
+    tenth to five spacings (within two samples above the merge gap, where the planner may merge
+    what the count keeps apart, skipped), at least 100 rows checked."""
+    from boustro.plan.contour import MERGE_GAP, _runs
+
+    spacing, step = 5.0, 0.05
+    rng = np.random.default_rng(17)
+    checked = 0
+    for _ in range(40):
+        arcs, totals, rings = [], [], []
+        for r in range(3):
+            at, cores = rng.uniform(0, spacing), []
+            while True:
+                lo, hi = at, at + rng.uniform(0.2, 3.0) * spacing
+                at = hi + spacing * float(rng.choice([rng.uniform(0.1, 1.9), rng.uniform(2.1, 5)]))
+                if at > 40 * spacing:
+                    break
+                cores.append((lo, hi))
+            total = at
+            arcs += cores
+            totals += [total] * len(cores)
+            rings += [r] * len(cores)
+        arc, total_a, ring = np.array(arcs), np.array(totals), np.array(rings)
+        far = rng.random((8, len(arc))) < 0.5
+        got = pass_count(arc, total_a, ring, far, None, spacing)
+        for row in range(len(far)):
+            want, near_the_merge_gap = 0, False
+            for r in range(3):
+                cols = np.flatnonzero(far[row] & (ring == r))
+                if not len(cols):
+                    continue
+                total = float(total_a[cols[0]])
+                lo, hi = arc[cols, 0], arc[cols, 1]
+                gaps = np.r_[lo[1:] - hi[:-1], lo[0] + total - hi[-1]]
+                near_the_merge_gap |= bool(
+                    ((gaps >= MERGE_GAP * spacing * (1 - 1e-6))
+                     & (gaps <= MERGE_GAP * spacing + 2 * step)).any()
+                )  # fmt: skip
+                n = math.ceil(total / step)
+                at = np.linspace(0.0, total, n + 1)[:-1]
+                flag = ((at[:, None] >= lo[None]) & (at[:, None] <= hi[None])).any(axis=1)
+                runs = _runs(flag, at, total, MERGE_GAP * spacing)
+                want += 1 if runs is None else len(runs)
+            if not near_the_merge_gap:
+                assert got[row] == want, (row, got[row], want)
+                checked += 1
+    assert checked >= 100
+
+
 def _areas() -> list[Region]:
     """Straight-edged areas (a rectangle, an L, a quadrilateral with a hole, an obtuse hexagon,
     a ring 13.5 m wide, a hole 5.5 m from the side), random areas with holes, one of them at
