@@ -10,7 +10,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from boustro.errors import InvalidParameterError
+from boustro.errors import InvalidParameterError, NoTransectError
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region, random_region
 from boustro.mission import plan_area, region_certified
@@ -263,3 +263,38 @@ def test_default_budget_doubles_while_the_gap_shrinks_and_an_explicit_one_is_har
     stalled = smith_bb_region(comb, 5.0)
     assert not stalled.info["converged"]
     assert stalled.info["boxes"] == smith_bb_region(comb, 5.0, max_work=2e6).info["boxes"]
+
+
+def test_the_extended_budget_stops_at_its_cap_and_extends_only_on_a_finite_gap(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # a small area whose gap keeps shrinking: with the default budget made small (1e6) it
+    # doubles up to REGION_EXTEND times and stops there, short of tol, though 4 times that
+    # budget converges (the cap stopped it, not a stall)
+    from boustro.optimize.smith_bb import region as region_mod
+    from boustro.optimize.smith_bb import search as search_mod
+    from boustro.optimize.smith_bb.region import REGION_EXTEND
+
+    rng = np.random.default_rng(26)
+    area = random_region(rng, int(rng.integers(20, 80)), int(rng.integers(1, 3)))
+    spacing = 0.05 * area.diameter
+    monkeypatch.setattr(region_mod, "REGION_MAX_WORK", 1e6)
+    cap = REGION_EXTEND * 1e6
+    capped = smith_bb_region(area, spacing)
+    assert not capped.info["converged"]
+    assert capped.info["stopped"] == f"the work budget ({cap:.0e} box edges) was spent"
+    assert capped.info["boxes"] > smith_bb_region(area, spacing, max_work=cap / 2).info["boxes"]
+    assert smith_bb_region(area, spacing, max_work=4 * cap).info["converged"]
+    # a search that finds no layout (every offer dropped: its gap is infinite) does not extend
+    runs: list[tuple[float, int, str]] = []
+
+    def spy(*args, **kwargs):  # type: ignore[no-untyped-def]
+        runs.append(run(*args, **kwargs))
+        return runs[-1]
+
+    run = search_mod._run
+    monkeypatch.setattr(search_mod, "_run", spy)
+    monkeypatch.setattr(region_mod._RegionSearch, "offer", lambda self, value, theta, d: None)
+    with pytest.raises(NoTransectError):
+        smith_bb_region(area, spacing)
+    assert runs[0][2] == f"the work budget ({1e6:.0e} box edges) was spent"

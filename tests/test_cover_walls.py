@@ -203,3 +203,64 @@ def test_walls_of_a_concave_hole_stay_inside_it():
     assert len(walls) >= 3
     inside = shapely.Polygon(hole)
     assert all(inside.covers(shapely.LineString([w[:2], w[2:]])) for w in walls)
+
+
+def _walls_of_every_pair(es, per_ring=6, inset=1e-6):
+    """The former ``hole_walls`` (before 2026-11-28): every pair of the inset ring's vertices
+    sorted by length, tested in order; ``O(n^2)`` per ring."""
+    from boustro.optimize.cover.walls import _inset_rings, _ring_starts
+
+    starts = _ring_starts(es)
+    ends = np.append(starts[1:], len(es.xy))
+    extent = float(np.ptp(es.xy[:, :2], axis=0).max()) if len(es.xy) else 0.0
+    out = []
+    for a, b in zip(starts, ends, strict=True):
+        if es.hole[a] < 0 or b - a < 3:
+            continue
+        poly = shapely.Polygon(es.xy[a:b, :2])
+        if not poly.is_valid or poly.area <= 0:
+            continue
+        shapely.prepare(poly)
+        for ring in _inset_rings(poly, inset * extent):
+            i, j = np.triu_indices(len(ring), 1)
+            seg = np.concatenate([ring[i], ring[j]], axis=1)
+            length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+            kept = []
+            for k in np.argsort(-length):
+                if shapely.covered_by(shapely.LineString([seg[k, :2], seg[k, 2:]]), poly):
+                    kept.append(seg[k])
+                    if len(kept) >= per_ring:
+                        break
+            out.extend(kept)
+    return np.asarray(out, dtype=np.float64).reshape(-1, 4)
+
+
+def test_walls_equal_those_of_every_pair_sorted():
+    """The walls listed in shells of decreasing length are the former sort of every pair's: on
+    random areas' holes (several per area), traced holes of 200 to 2000 vertices and a 2000-vertex
+    star (its long chords leave it); where lengths tie (a square, a regular 2000-gon) the same
+    lengths, each wall inside its hole (the order among equal lengths was the sort's own)."""
+    from boustro.geometry.traced import traced_field
+    from boustro.optimize.cover.bands import edge_set
+
+    shell = np.array([[-500, -500], [500, -500], [500, 500], [-500, 500]], float)
+    holes = [traced_field(n, 0, seed=n, radius=40.0).shell.vertices for n in (200, 700, 2000)]
+    rng = np.random.default_rng(5)
+    t = np.linspace(0, 2 * np.pi, 2000, endpoint=False)
+    holes.append(np.c_[np.cos(t), np.sin(t)] * (30 + 15 * rng.random(2000))[:, None])
+    sets = [edge_set([shell, h[::-1]], [-1, 0]) for h in holes]
+    for region in random_regions(6, 31, n_holes=(1, 3)):
+        big = scaled(region, 300.0)
+        rings = [big.shell.vertices] + [h.vertices for h in big.holes]
+        sets.append(edge_set(rings, [-1, *range(len(big.holes))]))
+    for es in sets:
+        got = hole_walls(es)
+        assert len(got) and np.array_equal(got, _walls_of_every_pair(es))
+    square = np.array([[0, 0], [10, 0], [10, 10], [0, 10]], float)
+    for h in (square, np.c_[np.cos(t), np.sin(t)] * 30):
+        es = edge_set([shell, h[::-1]], [-1, 0])
+        got, before = hole_walls(es), _walls_of_every_pair(es)
+        length = np.hypot(*(got[:, 2:] - got[:, :2]).T)
+        assert np.array_equal(length, np.hypot(*(before[:, 2:] - before[:, :2]).T))
+        inside = shapely.Polygon(h)
+        assert all(inside.covers(shapely.LineString([w[:2], w[2:]])) for w in got)

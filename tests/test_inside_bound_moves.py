@@ -62,6 +62,58 @@ def test_pass_count_by_hand():
     assert got.tolist() == [4]
 
 
+def test_pass_count_is_the_planners_merge_of_flagged_runs():
+    """The passes :func:`pass_count` counts are those the planner drives (``plan/contour._runs``
+    with its ``MERGE_GAP``, on rings sampled every hundredth of a spacing, the samples in the
+    counted cores flagged): random cores on three rings, gaps between counted cores from a
+    tenth to five spacings (within two samples above the merge gap, where the planner may merge
+    what the count keeps apart, skipped), at least 100 rows checked."""
+    from boustro.plan.contour import MERGE_GAP, _runs
+
+    spacing, step = 5.0, 0.05
+    rng = np.random.default_rng(17)
+    checked = 0
+    for _ in range(40):
+        arcs, totals, rings = [], [], []
+        for r in range(3):
+            at, cores = rng.uniform(0, spacing), []
+            while True:
+                lo, hi = at, at + rng.uniform(0.2, 3.0) * spacing
+                at = hi + spacing * float(rng.choice([rng.uniform(0.1, 1.9), rng.uniform(2.1, 5)]))
+                if at > 40 * spacing:
+                    break
+                cores.append((lo, hi))
+            total = at
+            arcs += cores
+            totals += [total] * len(cores)
+            rings += [r] * len(cores)
+        arc, total_a, ring = np.array(arcs), np.array(totals), np.array(rings)
+        far = rng.random((8, len(arc))) < 0.5
+        got = pass_count(arc, total_a, ring, far, None, spacing)
+        for row in range(len(far)):
+            want, near_the_merge_gap = 0, False
+            for r in range(3):
+                cols = np.flatnonzero(far[row] & (ring == r))
+                if not len(cols):
+                    continue
+                total = float(total_a[cols[0]])
+                lo, hi = arc[cols, 0], arc[cols, 1]
+                gaps = np.r_[lo[1:] - hi[:-1], lo[0] + total - hi[-1]]
+                near_the_merge_gap |= bool(
+                    ((gaps >= MERGE_GAP * spacing * (1 - 1e-6))
+                     & (gaps <= MERGE_GAP * spacing + 2 * step)).any()
+                )  # fmt: skip
+                n = math.ceil(total / step)
+                at = np.linspace(0.0, total, n + 1)[:-1]
+                flag = ((at[:, None] >= lo[None]) & (at[:, None] <= hi[None])).any(axis=1)
+                runs = _runs(flag, at, total, MERGE_GAP * spacing)
+                want += 1 if runs is None else len(runs)
+            if not near_the_merge_gap:
+                assert got[row] == want, (row, got[row], want)
+                checked += 1
+    assert checked >= 100
+
+
 def _areas() -> list[Region]:
     """Straight-edged areas (a rectangle, an L, a quadrilateral with a hole, an obtuse hexagon,
     a ring 13.5 m wide, a hole 5.5 m from the side), random areas with holes, one of them at
@@ -237,3 +289,27 @@ def test_a_decomposition_decides_its_keep_inside_cells_without_the_moves_term(mo
     plan_area(shell, 10.0, crs=None, holes=[hole], speed=5.0, turn_time=10.0, keep_inside=True)
     assert any(k for k, _ in seen)  # keep-inside cells were searched
     assert all(not moves for k, moves in seen if k)
+
+
+def test_an_invalid_moves_decide_is_refused_where_it_is_read(monkeypatch):
+    """``search.MOVES_DECIDE`` outside its three values raises a clear error where a keep-inside
+    search reads it (a layout's bound and a box's), rather than deciding as ``"boxes"``; the
+    three values are read without error."""
+    from boustro.errors import InvalidParameterError
+    from boustro.optimize.cover import search as search_mod
+
+    region = _areas()[0]
+    cost = CoverCost.time(5.0, 10.0)
+    boxes = Boxes(np.array([0.3, 1.2]), np.zeros(2), np.array([1.0, 4.0]), np.full(2, 1e-3))
+    search = CoverSearch(region, SPACING, SPACING / 2, cost, None, False, keep_inside=True)
+    search.top_eps = float((boxes.delta * search.radius + boxes.eta).max()) * 1.5
+    for value in search_mod.MOVES_DECIDE_VALUES:
+        monkeypatch.setattr(search_mod, "MOVES_DECIDE", value)
+        assert np.isfinite(search.point_values(boxes)).all()
+        assert np.isfinite(search.box_bounds(boxes)).all()
+    monkeypatch.setattr(search_mod, "MOVES_DECIDE", "certificates")
+    for bound in (search.point_values, search.box_bounds):
+        with pytest.raises(
+            InvalidParameterError, match=r"MOVES_DECIDE must be one of.*'certificates'"
+        ):
+            bound(boxes)

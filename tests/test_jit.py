@@ -8,7 +8,16 @@ import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from boustro._jit import _CHECKED, fresh_cache, jit, jit_cached, jit_globals, sources_digest
+from boustro import _jit
+from boustro._jit import (
+    _CHECKED,
+    compiled,
+    fresh_cache,
+    jit,
+    jit_cached,
+    jit_globals,
+    sources_digest,
+)
 
 
 def _twice(x: float) -> float:
@@ -24,6 +33,63 @@ def test_helpers_are_swapped_once_and_kernels_compile_against_them():
     assert ns["_twice"] is first  # not compiled again over the compiled one
     again = jit(first)  # a compiled function is compiled from its Python original
     assert again.py_func is _twice and again(1.5) == 3.0
+
+
+def _kernel_module() -> dict:
+    """The globals of a small kernel module: ``add_twice`` calls the helper ``twice`` by name."""
+    ns: dict = {}
+    exec("def twice(x):\n    return 2.0 * x\ndef add_twice(x):\n    return x + twice(x)\n", ns)
+    return ns
+
+
+def test_compiled_swaps_helpers_after_the_steps_before_and_compiles_the_kernels(monkeypatch):
+    """A kernel module's ``_compiled()``: ``before`` called in order, then the helpers swapped,
+    then the kernels compiled (one function for one name, a tuple for several); without numba
+    the Python functions, nothing called or swapped."""
+    calls: list[str] = []
+    ns = _kernel_module()
+    twice, add_twice = ns["twice"], ns["add_twice"]
+    one = compiled(ns, "twice", (), [lambda: calls.append("a"), lambda: calls.append("b")])
+    assert calls == ["a", "b"] and one.py_func is twice and one(2.0) == 4.0
+    assert ns["twice"] is twice  # not a helper here: left as it is
+    swapped = [lambda: calls.append(f"swapped {hasattr(ns['twice'], 'py_func')}")]
+    both = compiled(ns, ("add_twice", "twice"), ("twice",), swapped)
+    assert calls[-1] == "swapped False"  # the steps before come before the helpers' swap
+    assert isinstance(both, tuple) and [f.py_func for f in both] == [add_twice, twice]
+    assert ns["twice"].py_func is twice and both[0](1.0) == 3.0
+    monkeypatch.setattr(_jit, "find_spec", lambda name: None)
+    plain = _kernel_module()
+    got = compiled(plain, ("add_twice",), ("twice",), [lambda: calls.append("c")])
+    assert got == (plain["add_twice"],) and compiled(plain, "twice") is plain["twice"]
+    assert not hasattr(plain["twice"], "py_func") and calls == ["a", "b", "swapped False"]
+
+
+def test_every_kernel_module_compiles_through_the_one_helper():
+    """The kernel modules' ``_compiled()`` (and order_kernel's ``_compiled_lanes``) return what
+    ``compiled`` gives: numba functions of their Python kernels."""
+    from boustro.optimize.cover import bands, ends, one_tree, piece_ends
+    from boustro.optimize.smith_bb import kernel, region_kernel
+    from boustro.plan import edge_grid, order_kernel, straight_moves, tour_exact, visibility_kernel
+
+    table = {
+        bands._compiled: ("_all",),
+        ends._compiled: ("_ends",),
+        one_tree._compiled: ("_bounds",),
+        piece_ends._compiled: ("_charges",),
+        kernel._compiled: ("_bounds", "_values"),
+        region_kernel._compiled: ("_bounds", "_values"),
+        edge_grid._compiled: ("_grid_crossings", "_grid_near"),
+        order_kernel._compiled: ("_two_opt",),
+        order_kernel._compiled_lanes: ("_lane_search",),
+        straight_moves._compiled: ("_edge_tests",),
+        tour_exact._compiled: ("_held_karp",),
+        visibility_kernel._compiled: ("_crossings", "_near"),
+    }
+    for get, names in table.items():
+        got = get()
+        got = got if isinstance(got, tuple) else (got,)
+        home = sys.modules[get.__module__]
+        assert [f.py_func for f in got] == [getattr(home, n) for n in names], get.__module__
 
 
 def test_first_use_from_several_threads_at_once():

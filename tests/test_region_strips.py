@@ -130,13 +130,55 @@ def _layouts(xy: np.ndarray, s: float, rng: np.random.Generator) -> list[tuple[f
     return out
 
 
-@pytest.mark.parametrize("which", ["traced", "comb"])
-def test_sweep_and_intervals_equal_every_edge_against_every_line(which: str) -> None:
-    # the one-pass sweep of the strips (quick rejection of the edges meeting no strip) and the
-    # lines' intervals (quick rejection of the edges crossing no line) against the plain rule
-    # applied to every edge and every line
+def _sweep_as_the_plain_rule(
+    xy: np.ndarray,
+    theta: float,
+    d: float,
+    s: float,
+    k0: int,
+    nb: int,
+    radius: float,
+    sdelta: float,
+    eta: float,
+) -> int:
+    """Assert the one-pass sweep of the strips (quick rejection of the edges meeting no strip)
+    and the lines' intervals (quick rejection of the edges crossing no line) equal the plain
+    rule applied to every edge and every line; returns how many lines have crossings."""
     from boustro.optimize.smith_bb.region_strips import _sweep, strip_halfwidths
 
+    cs, sn = math.cos(theta), math.sin(theta)
+    h1, h2 = -sn * xy[:, 0] + cs * xy[:, 1], -sn * xy[:, 2] + cs * xy[:, 3]
+    t1, t2 = cs * xy[:, 0] + sn * xy[:, 1], cs * xy[:, 2] + sn * xy[:, 3]
+    a, b = np.minimum(h1, h2), np.maximum(h1, h2)
+    c = np.array([d + (k0 + q) * s for q in range(nb)])
+    half = np.empty(nb)
+    strip_halfwidths(c, radius, sdelta, eta, half)
+    low, high = c - half, c + half
+    lcnt, lt, hcnt, ht, pcnt, plo, phi = _sweep(xy, cs, sn, c, low, high, half.max(), d, s, k0,
+                                                nb)  # fmt: skip
+    start, lo, hi = rk._intervals(xy, cs, sn, d, s, k0, nb)
+    lines = 0
+    for q in range(nb):
+        with np.errstate(all="ignore"):
+            for at, cnt, got in ((low[q], lcnt, lt), (high[q], hcnt, ht), (c[q], None, None)):
+                m = (a <= at) & (at < b)
+                want = np.sort(t1[m] + (at - h1[m]) * (t2[m] - t1[m]) / (h2[m] - h1[m]))
+                if cnt is None:  # the line itself: its intervals pair the crossings
+                    assert np.array_equal(lo[start[q] : start[q + 1]], want[0::2])
+                    assert np.array_equal(hi[start[q] : start[q + 1]], want[1::2])
+                else:
+                    assert np.array_equal(got[cnt[q] : cnt[q + 1]], want)
+        touch = (low[q] <= b) & (high[q] >= a)
+        assert pcnt[q + 1] - pcnt[q] == touch.sum()
+        mid = 0.5 * (plo[pcnt[q] : pcnt[q + 1]] + phi[pcnt[q] : pcnt[q + 1]])
+        lo_t, hi_t = np.minimum(t1, t2)[touch], np.maximum(t1, t2)[touch]
+        assert ((lo_t - 1e-9 <= mid) & (mid <= hi_t + 1e-9)).all()  # each on its edge
+        lines += int(m.sum() > 0)
+    return lines
+
+
+@pytest.mark.parametrize("which", ["traced", "comb"])
+def test_sweep_and_intervals_equal_every_edge_against_every_line(which: str) -> None:
     rng = np.random.default_rng(5)
     if which == "traced":
         search = _search(7, 300, 3)
@@ -147,34 +189,35 @@ def test_sweep_and_intervals_equal_every_edge_against_every_line(which: str) -> 
     k0, nb = k0 - 4, nb + 8
     lines = 0
     for theta, d in _layouts(xy, s, rng):
-        cs, sn = math.cos(theta), math.sin(theta)
-        h1, h2 = -sn * xy[:, 0] + cs * xy[:, 1], -sn * xy[:, 2] + cs * xy[:, 3]
-        t1, t2 = cs * xy[:, 0] + sn * xy[:, 1], cs * xy[:, 2] + sn * xy[:, 3]
-        a, b = np.minimum(h1, h2), np.maximum(h1, h2)
-        c = np.array([d + (k0 + q) * s for q in range(nb)])
-        half = np.empty(nb)
-        strip_halfwidths(c, search.radius, math.sin(rng.uniform(0, 3e-3)), 0.02 * s, half)
-        low, high = c - half, c + half
-        lcnt, lt, hcnt, ht, pcnt, plo, phi = _sweep(xy, cs, sn, c, low, high, half.max(), d, s,
-                                                    k0, nb)  # fmt: skip
-        start, lo, hi = rk._intervals(xy, cs, sn, d, s, k0, nb)
-        for q in range(nb):
-            with np.errstate(all="ignore"):
-                for at, cnt, got in ((low[q], lcnt, lt), (high[q], hcnt, ht), (c[q], None, None)):
-                    m = (a <= at) & (at < b)
-                    want = np.sort(t1[m] + (at - h1[m]) * (t2[m] - t1[m]) / (h2[m] - h1[m]))
-                    if cnt is None:  # the line itself: its intervals pair the crossings
-                        assert np.array_equal(lo[start[q] : start[q + 1]], want[0::2])
-                        assert np.array_equal(hi[start[q] : start[q + 1]], want[1::2])
-                    else:
-                        assert np.array_equal(got[cnt[q] : cnt[q + 1]], want)
-            touch = (low[q] <= b) & (high[q] >= a)
-            assert pcnt[q + 1] - pcnt[q] == touch.sum()
-            mid = 0.5 * (plo[pcnt[q] : pcnt[q + 1]] + phi[pcnt[q] : pcnt[q + 1]])
-            lo_t, hi_t = np.minimum(t1, t2)[touch], np.maximum(t1, t2)[touch]
-            assert ((lo_t - 1e-9 <= mid) & (mid <= hi_t + 1e-9)).all()  # each on its edge
-            lines += int(m.sum() > 0)
+        sdelta = math.sin(rng.uniform(0, 3e-3))
+        lines += _sweep_as_the_plain_rule(xy, theta, d, s, k0, nb, search.radius, sdelta, 0.02 * s)
     assert lines > 50
+
+
+def test_the_strips_keep_an_edge_on_a_line_far_from_the_origin():
+    """The strips' quick rejection (``_sweep``) has a margin that grows with the line index: at
+    raw UTM-like coordinates (northing 5.4e6 m, spacing 0.1 m: line 5.4e7, where ``(k s) / s``
+    rounds 7e-9 above ``k``) a fixed 1e-9 dropped a hole's edge lying on a line of a box of one
+    layout, so its inner set held the edge (the line along the boundary counted inside)."""
+    s, inv = 0.1, 10.0
+    k = next(k for k in range(54_000_000, 54_001_000) if math.ceil(k * s * inv - 1e-9) > k)
+    y0, x0 = k * s, 450_000.0  # the hole's top edge lies on line k (as d + k s computes it)
+    hole = [(x0 + 20, y0 - 0.5), (x0 + 60, y0 - 0.5), (x0 + 60, y0), (x0 + 20, y0)]
+    area = Region(
+        [(x0, y0 - 1), (x0 + 100, y0 - 1), (x0 + 100, y0 + 1), (x0, y0 + 1)], holes=[hole]
+    )
+    xy = np.ascontiguousarray(area.edges.reshape(-1, 4))
+    k0, nb = k - 15, 30
+    radius = float(np.hypot(xy[:, 0], xy[:, 1]).max())
+    assert _sweep_as_the_plain_rule(xy, 0.0, 0.0, s, k0, nb, radius, 0.0, 0.0) >= 20
+    ost, oa, ob, ist, pa, pb = strip_intervals(xy, 1.0, 0.0, 0.0, s, k0, nb, radius, 0.0, 0.0,
+                                               rk.KEEP)  # fmt: skip
+    on = k - k0  # the line along the hole's top edge: no inner piece within the edge
+    inner = list(zip(pa[ist[on] : ist[on + 1]], pb[ist[on] : ist[on + 1]], strict=True))
+    assert inner and all(b <= x0 + 20 or a >= x0 + 60 for a, b in inner)
+    below = on - 1  # a line through the hole: the hole is out of its inner and outer sets
+    outer = list(zip(oa[ost[below] : ost[below + 1]], ob[ost[below] : ost[below + 1]], strict=True))
+    assert len(outer) == 2 and outer[0][1] <= x0 + 20 + 1e-6 and outer[1][0] >= x0 + 60 - 1e-6
 
 
 def test_an_edge_on_a_line_far_from_the_origin_is_not_dropped():

@@ -6,7 +6,9 @@ when it compiles a caller), then compiles the kernels. :func:`jit_globals` does 
 one process-wide lock and never compiles a compiled function again, so two threads that reach a
 module's first use at once (a ``functools.cache`` lets both in) get the same kernels.
 :func:`jit` uses numba's disk cache where a cache location is writable, and compiles in every
-process otherwise. numba is imported by the calls, never by ``import boustro``.
+process otherwise. numba is imported by the calls, never by ``import boustro``. A kernel module's
+cached ``_compiled()`` is :func:`compiled`: its kernels compiled, or its Python functions
+where numba is not installed.
 
 numba keys a cached function to its own source file only: a kernel whose helpers live in
 another file would keep its old machine code after the helpers change (an upgrade, a checkout).
@@ -18,12 +20,21 @@ from __future__ import annotations
 
 import hashlib
 import threading
-from collections.abc import Iterable, MutableMapping
+from collections.abc import Callable, Iterable, MutableMapping
 from functools import cache
+from importlib.util import find_spec
 from pathlib import Path
 from typing import Any
 
-__all__ = ["LOCK", "fresh_cache", "jit", "jit_cached", "jit_globals", "sources_digest"]
+__all__ = [
+    "LOCK",
+    "compiled",
+    "fresh_cache",
+    "jit",
+    "jit_cached",
+    "jit_globals",
+    "sources_digest",
+]
 
 #: Held while helpers are swapped (re-entrant: a module's first use may reach another's).
 LOCK = threading.RLock()
@@ -101,3 +112,25 @@ def jit_globals(namespace: MutableMapping[str, Any], names: Iterable[str], **opt
                 namespace[name], cached = jit_cached(namespace[name], **options)
                 on_disk = on_disk and cached
     return on_disk
+
+
+def compiled(
+    namespace: MutableMapping[str, Any],
+    kernels: str | tuple[str, ...],
+    helpers: Iterable[str] = (),
+    before: Iterable[Callable[[], Any]] = (),
+) -> Any:
+    """A kernel module's ``_compiled()`` (which caches it): its functions ``kernels`` (names in
+    ``namespace``, the module's ``globals()``) compiled by :func:`jit`, after each of
+    ``before`` is called (other modules' helpers swapped where these kernels look them up) and
+    ``helpers`` are swapped (:func:`jit_globals`); the plain Python functions where numba is not
+    installed. One function for one name, else a tuple in the order of ``kernels``."""
+    names = (kernels,) if isinstance(kernels, str) else tuple(kernels)
+    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
+        out = tuple(namespace[name] for name in names)
+    else:
+        for step in before:
+            step()
+        jit_globals(namespace, helpers)
+        out = tuple(jit(namespace[name]) for name in names)
+    return out[0] if isinstance(kernels, str) else out

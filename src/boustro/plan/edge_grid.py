@@ -20,13 +20,12 @@ from __future__ import annotations
 
 import math
 from functools import cache
-from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .._jit import jit, jit_globals
+from .._jit import compiled
 from .visibility_kernel import _contact, _near_edge, jit_into
 
 __all__ = ["EdgeGrid"]
@@ -83,11 +82,9 @@ def _grid_near(p, e1, e2, n_edges, r, tiny, x0, y0, inv, nx, ny, start, items, s
 
 @cache
 def _compiled() -> Any:
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _grid_crossings, _grid_near
-    jit_into(globals())
-    jit_globals(globals(), ("_cell",))
-    return jit(_grid_crossings), jit(_grid_near)
+    return compiled(
+        globals(), ("_grid_crossings", "_grid_near"), ("_cell",), [lambda: jit_into(globals())]
+    )
 
 
 class EdgeGrid:

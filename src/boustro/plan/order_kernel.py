@@ -12,13 +12,12 @@ from __future__ import annotations
 
 import math
 from functools import cache
-from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .._jit import jit, jit_globals
+from .._jit import compiled
 
 __all__ = ["improve_lanes", "improve_order"]
 
@@ -71,10 +70,7 @@ def _two_opt(order, best, budget, fixed, start, dist, entry, exit_, internal, n_
 
 @cache
 def _compiled() -> Any:
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _two_opt
-    jit_globals(globals(), ("_cost",))
-    return jit(_two_opt)
+    return compiled(globals(), "_two_opt", ("_cost",))
 
 
 def improve_order(
@@ -226,12 +222,8 @@ def _lane_search(seq, flip, fixed, dist, budget):
 
 @cache
 def _compiled_lanes() -> Any:
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _lane_search
-    jit_globals(
-        globals(), ("_en", "_ex", "_d", "_reverse", "_two_opt_lanes", "_or_opt_lanes", "_move")
-    )
-    return jit(_lane_search)
+    helpers = ("_en", "_ex", "_d", "_reverse", "_two_opt_lanes", "_or_opt_lanes", "_move")
+    return compiled(globals(), "_lane_search", helpers)
 
 
 def improve_lanes(

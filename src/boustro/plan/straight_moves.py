@@ -22,13 +22,12 @@ from __future__ import annotations
 
 import math
 from functools import cache
-from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .._jit import jit
+from .._jit import compiled
 from ..geometry.polygon import _cross
 
 __all__ = ["straight_moves"]
@@ -134,9 +133,7 @@ def _edge_tests(p, r, rn, pos, e1, s, snorm, tol, seg, par, near):
 
 @cache
 def _compiled() -> Any:
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _edge_tests
-    return jit(_edge_tests)
+    return compiled(globals(), "_edge_tests")
 
 
 def _tests(

@@ -15,13 +15,12 @@ from __future__ import annotations
 import itertools
 import math
 from functools import cache
-from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .._jit import jit
+from .._jit import compiled
 from ..errors import InvalidParameterError
 
 __all__ = ["EXACT_TOUR_PASSES", "exact_nodes"]
@@ -70,9 +69,7 @@ def _held_karp(n, bit, first, move):
 @cache
 def _compiled() -> Any:
     """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _held_karp
-    return jit(_held_karp)
+    return compiled(globals(), "_held_karp")
 
 
 def exact_nodes(

@@ -17,13 +17,12 @@ from __future__ import annotations
 import math
 from collections.abc import MutableMapping
 from functools import cache
-from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .._jit import jit, jit_globals
+from .._jit import compiled, jit_globals
 
 __all__ = ["DENSE_EDGES", "HELPERS", "jit_into", "points_near", "segment_crossings"]
 
@@ -112,10 +111,7 @@ def _near(p, e1, e2, n_edges, r, tiny, out):
 
 @cache
 def _compiled() -> Any:
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _crossings, _near
-    jit_globals(globals(), HELPERS)
-    return jit(_crossings), jit(_near)
+    return compiled(globals(), ("_crossings", "_near"), HELPERS)
 
 
 def jit_into(namespace: MutableMapping[str, Any]) -> None:

@@ -18,13 +18,12 @@ quantities the certified bounds need (:mod:`boustro.optimize.cover.bounds`). Wit
 from __future__ import annotations
 
 from functools import cache
-from importlib.util import find_spec
 from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._jit import jit, jit_globals
+from ..._jit import compiled
 from .band_lines import (
     _band_intervals,
     _count_pieces,
@@ -332,12 +331,8 @@ def _all(
 @cache
 def _compiled() -> Any:
     """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _all
-    jit_into(globals())
-    jit_globals(globals(), ("_rigid_cuts", "_hole_extents", "_split_gaps", "_split_pieces",
-                            "_leaf"))  # fmt: skip
-    return jit(_all)
+    helpers = ("_rigid_cuts", "_hole_extents", "_split_gaps", "_split_pieces", "_leaf")
+    return compiled(globals(), "_all", helpers, [lambda: jit_into(globals())])
 
 
 def band_stats(

@@ -40,13 +40,12 @@ from __future__ import annotations
 
 import math
 from functools import cache
-from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._jit import jit
+from ..._jit import compiled
 from .bands import BandStats
 from .cost import CoverCost
 
@@ -134,9 +133,7 @@ def _ends(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, holes, k0, s, 
 @cache
 def _compiled() -> Any:
     """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _ends
-    return jit(_ends)
+    return compiled(globals(), "_ends")
 
 
 def lane_end_bound(

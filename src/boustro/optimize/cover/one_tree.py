@@ -52,13 +52,12 @@ from __future__ import annotations
 
 import math
 from functools import cache
-from importlib.util import find_spec
 from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._jit import jit, jit_globals
+from ..._jit import compiled
 from .bands import BandStats
 from .cost import CoverCost
 from .extremes import line_extremes
@@ -341,23 +340,9 @@ class Multipliers(NamedTuple):
 @cache
 def _compiled() -> Any:
     """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _bounds
-    jit_globals(
-        globals(),
-        (
-            "_orient",
-            "_crosses",
-            "_to_range",
-            "_detour",
-            "_lane_ends",
-            "_distances",
-            "_one_tree",
-            "_load",
-            "_store",
-        ),
-    )
-    return jit(_bounds)
+    helpers = ("_orient", "_crosses", "_to_range", "_detour", "_lane_ends", "_distances",
+               "_one_tree", "_load", "_store")  # fmt: skip
+    return compiled(globals(), "_bounds", helpers)
 
 
 def one_tree_bound(

@@ -44,13 +44,12 @@ from __future__ import annotations
 
 import math
 from functools import cache
-from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._jit import jit, jit_globals
+from ..._jit import compiled
 from .bands import BandStats
 from .cost import CoverCost
 
@@ -151,10 +150,7 @@ def _charges(count, out_lo, in_lo, in_hi, out_hi, first_hi, last_lo, pieces, s, 
 @cache
 def _compiled() -> Any:
     """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _charges
-    jit_globals(globals(), ("_gap",))
-    return jit(_charges)
+    return compiled(globals(), "_charges", ("_gap",))
 
 
 def piece_end_bound(st: BandStats, spacing: float, cost: CoverCost) -> NDArray[np.float64]:

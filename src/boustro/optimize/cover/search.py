@@ -94,8 +94,22 @@ SPLIT_GAPS = True
 #: ``"boxes"`` also which boxes it keeps, ``"all"`` also the layouts' bounds (docs/mission_time.md,
 #: "Keep-inside: moves on top of passes").
 MOVES_DECIDE = "certificate"
+#: The values :data:`MOVES_DECIDE` may take.
+MOVES_DECIDE_VALUES = ("certificate", "boxes", "all")
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
+
+
+def moves_decide() -> str:
+    """:data:`MOVES_DECIDE`, read where a keep-inside search decides by it; a value not in
+    :data:`MOVES_DECIDE_VALUES` raises :class:`InvalidParameterError` (rather than silently
+    deciding as ``"boxes"``)."""
+    if MOVES_DECIDE not in MOVES_DECIDE_VALUES:
+        raise InvalidParameterError(
+            f"search.MOVES_DECIDE must be one of {', '.join(map(repr, MOVES_DECIDE_VALUES))}, "
+            f"got {MOVES_DECIDE!r}"
+        )
+    return MOVES_DECIDE
 
 
 class CoverSearch:
@@ -238,7 +252,7 @@ class CoverSearch:
         ends = None if span_only else self._hole_boxes(boxes.theta, boxes.d, 0.0)
         rank = None
         if self.keep_inside:  # the bound, and the value that ranks the layouts (inside_bound)
-            decide = MOVES_DECIDE == "all" and self.moves_on_passes
+            decide = moves_decide() == "all" and self.moves_on_passes
             tight: list[NDArray[np.float64]] | None = [] if decide else None
             out, rank = self._inside(
                 lv, st, 0.0, 0.0, boxes.theta, boxes.d, np.zeros(len(boxes.d)), ranking=True,
@@ -322,7 +336,7 @@ class CoverSearch:
                     tight=cert,
                 )  # fmt: skip
                 if cert is not None:
-                    if self.tight is out and MOVES_DECIDE == "certificate":
+                    if self.tight is out and moves_decide() == "certificate":
                         self.tight = out.copy()
                     self.tight[sel] = cert[0]
                 continue

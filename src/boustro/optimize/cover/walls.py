@@ -12,8 +12,9 @@ point of its boundary too (a simple ring lies on the far side there).
 
 The walls of a ring are the edges and the inner diagonals of the ring *inset* by
 :data:`WALL_INSET` of the set's extent (shapely's mitred ``buffer(-inset)`` of the hole, each
-segment checked to lie inside the hole itself), the :data:`WALLS_PER_RING` longest; the ring
-itself where the inset leaves nothing. Inset, because a lane cut at a hole ends on its ring: a
+segment checked to lie inside the hole itself), the :data:`WALLS_PER_RING` longest (listed in shells
+of decreasing length, not all ``n^2`` pairs: :func:`_ring_walls`); the ring itself where the
+inset leaves nothing. Inset, because a lane cut at a hole ends on its ring: a
 move between the two lanes a hole splits (its chord through the hole) meets the ring's own
 edges only at its ends, which is no proper crossing (:func:`~.one_tree._crosses` needs room), so
 with the ring's own edges a triangular hole gave no detour at all (twelfth round: random area 0
@@ -38,6 +39,7 @@ farther than ``outside`` from the shells).
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -75,30 +77,109 @@ def _inset_rings(poly: Any, inset: float) -> list[NDArray[np.float64]]:
     return [np.asarray(g.exterior.coords)[:-1] for g in parts]
 
 
-def _ring_walls(poly: Any, inset: float, per_ring: int, far: Any = None) -> list[Any]:
-    """The ``per_ring`` longest segments between the vertices of ``poly``'s ring inset by
-    ``inset`` that lie inside ``poly`` (and, with ``far = (geometry, distance)``, farther than
-    ``distance`` from ``geometry``, measured exactly)."""
-    from shapely import LineString, covered_by, prepare
+def _projections(ring: NDArray[np.float64]) -> list[tuple[NDArray[np.intp], NDArray[np.float64]]]:
+    """Per direction of :data:`_DIRECTIONS` (angles ``k pi / K``): the vertices' order along it
+    and their sorted projections."""
+    out = []
+    for k in range(_DIRECTIONS):
+        angle = k * math.pi / _DIRECTIONS
+        p = ring[:, 0] * math.cos(angle) + ring[:, 1] * math.sin(angle)
+        order = np.argsort(p, kind="stable")
+        out.append((order, p[order]))
+    return out
 
-    prepare(poly)
-    kept: list[Any] = []
-    for ring in _inset_rings(poly, inset):
-        i, j = np.triu_indices(len(ring), 1)
+
+def _starts(proj: list[tuple[NDArray[np.intp], NDArray[np.float64]]], least: float) -> list:
+    """Per direction, each sorted vertex's first partner at least ``least cos(pi / (2 K))``
+    further along it: a pair ``|v| >= least`` apart lies within ``pi / (2 K)`` of one of the
+    ``K`` directions, so its projections on it differ by at least that (less a billionth: the
+    rounding's room)."""
+    gap = least * math.cos(math.pi / (2 * _DIRECTIONS)) * (1 - 1e-9)
+    return [np.searchsorted(ps, ps + gap, side="left") for _, ps in proj]
+
+
+def _pairs(
+    proj: list[tuple[NDArray[np.intp], NDArray[np.float64]]], starts: list
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """``(i, j)``, ``i < j``, once each: the pairs :func:`_starts` lists (each vertex with the
+    suffix of its direction's order from its start), every pair at least ``least`` apart among
+    them."""
+    m = len(proj[0][0])
+    keys = []
+    for (order, _), start in zip(proj, starts, strict=True):
+        count = m - start
+        lo = np.repeat(np.arange(m), count)
+        hi = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count) + start[lo]
+        a, b = order[lo], order[hi]
+        keys.append(np.minimum(a, b) * m + np.maximum(a, b))
+    key = np.unique(np.concatenate(keys))
+    return key // m, key % m
+
+
+#: Directions of the projections (:func:`_starts`).
+_DIRECTIONS = 8
+#: The pairs listed by the first shell of :func:`_ring_walls`, and the growth of each next one.
+_FIRST_SHELL, _GROWTH = 256, 4
+
+
+def _shell_pairs(
+    ring: NDArray[np.float64], proj: list, above: float, total: int
+) -> tuple[float, NDArray[np.intp], NDArray[np.intp]]:
+    """``(least, i, j)``: a length below ``above`` whose pairs :func:`_starts` lists number
+    about ``total`` (bisected), and those pairs; ``least = 0`` and every pair where about as
+    many as every pair would be listed."""
+    m = len(ring)
+    if total >= m * (m - 1) // 2:
+        i, j = np.triu_indices(m, 1)
+        return 0.0, i, j
+    lo, hi = 0.0, min(above, float(np.hypot(*np.ptp(ring, axis=0))))
+    for _ in range(40):  # the largest length listing at least `total` pairs
+        mid = 0.5 * (lo + hi)
+        if sum(m * m - int(st.sum()) for st in _starts(proj, mid)) >= total:
+            lo = mid
+        else:
+            hi = mid
+    if lo <= 0:
+        i, j = np.triu_indices(m, 1)
+        return 0.0, i, j
+    i, j = _pairs(proj, _starts(proj, lo))
+    return lo, i, j
+
+
+def _ring_walls(
+    ring: NDArray[np.float64], poly: Any, per_ring: int, far: Any = None
+) -> list[NDArray[np.float64]]:
+    """The ``per_ring`` longest segments between vertices of ``ring`` covered by ``poly`` (and,
+    with ``far = (geometry, distance)``, farther than ``distance`` from ``geometry``, measured
+    exactly) (longest first; equal lengths in the order of ``np.triu_indices``). The pairs are taken
+    in shells of decreasing length (:func:`_shell_pairs`, each sorted and tested in order),
+    about :data:`_FIRST_SHELL` pairs first and :data:`_GROWTH` times more each time: the same
+    walls as sorting every pair, without listing the ``n^2`` pairs of a traced hole."""
+    from shapely import covered_by, distance, linestrings
+
+    m, want = len(ring), max(per_ring, 1)  # at least one, as the sort of every pair kept
+    proj = _projections(ring)
+    kept: list[NDArray[np.float64]] = []
+    above, total = math.inf, _FIRST_SHELL
+    while True:
+        least, i, j = _shell_pairs(ring, proj, above, total)
         seg = np.concatenate([ring[i], ring[j]], axis=1)
         length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
-        found = 0
-        for k in np.argsort(-length):
-            line = LineString([seg[k, :2], seg[k, 2:]])
-            if not covered_by(line, poly):  # inside the hole (the pocket)
-                continue
-            if far is not None and not line.distance(far[0]) > far[1]:
-                continue
-            kept.append(seg[k])
-            found += 1
-            if found >= per_ring:
-                break
-    return kept
+        shell = (length >= least) & (length < above)
+        index = (i * m - i * (i + 1) // 2 + j - i - 1)[shell]  # the pair's place in triu order
+        seg = seg[shell][np.lexsort((index, -length[shell]))]
+        at, batch = 0, want
+        while at < len(seg) and len(kept) < want:  # tested in order, in growing batches
+            part = seg[at : at + batch]
+            lines = linestrings(part.reshape(-1, 2, 2))
+            ok = covered_by(lines, poly)
+            if far is not None:
+                ok &= distance(lines, far[0]) > far[1]
+            kept.extend(part[ok])
+            at, batch = at + batch, 2 * batch
+        if len(kept) >= want or least <= 0:
+            return kept[:want]
+        above, total = least, total * _GROWTH
 
 
 def hole_walls(
@@ -106,8 +187,8 @@ def hole_walls(
 ) -> NDArray[np.float64]:
     """``(W, 4)`` walls ``x1, y1, x2, y2`` inside the hole rings of ``es`` (module docstring):
     per hole, the ``per_ring`` longest segments between the vertices of its ring inset by
-    ``inset`` of the set's extent that lie inside the hole."""
-    from shapely import Polygon
+    ``inset`` of the set's extent that lie inside the hole (:func:`_ring_walls`)."""
+    from shapely import Polygon, prepare
 
     starts = _ring_starts(es)
     ends = np.append(starts[1:], len(es.xy))
@@ -119,7 +200,9 @@ def hole_walls(
         poly: Any = Polygon(es.xy[a:b, :2])
         if not poly.is_valid or poly.area <= 0:
             continue
-        out.extend(_ring_walls(poly, inset * extent, per_ring))
+        prepare(poly)
+        for ring in _inset_rings(poly, inset * extent):
+            out.extend(_ring_walls(ring, poly, per_ring))
     return np.asarray(out, dtype=np.float64).reshape(-1, 4)
 
 
@@ -131,7 +214,7 @@ def shell_walls(
     dilation (shapely's mitred one, which holds the round one), per part the ``per_ring`` longest
     segments between the vertices of its ring inset by ``inset`` of the set's extent that lie
     inside it and, measured exactly, farther than ``outside`` from every outer ring."""
-    from shapely import Polygon, unary_union
+    from shapely import Polygon, prepare, unary_union
 
     if not len(es.xy) or not outside > 0:
         return np.zeros((0, 4))
@@ -153,7 +236,10 @@ def shell_walls(
     for part in getattr(pockets, "geoms", [pockets]):
         if part.is_empty or part.geom_type != "Polygon" or part.area <= 0:
             continue
-        out.extend(_ring_walls(Polygon(part.exterior), inset * extent, per_ring, (body, outside)))
+        poly = Polygon(part.exterior)
+        prepare(poly)
+        for ring in _inset_rings(poly, inset * extent):
+            out.extend(_ring_walls(ring, poly, per_ring, (body, outside)))
     return np.asarray(out, dtype=np.float64).reshape(-1, 4)
 
 

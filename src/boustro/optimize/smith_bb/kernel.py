@@ -23,13 +23,12 @@ from __future__ import annotations
 
 import math
 from functools import cache
-from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._jit import jit, jit_globals
+from ..._jit import compiled
 
 __all__ = ["box_bounds", "eq1_at_angle", "eq1_values", "lines_range"]
 
@@ -241,10 +240,9 @@ def _values(xy, cs, sn, d, s, k0, nb, a, b):
 def _compiled() -> tuple[Any, Any]:
     """``(_bounds, _values)`` compiled by numba (cached on disk), or plain Python without it
     (safe from several threads at once: :func:`boustro._jit.jit_globals`)."""
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _bounds, _values
-    jit_globals(globals(), ("_spans", "_eq1", "_g", "_sup_w", "_sup", "_upper"))
-    return jit(_bounds), jit(_values)
+    return compiled(
+        globals(), ("_bounds", "_values"), ("_spans", "_eq1", "_g", "_sup_w", "_sup", "_upper")
+    )
 
 
 def lines_range(xy: NDArray[np.float64], spacing: float) -> tuple[int, int]:

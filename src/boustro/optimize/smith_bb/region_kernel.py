@@ -32,13 +32,12 @@ from __future__ import annotations
 
 import math
 from functools import cache
-from importlib.util import find_spec
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._jit import jit, jit_globals
+from ..._jit import compiled
 from . import kernel, region_splits, region_strips
 from .kernel import _sup_w, lines_range
 from .region_chains import _chains, chain_bound, edge_lengths, prepare
@@ -354,18 +353,14 @@ def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, n
 @cache
 def _compiled() -> tuple[Any, Any]:
     """``(_bounds, _values)`` compiled by numba (cached on disk), or plain Python without it."""
-    if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
-        return _bounds, _values
-    kernel._compiled()  # _sup_w's own helpers (kernel's _g) compiled where it looks them up
-    prepare()  # and chain_bound's, in .region_chains
-    region_splits.prepare()  # and split_bound's
-    region_strips.prepare()  # and strip_intervals'
+    # first _sup_w's own helpers (kernel's _g) compiled where it looks them up, and those of
+    # chain_bound (.region_chains), split_bound and strip_intervals
+    before = (kernel._compiled, prepare, region_splits.prepare, region_strips.prepare)
     helpers = ("_first_line", "_intervals", "_chains", "edge_lengths", "_count_chains",
                "_chain_counts", "_sup_w", "_owners",
                "_line_segments", "_enumerated", "chain_bound",
                "split_bound", "strip_intervals", "_bound_of", "_bound")  # fmt: skip
-    jit_globals(globals(), helpers)
-    return jit(_bounds), jit(_values)
+    return compiled(globals(), ("_bounds", "_values"), helpers, before)
 
 
 def ring_starts(rings: list[NDArray[np.float64]]) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
