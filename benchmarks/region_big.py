@@ -15,8 +15,10 @@ search doubles its budget while the gap shrinks, up to 8x; an explicit budget is
 
 ``--fractions 10 20 50 100 200 500`` sweeps the spacing instead (issue 21's benchmark against
 spacing): the spacing is the field's diameter over each fraction (``--spacing`` is ignored), one
-row per spacing and budget, with its lines across (diameter / spacing); ``--once`` runs each
-tree once (base, new) instead of base, new, base again.
+row per spacing and budget, with its lines across (diameter / spacing) and the count that
+``region_splits.NODE_LINES`` is compared with (``range``: ``lines_range``, about the
+circumscribed diameter over the spacing, plus 6; above 200 the boxes keep the pooled split
+bound); ``--once`` runs each tree once (base, new) instead of base, new, base again.
 """
 
 from __future__ import annotations
@@ -34,10 +36,12 @@ def _worker(budgets: list[float], n: int, holes: int, spacings: list[float]) -> 
     """Rows of JSON: the first call's CPU, one row per spacing and budget, the peak RSS.
     ``spacings``: user units, or negative for the diameter over ``-spacing``."""
     from boustro.geometry.traced import traced_field
+    from boustro.optimize.smith_bb.kernel import lines_range
     from boustro.optimize.smith_bb.region import smith_bb_region
 
     region = traced_field(n, holes)
     spacings = [s if s > 0 else region.diameter / -s for s in spacings]
+    xy = region.frame.to_normalised(region.vertices)
     t = time.process_time()
     smith_bb_region(region, spacings[0], max_work=1e5)  # compile / load the kernels
     print(json.dumps({"first": time.process_time() - t}), flush=True)
@@ -48,7 +52,8 @@ def _worker(budgets: list[float], n: int, holes: int, spacings: list[float]) -> 
             row = {"budget": budget, "cpu": time.process_time() - t, "gap": res.gap,
                    "upper": res.upper_bound, "fitness": res.fitness, "boxes": res.info["boxes"],
                    "converged": res.info["converged"], "spacing": spacing,
-                   "lines": region.diameter / spacing}  # fmt: skip
+                   "lines": region.diameter / spacing,
+                   "range": lines_range(xy, spacing / region.frame.scale)[1]}  # fmt: skip
             print(json.dumps(row), flush=True)
     # peak resident memory of the whole process (imports, all budgets), kilobytes on Linux
     print(json.dumps({"rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}), flush=True)
@@ -87,14 +92,14 @@ def main() -> None:
     rss = {k: v.pop()["rss"] / 1024 for k, v in runs.items() if k != "base2" or not args.once}
     print(f"peak RSS of a process (all budgets): base {max(rss['base'], rss.get('base2', 0)):.0f} "
           f"MB, new {rss['new']:.0f} MB")  # fmt: skip
-    print(f"{'spacing':>8} {'lines':>6} {'budget':>8} {'base gap':>9} {'new gap':>9} "
+    print(f"{'spacing':>8} {'lines':>6} {'range':>6} {'budget':>8} {'base gap':>9} {'new gap':>9} "
           f"{'base ub':>8} {'new ub':>8} {'base fit':>9} {'new fit':>9} {'base s':>7} "
           f"{'new s':>7} {'boxes':>13} certified")  # fmt: skip
     for base, base2, new in zip(runs["base"][1:], runs["base2"][1:], runs["new"][1:], strict=True):
         cpu = min(base["cpu"], base2["cpu"])
         label = f"{new['budget']:>8.0e}" if new["budget"] else " default"
-        print(f"{new['spacing']:>8.3g} {new['lines']:>6.0f} {label} {base['gap']:>9.2e} "
-              f"{new['gap']:>9.2e} {base['upper']:>8.4f} {new['upper']:>8.4f} "
+        print(f"{new['spacing']:>8.3g} {new['lines']:>6.0f} {new['range']:>6} {label} "
+              f"{base['gap']:>9.2e} {new['gap']:>9.2e} {base['upper']:>8.4f} {new['upper']:>8.4f} "
               f"{base['fitness']:>9.5f} {new['fitness']:>9.5f} {cpu:>7.2f} {new['cpu']:>7.2f} "
               f"{base['boxes']:>6}/{new['boxes']:<6} "
               f"{base['converged']}/{new['converged']}")  # fmt: skip

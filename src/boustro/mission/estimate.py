@@ -106,7 +106,9 @@ KEEP_INSIDE_FACTOR = 2.0
 #: ``(c, kappa, gamma)``: the doublings of the certified region search's budget
 #: (``"region-certified"``): ``(REGION_EXTEND - 1) c L^kappa n^gamma`` seconds more. A search
 #: whose gap keeps shrinking at its budget doubles it, up to
-#: :data:`~boustro.optimize.smith_bb.region.REGION_EXTEND` times (8), and its boxes cost more
+#: :data:`~boustro.optimize.smith_bb.region.REGION_EXTEND` times (8; 16,
+#: ``REGION_EXTEND_POOLED``, where its boxes keep the pooled split bound, as in the fit's runs
+#: at 2-4 m: the fitted ``c`` holds that, the 8 is only a scale), and its boxes cost more
 #: with more lines (the strips and the split choices are per line; the budget counts edges): on
 #: a large noisy area at a fine spacing the search spends its whole extended budget (issue 21's
 #: field, 2120 vertices, at 3 m: the row alone said 7.2 s, ``plan_area`` took 48.6 s, 33.8 s

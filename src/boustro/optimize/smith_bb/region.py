@@ -27,10 +27,8 @@ from ..cover.sandwich import Sandwich
 from ..cover.search import SIMPLIFY_EDGES, SIMPLIFY_SPACING
 from ..region_grid import evaluate_region_grid
 from ..result import OptimizeResult
-from .kernel import lines_range
 from .region_chains import near_margin
-from .region_kernel import region_bounds, region_values, ring_starts
-from .region_splits import split_nodes
+from .region_kernel import region_bounds, region_nodes, region_values, ring_starts
 from .search import DEFAULT_TOL, SEED_ANGLES, _check, _check_angles, _Search, _weights, solve
 
 __all__ = [
@@ -282,7 +280,7 @@ def smith_bb_region(
     n_angles = _check_angles(n_angles)
     search = _RegionSearch(r, spacing, a, b)
     search.tol = tol
-    pooled = split_nodes(lines_range(search.real[0], search.s)[1]) == 0
+    pooled = region_nodes(search.real[0], search.s) == 0
     extend = 1.0 if hard else (REGION_EXTEND_POOLED if pooled else REGION_EXTEND)
     boxes = initial_boxes(search.s, search.radius, n_angles)
     for angle, offset in incumbents:

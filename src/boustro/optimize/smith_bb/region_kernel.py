@@ -44,7 +44,7 @@ from .region_chains import _chains, chain_bound, edge_lengths, prepare
 from .region_splits import _line_segments, split_bound, split_nodes
 from .region_strips import strip_intervals
 
-__all__ = ["region_bounds", "region_values", "ring_starts"]
+__all__ = ["region_bounds", "region_nodes", "region_values", "ring_starts"]
 
 #: Most split choices enumerated per box (2^gaps), beyond it :func:`.region_splits.split_bound`.
 MAX_CHOICES = 8
@@ -401,9 +401,9 @@ def region_bounds(
     th = np.ascontiguousarray(theta, dtype=np.float64)
     sdelta = np.sin(np.minimum(np.asarray(delta, dtype=np.float64), math.pi / 2))
     eta = eps if eta is None else np.minimum(eta, eps)
-    k0, nb = lines_range(real[0], spacing)  # the lines across the real region
-    nodes = split_nodes(nb)
+    nodes = region_nodes(real[0], spacing)
     if radius >= 0:  # the lines that a strip of the real region can reach
+        k0, nb = lines_range(real[0], spacing)
         cd = np.sqrt(np.maximum(1.0 - sdelta * sdelta, 1e-300))
         half = float(np.max((radius * (1 - cd) + eta + radius * sdelta) / cd, initial=0.0))
         grow = math.ceil(half / spacing) + 1
@@ -418,6 +418,13 @@ def region_bounds(
               float(spacing), np.ascontiguousarray(eps, dtype=np.float64), k0, nb, float(a),
               float(b), float(tiny), float(margin), float(cut), BOUND_SLACK,
               float(radius), nodes)  # fmt: skip
+
+
+def region_nodes(real_xy: NDArray[np.float64], spacing: float) -> int:
+    """The nodes of the split choices' branch and bound in every box of the region of edges
+    ``real_xy`` (normalised frame) at ``spacing`` (same units):
+    :func:`.region_splits.split_nodes` of the lines across it (0: the pooled bound)."""
+    return split_nodes(lines_range(real_xy, spacing)[1])
 
 
 def region_values(
