@@ -11,7 +11,6 @@ pulled tight in the area like any other."""
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -29,46 +28,40 @@ _NEAREST = 16
 def to_domains(
     router: Any, pa: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
-    """Each anchored point's nearest point of a domain of ``router`` if in sight, else the
-    nearer of its nearest domain vertex in sight and the end of its :func:`walk_to_domain`;
-    the domain (``-1``: none reached) and the length of that leg (of the walk for a walk)."""
+    """Each anchored point's nearest point of a domain of ``router`` if in sight, else its
+    nearest domain vertex in sight, else the end of its :func:`walk_to_domain`; the domain
+    (``-1``: none reached) and the length of that leg (of the walk for a walk).
+
+    A walk is taken only where no domain vertex is in sight: preferring a walk shorter than
+    the leg to a visible vertex made the moves of issue 21's 400-vertex keep-inside field
+    126 m longer (a walk's end can lie farther from where the move goes)."""
     domains = router._domains
     pd, which = nearest_in(domains, pa)
     ok = router._visible_many(pa, pd)
     which = np.where(ok, which, -1)
-    leg = np.linalg.norm(pd - pa, axis=1)
     blocked = np.flatnonzero(~ok)
-    if not len(blocked):
-        return pd, which, leg
-    # the nearest point is hidden (a dent): the walk, unless a domain vertex nearer than the
-    # walk's length is in sight
-    walks = [walk_to_domain(router, pa[i]) for i in blocked]
-    bound = np.array([math.inf if w is None else _length(w[0]) for w in walks])
-    v = np.concatenate([d.vertices for d in domains])
-    owner = np.repeat(np.arange(len(domains)), [len(d.vertices) for d in domains])
-    dist = np.linalg.norm(pa[blocked, None] - v[None], axis=-1)
-    near = np.argsort(dist, axis=1)
-    seen = np.zeros(len(blocked), dtype=bool)
-    left = np.arange(len(blocked))
-    for k in range(0, len(v), _NEAREST):  # nearest vertices first, a batch at a time
-        cand = near[left, k : k + _NEAREST]  # (B, <= _NEAREST), by distance
-        nearer = np.take_along_axis(dist[left], cand, axis=1) < bound[left, None]
-        a = np.repeat(pa[blocked[left]], cand.shape[1], axis=0)
-        vis = router._visible_many(a, v[cand.ravel()]).reshape(cand.shape) & nearer
-        hit = vis.any(axis=1)
-        first = cand[np.arange(len(left)), np.argmax(vis, axis=1)]
-        pd[blocked[left[hit]]] = v[first[hit]]
-        which[blocked[left[hit]]] = owner[first[hit]]
-        seen[left[hit]] = True
-        left = left[~hit & nearer[:, -1]]  # points with nearer vertices still to try
-        if not len(left):
-            break
-    leg[blocked] = np.linalg.norm(pd[blocked] - pa[blocked], axis=1)
-    for j in np.flatnonzero(~seen):  # no domain vertex in sight nearer than the walk
-        walk = walks[j]
+    if len(blocked):  # the nearest point is hidden (a dent): the nearest visible vertex
+        v = np.concatenate([d.vertices for d in domains])
+        sizes = [len(d.vertices) for d in domains]
+        owner = np.repeat(np.arange(len(domains)), sizes)
+        near = np.argsort(np.linalg.norm(pa[blocked, None] - v[None], axis=-1), axis=1)
+        left = np.arange(len(blocked))
+        for k in range(0, len(v), _NEAREST):  # nearest vertices first, a batch at a time
+            cand = near[left, k : k + _NEAREST]  # (B, <= _NEAREST), by distance
+            a = np.repeat(pa[blocked[left]], cand.shape[1], axis=0)
+            vis = router._visible_many(a, v[cand.ravel()]).reshape(cand.shape)
+            hit = vis.any(axis=1)
+            first = cand[np.arange(len(left)), np.argmax(vis, axis=1)]
+            pd[blocked[left[hit]]] = v[first[hit]]
+            which[blocked[left[hit]]] = owner[first[hit]]
+            left = left[~hit]
+            if not len(left):
+                break
+    leg = np.linalg.norm(pd - pa, axis=1)
+    for i in np.flatnonzero(which < 0):  # no domain vertex in sight: along the boundary
+        walk = walk_to_domain(router, pa[i])
         if walk is not None:
-            i = blocked[j]
-            pd[i], which[i], leg[i] = walk[0][-1], walk[1], bound[j]
+            pd[i], which[i], leg[i] = walk[0][-1], walk[1], _length(walk[0])
     return pd, which, leg
 
 
