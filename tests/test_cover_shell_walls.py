@@ -12,15 +12,18 @@ import numpy as np
 import pytest
 import shapely
 
+import boustro.mission.cover as cover_module
 import boustro.optimize.cover.bounds as bounds_module
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region
+from boustro.mission import plan_area
 from boustro.mission.cover import OUTSIDE_FACTOR, _outside
 from boustro.optimize.cover import CoverCost
 from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.search import CoverSearch
 from boustro.optimize.cover.walls import shell_walls
 from boustro.plan.routing import Router
+from boustro.vehicle import Vehicle
 
 from .conftest import random_regions
 from .plan_samples import SPACING, bounds_and_plans, plan_cost, sample_boxes, scaled
@@ -132,3 +135,42 @@ def test_no_shell_walls_where_a_plan_may_leave_the_area_farther():
     assert _outside(options, False, None) == pytest.approx(7.0 * OUTSIDE_FACTOR)
     assert _outside(options, True, None) is None
     assert _outside(options, False, lambda plan: plan) is None
+
+
+class _Searched(Exception):
+    """Raised by the stand-in search once it has seen its keywords."""
+
+
+@pytest.mark.parametrize(
+    "kw, given",
+    [
+        ({}, True),
+        ({"vehicle": Vehicle(turn_radius=6.0)}, False),
+        ({"headland": 1}, False),
+        ({"keep_inside": True}, False),
+    ],
+)
+def test_plan_area_gives_the_search_the_distance_only_without_turns_headland_or_keep_inside(
+    kw, given, monkeypatch
+):
+    """What ``plan_area`` (time objective, one grid) passes the search as ``outside``: reach
+    plus run-in times :data:`OUTSIDE_FACTOR` on its own; nothing with a vehicle's turns,
+    headland passes or keep-inside (their paths may lie farther out: a wall there would cut
+    moves the plan flies)."""
+    seen: list[object] = []
+
+    def search(*args, **kwargs):
+        seen.append(kwargs.get("outside"))
+        raise _Searched
+
+    monkeypatch.setattr(cover_module, "cover_optimum", search)
+    ring = [(0, 0), (160, 0), (160, 120), (110, 120), (95, 50), (80, 120), (0, 120)]
+    with pytest.raises(_Searched):
+        plan_area(
+            ring, 10.0, crs=None, speed=5.0, turn_time=10.0, turnaround=3.0, decompose=False,
+            **kw,
+        )  # fmt: skip
+    if given:
+        assert seen == [pytest.approx(OUTSIDE_FACTOR * (5.0 + 3.0))]
+    else:
+        assert seen == [None]
