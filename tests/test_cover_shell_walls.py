@@ -22,6 +22,7 @@ from boustro.optimize.cover import CoverCost
 from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.search import CoverSearch
 from boustro.optimize.cover.walls import shell_walls
+from boustro.plan.region import plan_region
 from boustro.plan.routing import Router
 from boustro.vehicle import Vehicle
 
@@ -174,3 +175,49 @@ def test_plan_area_gives_the_search_the_distance_only_without_turns_headland_or_
         assert seen == [pytest.approx(OUTSIDE_FACTOR * (5.0 + 3.0))]
     else:
         assert seen == [None]
+
+
+def _farthest(path: np.ndarray, body) -> float:
+    """How far from ``body`` (shapely) the polyline ``path`` lies, sampled every 1 cm."""
+    line = shapely.segmentize(shapely.LineString(path), 0.01)
+    return float(shapely.distance(body, shapely.points(shapely.get_coordinates(line))).max())
+
+
+def test_straight_moves_pass_outside_beyond_the_reach_but_within_the_factor():
+    """The router's straight moves over a V notch (sampled every sixteenth of its reach) pass
+    farther than the reach from the area between the samples (up to 1/32 beyond it), never
+    farther than :data:`OUTSIDE_FACTOR` times it: a factor of 1 would put walls where plans
+    fly."""
+    ring = [(0, 0), (100, 0), (100, 100), (54, 100), (50, 96), (46, 100), (0, 100)]
+    v_notch = Region(Polygon(ring))
+    body = shapely.Polygon(v_notch.shell.vertices)
+    reach = 4.5
+    router = Router(v_notch, reach=reach)
+    rng = np.random.default_rng(0)
+    farthest = 0.0
+    for _ in range(400):
+        p = np.array([rng.uniform(30, 46), rng.uniform(96, 100 + reach)])
+        q = np.array([rng.uniform(54, 70), rng.uniform(96, 100 + reach)])
+        route = router.path(p, q)
+        if route.straight and route.found:
+            farthest = max(farthest, _farthest(route.points, body))
+    assert reach * 1.01 < farthest <= OUTSIDE_FACTOR * reach
+
+
+@pytest.mark.parametrize("reach, turnaround", [(4.5, 0.0), (6.0, 3.0), (4.5, 12.0)])
+def test_real_plans_lie_within_the_distance_plan_cover_gives(reach, turnaround):
+    """Real plans (lanes, run-ins and run-outs, routed and straight moves, hole passes) of
+    random layouts on the notched field, a thin slot and a random concave area with holes lie
+    within ``OUTSIDE_FACTOR * (reach + run-in)`` of the shell: the premise of the shell's
+    walls."""
+    slot = Region(Polygon([(0, 0), (100, 0), (100, 100), (52, 100), (52, 20), (48, 20),
+                           (48, 100), (0, 100)]))  # fmt: skip
+    rng = np.random.default_rng(int(reach + turnaround))
+    for region in (NOTCHES, slot, scaled(random_regions(77, 1, n_holes=(1, 2))[0], 160.0)):
+        body = shapely.Polygon(region.shell.vertices)
+        for _ in range(3):
+            plan = plan_region(
+                region, SPACING, decompose_area=False, angle=float(rng.uniform(0, math.pi)),
+                offset=float(rng.uniform(0, SPACING)), turnaround=turnaround, reach=reach,
+            )  # fmt: skip
+            assert _farthest(plan.waypoints, body) <= OUTSIDE_FACTOR * (reach + turnaround)
