@@ -12,15 +12,19 @@ import numpy as np
 import pytest
 import shapely
 
+import boustro.mission.cover as cover_module
 import boustro.optimize.cover.bounds as bounds_module
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region
+from boustro.mission import plan_area
 from boustro.mission.cover import OUTSIDE_FACTOR, _outside
 from boustro.optimize.cover import CoverCost
 from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.search import CoverSearch
 from boustro.optimize.cover.walls import shell_walls
+from boustro.plan.region import plan_region
 from boustro.plan.routing import Router
+from boustro.vehicle import Vehicle
 
 from .conftest import random_regions
 from .plan_samples import SPACING, bounds_and_plans, plan_cost, sample_boxes, scaled
@@ -132,3 +136,88 @@ def test_no_shell_walls_where_a_plan_may_leave_the_area_farther():
     assert _outside(options, False, None) == pytest.approx(7.0 * OUTSIDE_FACTOR)
     assert _outside(options, True, None) is None
     assert _outside(options, False, lambda plan: plan) is None
+
+
+class _Searched(Exception):
+    """Raised by the stand-in search once it has seen its keywords."""
+
+
+@pytest.mark.parametrize(
+    "kw, given",
+    [
+        ({}, True),
+        ({"vehicle": Vehicle(turn_radius=6.0)}, False),
+        ({"headland": 1}, False),
+        ({"keep_inside": True}, False),
+    ],
+)
+def test_plan_area_gives_the_search_the_distance_only_without_turns_headland_or_keep_inside(
+    kw, given, monkeypatch
+):
+    """What ``plan_area`` (time objective, one grid) passes the search as ``outside``: reach
+    plus run-in times :data:`OUTSIDE_FACTOR` on its own; nothing with a vehicle's turns,
+    headland passes or keep-inside (their paths may lie farther out: a wall there would cut
+    moves the plan flies)."""
+    seen: list[object] = []
+
+    def search(*args, **kwargs):
+        seen.append(kwargs.get("outside"))
+        raise _Searched
+
+    monkeypatch.setattr(cover_module, "cover_optimum", search)
+    ring = [(0, 0), (160, 0), (160, 120), (110, 120), (95, 50), (80, 120), (0, 120)]
+    with pytest.raises(_Searched):
+        plan_area(
+            ring, 10.0, crs=None, speed=5.0, turn_time=10.0, turnaround=3.0, decompose=False,
+            **kw,
+        )  # fmt: skip
+    if given:
+        assert seen == [pytest.approx(OUTSIDE_FACTOR * (5.0 + 3.0))]
+    else:
+        assert seen == [None]
+
+
+def _farthest(path: np.ndarray, body) -> float:
+    """How far from ``body`` (shapely) the polyline ``path`` lies, sampled every 1 cm."""
+    line = shapely.segmentize(shapely.LineString(path), 0.01)
+    return float(shapely.distance(body, shapely.points(shapely.get_coordinates(line))).max())
+
+
+def test_straight_moves_pass_outside_beyond_the_reach_but_within_the_factor():
+    """The router's straight moves over a V notch (sampled every sixteenth of its reach) pass
+    farther than the reach from the area between the samples (up to 1/32 beyond it), never
+    farther than :data:`OUTSIDE_FACTOR` times it: a factor of 1 would put walls where plans
+    fly."""
+    ring = [(0, 0), (100, 0), (100, 100), (54, 100), (50, 96), (46, 100), (0, 100)]
+    v_notch = Region(Polygon(ring))
+    body = shapely.Polygon(v_notch.shell.vertices)
+    reach = 4.5
+    router = Router(v_notch, reach=reach)
+    rng = np.random.default_rng(0)
+    farthest = 0.0
+    for _ in range(400):
+        p = np.array([rng.uniform(30, 46), rng.uniform(96, 100 + reach)])
+        q = np.array([rng.uniform(54, 70), rng.uniform(96, 100 + reach)])
+        route = router.path(p, q)
+        if route.straight and route.found:
+            farthest = max(farthest, _farthest(route.points, body))
+    assert reach * 1.01 < farthest <= OUTSIDE_FACTOR * reach
+
+
+@pytest.mark.parametrize("reach, turnaround", [(4.5, 0.0), (6.0, 3.0), (4.5, 12.0)])
+def test_real_plans_lie_within_the_distance_plan_cover_gives(reach, turnaround):
+    """Real plans (lanes, run-ins and run-outs, routed and straight moves, hole passes) of
+    random layouts on the notched field, a thin slot and a random concave area with holes lie
+    within ``OUTSIDE_FACTOR * (reach + run-in)`` of the shell: the premise of the shell's
+    walls."""
+    slot = Region(Polygon([(0, 0), (100, 0), (100, 100), (52, 100), (52, 20), (48, 20),
+                           (48, 100), (0, 100)]))  # fmt: skip
+    rng = np.random.default_rng(int(reach + turnaround))
+    for region in (NOTCHES, slot, scaled(random_regions(77, 1, n_holes=(1, 2))[0], 160.0)):
+        body = shapely.Polygon(region.shell.vertices)
+        for _ in range(3):
+            plan = plan_region(
+                region, SPACING, decompose_area=False, angle=float(rng.uniform(0, math.pi)),
+                offset=float(rng.uniform(0, SPACING)), turnaround=turnaround, reach=reach,
+            )  # fmt: skip
+            assert _farthest(plan.waypoints, body) <= OUTSIDE_FACTOR * (reach + turnaround)

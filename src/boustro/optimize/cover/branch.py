@@ -28,6 +28,7 @@ __all__ = [
     "Limits",
     "branch_and_bound",
     "certifying",
+    "discard_at",
     "retire_at",
     "take_multipliers",
 ]
@@ -101,10 +102,16 @@ def take_multipliers(mult: Multipliers | None, index: NDArray[Any]) -> Multiplie
     return Multipliers(mult.values[index], mult.warm[index], mult.k0)
 
 
+def discard_at(best: float, lim: Limits) -> float:
+    """The discard value: a box whose bound is at or above it cannot beat the best plan
+    ``best`` by more than ``rtol`` (cost units)."""
+    return best - lim.rtol * abs(best)
+
+
 def certifying(best: float, model_min: float, lim: Limits) -> bool:
     """Whether boxes are only discarded (:data:`CERTIFY_FIRST`): the lowest model less
     :data:`CERTIFY_SHARE` of its distance to the best plan is at or above the discard value."""
-    discard = best - lim.rtol * abs(best)
+    discard = discard_at(best, lim)
     return CERTIFY_FIRST and model_min - CERTIFY_SHARE * max(best - model_min, 0.0) >= discard
 
 
@@ -123,7 +130,7 @@ def retire_at(
     value leaves the certificate's floor there (unless :data:`REOPEN` brings it back),
     uncertified however far the others go (Fields2Cover's ``test1.xml``: boxes settled at
     3987.54 s, where the plan of 3991.70 s certifies at 3987.70 s)."""
-    discard = best - lim.rtol * abs(best)
+    discard = discard_at(best, lim)
     unavoidable = SETTLE_SHARE * max(best - model_min, 0.0)
     if certifying(best, model_min, lim):
         return np.full(len(points), discard)
@@ -193,7 +200,7 @@ def branch_and_bound(
             search.deferred.append(later)
         done = ~keep & ~search.skipped
         if REOPEN:  # settled or resolved below the discard value: back once certifying
-            low_done = done & (bounds < best - lim.rtol * abs(best))
+            low_done = done & (bounds < discard_at(best, lim))
             if low_done.any():
                 retired.append((boxes.take(low_done), bounds[low_done], tight[low_done],
                                 take_multipliers(mult, low_done)))  # fmt: skip

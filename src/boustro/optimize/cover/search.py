@@ -212,8 +212,8 @@ class CoverSearch:
     def _walls(
         self, lv: Level, theta: NDArray[np.float64], d: NDArray[np.float64], eps: float = 0.0
     ) -> NDArray[np.float64] | None:
-        """The walls inside ``lv``'s outer holes in the layouts' frames, where the 1-tree bound
-        is computed."""
+        """The walls inside ``lv``'s outer holes (and in its shells' pockets, with ``outside``)
+        in the layouts' frames, where the 1-tree bound is computed."""
         if self._tour_below(eps) is None:
             return None
         return self.walls.frames(lv.outer, theta, d, self.origin)

@@ -262,9 +262,10 @@ def walls_in_frames(
 
 
 class WallCache:
-    """The walls of each sandwich level (:func:`hole_walls` of its outer set), computed once per
-    level of a search: the levels are cached, so their arrays (the keys, by identity, kept
-    alive here) live as long as the search."""
+    """The walls of each sandwich level (:func:`hole_walls` of its outer set, and with
+    ``outside`` its :func:`shell_walls`), computed once per level of a search: the levels are
+    cached, so their arrays (the keys, by identity, kept alive here) live as long as the
+    search."""
 
     def __init__(self, outside: float | None = None) -> None:
         self._walls: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
