@@ -159,6 +159,67 @@ def test_a_test_point_within_its_depth_of_a_box_keeps_no_sample():
     assert kept.tolist() == [False, True] * 4
 
 
+def _dense_uncovered(points, lanes, across, grow):
+    """margin_floor._uncovered's predicate, every point against every lane."""
+    free = np.ones(len(points), dtype=bool)
+    for ls in lanes:
+        u = np.array([math.cos(ls.angle), math.sin(ls.angle)])
+        n = np.array([-u[1], u[0]])
+        t, c = (points - ls.origin) @ u, (points - ls.origin) @ n
+        hit = (
+            (np.abs(c[:, None] - ls.c[None, :]) <= across)
+            & (t[:, None] >= ls.t0[None, :] - grow)
+            & (t[:, None] <= ls.t1[None, :] + grow)
+        ).any(axis=1)
+        free &= ~hit
+    return free
+
+
+def _random_lanes(rng, count, angle):
+    """``count`` lanes on 40 lines at ``angle``, some lines with two, in no order."""
+    k = rng.integers(-20, 20, count)
+    t0 = rng.uniform(-50, 40, count)
+    t1 = t0 + rng.uniform(0.5, 30, count)
+    return Lanes(angle, rng.uniform(-5, 5, 2), k, 0.3 + 9.0 * k, t0, t1, frozenset())
+
+
+def test_the_boxes_test_of_the_lanes_near_each_point_is_the_test_of_all():
+    rng = np.random.default_rng(8)
+    for _ in range(20):
+        lanes = [_random_lanes(rng, 60, rng.uniform(0, math.pi)) for _ in range(2)]
+        across, grow = rng.uniform(4.5, 12), rng.uniform(0, 1)
+        pts = rng.uniform(-60, 60, (500, 2))
+        # points on the grown boxes' sides and ends (in the first lanes' frame)
+        ls = lanes[0]
+        u = np.array([math.cos(ls.angle), math.sin(ls.angle)])
+        n = np.array([-u[1], u[0]])
+        mid = ((ls.t0 + ls.t1) / 2)[:, None] * u
+        left = ls.origin + (ls.c + across)[:, None] * n + mid
+        right = ls.origin + (ls.c - across)[:, None] * n + mid
+        end = ls.origin + ls.c[:, None] * n + (ls.t1 + grow)[:, None] * u
+        pts = np.concatenate([pts, left, right, end])
+        want = _dense_uncovered(pts, lanes, across, grow)
+        assert np.array_equal(margin_floor._uncovered(pts, lanes, across, grow), want)
+        assert 0 < want.sum() < len(pts)
+
+
+def test_the_boxes_test_takes_memory_of_points_plus_lanes():
+    # 4000 points against 4000 lanes: 128 MB each of the all-pairs test's arrays
+    import tracemalloc
+
+    rng = np.random.default_rng(9)
+    k = np.arange(4000)
+    lanes = [Lanes(0.1, np.zeros(2), k, 9.0 * k, np.zeros(4000), np.full(4000, 50.0), frozenset())]
+    pts = np.stack([rng.uniform(-10, 60, 4000), rng.uniform(0, 36000, 4000)], axis=1)
+    tracemalloc.start()
+    try:
+        margin_floor._uncovered(pts, lanes, 4.68, 0.18)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 16e6, peak
+
+
 def test_the_area_rule_gives_no_floor_where_a_kept_piece_is_not_sure():
     region = Region([(0, 0), (100, 0), (100, 100), (0, 100)])
     cut = [
