@@ -11,7 +11,7 @@ import numpy as np
 from boustro.geometry.region import Region
 from boustro.plan import inside, margin_floor
 from boustro.plan.contour import _contour_arcs
-from boustro.plan.lanes import region_lanes
+from boustro.plan.lanes import Lanes, region_lanes
 
 from .plan_samples import SPACING, inside_areas
 
@@ -100,7 +100,8 @@ def test_the_test_points_lie_within_reach_of_their_samples_and_deep_enough(monke
         [(0, 0), (200, 0), (200, 60), (100, 20), (0, 60)], [[(20, 10), (40, 10), (30, 20)]]
     )
     geo = inside._Geometry(region, SPACING)
-    monkeypatch.setattr(margin_floor, "ALONG", (-2.0, -0.5, 0.0, 0.5, 2.0))  # some too far
+    # some too far; some between reach + step and reach + 2 step (a check a step too loose)
+    monkeypatch.setattr(margin_floor, "ALONG", tuple(np.linspace(-1.5, 1.5, 61)))
     tests = margin_floor.test_points(geo.target, geo.contour.rings, SPACING, REACH)
     import shapely
 
@@ -112,6 +113,111 @@ def test_the_test_points_lie_within_reach_of_their_samples_and_deep_enough(monke
         depth = shapely.distance(shapely.points(t.points), boundary)
         assert np.all(depth >= margin_floor.DEPTH * SPACING)
         assert np.all(shapely.contains_xy(geo.target, t.points[:, 0], t.points[:, 1]))
+
+
+def test_the_disks_of_uncovered_test_points_miss_every_footprint():
+    # the argument's step: a test point the boxes test calls uncovered has its disk (radius
+    # DEPTH spacings) outside the lanes' footprints (inside._lane_footprint, as the residual)
+    import shapely
+
+    depth = margin_floor.DEPTH * SPACING
+    near = 0
+    for region, lanes in _cases():
+        tol = 1e-9 * region.diameter
+        cut = [inside.clip_lanes(ls, region, tol, 0.0, SPACING) for ls in lanes]
+        cut = [ls for ls in cut if len(ls.k)]
+        segments = np.concatenate([ls.segments for ls in cut])
+        angles = np.concatenate([np.full(len(ls.k), ls.angle) for ls in cut])
+        foot = inside._lane_footprint(segments, angles, region.centre, REACH, SPACING)
+        geo = inside._geometry(region, SPACING)
+        geo.stretch_floor(cut, REACH)  # its test points built
+        for ring in geo._tests[REACH]:
+            free = margin_floor._uncovered(ring.points, cut, REACH + depth, depth)
+            d = shapely.distance(shapely.points(ring.points), foot)
+            assert np.all(d[free] >= depth * (1 - 1e-9)), d[free].min() / depth
+            assert np.all(d[~free] < 2 * depth)  # covered: in a box grown by the depth
+            near += int(np.sum(free & (d < 2 * depth)))
+    assert near > 0  # some uncovered points lie within two depths of a footprint
+
+
+def test_a_test_point_within_its_depth_of_a_box_keeps_no_sample():
+    # one lane along x, 100 long, reach 5; spacing 10: test points' depth 0.2. Each pair: a
+    # point inside the box grown by the depth (across, past either end), then one outside
+    lane = Lanes(
+        0.0,
+        np.zeros(2),
+        np.array([0]),
+        np.array([0.0]),
+        np.array([0.0]),
+        np.array([100.0]),
+        frozenset(),
+    )
+    pts = [(50, 5.1), (50, 5.3), (50, -5.1), (50, -5.3), (100.1, 0), (100.3, 0)]
+    pts += [(-0.1, 1), (-0.3, 1)]
+    tests = [margin_floor.RingTests(np.array(pts, dtype=float), np.arange(8), 8, 1.0)]
+    kept = margin_floor.kept_samples(tests, [lane], 5.0, 10.0)[0]
+    assert kept.tolist() == [False, True] * 4
+
+
+def _dense_uncovered(points, lanes, across, grow):
+    """margin_floor._uncovered's predicate, every point against every lane."""
+    free = np.ones(len(points), dtype=bool)
+    for ls in lanes:
+        u = np.array([math.cos(ls.angle), math.sin(ls.angle)])
+        n = np.array([-u[1], u[0]])
+        t, c = (points - ls.origin) @ u, (points - ls.origin) @ n
+        hit = (
+            (np.abs(c[:, None] - ls.c[None, :]) <= across)
+            & (t[:, None] >= ls.t0[None, :] - grow)
+            & (t[:, None] <= ls.t1[None, :] + grow)
+        ).any(axis=1)
+        free &= ~hit
+    return free
+
+
+def _random_lanes(rng, count, angle):
+    """``count`` lanes on 40 lines at ``angle``, some lines with two, in no order."""
+    k = rng.integers(-20, 20, count)
+    t0 = rng.uniform(-50, 40, count)
+    t1 = t0 + rng.uniform(0.5, 30, count)
+    return Lanes(angle, rng.uniform(-5, 5, 2), k, 0.3 + 9.0 * k, t0, t1, frozenset())
+
+
+def test_the_boxes_test_of_the_lanes_near_each_point_is_the_test_of_all():
+    rng = np.random.default_rng(8)
+    for _ in range(20):
+        lanes = [_random_lanes(rng, 60, rng.uniform(0, math.pi)) for _ in range(2)]
+        across, grow = rng.uniform(4.5, 12), rng.uniform(0, 1)
+        pts = rng.uniform(-60, 60, (500, 2))
+        # points on the grown boxes' sides and ends (in the first lanes' frame)
+        ls = lanes[0]
+        u = np.array([math.cos(ls.angle), math.sin(ls.angle)])
+        n = np.array([-u[1], u[0]])
+        mid = ((ls.t0 + ls.t1) / 2)[:, None] * u
+        left = ls.origin + (ls.c + across)[:, None] * n + mid
+        right = ls.origin + (ls.c - across)[:, None] * n + mid
+        end = ls.origin + ls.c[:, None] * n + (ls.t1 + grow)[:, None] * u
+        pts = np.concatenate([pts, left, right, end])
+        want = _dense_uncovered(pts, lanes, across, grow)
+        assert np.array_equal(margin_floor._uncovered(pts, lanes, across, grow), want)
+        assert 0 < want.sum() < len(pts)
+
+
+def test_the_boxes_test_takes_memory_of_points_plus_lanes():
+    # 4000 points against 4000 lanes: 128 MB each of the all-pairs test's arrays
+    import tracemalloc
+
+    rng = np.random.default_rng(9)
+    k = np.arange(4000)
+    lanes = [Lanes(0.1, np.zeros(2), k, 9.0 * k, np.zeros(4000), np.full(4000, 50.0), frozenset())]
+    pts = np.stack([rng.uniform(-10, 60, 4000), rng.uniform(0, 36000, 4000)], axis=1)
+    tracemalloc.start()
+    try:
+        margin_floor._uncovered(pts, lanes, 4.68, 0.18)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 16e6, peak
 
 
 def test_the_area_rule_gives_no_floor_where_a_kept_piece_is_not_sure():

@@ -117,8 +117,8 @@ class _Geometry:
     def stretch_floor(self, lanes: list[Lanes], reach: float) -> tuple[float, int]:
         """A floor of the length of the contour stretches the residual of the cut ``lanes``
         keeps (:func:`~boustro.plan.margin_floor.stretch_floor`; its test points built once
-        per reach), and at most how many points those stretches hold (each ring's points and
-        two per sample: the stretches are disjoint, at most one per two samples)."""
+        per reach), and at most how many points those stretches hold (per ring: its points, and
+        two ends per stretch, the stretches disjoint and at most one per two samples; plus 2)."""
         import shapely
 
         perimeter = float(shapely.length(self.target))

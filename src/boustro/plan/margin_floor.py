@@ -140,18 +140,33 @@ def _uncovered(
     points: NDArray[np.float64], lanes: list[Lanes], across: float, grow: float
 ) -> NDArray[np.bool_]:
     """Whether each point lies outside every lane's box grown to ``across`` either side of the
-    lane and ``grow`` past its ends (in the lane's own frame)."""
+    lane and ``grow`` past its ends (in the lane's own frame). Each point is tested against the
+    lanes whose lines lie within ``across`` of it only (found by sorting the lines: a few per
+    point), not against all: memory and time grow with points plus lanes, not their product
+    (a 6 km field at 5 m spacing: 2 GB per layout tested against all)."""
     free = np.ones(len(points), dtype=bool)
     for ls in lanes:
-        if not len(ls.k):
+        idx = np.flatnonzero(free)
+        if not len(ls.k) or not len(idx):
             continue
         u, n = _frame(ls.angle)
-        rel = points[free] - ls.origin
+        rel = points[idx] - ls.origin
         t, c = rel @ u, rel @ n
+        order = np.argsort(ls.c, kind="stable")
+        lines = ls.c[order]
+        # every lane within across of a point, and perhaps a few more (the window is widened
+        # past rounding): the exact test below decides
+        room = across * (1 + 1e-6) + 1e-9 * np.abs(c)
+        lo = np.searchsorted(lines, c - room, side="left")
+        hi = np.searchsorted(lines, c + room, side="right")
+        counts = hi - lo
+        which = np.repeat(np.arange(len(idx)), counts)
+        first = np.repeat(np.cumsum(counts) - counts, counts)
+        lane = order[np.repeat(lo, counts) + np.arange(len(which)) - first]
         hit = (
-            (np.abs(c[:, None] - ls.c[None, :]) <= across)
-            & (t[:, None] >= ls.t0[None, :] - grow)
-            & (t[:, None] <= ls.t1[None, :] + grow)
-        ).any(axis=1)
-        free[np.flatnonzero(free)[hit]] = False
+            (np.abs(c[which] - ls.c[lane]) <= across)
+            & (t[which] >= ls.t0[lane] - grow)
+            & (t[which] <= ls.t1[lane] + grow)
+        )
+        free[idx[which[hit]]] = False
     return free
