@@ -11,9 +11,12 @@ import shapely
 
 from boustro.cli import main
 from boustro.errors import InvalidParameterError
+from boustro.geometry.region import Region
 from boustro.io import embedded_field
 from boustro.io.formats import write_mission
 from boustro.mission import plan_area
+from boustro.plan import headland
+from boustro.plan.routing import Router
 from boustro.sensors import Swath
 from boustro.vehicle import Vehicle
 
@@ -258,3 +261,59 @@ def test_headland_mission_read_by_pymavlink(tmp_path):
     assert n == len(mission.waypoints) + 1 or n == len(mission.waypoints) + 2
     got = np.array([[loader.wp(i).y, loader.wp(i).x] for i in range(n - len(mission.waypoints), n)])
     np.testing.assert_allclose(got, mission.waypoints_lonlat, atol=1e-9, rtol=0)
+
+
+def _traced(n: int = 3000, a: float = 250.0, b: float = 150.0, noise: float = 0.3) -> np.ndarray:
+    """A traced boundary: an ellipse whose radius walks randomly, 0.3 m of noise per vertex at
+    about 0.7 m spacing (the exploratory test's field, 500 x 300 m, 3000 vertices)."""
+    rng = np.random.default_rng(3)
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    r = 1 + 0.01 * rng.standard_normal(n).cumsum() / 10
+    x = a * np.cos(t) * r + noise * rng.standard_normal(n)
+    y = b * np.sin(t) * r + noise * rng.standard_normal(n)
+    poly = shapely.Polygon(np.c_[x, y])
+    poly = poly if poly.is_valid else poly.buffer(0)
+    return np.asarray(poly.exterior.coords)[:-1]
+
+
+def test_headland_on_a_traced_boundary_is_about_its_rings_length():
+    # Spikes into every corner of the band farther than reach made 32.7 km of headland around
+    # this field's 1.3 km ring; now the spikes reach only as far as the noise's corners need.
+    mission = plan_area(_traced(), 15.0, crs=None, headland=1, angle=0.0)
+    _check(mission, 1)
+    plan = mission.plan
+    rings = headland.headland_rings(plan.region, plan.spacing, 1)
+    ring = sum(shapely.LineString(r).length for rs in rings for r in rs)
+    assert mission.summary()["headland_length_m"] < 1.6 * ring
+
+
+@pytest.mark.parametrize("passes", [1, 2])
+@pytest.mark.parametrize("name", ["square", "L", "traced"])
+def test_spikes_cover_the_band_without_the_gap_passes(name, passes):
+    # The rings and their spikes alone cover the whole field less the inner field (the gap
+    # passes are only the guarantee): measured with swaths of 64 segments per quarter circle.
+    ring = {"square": np.asarray(SQUARE, float), "L": np.asarray(L_FIELD, float)}.get(name)
+    field = Region(_traced(1200, 100.0, 60.0) if ring is None else ring, [])
+    spacing, reach = 10.0, 5.0
+    router = Router(field, reach=0.0)
+    rings = headland.headland_rings(field, spacing, passes)
+    driven = []
+    for k, rs in enumerate(rings):
+        outer = headland._offset(field, k * spacing)
+        inner = headland._offset(field, (k + 0.5) * spacing)
+        driven += headland._spikes(outer, inner, rs, reach, spacing, router)
+    swaths = shapely.buffer([shapely.LineString(d) for d in driven], reach, quad_segs=64)
+    inner = headland._offset(field, (passes - headland._OVERLAP) * spacing)
+    whole = headland._shapely_region(field)
+    assert whole.difference(shapely.union_all([*swaths, inner])).area <= 1e-9 * whole.area
+    assert all(whole.buffer(1e-7).covers(shapely.LineString(d)) for d in driven)
+
+
+def test_a_spike_stops_a_reach_short_of_the_corner():
+    # A 90-degree corner lies sqrt(2) * 5 m from the pass at 10 m: its spike is that less
+    # 0.99 reach long, driven there and back, one per corner.
+    mission = plan_area(SQUARE, 10.0, crs=None, headland=1, angle=0.0)
+    _check(mission, 1)
+    spike = 2**0.5 * 5.0 - (1 - headland._SHORT) * 5.0
+    ring = 2 * (110 + 80)
+    assert mission.summary()["headland_length_m"] == pytest.approx(ring + 4 * 2 * spike)
