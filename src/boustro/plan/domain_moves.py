@@ -6,8 +6,9 @@ A point in a pocket of the boundary (a slot narrower than the erosion, bent so t
 point is in sight) reaches a domain along the boundary instead (:func:`walk_to_domain`): the
 straight leg to its nearest boundary point stays in the area (the open disc of that radius
 lies inside it), the ring's edges are part of the closed area, and the walk ends at the
-first ring vertex, either way round, that sees its nearest domain point. The move is then
-pulled tight in the area like any other."""
+first ring vertex, either way round, that sees its nearest domain point (if none of that
+ring does, a hole in the pocket, from the next nearest ring whose nearest point is in sight).
+The move is then pulled tight in the area like any other."""
 
 from __future__ import annotations
 
@@ -93,17 +94,29 @@ def walk_to_domain(
 ) -> tuple[NDArray[np.float64], int] | None:
     """``(polyline, domain)``: from ``point`` (in the closed area) straight to its nearest
     boundary point, along that ring to the first vertex, either way round, that sees its
-    nearest domain point, and there; the shorter way. ``None`` if no ring vertex sees one."""
-    best: tuple[float, int, int, NDArray[np.float64]] | None = None
-    rings = router.region.rings
-    for ri, ring in enumerate(rings):
+    nearest domain point, and there; the shorter way. If no vertex of that ring sees one (a
+    hole in the pocket), the same from the next nearest ring whose nearest point ``point``
+    sees. ``None`` if none does."""
+    feet = []
+    for ri, ring in enumerate(router.region.rings):
         foot, dist = pair_feet(np.repeat(point[None], len(ring), 0), ring, np.roll(ring, -1, 0))
         e = int(np.argmin(dist))
-        if best is None or dist[e] < best[0]:
-            best = (float(dist[e]), ri, e, foot[e])
-    assert best is not None
-    _, ri, e, foot = best
-    ring = rings[ri]
+        feet.append((float(dist[e]), ri, e, foot[e]))
+    feet.sort(key=lambda f: f[0])
+    for k, (_, ri, e, foot) in enumerate(feet):
+        if k and not router._visible_many(point[None], foot[None])[0]:
+            continue  # the nearest ring's leg is inside (the open disc); others are tested
+        walk = _walk_ring(router, point, ri, e, foot)
+        if walk is not None:
+            return walk
+    return None
+
+
+def _walk_ring(
+    router: Any, point: NDArray[np.float64], ri: int, e: int, foot: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], int] | None:
+    """:func:`walk_to_domain` along ring ``ri`` from ``foot`` on its edge ``e``."""
+    ring = router.region.rings[ri]
     pd, which, sees = _sights(router)[ri]
     n = len(ring)
     out: tuple[NDArray[np.float64], int] | None = None
@@ -125,15 +138,17 @@ def coarse_path(
     tight in the area; ``None`` if none is found."""
     assert router._coarse is not None
     ends = np.stack([pa, qa])
-    pd, which, leg = router._to_domains(ends)
+    pd, which, _ = router._to_domains(ends)
     if which[0] < 0 or which[0] != which[1]:
         return None
     sub = router._coarse[int(which[0])].path(pd[0], pd[1])
     if not sub.found:
         return None
     lead = [e[None] for e in ends]
-    for i in np.flatnonzero(leg > np.linalg.norm(pd - ends, axis=1) * (1 + 1e-12) + router.tol):
-        walk = walk_to_domain(router, ends[i])  # the leg is a walk along the boundary
+    # a leg out of sight is a walk along the boundary (its length says too little: a walk
+    # past a spike 0.4 mm across the chord is within 1e-9 of the diameter of the chord's)
+    for i in np.flatnonzero(~router._visible_many(ends, pd)):
+        walk = walk_to_domain(router, ends[i])
         assert walk is not None
         lead[i] = walk[0][:-1]
     return pull(router, np.concatenate([lead[0], sub.points, lead[1][::-1]]))
