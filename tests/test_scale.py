@@ -231,6 +231,22 @@ def test_a_walk_as_long_as_its_chord_is_flown_along_the_boundary():
     assert shapely_region(r).buffer(1e-9 * r.diameter).covers(shapely.LineString(route.points))
 
 
+def test_a_pocket_with_its_own_domain_walks_on_to_the_other_ends_domain():
+    # review 2026-11-28: a keep-inside plan of traced_field(5000, 10, seed=1) at 10 m (angle
+    # 0.3, offset 1): this lane end walks to a 3-vertex domain of its own pocket, the contour
+    # point 5 m away is in the main domain: no move found, the straight line 0.07 m outside
+    r = traced_field(5000, 10, seed=1)
+    router = Router(r, reach=0.0)
+    a = np.array([-102.27725465566786, -300.82854576213464])
+    b = np.array([-107.14131232445793, -302.8753504553615])
+    which = router._to_domains(np.stack([a, b]))[1]
+    assert which[0] != which[1]
+    area = shapely_region(r).buffer(1e-9 * r.diameter)
+    for p, q in ((a, b), (b, a)):
+        route = router.path(p, q)
+        assert route.found and area.covers(shapely.LineString(route.points))
+
+
 def test_plan_of_a_traced_field_covers_it_with_no_blocked_move():
     r = traced_field(2000, 10)
     plan = plan_region(r, 10.0, decompose_area=False, angle=0.3, offset=1.0)

@@ -8,7 +8,9 @@ straight leg to its nearest boundary point stays in the area (the open disc of t
 lies inside it), the ring's edges are part of the closed area, and the walk ends at the
 first ring vertex, either way round, that sees its nearest domain point (if none of that
 ring does, a hole in the pocket, from the next nearest ring whose nearest point is in sight).
-The move is then pulled tight in the area like any other."""
+Where the two ends reach different domains (a pocket's own small domain), one end walks on
+to a vertex in sight of the other's. The move is then pulled tight in the area like any
+other."""
 
 from __future__ import annotations
 
@@ -90,13 +92,13 @@ def _sights(router: Any) -> list[tuple[NDArray[np.float64], NDArray[np.int64], N
 
 
 def walk_to_domain(
-    router: Any, point: NDArray[np.float64]
+    router: Any, point: NDArray[np.float64], domain: int | None = None
 ) -> tuple[NDArray[np.float64], int] | None:
     """``(polyline, domain)``: from ``point`` (in the closed area) straight to its nearest
     boundary point, along that ring to the first vertex, either way round, that sees its
     nearest domain point, and there; the shorter way. If no vertex of that ring sees one (a
     hole in the pocket), the same from the next nearest ring whose nearest point ``point``
-    sees. ``None`` if none does."""
+    sees. Only vertices whose nearest domain is ``domain``, if given. ``None`` if none does."""
     feet = []
     for ri, ring in enumerate(router.region.rings):
         foot, dist = pair_feet(np.repeat(point[None], len(ring), 0), ring, np.roll(ring, -1, 0))
@@ -106,18 +108,25 @@ def walk_to_domain(
     for k, (_, ri, e, foot) in enumerate(feet):
         if k and not router._visible_many(point[None], foot[None])[0]:
             continue  # the nearest ring's leg is inside (the open disc); others are tested
-        walk = _walk_ring(router, point, ri, e, foot)
+        walk = _walk_ring(router, point, ri, e, foot, domain)
         if walk is not None:
             return walk
     return None
 
 
 def _walk_ring(
-    router: Any, point: NDArray[np.float64], ri: int, e: int, foot: NDArray[np.float64]
+    router: Any,
+    point: NDArray[np.float64],
+    ri: int,
+    e: int,
+    foot: NDArray[np.float64],
+    domain: int | None,
 ) -> tuple[NDArray[np.float64], int] | None:
     """:func:`walk_to_domain` along ring ``ri`` from ``foot`` on its edge ``e``."""
     ring = router.region.rings[ri]
     pd, which, sees = _sights(router)[ri]
+    if domain is not None:
+        sees = sees & (which == domain)
     n = len(ring)
     out: tuple[NDArray[np.float64], int] | None = None
     for way in (np.arange(e + 1, e + 1 + n) % n, np.arange(e, e - n, -1) % n):
@@ -139,18 +148,27 @@ def coarse_path(
     assert router._coarse is not None
     ends = np.stack([pa, qa])
     pd, which, _ = router._to_domains(ends)
+    pd, which = pd.copy(), which.copy()  # (the router's remembered rows)
+    lead = [e[None] for e in ends]
+    if which[0] != which[1]:  # one end walks on to the other's domain (a pocket's own domain)
+        for i in (0, 1):
+            other = int(which[1 - i])
+            walk = None if other < 0 else walk_to_domain(router, ends[i], other)
+            if walk is not None:
+                lead[i], pd[i], which[i] = walk[0][:-1], walk[0][-1], walk[1]
+                break
     if which[0] < 0 or which[0] != which[1]:
         return None
     sub = router._coarse[int(which[0])].path(pd[0], pd[1])
     if not sub.found:
         return None
-    lead = [e[None] for e in ends]
     # a leg out of sight is a walk along the boundary (its length says too little: a walk
     # past a spike 0.4 mm across the chord is within 1e-9 of the diameter of the chord's)
-    for i in np.flatnonzero(~router._visible_many(ends, pd)):
-        walk = walk_to_domain(router, ends[i])
-        assert walk is not None
-        lead[i] = walk[0][:-1]
+    for k in np.flatnonzero(~router._visible_many(ends, pd)):
+        if len(lead[k]) == 1:
+            walk = walk_to_domain(router, ends[k])
+            assert walk is not None
+            lead[k] = walk[0][:-1]
     return pull(router, np.concatenate([lead[0], sub.points, lead[1][::-1]]))
 
 
