@@ -176,13 +176,14 @@ def test_coarse_router_moves_stay_inside_the_area():
     assert np.all(d >= straight - 1e-9)
 
 
-def _pocket_field():
+def _pocket_field(holes=()):
     """200 x 120 m with a sawtooth south edge (200 teeth: hundreds of reflex vertices, so the
     router routes through inner domains) and, out of its west edge, an L-shaped slot 0.4 m
     wide whose end sees no point of the area eroded by more than 0.2 m."""
     south = [(x, 0.6 * (i % 2)) for i, x in enumerate(np.linspace(0, 200, 401))]
     slot = [(0.0, 60.4), (-3.0, 60.4), (-3.0, 64.0), (-3.4, 64.0), (-3.4, 60.0), (0.0, 60.0)]
-    return Region(Polygon(np.array([*south, (200.0, 120.0), (0.0, 120.0), *slot])))
+    shell = Polygon(np.array([*south, (200.0, 120.0), (0.0, 120.0), *slot]))
+    return Region(shell, [Polygon(np.array(h)) for h in holes])
 
 
 def test_a_move_from_a_pocket_out_of_sight_of_the_domains_stays_inside():
@@ -200,6 +201,50 @@ def test_a_move_from_a_pocket_out_of_sight_of_the_domains_stays_inside():
         np.testing.assert_array_equal(route.points[[0, -1]], [p, q])
     d = router.distances(np.stack([pocket, far]))
     assert np.isfinite(d).all() and d[0, 1] >= route.length - 1e-9  # the walk: not shorter
+
+
+def test_a_pocket_point_nearest_a_hole_in_the_pocket_walks_along_the_shell():
+    # review 2026-11-28: the nearest ring was a 0.1 m hole in the slot, none of whose
+    # vertices sees a domain: no walk, the straight move, 3.1 m outside the area
+    hole = [(-3.25, 63.0), (-3.15, 63.0), (-3.15, 63.2), (-3.25, 63.2)]
+    r = _pocket_field([hole])
+    router = Router(r, reach=0.0)
+    p, far = np.array([-3.2, 63.21]), np.array([150.0, 100.0])
+    route = router.path(p, far)
+    assert route.found and not route.straight
+    assert shapely_region(r).buffer(1e-9 * r.diameter).covers(shapely.LineString(route.points))
+
+
+def test_a_walk_as_long_as_its_chord_is_flown_along_the_boundary():
+    # review 2026-11-28: a keep-inside plan of traced_field(5000, 10) at 10 m (angle 0.3,
+    # offset 1) left the area by 0.22 m, 0.42 mm across a spike of the trace: the walk from
+    # this contour point was within the router's tol as long as its chord, so the chord flew
+    r = traced_field(5000, 10)
+    router = Router(r, reach=0.0)
+    a = np.array([258.95526724414214, 168.09469581723448])
+    b = np.array([249.99846305, 172.91146856])
+    pd, _, leg = router._to_domains(router.anchor(a[None]))
+    assert not router._visible_many(a[None], pd)[0]  # a walk
+    assert leg[0] < np.linalg.norm(pd[0] - a) + router.tol  # as long as its chord
+    route = router.path(a, b)
+    assert route.found
+    assert shapely_region(r).buffer(1e-9 * r.diameter).covers(shapely.LineString(route.points))
+
+
+def test_a_pocket_with_its_own_domain_walks_on_to_the_other_ends_domain():
+    # review 2026-11-28: a keep-inside plan of traced_field(5000, 10, seed=1) at 10 m (angle
+    # 0.3, offset 1): this lane end walks to a 3-vertex domain of its own pocket, the contour
+    # point 5 m away is in the main domain: no move found, the straight line 0.07 m outside
+    r = traced_field(5000, 10, seed=1)
+    router = Router(r, reach=0.0)
+    a = np.array([-102.27725465566786, -300.82854576213464])
+    b = np.array([-107.14131232445793, -302.8753504553615])
+    which = router._to_domains(np.stack([a, b]))[1]
+    assert which[0] != which[1]
+    area = shapely_region(r).buffer(1e-9 * r.diameter)
+    for p, q in ((a, b), (b, a)):
+        route = router.path(p, q)
+        assert route.found and area.covers(shapely.LineString(route.points))
 
 
 def test_plan_of_a_traced_field_covers_it_with_no_blocked_move():

@@ -330,9 +330,9 @@ class Router:
     def _to_domains(
         self, pa: NDArray[np.float64]
     ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
-        """Each anchored point's nearest point of a domain, the domain (``-1``: none reached
-        by a straight move inside the area) and the length of that leg; each point's answer
-        computed once (:meth:`_rows`)."""
+        """Each anchored point's domain point, its domain (``-1``: none reached) and the
+        length of the leg there (:func:`~boustro.plan.domain_moves.to_domains`: straight, or
+        a walk along the boundary); each point's answer computed once (:meth:`_rows`)."""
         pd, which, leg = self._rows("domains", pa, self._to_domains_now)
         return pd, which, leg
 
