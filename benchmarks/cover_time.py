@@ -17,10 +17,9 @@ today's, and the ratio of the warm times is printed with whether both found the 
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import subprocess
-import sys
+
+from _child import run_child
 
 SRC = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "src")
 
@@ -57,15 +56,7 @@ CASES = (("traced", 0.0), ("traced", 6.0), ("100-gon", 0.0), ("100-gon", 6.0))
 
 
 def _run(src: str, field: str, radius: float) -> dict:
-    env = {**os.environ, "PYTHONPATH": src}
-    out = subprocess.run(
-        [sys.executable, "-c", _CASE, field, str(radius)],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    return run_child(src, _CASE, field, str(radius))
 
 
 def main() -> None:

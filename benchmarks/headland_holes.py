@@ -16,10 +16,9 @@ of this tree's CPU times to the baseline's.
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import subprocess
-import sys
+
+from _child import run_child
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SRC = os.path.join(os.path.dirname(HERE), "src")
@@ -51,15 +50,7 @@ print(json.dumps(dict(cpu=cpu, headland=spent[0], covered=m.coverage.covered_sha
 
 
 def run(src: str, n: int) -> dict:
-    env = dict(os.environ, PYTHONPATH=src)
-    out = subprocess.run(
-        [sys.executable, "-c", CHILD.format(n=n)],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    return run_child(src, CHILD.format(n=n))
 
 
 def main() -> None:

@@ -20,10 +20,10 @@ once before the timed run (numba's cache, shapely's first calls).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import subprocess
-import sys
+
+from _child import run_child
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SRC = os.path.join(os.path.dirname(HERE), "src")
@@ -87,15 +87,7 @@ print(json.dumps(dict(cpu=spent[-1], headland_m=s["headland_length_m"], ring_m=r
 
 
 def run(src: str, name: str, data: str, spacing: float, passes: int) -> dict:
-    env = dict(os.environ, PYTHONPATH=src)
-    out = subprocess.run(
-        [sys.executable, "-c", CHILD.format(name=name, data=data, spacing=spacing, passes=passes)],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    return run_child(src, CHILD.format(name=name, data=data, spacing=spacing, passes=passes))
 
 
 def main() -> None:
