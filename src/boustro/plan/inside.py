@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._memo import bytes_key, remember
 from ..geometry.region import Region
 from .cells import _frame
 from .contour import Contour, _contour_arcs, _corner_spurs, _lines, _pieces, contour_of
@@ -161,12 +162,7 @@ def _geometry(area: Region, spacing: float) -> _Geometry:
     rings = [area.shell.vertices, *(h.vertices for h in area.holes)]
     key = b"|".join(np.ascontiguousarray(v, dtype=np.float64).tobytes() for v in rings)
     key += np.float64(spacing).tobytes()
-    geo = _GEOMETRIES.get(key)
-    if geo is None:
-        if len(_GEOMETRIES) >= AREA_CACHE:
-            _GEOMETRIES.pop(next(iter(_GEOMETRIES)))
-        geo = _GEOMETRIES[key] = _Geometry(area, spacing)
-    return geo
+    return remember(_GEOMETRIES, key, AREA_CACHE, lambda: _Geometry(area, spacing))
 
 
 def clip_lanes(
@@ -493,13 +489,8 @@ def inside_layout(
         k = np.asarray(ls.k, dtype=np.int64)
         parts += [head.tobytes(), k.tobytes(), *(x.tobytes() for x in cols), cut.tobytes()]
     parts.append(np.array([spacing, reach], dtype=np.float64).tobytes())
-    key = b"|".join(p + len(p).to_bytes(8, "little") for p in parts)
-    hit = _LAYOUTS.get(key)
-    if hit is None:
-        hit = _inside_layout(area, lanes, spacing, reach)
-        if len(_LAYOUTS) >= LAYOUT_CACHE:
-            _LAYOUTS.pop(next(iter(_LAYOUTS)))
-        _LAYOUTS[key] = hit
+    make = lambda: _inside_layout(area, lanes, spacing, reach)  # noqa: E731
+    hit = remember(_LAYOUTS, bytes_key(parts), LAYOUT_CACHE, make)
     return list(hit[0]), list(hit[1]), hit[2]
 
 

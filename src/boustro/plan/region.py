@@ -12,6 +12,7 @@ from typing import Any, Literal, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._memo import bytes_key, remember
 from ..errors import InvalidParameterError, InvalidPolygonError, NoTransectError
 from ..geometry import Polygon
 from ..geometry.region import Region, as_region
@@ -393,15 +394,7 @@ def _region_lanes(
     parts = [np.ascontiguousarray(v, dtype=np.float64).tobytes() for v in rings]
     numbers = [len(cell.holes), len(holes), opts.spacing, angle, offset, opts.reach]
     parts.append(np.array(numbers, dtype=np.float64).tobytes())
-    key = b"|".join(p + len(p).to_bytes(8, "little") for p in parts)
-    key += opts.layout.encode()
-    hit = _LANES.get(key)
-    if hit is None:
-        hit = lay()
-        if len(_LANES) >= LANES_CACHE:
-            _LANES.pop(next(iter(_LANES)))
-        _LANES[key] = hit
-    return hit
+    return remember(_LANES, bytes_key(parts) + opts.layout.encode(), LANES_CACHE, lay)
 
 
 # -- step 4: tour -----------------------------------------------------------------------------
