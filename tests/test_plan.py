@@ -286,3 +286,23 @@ def test_plan_module_is_core():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == ""
+
+
+def test_overlap_share_counts_a_boundary_pass_once_along_its_length():
+    # A disc of radius 100 m planned with --keep-inside, its boundary traced with 40 and with 400
+    # vertices: the boundary passes sweep nearly the same band, so the overlap share must not grow
+    # with the vertices (buffering each short edge alone counted the round ends overlapping at
+    # every joint: 0.40 and 3.10 where both are 0.10).
+    from boustro.plan import plan_region
+    from boustro.regions import Region
+
+    shares = []
+    for n in (40, 400):
+        a = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        plan = plan_region(Region(np.c_[100 * np.cos(a), 100 * np.sin(a)]), 10.0, keep_inside=True)
+        assert "boundary" in plan.role()
+        cov = coverage(plan)
+        assert cov.covered_share == pytest.approx(1.0, abs=1e-9)
+        shares.append(cov.overlap_share)
+    assert 0.0 < shares[0] < 0.2
+    assert shares[1] == pytest.approx(shares[0], abs=0.01)

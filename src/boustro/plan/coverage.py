@@ -61,7 +61,9 @@ class Coverage:
         covered_area: area of (region ∩ union of footprints).
         covered_share: ``covered_area / area`` (1.0 for a guaranteed plan, to rounding; capped
             at 1 where rounding would exceed it).
-        swept_area: sum of the footprints' areas.
+        swept_area: sum of the footprints' areas: the lanes' rectangles, and along each pass
+            ``2 reach`` times its length plus one round cap (a pass counted once along its
+            length, not once per edge).
         overlap_share: ``(swept_area - covered_area) / area``: footprint area spent outside the
             region or on parts already covered, as a share of the region's area.
     """
@@ -177,8 +179,9 @@ def _aligned_boxes(
 def footprint(plan: Plan) -> tuple[Any, float]:
     """The union of a plan's sensor footprints as a shapely geometry (plan frame), and the sum
     of their areas. Lanes: rectangles (one union per lane direction, built in that direction's
-    frame, see :func:`coverage`); passes around holes: every point within ``reach`` of the pass
-    (the vehicle turns on the spot at the hole's corners with its sensor on)."""
+    frame, see :func:`coverage`); passes around holes and boundary passes: every point within
+    ``reach`` of the pass (the vehicle turns on the spot at the corners with its sensor on),
+    whose swept area is :func:`_passes_swept`."""
     import shapely
 
     origin = plan.polygon.centre
@@ -203,9 +206,22 @@ def footprint(plan: Plan) -> tuple[Any, float]:
     if holes.any():
         lines = shapely.linestrings(plan.transects[holes])
         buffers = shapely.buffer(lines, plan.reach, quad_segs=64)  # round ends, not octagons
-        swept += float(np.sum(shapely.area(buffers)))
+        swept += _passes_swept(plan.transects[holes], plan.reach, plan.spacing)
         parts.append(shapely.union_all(buffers))
     return shapely.union_all(parts), swept
+
+
+def _passes_swept(edges: NDArray[np.float64], reach: float, spacing: float) -> float:
+    """The area the passes' ``(E, 2, 2)`` edges sweep: ``2 reach`` times their length, plus a
+    round cap of ``pi reach^2`` for each pass (an edge that does not start where the previous one
+    ends, within ``1e-9 * spacing``, starts a new pass). A pass's footprint is counted once along
+    its length, not once per edge: buffering every edge of a traced ring alone counts the round
+    ends that overlap at every joint (a 2000-vertex field's overlap share read 1.56 where its
+    lanes and passes overlap by 0.08). For a closed convex ring, ``2 reach L`` is exactly its
+    band's area (Steiner's formula)."""
+    length = float(np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1).sum())
+    breaks = np.abs(edges[1:, 0] - edges[:-1, 1]).max(axis=1) > 1e-9 * spacing
+    return 2.0 * reach * length + math.pi * reach**2 * (1 + int(breaks.sum()))
 
 
 def _coverage_general(plan: Plan, region: Any) -> Coverage:
