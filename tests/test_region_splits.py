@@ -53,7 +53,12 @@ def _choices(search: _RegionSearch, theta: float, delta: float, d: float, eta: f
                                               ist[q + 1], owner, 0, 0, lo, hi, n_fixed)  # fmt: skip
             continue
         extra[q], gaps[q] = cnt[q] // 2 - r, len(own) - r
-        gfree = rk.longest_gap(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], owner, gfree)
+        for o in range(ost[q], ost[q + 1]):
+            left = oa[o]
+            for p in range(ist[q], ist[q + 1]):
+                if owner[p] == o:
+                    gfree, left = max(gfree, pa[p] - left), pb[p]
+            gfree = max(gfree, ob[o] - left)
     return oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, n_fixed, gfree
 
 
@@ -76,9 +81,8 @@ def test_branched_splits_lie_between_the_exact_choices_and_the_relaxation() -> N
                 continue
             pos = np.empty(4 * len(lo) + 8)
             w = np.ones(len(lo))
-            need = np.zeros(nb, dtype=np.int64)
-            args = (oa, ob, ost, pa, pb, ist, owner, extra, need, gaps, nb)
-            exact = rk._enumerated(*args[:9], total, gfree, nb, lo.copy(), hi.copy(), w.copy(),
+            args = (oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb)
+            exact = rk._enumerated(*args[:8], total, gfree, nb, lo.copy(), hi.copy(), w.copy(),
                                    n_fixed, 0.5, 0.5, pos)  # fmt: skip
             relaxed = rk.split_bound(
                 *args, lo.copy(), hi.copy(), w.copy(), n_fixed, gfree, 0.5, 0.5, pos, -math.inf, 0

@@ -27,7 +27,7 @@ from ..cover.sandwich import Sandwich
 from ..cover.search import SIMPLIFY_EDGES, SIMPLIFY_SPACING
 from ..region_grid import evaluate_region_grid
 from ..result import OptimizeResult
-from .region_chains import near_margin, sharp_edges
+from .region_chains import near_margin
 from .region_kernel import region_bounds, region_nodes, region_values, ring_starts
 from .search import DEFAULT_TOL, SEED_ANGLES, _check, _check_angles, _Search, _weights, solve
 
@@ -73,7 +73,6 @@ class _RegionSearch(_Search):
         self.radius = float(np.hypot(self.v[:, 0], self.v[:, 1]).max())
         self.tiny = TINY * max(self.radius, 1e-300)
         self.margin = near_margin(rings, self.tiny)
-        self.sharp = sharp_edges(rings, self.tiny)
         simplify = len(self.xy) > SIMPLIFY_EDGES
         self.sandwich = Sandwich(region, SIMPLIFY_SPACING * spacing if simplify else 0.0)
         self.levels: dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
@@ -101,7 +100,7 @@ class _RegionSearch(_Search):
                 self.real[0][:0], self.real[0][:0], self.real, boxes.theta, boxes.delta,
                 boxes.d, eps * (1 + 1e-9) + 1e-12, self.s, self.a, self.b, self.tiny,
                 boxes.eta * (1 + 1e-9) + 1e-12, self.margin, self.best + self.tol,
-                radius=self.radius * (1 + 1e-12), sharp=self.sharp)  # fmt: skip
+                radius=self.radius * (1 + 1e-12))  # fmt: skip
         radius = level_radius(eps, self.top_eps)
         out = np.empty(len(radius))
         for r in np.unique(radius):

@@ -58,7 +58,6 @@ __all__ = [
     "edge_lengths",
     "near_margin",
     "prepare",
-    "sharp_edges",
 ]
 
 #: Most uncertain lines (``u > r``) of a box for the chain bound.
@@ -443,26 +442,6 @@ def _combine(opt, olo, ohi, ct, cr, cup, lstart, nlines, lo, hi, n_fixed, width,
     return best
 
 
-def _vertex_sines(rings: list[NDArray[np.float64]]) -> NDArray[np.float64]:
-    """Per vertex of the closed ``rings`` (in order): the sine of its angle if acute, else 1."""
-    out = []
-    for r in rings:
-        back = np.roll(r, 1, axis=0) - r
-        ahead = np.roll(r, -1, axis=0) - r
-        cross = np.abs(back[:, 0] * ahead[:, 1] - back[:, 1] * ahead[:, 0])
-        dot = (back * ahead).sum(axis=1)
-        norm = np.hypot(back[:, 0], back[:, 1]) * np.hypot(ahead[:, 0], ahead[:, 1])
-        out.append(np.where(dot > 0.0, cross / np.maximum(norm, 1e-300), 1.0))
-    return np.concatenate(out) if out else np.zeros(0)
-
-
-def _clear(rings: list[NDArray[np.float64]], tiny: float) -> bool:
-    """Whether the region's minimum clearance (GEOS) exceeds ``2 tiny``."""
-    import shapely
-
-    return bool(shapely.minimum_clearance(shapely.Polygon(rings[0], rings[1:])) > 2.0 * tiny)
-
-
 def near_margin(rings: list[NDArray[np.float64]], tiny: float) -> float:
     """How near a vertex a line must pass to cut a segment of length at most ``tiny`` from the
     region of closed ``rings`` (normalised frame), or ``-1`` if that is not known small
@@ -474,31 +453,22 @@ def near_margin(rings: list[NDArray[np.float64]], tiny: float) -> float:
     vertex ``v``, with an angle ``phi`` between them, and both ends lie within
     ``tiny / f`` of ``v`` (``f = sin phi`` if ``phi`` is acute, else 1), so the line passes
     within ``tiny / f`` of ``v``."""
-    if not _clear(rings, tiny):
+    import shapely
+
+    poly = shapely.Polygon(rings[0], rings[1:])
+    if not shapely.minimum_clearance(poly) > 2.0 * tiny:
         return -1.0
-    f = min(1.0, float(_vertex_sines(rings).min(initial=1.0)))
+    f = 1.0
+    for r in rings:
+        back = np.roll(r, 1, axis=0) - r
+        ahead = np.roll(r, -1, axis=0) - r
+        cross = np.abs(back[:, 0] * ahead[:, 1] - back[:, 1] * ahead[:, 0])
+        dot = (back * ahead).sum(axis=1)
+        norm = np.hypot(back[:, 0], back[:, 1]) * np.hypot(ahead[:, 0], ahead[:, 1])
+        sines = np.where(dot > 0.0, cross / np.maximum(norm, 1e-300), 1.0)
+        f = min(f, float(sines.min()))
     margin = 2.0 * tiny / max(f, 1e-300)
     return margin if margin <= MARGIN_CAP else -1.0
-
-
-def sharp_edges(rings: list[NDArray[np.float64]], tiny: float) -> NDArray[np.bool_]:
-    """Per edge of the closed ``rings`` (edge ``i`` from vertex ``i`` to the next, as
-    ``region_kernel.ring_starts``): True where a segment of at most ``tiny`` with an end on it
-    may be cut by a line farther than :data:`MARGIN_CAP` from every vertex (one of its two
-    vertices sharper than :func:`near_margin` allows, or every edge if the region's minimum
-    clearance is not above ``2 tiny``); False where such a layout is one the bounds leave
-    out."""
-    sines = _vertex_sines(rings)
-    if not _clear(rings, tiny):
-        return np.ones(len(sines), dtype=np.bool_)
-    bad = 2.0 * tiny / np.maximum(sines, 1e-300) > MARGIN_CAP
-    out = []
-    start = 0
-    for r in rings:
-        v = bad[start : start + len(r)]
-        out.append(v | np.roll(v, -1))
-        start += len(r)
-    return np.concatenate(out)
 
 
 def prepare() -> None:

@@ -38,12 +38,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._jit import compiled
-from . import kernel, region_forced, region_splits, region_strips
+from . import kernel, region_splits, region_strips
 from .kernel import _sup_w, lines_range
 from .region_chains import _chains, chain_bound, edge_lengths, prepare
-from .region_forced import forced_segments, traversals
 from .region_splits import _line_segments, split_bound, split_nodes
-from .region_strips import strip_intervals, strip_lines
+from .region_strips import strip_intervals
 
 __all__ = ["region_bounds", "region_nodes", "region_values", "ring_starts"]
 
@@ -200,57 +199,37 @@ def _owners(oa, ob, o0, o1, pa, pb, p0, p1, tiny, owner):
     return True
 
 
-def longest_gap(oa, ob, o0, o1, pa, pb, p0, p1, owner, g):
-    """The largest of ``g`` and the gaps of one line: between two pieces of a component, or a
-    component's ends and its pieces (its whole length if it holds none)."""
-    for o in range(o0, o1):
-        left = oa[o]
-        for p in range(p0, p1):
-            if owner[p] == o:
-                g = max(g, pa[p] - left)
-                left = pb[p]
-        g = max(g, ob[o] - left)
-    return g
-
-
-def _bound(in_xy, out_xy, real_xy, rings, ln, sharp, cs, sn, sdelta, eta, d, s, eps, k0, nb, a,
-           b, tiny, margin, cut, pos, radius, nodes):  # fmt: skip
+def _bound(in_xy, out_xy, real_xy, rings, ln, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b,
+           tiny, margin, cut, pos, radius, nodes):  # fmt: skip
     """The bound of one box: from the strips of the real boundary if ``radius >= 0``
     (:mod:`.region_strips`; lengths in ``t``, so ``(a + b) (1 / cos delta - 1) top`` is added,
-    and the cut is lowered by it) with the segments their traversals force
-    (:mod:`.region_forced`; ``sharp``: :func:`.region_chains.sharp_edges`), else from the
-    sandwich ``in_xy, out_xy``."""
+    and the cut is lowered by it), else from the sandwich ``in_xy, out_xy``."""
     if radius >= 0:
         ost, oa, ob, ist, pa, pb = strip_intervals(real_xy, cs, sn, d, s, k0, nb, radius,
                                                    sdelta, eta, KEEP)  # fmt: skip
-        c, half, low, high = strip_lines(d, s, k0, nb, radius, sdelta, eta)
-        fst, flo, fhi = traversals(real_xy, rings, sharp, cs, sn, c, low, high, half.max(), d,
-                                   s, k0, nb)  # fmt: skip
     else:
         ost, oa, ob = _intervals(out_xy, cs, sn, d, s, k0, nb)
         ist, pa, pb = _intervals(in_xy, cs, sn, d, s, k0, nb)
-        fst, flo, fhi = np.zeros(nb + 1, dtype=np.int64), np.empty(0), np.empty(0)
     top = 0.0
     for j in range(oa.shape[0]):
         top = max(top, ob[j] - oa[j])
     if oa.shape[0] == 0:
         return -np.inf
-    if pos.shape[0] < 2 * (pa.shape[0] + flo.shape[0] + 8):
-        pos = np.empty(2 * (pa.shape[0] + flo.shape[0] + 8))
+    if pos.shape[0] < 2 * (pa.shape[0] + 8):
+        pos = np.empty(2 * (pa.shape[0] + 8))
     stretch = 0.0
     if radius >= 0:
         # a layout's lengths are the t-lengths times 1 / cos(alpha): mean and std (the chain
         # bound mixes t-lengths with its own) move by at most (1 / cos(delta) - 1) top each
         stretch = (a + b) * top * (1.0 / math.sqrt(max(1.0 - sdelta * sdelta, 1e-300)) - 1.0)
-    return stretch + _bound_of(oa, ob, ost, pa, pb, ist, fst, flo, fhi, real_xy, rings, ln, cs,
-                               sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny, margin,
-                               cut - stretch, pos, top, nodes)  # fmt: skip
+    return stretch + _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, ln, cs, sn, sdelta, eta,
+                               d, s, eps, k0, nb, a, b, tiny, margin, cut - stretch, pos,
+                               top, nodes)  # fmt: skip
 
 
-def _bound_of(oa, ob, ost, pa, pb, ist, fst, flo, fhi, real_xy, rings, ln, cs, sn, sdelta, eta, d,
-              s, eps, k0, nb, a, b, tiny, margin, cut, pos, top, nodes):  # fmt: skip
-    """The bound of one box from its lines' outer and inner intervals (module doc) and the
-    traversals ``flo/fhi[fst[q]:fst[q + 1]]`` of line ``q`` (:mod:`.region_forced`); ``ln``:
+def _bound_of(oa, ob, ost, pa, pb, ist, real_xy, rings, ln, cs, sn, sdelta, eta, d, s, eps, k0,
+              nb, a, b, tiny, margin, cut, pos, top, nodes):  # fmt: skip
+    """The bound of one box from its lines' outer and inner intervals (module doc); ``ln``:
     the real edges' lengths (:func:`.region_chains.edge_lengths`); ``nodes``: of the split
     choices' branch and bound (:func:`.region_splits.split_bound`)."""
     crude = a * top + b
@@ -261,9 +240,8 @@ def _bound_of(oa, ob, ost, pa, pb, ist, fst, flo, fhi, real_xy, rings, ln, cs, s
     _count_chains(cf, nch, d, s, eps, k0, nb, cnt)
     owner = np.empty(pa.shape[0], dtype=np.int64)
     extra = np.zeros(nb, dtype=np.int64)
-    need = np.zeros(nb, dtype=np.int64)
     gaps = np.zeros(nb, dtype=np.int64)
-    size = pa.shape[0] + flo.shape[0] + 3
+    size = pa.shape[0] + 3
     lo = np.empty(size)
     hi = np.empty(size)
     w = np.ones(size)
@@ -299,31 +277,25 @@ def _bound_of(oa, ob, ost, pa, pb, ist, fst, flo, fhi, real_xy, rings, ln, cs, s
                     clo[n_sure], chi[n_sure] = lo[j], hi[j]
                     n_sure += 1
             continue
+        extra[q] = u - r
         unc[n_unc] = q
         n_unc += 1
-        # the segments the strips' traversals force: free ones fixed, splits required
-        n1, forced, need[q] = forced_segments(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q],
-                                              ist[q + 1], owner, flo, fhi, fst[q], fst[q + 1],
-                                              lo, hi, n_fixed)  # fmt: skip
-        if u - r - forced == 0 and need[q] == 0:  # the forced ones are all: components whole
-            n_fixed, _, _ = _line_segments(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q],
-                                           ist[q + 1], owner, 0, 0, lo, hi, n1)  # fmt: skip
-            need[q] = 0
-            continue
-        if u - r - forced <= 0:  # more forced than the count allows (no layout): none forced
-            n1, need[q] = n_fixed, 0
-            forced = 0
-        n_fixed = n1
-        extra[q] = u - r - forced
         gaps[q] = held - r
         total_gaps += held - r
-        gfree = longest_gap(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], owner, gfree)
+        # the longest gap on the line: between pieces, or a component's ends and its pieces
+        for o in range(ost[q], ost[q + 1]):
+            left = oa[o]
+            for p in range(ist[q], ist[q + 1]):
+                if owner[p] == o:
+                    gfree = max(gfree, pa[p] - left)
+                    left = pb[p]
+            gfree = max(gfree, ob[o] - left)
     if total_gaps > 30 or (1 << total_gaps) > MAX_CHOICES:  # branched (.region_splits)
-        old = split_bound(oa, ob, ost, pa, pb, ist, owner, extra, need, gaps, nb, lo, hi, w,
-                          n_fixed, gfree, a, b, pos, cut, nodes)  # fmt: skip
+        old = split_bound(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_fixed,
+                          gfree, a, b, pos, cut, nodes)  # fmt: skip
     else:
-        old = _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, need, total_gaps, gfree, nb,
-                          lo, hi, w, n_fixed, a, b, pos)  # fmt: skip
+        old = _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, lo, hi,
+                          w, n_fixed, a, b, pos)  # fmt: skip
     if cut == np.inf:  # the chain bound alone (tests)
         old = np.inf
     elif old <= cut:  # the box is discarded anyway
@@ -333,19 +305,15 @@ def _bound_of(oa, ob, ost, pa, pb, ist, fst, flo, fhi, real_xy, rings, ln, cs, s
                                 n_unc, clo, chi, n_sure, a, b, tiny, margin))  # fmt: skip
 
 
-def _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, need, total_gaps, gfree, nb, lo, hi, w,
-                n_fixed, a, b, pos):  # fmt: skip
-    """The bound with every choice of splits on the uncertain lines that holds their forced
-    splits ``need`` (module doc)."""
+def _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, total_gaps, gfree, nb, lo, hi, w, n_fixed,
+                a, b, pos):  # fmt: skip
+    """The bound with every choice of splits on the uncertain lines (module doc)."""
     best = -np.inf
     for mask in range(1 << total_gaps):
         n, g, free, ok = n_fixed, 0, 0, True
         for q in range(nb):
             if extra[q] == 0:
                 continue
-            if (mask >> g) & need[q] != need[q]:
-                ok = False
-                break
             n, g, splits = _line_segments(
                 oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], owner, mask, g, lo, hi,
                 n)  # fmt: skip
@@ -368,15 +336,15 @@ def _enumerated(oa, ob, ost, pa, pb, ist, owner, extra, need, total_gaps, gfree,
     return best
 
 
-def _bounds(in_xy, out_xy, real_xy, rings, sharp, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b,
-            tiny, margin, cut, slack, radius, nodes):  # fmt: skip
+def _bounds(in_xy, out_xy, real_xy, rings, cs, sn, sdelta, eta, d, s, eps, k0, nb, a, b, tiny,
+            margin, cut, slack, radius, nodes):  # fmt: skip
     m = cs.shape[0]
     out = np.empty(m)
     pos = np.empty(2 * (max(in_xy.shape[0], 2 * real_xy.shape[0]) + 4) * nb + 8)
     ln = edge_lengths(real_xy)
     for i in range(m):
-        v = _bound(in_xy, out_xy, real_xy, rings, ln, sharp, cs[i], sn[i], sdelta[i], eta[i],
-                   d[i], s, eps[i], k0, nb, a, b, tiny, margin, cut - 2.0 * slack, pos, radius,
+        v = _bound(in_xy, out_xy, real_xy, rings, ln, cs[i], sn[i], sdelta[i], eta[i], d[i], s,
+                   eps[i], k0, nb, a, b, tiny, margin, cut - 2.0 * slack, pos, radius,
                    nodes)  # fmt: skip
         out[i] = v + slack
     return out
@@ -387,13 +355,11 @@ def _compiled() -> tuple[Any, Any]:
     """``(_bounds, _values)`` compiled by numba (cached on disk), or plain Python without it."""
     # first _sup_w's own helpers (kernel's _g) compiled where it looks them up, and those of
     # chain_bound (.region_chains), split_bound and strip_intervals
-    before = (kernel._compiled, prepare, region_splits.prepare, region_strips.prepare,
-              region_forced.prepare)  # fmt: skip
+    before = (kernel._compiled, prepare, region_splits.prepare, region_strips.prepare)
     helpers = ("_first_line", "_intervals", "_chains", "edge_lengths", "_count_chains",
-               "_chain_counts", "_sup_w", "_owners", "longest_gap",
+               "_chain_counts", "_sup_w", "_owners",
                "_line_segments", "_enumerated", "chain_bound",
-               "split_bound", "strip_intervals", "strip_lines", "traversals",
-               "forced_segments", "_bound_of", "_bound")  # fmt: skip
+               "split_bound", "strip_intervals", "_bound_of", "_bound")  # fmt: skip
     return compiled(globals(), ("_bounds", "_values"), helpers, before)
 
 
@@ -420,7 +386,6 @@ def region_bounds(
     margin: float = -1.0,
     cut: float = math.inf,
     radius: float = -1.0,
-    sharp: NDArray[np.bool_] | None = None,
 ) -> NDArray[np.float64]:
     """``(m,)`` an upper bound of Eq. 1 over the segments of every rigid image of the region
     ``real`` (:func:`ring_starts`) moved by at most ``eps[i]`` (rotation at most ``delta[i]``,
@@ -431,16 +396,12 @@ def region_bounds(
     ``cut`` (it will be discarded) skips the chain bound; ``cut = inf``: the chain bound alone
     (``inf`` where it does not apply; for tests). ``radius >= 0`` (every vertex of ``real``
     within it of 0): the lines' intervals from strips of the real boundary
-    (:mod:`.region_strips`), ``inner`` and ``outer`` unread, and the segments forced by the
-    strips' traversals (:mod:`.region_forced`) counted on the edges not ``sharp``
-    (:func:`.region_chains.sharp_edges` of the same ``tiny``; default: every edge, none
-    forced). The split choices are branched (:func:`.region_splits.split_nodes`) unless more
-    lines cross ``real``."""
+    (:mod:`.region_strips`), ``inner`` and ``outer`` unread. The split choices are branched
+    (:func:`.region_splits.split_nodes`) unless more lines cross ``real``."""
     th = np.ascontiguousarray(theta, dtype=np.float64)
     sdelta = np.sin(np.minimum(np.asarray(delta, dtype=np.float64), math.pi / 2))
     eta = eps if eta is None else np.minimum(eta, eps)
     nodes = region_nodes(real[0], spacing)
-    sharp = np.ones(len(real[0]), dtype=np.bool_) if sharp is None else sharp
     if radius >= 0:  # the lines that a strip of the real region can reach
         k0, nb = lines_range(real[0], spacing)
         cd = np.sqrt(np.maximum(1.0 - sdelta * sdelta, 1e-300))
@@ -452,8 +413,7 @@ def region_bounds(
         k0, nb = lines_range(outer, spacing)
     fn = _compiled()[0]
     return fn(np.ascontiguousarray(inner), np.ascontiguousarray(outer), real[0], real[1],
-              np.ascontiguousarray(sharp, dtype=np.bool_), np.cos(th), np.sin(th), sdelta,
-              np.ascontiguousarray(eta, dtype=np.float64),
+              np.cos(th), np.sin(th), sdelta, np.ascontiguousarray(eta, dtype=np.float64),
               np.ascontiguousarray(d, dtype=np.float64),
               float(spacing), np.ascontiguousarray(eps, dtype=np.float64), k0, nb, float(a),
               float(b), float(tiny), float(margin), float(cut), BOUND_SLACK,

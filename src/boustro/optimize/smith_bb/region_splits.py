@@ -109,16 +109,13 @@ def _line_segments(oa, ob, o0, o1, pa, pb, p0, p1, owner, mask, g, lo, hi, n):
     return n, g, splits
 
 
-def _node(oa, ob, ost, pa, pb, ist, owner, extra, need, gaps, order, nl, depth, chosen, lo, hi,
-          w, n_fixed, free, gfree, a, b, pos):  # fmt: skip
+def _node(oa, ob, ost, pa, pb, ist, owner, extra, gaps, order, nl, depth, chosen, lo, hi, w,
+          n_fixed, free, gfree, a, b, pos):  # fmt: skip
     """The bound of a node: lines ``order[:depth]`` with the choices ``chosen``, the other
-    uncertain lines pooled; ``-inf`` if a choice splits a line more than its ``extra`` or
-    leaves out one of its forced splits ``need``."""
+    uncertain lines pooled; ``-inf`` if a choice splits a line more than its ``extra``."""
     n = n_fixed
     for i in range(depth):
         q = order[i]
-        if chosen[i] & need[q] != need[q]:
-            return -np.inf
         n, _, splits = _line_segments(oa, ob, ost[q], ost[q + 1], pa, pb, ist[q], ist[q + 1], owner,
                               chosen[i], 0, lo, hi, n)  # fmt: skip
         if splits > extra[q]:
@@ -162,13 +159,11 @@ def _node(oa, ob, ost, pa, pb, ist, owner, extra, need, gaps, order, nl, depth, 
     return best
 
 
-def split_bound(oa, ob, ost, pa, pb, ist, owner, extra, need, gaps, nb, lo, hi, w, n_fixed,
-                gfree, a, b, pos, cut, nodes):  # fmt: skip
-    """The maximum of Eq. 1 over every choice of splits of the uncertain lines (``extra > 0``)
-    that holds their forced splits (``need``, masks as :func:`_line_segments` reads them; a
-    pooled line's are not used), bounded by a branch and bound of at most ``nodes`` nodes
-    (module doc); ``cut``: a value at which the caller discards the box anyway (nodes at most
-    it are not branched)."""
+def split_bound(oa, ob, ost, pa, pb, ist, owner, extra, gaps, nb, lo, hi, w, n_fixed, gfree, a,
+                b, pos, cut, nodes):  # fmt: skip
+    """The maximum of Eq. 1 over every choice of splits of the uncertain lines (``extra > 0``),
+    bounded by a branch and bound of at most ``nodes`` nodes (module doc); ``cut``: a value
+    at which the caller discards the box anyway (nodes at most it are not branched)."""
     order = np.empty(nb, dtype=np.int64)
     key = np.empty(nb)
     nd, nl, free = 0, 0, 0
@@ -189,8 +184,8 @@ def split_bound(oa, ob, ost, pa, pb, ist, owner, extra, need, gaps, nb, lo, hi, 
                 order[nl] = q
                 nl += 1
     chosen = np.zeros(nd + 1, dtype=np.int64)
-    root = _node(oa, ob, ost, pa, pb, ist, owner, extra, need, gaps, order, nl, 0, chosen, lo, hi,
-                 w, n_fixed, free, gfree, a, b, pos)  # fmt: skip
+    root = _node(oa, ob, ost, pa, pb, ist, owner, extra, gaps, order, nl, 0, chosen, lo, hi, w,
+                 n_fixed, free, gfree, a, b, pos)  # fmt: skip
     if nd == 0 or root <= cut:
         return root
     # a stack of nodes (depth, the choice of line order[depth - 1], bound), depth first
@@ -220,13 +215,9 @@ def split_bound(oa, ob, ost, pa, pb, ist, owner, extra, need, gaps, nb, lo, hi, 
         q = order[depth]
         nm = 1 << gaps[q]
         for m in range(nm):
-            if m & need[q] != need[q]:  # a forced split left out: no layout
-                vals[m] = -np.inf
-                continue
             chosen[depth] = m
-            vals[m] = _node(oa, ob, ost, pa, pb, ist, owner, extra, need, gaps, order, nl,
-                            depth + 1, chosen, lo, hi, w, n_fixed, free, gfree, a, b,
-                            pos)  # fmt: skip
+            vals[m] = _node(oa, ob, ost, pa, pb, ist, owner, extra, gaps, order, nl, depth + 1,
+                            chosen, lo, hi, w, n_fixed, free, gfree, a, b, pos)  # fmt: skip
             used += 1
         for m in np.argsort(vals[:nm]):  # the best child on top of the stack
             s_depth[top], s_mask[top], s_bound[top] = depth + 1, m, vals[m]

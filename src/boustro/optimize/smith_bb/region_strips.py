@@ -38,7 +38,7 @@ import numpy as np
 from ..._jit import jit_globals
 from ..cover.band_lines import _sort_keys, _sort_pairs, jit_into
 
-__all__ = ["meets_no_strip", "prepare", "strip_halfwidths", "strip_intervals", "strip_lines"]
+__all__ = ["prepare", "strip_halfwidths", "strip_intervals"]
 
 
 def strip_halfwidths(c, radius, sdelta, eta, out):
@@ -49,16 +49,6 @@ def strip_halfwidths(c, radius, sdelta, eta, out):
         near = max(abs(c[q]) - a0, 0.0)
         t = math.sqrt(max(radius * radius - near * near, 0.0))
         out[q] = ((abs(c[q]) * (1.0 - cd) + eta + t * sdelta) / cd) * (1.0 + 1e-9) + 1e-12
-
-
-def meets_no_strip(a, b, widest, d, inv):
-    """Whether an edge of across-range ``[a, b]`` meets no strip (half widths at most
-    ``widest``) of the lines ``d + k / inv``: no whole number within a margin (far above the
-    rounding of ``c = d + k s``, relative to the line index as in
-    :func:`.region_kernel._intervals`) of ``[(a - widest - d) / s, (b + widest - d) / s]``."""
-    lo, hi = (a - widest - d) * inv, (b + widest - d) * inv
-    margin = 1e-9 + 1e-14 * (abs(lo) + abs(hi))
-    return math.ceil(lo - margin) > hi + margin
 
 
 def _first_strip(c, nb, at, d, s, k0):
@@ -99,7 +89,12 @@ def _sweep(xy, cs, sn, c, low, high, widest, d, s, k0, nb):
         h1 = -sn * xy[i, 0] + cs * xy[i, 1]
         h2 = -sn * xy[i, 2] + cs * xy[i, 3]
         a, b = min(h1, h2), max(h1, h2)
-        if meets_no_strip(a, b, widest, d, inv):  # most edges
+        # most edges meet no strip: no whole number within a margin (far above the rounding
+        # of c = d + k s, relative to the line index as in region_kernel._intervals) of
+        # [(a - widest - d) / s, (b + widest - d) / s]
+        lo, hi = (a - widest - d) * inv, (b + widest - d) * inv
+        margin = 1e-9 + 1e-14 * (abs(lo) + abs(hi))
+        if math.ceil(lo - margin) > hi + margin:
             continue
         q = _first_strip(c, nb, a - widest, d, s, k0)
         if q >= nb or c[q] - widest > b:
@@ -212,24 +207,19 @@ def _merge(lo, hi, n, out_lo, out_hi, m):
     return m
 
 
-def strip_lines(d, s, k0, nb, radius, sdelta, eta):
-    """``(c, half, low, high)``: the offsets ``c`` of lines ``k0 .. k0 + nb - 1`` (``d + k
-    s``), their strips' half widths and the strips ``[low, high]`` (module doc)."""
-    c = np.empty(nb)
-    for q in range(nb):
-        c[q] = d + (k0 + q) * s
-    half = np.empty(nb)
-    strip_halfwidths(c, radius, sdelta, eta, half)
-    return c, half, c - half, c + half
-
-
 def strip_intervals(xy, cs, sn, d, s, k0, nb, radius, sdelta, eta, keep):
     """``(ost, oa, ob, ist, pa, pb)``: the outer and inner intervals (module doc) of lines
     ``k0 .. k0 + nb - 1`` of a box (centre ``cs, sn, d``; rotation at most ``asin(sdelta)``,
     shift at most ``eta``) of the region of edges ``xy`` whose vertices lie within ``radius``
     of 0, as :func:`.region_kernel._intervals` gives them (per line sorted, disjoint); inner
     pieces shorter than ``keep`` strip half widths dropped (:func:`_prune`)."""
-    c, half, low, high = strip_lines(d, s, k0, nb, radius, sdelta, eta)
+    c = np.empty(nb)
+    for q in range(nb):
+        c[q] = d + (k0 + q) * s
+    half = np.empty(nb)
+    strip_halfwidths(c, radius, sdelta, eta, half)
+    low = c - half
+    high = c + half
     lcnt, lt, hcnt, ht, pcnt, plo, phi = _sweep(xy, cs, sn, c, low, high, half.max(), d, s, k0,
                                                 nb)  # fmt: skip
     size = lt.shape[0] + ht.shape[0] + plo.shape[0] + 1
@@ -309,6 +299,6 @@ def _prune(oa, ob, o0, o1, pa, pb, p0, p1, short):
 def prepare() -> None:
     """Swap this module's helpers for their numba versions (before a caller compiles)."""
     jit_into(globals())  # the insertion sorts of cover's band lines
-    helpers = ("strip_halfwidths", "strip_lines", "meets_no_strip", "_first_strip", "_sweep",
-               "_union", "_merge", "_inner", "_prune")  # fmt: skip
+    helpers = ("strip_halfwidths", "_first_strip", "_sweep", "_union", "_merge", "_inner",
+               "_prune")  # fmt: skip
     jit_globals(globals(), helpers)
