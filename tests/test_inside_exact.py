@@ -94,10 +94,59 @@ def test_shrunk_intervals_equal_part_by_part():
         inner = inside._geometry(region, SPACING).shrunk(SPACING / 2)
         for lanes in _layouts(region, rng):
             for ls in lanes:
-                got = inside._shrunk_intervals(ls, inner)
+                i, a, b = inside._shrunk_intervals(ls, inner)
+                got = [[] for _ in ls.k]
+                for lane, lo, hi in zip(i.tolist(), a.tolist(), b.tolist(), strict=True):
+                    got[lane].append((lo, hi))
                 assert got == _intervals_before(ls, inner)
                 rows += sum(len(r) > 1 for r in got)
     assert rows > 0  # some lanes cross a bay or a hole: two intervals on one line
+
+
+def _clip_before(lanes, area, tol, margin, spacing):
+    """:func:`inside.clip_lanes` as it was before the fourteenth round: interval by interval,
+    from the rows of :func:`_intervals_before` or of the line's chords."""
+    from boustro.plan.lanes import Lanes, _intervals_on_lines
+
+    u, n = _frame(lanes.angle)
+    if margin > 0:
+        rows = _intervals_before(lanes, inside._geometry(area, spacing).shrunk(margin))
+    else:
+        rows = _intervals_on_lines(area.edges - lanes.origin, u, n, lanes.c)
+    k, c, t0, t1 = [], [], [], []
+    for i, row in enumerate(rows):
+        for a, b in row:
+            lo, hi = max(a, float(lanes.t0[i])), min(b, float(lanes.t1[i]))
+            if hi - lo > tol:
+                k.append(int(lanes.k[i]))
+                c.append(float(lanes.c[i]))
+                t0.append(lo)
+                t1.append(hi)
+    return Lanes(lanes.angle, lanes.origin, np.array(k, dtype=np.int64),
+                 np.array(c, dtype=np.float64), np.array(t0, dtype=np.float64),
+                 np.array(t1, dtype=np.float64), lanes.cut)  # fmt: skip
+
+
+@pytest.mark.parametrize("margin", [0.0, SPACING / 2, 3 * SPACING])
+def test_clip_lanes_equal_the_loop_before(margin):
+    """The lanes cut with arrays (fourteenth round) are the lanes the interval-by-interval loop
+    cut, byte for byte (the layout cache's keys), at both margins and one past the area's
+    width (nothing left); with parts dropped as shorter than ``tol`` (a huge one)."""
+    rng = np.random.default_rng(11)
+    split = dropped = 0
+    for region in _areas():
+        for lanes in _layouts(region, rng, 3):
+            for ls in lanes:
+                for tol in (1e-9 * region.diameter, 0.3 * SPACING):
+                    got = inside.clip_lanes(ls, region, tol, margin, SPACING)
+                    want = _clip_before(ls, region, tol, margin, SPACING)
+                    assert got.angle == want.angle and got.cut == want.cut
+                    for x, y in zip(got[2:6], want[2:6], strict=True):
+                        assert x.dtype == y.dtype and x.tobytes() == y.tobytes()
+                    split += len(np.unique(got.k)) < len(got.k)
+                    dropped += len(want.k) < len(_clip_before(ls, region, 0.0, margin, SPACING).k)
+    if margin < SPACING:
+        assert split > 0 and dropped > 0  # lanes split by bays or holes; parts dropped by tol
 
 
 def test_near_and_spurs_equal_the_code_before():

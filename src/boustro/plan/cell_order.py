@@ -84,33 +84,46 @@ class _Problem:
 
 def _held_karp(pb: _Problem) -> list[int]:
     """The least-cost sequence of options, one per pass (dynamic programme over subsets)."""
-    n, m = pb.n, len(pb.pass_of)
-    full = (1 << n) - 1
-    dp = np.full((1 << n, m), math.inf)
-    parent = np.full((1 << n, m), -1, dtype=np.int64)
-    bit = np.array([1 << k for k in pb.pass_of], dtype=np.int64)
-    for o in range(m):
-        dp[bit[o], o] = pb.first[o]
-    for s in range(1, full):
+    dp, parent, bit = _tables(pb)
+    every = np.arange(len(pb.pass_of))
+    for s in range(1, len(dp) - 1):
         row = dp[s]
         live = np.flatnonzero(np.isfinite(row))
         if len(live) == 0:
             continue
         step = row[live, None] + pb.move[live]  # (live, m)
         arg = np.argmin(step, axis=0)
-        best = step[arg, np.arange(m)]
-        for k in range(n):
-            if s >> k & 1:
-                continue
-            opts = pb.options[k]
-            t = s | (1 << k)
-            better = best[opts] < dp[t, opts]
-            if better.any():
-                sel = opts[better]
-                dp[t, sel] = best[sel]
-                parent[t, sel] = live[arg[sel]]
-    last = int(np.argmin(dp[full]))
-    nodes, s = [last], full
+        best = step[arg, every]
+        # every option of a pass not in s at once: option o extends s to s | bit[o], and no
+        # two options share a cell (t, o), so this is the pass-by-pass update in one step
+        opts = every[(s & bit) == 0]
+        t = s | bit[opts]
+        better = best[opts] < dp[t, opts]
+        if better.any():
+            sel, t = opts[better], t[better]
+            dp[t, sel] = best[sel]
+            parent[t, sel] = live[arg[sel]]
+    return _backtrack(dp, parent, bit)
+
+
+def _tables(pb: _Problem) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+    """Held-Karp's tables over (subset of passes, last option): the least costs (each option
+    alone: its first cost), the parents (none), and each option's pass as a bit."""
+    m = len(pb.pass_of)
+    dp = np.full((1 << pb.n, m), math.inf)
+    parent = np.full((1 << pb.n, m), -1, dtype=np.int64)
+    bit = np.array([1 << k for k in pb.pass_of], dtype=np.int64)
+    dp[bit, np.arange(m)] = pb.first
+    return dp, parent, bit
+
+
+def _backtrack(
+    dp: NDArray[np.float64], parent: NDArray[np.int64], bit: NDArray[np.int64]
+) -> list[int]:
+    """The sequence of options of Held-Karp's tables: from the least cost over every pass back
+    through the parents."""
+    s = len(dp) - 1
+    nodes = [int(np.argmin(dp[s]))]
     while parent[s, nodes[-1]] >= 0:
         prev = int(parent[s, nodes[-1]])
         s ^= int(bit[nodes[-1]])

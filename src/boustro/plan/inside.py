@@ -34,10 +34,10 @@ from numpy.typing import NDArray
 
 from .._memo import bytes_key, remember
 from ..geometry.region import Region
-from .cells import _frame
+from .cells import _crossings, _frame
 from .contour import Contour, _contour_arcs, _corner_spurs, _lines, _pieces, contour_of
 from .coverage import _aligned_boxes, _axes
-from .lanes import Lanes, _intervals_on_lines
+from .lanes import Lanes
 from .margin_floor import RingTests, kept_samples, stretch_floor, test_points
 from .outside import shapely_area
 
@@ -175,51 +175,62 @@ def clip_lanes(
     u, n = _frame(lanes.angle)
     if margin > 0:
         geo = _geometry(area, 2 * margin if spacing is None else spacing)
-        rows = _shrunk_intervals(lanes, geo.shrunk(margin))
+        i, a, b = _shrunk_intervals(lanes, geo.shrunk(margin))
     else:
-        rows = _intervals_on_lines(area.edges - lanes.origin, u, n, lanes.c)
-    k, c, t0, t1 = [], [], [], []
-    for i, row in enumerate(rows):
-        for a, b in row:
-            lo, hi = max(a, float(lanes.t0[i])), min(b, float(lanes.t1[i]))
-            if hi - lo > tol:
-                k.append(int(lanes.k[i]))
-                c.append(float(lanes.c[i]))
-                t0.append(lo)
-                t1.append(hi)
+        i, a, b = _chords(area.edges - lanes.origin, u, n, lanes.c)
+    lo, hi = np.maximum(a, lanes.t0[i]), np.minimum(b, lanes.t1[i])
+    keep = hi - lo > tol
+    i = i[keep]
     return Lanes(
         lanes.angle,
         lanes.origin,
-        np.array(k, dtype=np.int64),
-        np.array(c, dtype=np.float64),
-        np.array(t0, dtype=np.float64),
-        np.array(t1, dtype=np.float64),
+        np.asarray(lanes.k, dtype=np.int64)[i],
+        np.asarray(lanes.c, dtype=np.float64)[i],
+        lo[keep],
+        hi[keep],
         lanes.cut,
     )
 
 
-def _shrunk_intervals(lanes: Lanes, inner: Any) -> list[list[tuple[float, float]]]:
-    """Per lane, the intervals (along it) of its line inside ``inner`` (the area shrunk by the
-    margin, :meth:`_Geometry.shrunk`): the line parts of each lane's intersection, their
-    extreme points along the lane (all parts at once: the same products as part by part)."""
+def _chords(
+    edges: NDArray[np.float64], u: NDArray[np.float64], n: NDArray[np.float64], c: Any
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """The chords of the lines ``c`` through the area of ``edges`` (relative to the lanes'
+    origin) as flat arrays ``(lane, start, end)``, lane by lane and along each line: the
+    intervals of :func:`~boustro.plan.lanes._intervals_on_lines` (crossings ``2j, 2j + 1``)."""
+    t, _, count = _crossings(edges, u, n, c)
+    j = np.arange(0, max(t.shape[1] - 1, 0), 2)
+    pick = j[None, :] < (count[:, None] - 1)
+    i, col = np.nonzero(pick)
+    col = j[col]
+    return i.astype(np.int64), t[i, col], t[i, col + 1]
+
+
+def _shrunk_intervals(
+    lanes: Lanes, inner: Any
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """The intervals (along each lane) of its line inside ``inner`` (the area shrunk by the
+    margin, :meth:`_Geometry.shrunk`) as flat arrays ``(lane, start, end)``, lane by lane and
+    each lane's in the order of its intersection's parts: the line parts of each lane's
+    intersection, their extreme points along the lane (all parts at once: the same products
+    as part by part)."""
     import shapely
 
     u, _ = _frame(lanes.angle)
+    none = (np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0))
     if len(lanes.k) == 0 or inner.is_empty:
-        return [[] for _ in lanes.k]
+        return none
     parts = shapely.intersection(shapely.linestrings(lanes.segments), inner)
-    rows: list[list[tuple[float, float]]] = [[] for _ in range(len(parts))]
     lines, owner = shapely.get_parts(parts, return_index=True)
     pick = (shapely.get_type_id(lines) == 1) & ~shapely.is_empty(lines)  # LineStrings
     if not pick.any():
-        return rows
+        return none
     xy, which = shapely.get_coordinates(lines[pick], return_index=True)
     t = (xy - lanes.origin) @ u
     starts = np.concatenate([[0], np.flatnonzero(np.diff(which)) + 1])
     lo, hi = np.minimum.reduceat(t, starts), np.maximum.reduceat(t, starts)
-    for i, a, b in zip(owner[pick].tolist(), lo.tolist(), hi.tolist(), strict=True):
-        rows[i].append((a, b))
-    return rows
+    order = np.argsort(owner[pick], kind="stable")  # lane by lane, parts in their order
+    return owner[pick][order].astype(np.int64), lo[order], hi[order]
 
 
 def _lane_footprint(
