@@ -44,14 +44,14 @@ def _plans(region: Region, counted: list[int]):
     return evaluate
 
 
-@pytest.mark.parametrize("seed", [71, 5])
-def test_layouts_ruled_out_by_their_bound_are_not_planned_the_same_search(seed, monkeypatch):
-    region = _region(seed)
+def _ruled_out_same_search(region: Region, monkeypatch, **kw) -> None:
+    """The search with and without :data:`~.plans.SKIP_RULED_OUT`: the same plan, bound and
+    rounds, the layouts tried before now planned or ruled out (some)."""
     runs, calls = [], []
     for on in (False, True):
         monkeypatch.setattr(plans_module, "SKIP_RULED_OUT", on)
         counted: list[int] = []
-        runs.append(cover_optimum(region, SPACING, COST, _plans(region, counted)))
+        runs.append(cover_optimum(region, SPACING, COST, _plans(region, counted), **kw))
         calls.append(len(counted))
     off, on = runs
     assert (on.angle, on.offset, on.fitness) == (off.angle, off.offset, off.fitness)
@@ -61,6 +61,11 @@ def test_layouts_ruled_out_by_their_bound_are_not_planned_the_same_search(seed, 
     # the same layouts tried: planned before, now planned or ruled out
     assert on.info["plans"] + on.info["ruled_out"] == off.info["plans"]
     assert calls == [off.info["plans"], on.info["plans"]]
+
+
+@pytest.mark.parametrize("seed", [71, 5])
+def test_layouts_ruled_out_by_their_bound_are_not_planned_the_same_search(seed, monkeypatch):
+    _ruled_out_same_search(_region(seed), monkeypatch)
 
 
 def test_ruled_out_only_with_exact_bounds_and_real_plans():
@@ -185,21 +190,7 @@ def _plan_cost(region: Region, a: float, d: float) -> float:
 
 
 def test_simplified_area_layouts_ruled_out_by_their_exact_bound_the_same_search(monkeypatch):
-    region = _traced()
-    runs, calls = [], []
-    for on in (False, True):
-        monkeypatch.setattr(plans_module, "SKIP_RULED_OUT", on)
-        counted: list[int] = []
-        evaluate = _plans(region, counted)
-        runs.append(cover_optimum(region, SPACING, COST, evaluate, n_angles=12, max_work=3e5))
-        calls.append(len(counted))
-    off, on = runs
-    assert (on.angle, on.offset, on.fitness) == (off.angle, off.offset, off.fitness)
-    assert on.info["lower_bound"] == off.info["lower_bound"]
-    assert on.info["rounds"] == off.info["rounds"]
-    assert off.info["ruled_out"] == 0 and on.info["ruled_out"] > 0
-    assert on.info["plans"] + on.info["ruled_out"] == off.info["plans"]
-    assert calls == [off.info["plans"], on.info["plans"]]
+    _ruled_out_same_search(_traced(), monkeypatch, n_angles=12, max_work=3e5)
 
 
 def test_simplified_area_rules_out_by_the_exact_bound_below_the_plan(monkeypatch):
