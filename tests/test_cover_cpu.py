@@ -44,14 +44,14 @@ def _plans(region: Region, counted: list[int]):
     return evaluate
 
 
-@pytest.mark.parametrize("seed", [71, 5])
-def test_layouts_ruled_out_by_their_bound_are_not_planned_the_same_search(seed, monkeypatch):
-    region = _region(seed)
+def _ruled_out_same_search(region: Region, monkeypatch, **kw) -> None:
+    """The search with and without :data:`~.plans.SKIP_RULED_OUT`: the same plan, bound and
+    rounds, the layouts tried before now planned or ruled out (some)."""
     runs, calls = [], []
     for on in (False, True):
         monkeypatch.setattr(plans_module, "SKIP_RULED_OUT", on)
         counted: list[int] = []
-        runs.append(cover_optimum(region, SPACING, COST, _plans(region, counted)))
+        runs.append(cover_optimum(region, SPACING, COST, _plans(region, counted), **kw))
         calls.append(len(counted))
     off, on = runs
     assert (on.angle, on.offset, on.fitness) == (off.angle, off.offset, off.fitness)
@@ -61,6 +61,11 @@ def test_layouts_ruled_out_by_their_bound_are_not_planned_the_same_search(seed, 
     # the same layouts tried: planned before, now planned or ruled out
     assert on.info["plans"] + on.info["ruled_out"] == off.info["plans"]
     assert calls == [off.info["plans"], on.info["plans"]]
+
+
+@pytest.mark.parametrize("seed", [71, 5])
+def test_layouts_ruled_out_by_their_bound_are_not_planned_the_same_search(seed, monkeypatch):
+    _ruled_out_same_search(_region(seed), monkeypatch)
 
 
 def test_ruled_out_only_with_exact_bounds_and_real_plans():
@@ -165,3 +170,64 @@ def test_cells_get_the_cutoff_that_screens_their_candidate_out():
     assert _cell_optima(Search(), cells, beat=70.0) is None
     # the first cell alone must reach 70, the second 70 - 50 (then 50 + 30 >= 70)
     assert cutoffs == pytest.approx([70.0 * (1 + CUTOFF_MARGIN), 20.0 + 70.0 * CUTOFF_MARGIN])
+
+
+def _traced() -> Region:
+    """A traced field of 324 edges: searched with simplified sandwiches (> SIMPLIFY_EDGES)."""
+    from boustro.geometry.traced import traced_field
+
+    region = traced_field(300, 2, radius=120.0)
+    assert len(region.edges) > search_module.SIMPLIFY_EDGES
+    return region
+
+
+def _plan_cost(region: Region, a: float, d: float) -> float:
+    st = plan_region(
+        region, SPACING, decompose_area=False, angle=float(a), offset=float(d), speed=SPEED,
+        turn_time=TURN_TIME,
+    ).stats  # fmt: skip
+    return COST.of(st.path_length, st.n_turns)
+
+
+def test_simplified_area_layouts_ruled_out_by_their_exact_bound_the_same_search(monkeypatch):
+    _ruled_out_same_search(_traced(), monkeypatch, n_angles=12, max_work=3e5)
+
+
+def test_simplified_area_rules_out_by_the_exact_bound_below_the_plan(monkeypatch):
+    """Each layout ruled out on a simplified search is ruled out by its bound on the exact area
+    (not the simplified model the search ranks by), which is below its real plan; and so is the
+    exact bound of random layouts (the sampler)."""
+    region = _traced()
+    seen: list[tuple[float, float, float, float]] = []
+    rule = plans_module.rules_out
+    current: dict[str, float] = {}
+    exact_bound = plans_module._exact_bound
+
+    def record_bound(search, boxes, i):
+        current.update(theta=float(boxes.theta[i]), d=float(boxes.d[i]))
+        return exact_bound(search, boxes, i)
+
+    def record(floor: float, best: float) -> bool:
+        out = rule(floor, best)
+        if out:
+            seen.append((current["theta"], current["d"], floor, best))
+        return out
+
+    monkeypatch.setattr(plans_module, "_exact_bound", record_bound)
+    monkeypatch.setattr(plans_module, "rules_out", record)
+    res = cover_optimum(region, SPACING, COST, _plans(region, []), n_angles=12, max_work=3e5)
+    assert seen and len(seen) == res.info["ruled_out"]
+    ref = search_module.CoverSearch(region, SPACING, SPACING / 2, COST, None, False)
+    assert ref.sandwich.tolerance > 0
+    rng = np.random.default_rng(3)
+    samples = [(t, d) for t, d, _, _ in seen[:6]]
+    samples += [(float(rng.uniform(0, math.pi)), float(rng.uniform(0, SPACING))) for _ in range(6)]
+    for k, (theta, d) in enumerate(samples):
+        z = np.zeros(1)
+        box = Boxes(z + theta, z, z + d, z)
+        exact = float(ref.point_values(box, exact=True)[0])
+        plan = _plan_cost(region, theta, d)
+        assert exact <= plan, (theta, d, exact, plan)
+        if k < min(len(seen), 6):
+            assert seen[k][2] == pytest.approx(exact, rel=1e-12, abs=1e-9)
+            assert plan > seen[k][3]  # it could not have beaten the best plan then
