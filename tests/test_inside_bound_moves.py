@@ -249,18 +249,20 @@ def test_the_term_lifts_the_bound_on_straight_edged_areas():
 
 def test_the_search_plans_the_same_layouts_with_a_higher_floor():
     """A keep-inside search over an L with the term decides by the same bounds: the same plan,
-    the same number of plans and boxes, and a lower bound at least as high (higher here)."""
+    the same number of plans and boxes, and a lower bound at least as high (higher here, with
+    the fourteenth round's margin-0 passes and near rule at the layouts off: with them the L's
+    floor, 277.6 s instead of 251.5 s, is set where the term adds nothing)."""
     region = Region([(0, 0), (120, 0), (120, 40), (50, 40), (50, 100), (0, 100)])
     cost = CoverCost.time(5.0, 10.0)
     evaluate = plan_cost(region, cost, keep_inside=True)
     got = {}
     for flag in (False, True):
-        ib.MOVES_ON_PASSES = flag
+        ib.MOVES_ON_PASSES, ib.CUT_PASSES, ib.NEAR_AT_LAYOUTS = flag, "off", False
         try:
             got[flag] = cover_optimum(region, SPACING, cost, evaluate, keep_inside=True,
                                       n_angles=24, max_work=3e5)  # fmt: skip
         finally:
-            ib.MOVES_ON_PASSES = True
+            ib.MOVES_ON_PASSES, ib.CUT_PASSES, ib.NEAR_AT_LAYOUTS = True, "bound", True
     old, new = got[False], got[True]
     assert (new.angle, new.offset, new.fitness) == (old.angle, old.offset, old.fitness)
     for key in ("plans", "rounds", "screened", "ruled_out"):

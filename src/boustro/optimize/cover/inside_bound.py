@@ -38,6 +38,7 @@ from ...geometry.region import Region
 from .bands import BandStats, band_stats
 from .bounds import lower_bounds
 from .cost import CoverCost
+from .inside_cut import clearance, cut_stretches, relative_angle, rings_holding
 from .inside_moves import line_moves, pass_count
 from .sandwich import Level
 
@@ -71,6 +72,16 @@ NEAR_ANGLE = 0.3
 #: stretch can serve to those stretches (:mod:`~.inside_moves`), not the larger of the two.
 MOVES_ON_PASSES = True
 
+#: Where the margin-0 bound counts its lanes' passes (:mod:`~.inside_cut`): ``"off"``,
+#: ``"certificate"`` (the certificate's bounds only: the search decides as before),
+#: ``"bound"`` (the bounds the search keeps, retires and rules out by, not the value that ranks
+#: the layouts it plans) or ``"all"``.
+CUT_PASSES = "bound"
+
+#: Whether the layouts' own bounds (not the value that ranks them) count the stretches near
+#: the lanes' direction (:func:`_near_lengths`, at a box of radius 0) as the boxes' do.
+NEAR_AT_LAYOUTS = True
+
 #: Edges closer than this to the lanes' direction (radians, over the whole box) are left out
 #: of ``P`` by the angle rule (:data:`NEAR_ANGLE`'s rule may count them): the strip the lanes
 #: leave along an edge at angle ``phi`` is ``s/2 (1 - cos phi)`` deep (less the 0.5% the
@@ -102,6 +113,9 @@ class ContourEdges(NamedTuple):
     #: (S,) the ring's length: which counted stretches one pass holds (:mod:`~.inside_moves`)
     arc: NDArray[np.float64]
     total: NDArray[np.float64]
+    #: (S,) the distance from the edge's part over ``J`` to the area beyond its line
+    #: (:func:`~.inside_cut.clearance`: margin 0's passes)
+    clear: NDArray[np.float64]
 
 
 def _contour_rings(area: Region, half: float) -> list[NDArray[np.float64]]:
@@ -200,13 +214,14 @@ def contour_edges(area: Region, spacing: float, reach: float) -> ContourEdges:
         z = np.zeros(0)
         return ContourEdges(
             z, z, applies, z.astype(np.int64), np.zeros((0, 2, 2)), np.zeros((0, 2)),
-            np.zeros((0, 4)), np.zeros((0, 2)), z, np.zeros((0, 2)), z,
+            np.zeros((0, 4)), np.zeros((0, 2)), z, np.zeros((0, 2)), z, z,
         )  # fmt: skip
+    strip_all, inward_all = np.concatenate(strips), np.concatenate(inwards)
     return ContourEdges(
         np.concatenate(angles), np.concatenate(cores), applies, np.concatenate(rings),
-        np.concatenate(strips), np.concatenate(inwards), np.concatenate(feet),
+        strip_all, inward_all, np.concatenate(feet),
         np.concatenate(reaches), np.concatenate(trims), np.concatenate(arcs),
-        np.concatenate(totals),
+        np.concatenate(totals), clearance(area, strip_all, inward_all, spacing),
     )  # fmt: skip
 
 
@@ -274,7 +289,7 @@ def _near_lengths(
     step, rho = contour.reach[None, :, 0], contour.reach[None, :, 1]
     sd = sigma * d[:, None]
     u_min, u_max = u.min(axis=2), u.max(axis=2)
-    angle = np.abs((contour.angle[None, :] - theta[:, None] + math.pi / 2) % math.pi - math.pi / 2)
+    angle = relative_angle(contour.angle, theta)
     use = (angle <= NEAR_ANGLE) & (hi - lo < spacing) & (contour.core[None, :] > 0)
     if not use.any():
         if parts is not None:
@@ -337,7 +352,7 @@ def _stretches(
         if passes is not None:
             passes.append(np.zeros(len(theta), dtype=np.int64))
         return z, z, np.zeros(len(theta), dtype=np.int64)
-    rel = np.abs((contour.angle[None, :] - theta[:, None] + math.pi / 2) % math.pi - math.pi / 2)
+    rel = relative_angle(contour.angle, theta)
     pick = rel - delta[:, None] >= MIN_ANGLE
     core = np.where(pick, (contour.trimmed if ranking else contour.core)[None, :], 0.0)
     close = np.zeros_like(pick)
@@ -351,11 +366,7 @@ def _stretches(
             raise ValueError("the near lengths' parts are needed to count the passes")
         passes.append(pass_count(contour.arc, contour.total, contour.ring, far, in_near, spacing))
     along = core * np.cos(np.minimum(rel + delta[:, None], math.pi / 2))
-    n_rings = int(contour.ring.max()) + 1
-    held = np.zeros((len(theta), n_rings), dtype=bool)
-    rows, cols = np.nonzero(core > 0)
-    held[rows, contour.ring[cols]] = True
-    rings = np.zeros(len(theta), dtype=np.int64) if ranking else held.sum(axis=1)
+    rings = np.zeros(len(theta), dtype=np.int64) if ranking else rings_holding(core, contour.ring)
     return core.sum(axis=1), along.sum(axis=1), rings
 
 
@@ -366,6 +377,35 @@ def _moves(st: BandStats, spacing: float) -> NDArray[np.float64]:
     k_max = np.where(used, idx, -1).max(axis=1)
     k_min = np.where(used, idx, st.count.shape[1]).min(axis=1)
     return np.where(used.any(axis=1), (k_max - k_min) * spacing, 0.0)
+
+
+def _extra(
+    p: NDArray[np.float64], a: NDArray[np.float64], c: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The non-lane path beyond the moves across the lines ``c``: at least the larger of the
+    passes' stretches ``p`` and ``sqrt(a^2 + c^2)`` (``a`` their travel along the lanes)."""
+    return np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
+
+
+def _with_cut_passes(
+    zero: NDArray[np.float64],
+    st_zero: BandStats,
+    cost: CoverCost,
+    spacing: float,
+    contour: ContourEdges,
+    theta: NDArray[np.float64],
+    delta: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """The margin-0 bound ``zero`` with the passes its lanes need (:mod:`~.inside_cut`):
+    the non-lane path at least the larger of their length ``P0`` and ``sqrt(A0^2 + C0^2)``
+    (``C0`` the moves across the lines ``zero`` counts), one turn per ring holding one."""
+    if not contour.applies or not len(contour.core):
+        return zero
+    p, a, rings = cut_stretches(contour, theta, delta, spacing)
+    c = _moves(st_zero, spacing)
+    extra = _extra(p, a, c)
+    turns = np.where(st_zero.count.sum(axis=1) > 0, rings, 0)
+    return zero + cost.per_length * extra + cost.per_turn * turns
 
 
 def _no_holes(st: BandStats) -> BandStats:
@@ -390,6 +430,7 @@ def keep_inside_bounds(
     origin: NDArray[np.float64] | None = None,
     ranking: bool = False,
     tight: list[NDArray[np.float64]] | None = None,
+    cut_passes: str | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every keep-inside plan of the layouts (module
     docstring). ``st_half``/``level_half``: the sandwich's inner set shrunk by half a spacing
@@ -402,10 +443,13 @@ def keep_inside_bounds(
     round's bound (trimmed stretches, no turn per pass; lower, so still a bound). ``tight``:
     a list that gets ``(L,)``, the bound with the moves on top of the passes
     (:mod:`~.inside_moves`, :data:`MOVES_ON_PASSES`), which the certificate takes where the
-    search decides by the bound returned (docs/mission_time.md)."""
+    search decides by the bound returned (docs/mission_time.md). ``cut_passes``: where margin
+    0's passes count (:data:`CUT_PASSES`' values; default :data:`CUT_PASSES`)."""
+    mode = CUT_PASSES if cut_passes is None else cut_passes
     kw: dict[str, Any] = {"boustrophedon": False, "ends": None}
     half = lower_bounds(st_half, level_half, cost, spacing, runins=runins, **kw)
     zero = lower_bounds(_no_holes(st_zero), level_zero, cost, spacing, runins=False, **kw)
+    cut = _with_cut_passes(zero, st_zero, cost, spacing, contour, theta, delta)
     halves = [half, half] if ranking else [half]
     moved = half
     if contour.applies and len(contour.core):
@@ -426,16 +470,21 @@ def keep_inside_bounds(
                 contour, theta, delta, None if trimmed else near, trimmed,
                 parts=parts[0] if parts else None, spacing=spacing, passes=held,
             )  # fmt: skip
-            extra = np.maximum(np.maximum(p, np.sqrt(a**2 + c**2)) - c, 0.0)
+            extra = _extra(p, a, c)
             turns = np.where(lanes, rings, 0)
             halves[i] = np.maximum(half, plain + cost.per_length * extra + cost.per_turn * turns)
             if held:  # the moves no pass holding a counted stretch serves
                 more = np.maximum(extra, p + line_moves(st_half.count, spacing, held[0]) - c)
                 moved = np.maximum(half, plain + cost.per_length * more + cost.per_turn * turns)
     least = cost.per_length * floor + cost.fixed
-    out = [np.maximum(np.minimum(h, zero), least) for h in halves]
+    # margin 0's passes (inside_cut): in the bound, the ranking value and the certificate
+    # as CUT_PASSES says
+    zeros = [cut if mode in ("bound", "all") else zero]
+    zeros += [cut if mode == "all" else zero] if ranking else []
+    out = [np.maximum(np.minimum(h, z), least) for h, z in zip(halves, zeros, strict=True)]
     if tight is not None:
-        tight.append(np.maximum(np.minimum(np.maximum(moved, halves[0]), zero), least))
+        z = zero if mode == "off" else cut
+        tight.append(np.maximum(np.minimum(np.maximum(moved, halves[0]), z), least))
     return np.stack(out) if ranking else out[0]
 
 
@@ -460,12 +509,18 @@ def inside_box_bounds(
         lv0.inner, lv0.outer, theta, d, search.s, 0.0, search.origin,
         search.k_range(reach_out), search.n_holes, search.tol, inner_reach=0.0,
     )  # fmt: skip
-    # the stretches near the lanes' direction in boxes only: the layouts' own values rank the
-    # layouts the search plans, and with them there it planned longer plans (docs)
-    near = d if radius > 0 else None
+    # the stretches near the lanes' direction in boxes, and at the layouts in their bound but
+    # not in the value that ranks the layouts the search plans (with them there it planned
+    # longer plans: docs), where NEAR_AT_LAYOUTS; a decomposition's cell searches
+    # (moves_on_passes False: their floors screen candidates) decide as before both
+    fourteenth = bool(search.moves_on_passes)
+    near = d if radius > 0 or (NEAR_AT_LAYOUTS and fourteenth) else None
     args = (st, lv, st0, lv0, search.cost, search.s, search.contour, theta, delta)
     kw = {"runins": search.n_holes == 0, "floor": search.floor, "origin": search.origin}
     # with ranking, the layouts' own values that rank the layouts the search plans: the tenth
     # round's terms there (with the eleventh round's, 9 of 34 keep-inside plans of the 100-area
     # run came out longer by 0.1-9.5 s, one shorter: a review)
-    return keep_inside_bounds(*args, d=near, eps=radius, ranking=ranking, tight=tight, **kw)
+    cut = None if fourteenth else "off"
+    return keep_inside_bounds(
+        *args, d=near, eps=radius, ranking=ranking, tight=tight, cut_passes=cut, **kw
+    )

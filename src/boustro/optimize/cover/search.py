@@ -513,7 +513,9 @@ def cover_optimum(
             between lanes on top of the boundary passes (:mod:`~.inside_moves`; the search
             decides as without). ``False`` for a decomposition's cells, whose floor decides
             which candidates are planned (a screen: a cell planned alone counts passes along
-            its cut edges that the whole plan never flies), so they decide as before.
+            its cut edges that the whole plan never flies), so they decide as before; nor do
+            they count margin 0's passes or the stretches near the lanes at the layouts
+            (:data:`~.inside_bound.CUT_PASSES`, :data:`~.inside_bound.NEAR_AT_LAYOUTS`).
         outside: how far from the area any point of any plan ``evaluate`` returns may lie
             (its lanes, run-ins, connecting moves and passes; plan units), if known: the
             1-tree's moves then also go round the shell's pockets farther than that from it
