@@ -28,7 +28,7 @@ from ._common import (
     print_json,
     print_table,
 )
-from ._fields import mission_files, output_files, pick_fields, plan_fields
+from ._fields import mission_files, output_files, pick_fields, plan_fields, read_picked
 from ._flight import add_flight_options, fly, plan_mission
 from ._plan_rows import rows as _rows
 from ._sweep import check_sweep, sweep_noted
@@ -455,9 +455,8 @@ def _load(args: argparse.Namespace) -> list[Area]:
             raise InvalidParameterError(
                 "--crs applies to an AREA file; the embedded field is lon/lat"
             )
-    else:
-        areas = read_areas(args.area, crs=args.crs)
-    return pick_fields(areas, args.field)
+        return pick_fields(areas, args.field)
+    return read_picked(lambda: read_areas(args.area, crs=args.crs), args.field)
 
 
 def _validated(args: argparse.Namespace, area: Area) -> Area:
