@@ -71,13 +71,23 @@ def read_picked(read: Callable[[], list[Area]], field: str | None) -> list[Area]
     return picked
 
 
+class _Hold(logging.Handler):
+    """A handler that keeps its records."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.records: list[logging.LogRecord] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.records.append(record)
+
+
 @contextmanager
 def _held_log() -> Iterator[list[logging.LogRecord]]:
     """Hold the records of the ``boustro`` loggers (the caller may drop some from the list),
     and log the rest at the end, in order (all of them if the block raised)."""
-    records: list[logging.LogRecord] = []
-    handler = logging.Handler()
-    handler.emit = records.append  # type: ignore[method-assign]
+    handler = _Hold()
+    records = handler.records
     logger = logging.getLogger("boustro")
     propagate, logger.propagate = logger.propagate, False
     logger.addHandler(handler)
