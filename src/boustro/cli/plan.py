@@ -13,7 +13,7 @@ from .. import objectives
 from ..errors import InvalidParameterError
 from ..io import Area, embedded_field, read_areas
 from ..io.formats import FORMATS, atomic_write, format_for
-from ..io.repair import check_area, repair_area
+from ..io.repair import check_area, detach_holes, repair_area
 from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission
 from ..mission.camera import camera_presets
 from ..mission.options import sensor_of, vehicle_of
@@ -460,13 +460,18 @@ def _load(args: argparse.Namespace) -> list[Area]:
 
 
 def _validated(args: argparse.Namespace, area: Area) -> Area:
-    """``area`` checked by GEOS (refused with its reason), or made valid with ``--repair``."""
-    if not args.repair:
-        check_area(area)
-        return area
-    area, note = repair_area(area)
+    """``area`` checked by GEOS (refused with its reason), or made valid with ``--repair``;
+    a hole that touches the shell (valid for GEOS) cut back from it (:func:`detach_holes`)."""
+    note = None
+    if args.repair:
+        area, note = repair_area(area)
     if note is not None:
         print(f"boustro: {note}", file=sys.stderr)
+    area, note = detach_holes(area)
+    if note is not None:
+        print(f"boustro: {note}", file=sys.stderr)
+    if not args.repair:
+        check_area(area)
     return area
 
 
