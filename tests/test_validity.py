@@ -270,3 +270,17 @@ def test_a_hole_touching_the_shell_at_a_point_is_planned_with_full_coverage(tmp_
     ]
     original = shapely.Polygon(shell, [hole])
     assert lanes and original.difference(shapely.union_all(lanes)).area < 1e-9 * original.area
+
+
+def test_a_nan_vertex_is_refused_in_one_line_with_or_without_repair(tmp_path, capsys):
+    """QA round 13: a NaN vertex was refused with "try --repair", and --repair then ended in a
+    GEOS traceback (make_valid raises on NaN); a zero-area polygon was told to try --repair,
+    which leaves no polygon."""
+    nan = tmp_path / "nan.json"
+    nan.write_text("[[0,0],[10,0],[NaN,5],[0,10]]")
+    flat = tmp_path / "flat.json"
+    flat.write_text("[[0,0],[10,0],[20,0]]")
+    for path, extra in ((nan, []), (nan, ["--repair"]), (flat, [])):
+        code, out, err = run_cli(capsys, "plan", path, "--crs", "planar", "--spacing", "1", *extra)
+        assert code == 2 and out == "" and "Traceback" not in err, err
+        assert len(err.strip().splitlines()) == 1 and "try --repair" not in err

@@ -71,8 +71,20 @@ def check_area(area: Area) -> None:
         if problem is not None:
             if problem not in message:
                 message += f" (GEOS: {problem})"
-            message += "; try --repair (shapely.make_valid; it says what it changes)"
+            if _repairable(area):
+                message += "; try --repair (shapely.make_valid; it says what it changes)"
         raise InvalidPolygonError(message) from None
+
+
+def _repairable(area: Area) -> bool:
+    """Whether ``make_valid`` leaves some area (not for NaN, inf, or collinear vertices)."""
+    import shapely
+
+    return _finite(area) and shapely.make_valid(_shapely_area(area)).area > 0
+
+
+def _finite(area: Area) -> bool:
+    return all(np.all(np.isfinite(r)) for r in [area.ring, *area.holes])
 
 
 def detach_holes(area: Area) -> tuple[Area, str | None]:
@@ -134,6 +146,11 @@ def repair_area(area: Area) -> tuple[Area, str | None]:
     problem = area_problem(area)
     if problem is None:
         return area, None
+    if not _finite(area):  # GEOS's make_valid raises on NaN or inf
+        raise InvalidPolygonError(
+            f"{area.source or 'the area'}: {problem}: a coordinate is not a finite number "
+            "(NaN or inf), which --repair cannot mend; fix the file"
+        )
     before = _shapely_area(area)
     fixed = shapely.make_valid(before)
     parts = [g for g in shapely.get_parts(fixed) if g.geom_type in ("Polygon", "MultiPolygon")]
