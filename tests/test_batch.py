@@ -647,3 +647,17 @@ def test_settings_of_an_earlier_output_still_resume():
     assert PlanOptions(spacing=10.0, headland=1).settings()["headland"] == 1
     assert PlanOptions(spacing=10.0, turn_radius=0.0).settings()["turn_radius"] == 0.0
     assert PlanOptions(camera=(1.0, 2.0, 3.0, None)).settings()["camera"] == [1.0, 2.0, 3.0]
+
+
+def test_a_hole_touching_the_shell_at_a_point_is_planned(tmp_path):
+    """QA round 13: as ``boustro plan`` (io.repair.detach_holes), a hole touching the shell at
+    one point (valid for GEOS) is cut back from it and planned: an ``ok`` row, not an error."""
+    x, y = 150_000, 450_000
+    shell = [(x, y), (x + 100, y), (x + 100, y + 100), (x, y + 100)]
+    hole = [(x + 50, y), (x + 60, y + 20), (x + 40, y + 20)]
+    path = tmp_path / "touch.gpkg"
+    _write(path, [shapely.Polygon(shell, [hole])], ["touch"], [10.0])
+    boustro.batch(path, tmp_path / "out.gpkg", spacing=10.0, workers=1)
+    rows = _layer(tmp_path / "out.gpkg", "fields")
+    assert list(rows["status"]) == ["ok"], rows["error"]
+    assert rows["covered_share"][0] == pytest.approx(1.0)

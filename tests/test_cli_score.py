@@ -180,3 +180,14 @@ def test_verbosity_before_or_after_the_command(argv, quiet, verbose):
 
     args = build_parser().parse_args(argv)
     assert (args.quiet, args.verbose) == (quiet, verbose)
+
+
+@pytest.mark.parametrize("command", ["score", "optimize"])
+def test_concave_polygon_points_to_plan(capsys, tmp_path, command):
+    """QA round 13: a concave polygon was refused without saying that ``boustro plan`` plans it."""
+    path = tmp_path / "l.json"
+    path.write_text("[[0,0],[2,0],[2,1],[1,1],[1,2],[0,2]]")
+    code, out, err = run(capsys, command, str(path), "--spacing", "0.25")
+    assert code == 2 and out == ""
+    assert "convex" in err and len(err.strip().splitlines()) == 1
+    assert f"boustro plan {path} --crs planar --spacing 0.25" in err

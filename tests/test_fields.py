@@ -333,3 +333,17 @@ def test_kml_multigeometry_parts_and_duplicate_names(tmp_path, capsys):
     assert "2 fields have that name" in err and err.count("\n") == 1
     out = json.loads(_plan([str(path), "--field", "3", "--json"], capsys))
     assert out["name"] == "Farm part 1" and out["area_m2"] > 20000  # the southern one
+
+
+def test_field_shows_only_its_own_reading_warnings(tmp_path, capsys, caplog):
+    """QA round 13: ``--field`` printed the warnings of every feature of the file (here the
+    open ring of the other field), not only the picked one's."""
+    path = tmp_path / "two.geojson"
+    doc = {"type": "FeatureCollection", "features": [_feature({"name": "Good"}, [NORTH])]}
+    doc["features"].append(_feature({"name": "Open"}, [SOUTH[:-1]]))
+    path.write_text(json.dumps(doc))
+    assert main(["plan", str(path), "--spacing", "10", "--field", "Good"]) == 0
+    assert "not closed" not in caplog.text
+    caplog.clear()
+    assert main(["plan", str(path), "--spacing", "10", "--field", "Open"]) == 0
+    assert caplog.text.count("feature 1: the ring is not closed") == 1

@@ -262,7 +262,9 @@ def test_plan_starts_at_the_lane_end_nearest_the_start_in_concave_areas(holes, c
         assert np.hypot(*(wp[0] - start)) <= nearest + 2.0, (start, wp[0])
     with caplog.at_level(logging.WARNING):
         geo.plan_area(shell, 1.0, crs=None, start=[5000.0, 0.0])
-    assert "swapped longitude and latitude" in caplog.text
+    # QA round 13: planar (and projected) input has no longitude to swap
+    assert "times its size" in caplog.text and "in the area's CRS" in caplog.text
+    assert "swapped longitude" not in caplog.text
 
 
 # -- small API contracts -----------------------------------------------------------------------
@@ -456,3 +458,20 @@ def test_reproduce_shows_bars_only_on_a_terminal(monkeypatch):
     for tty, quiet, shown in ((True, False, True), (False, False, False), (True, True, False)):
         monkeypatch.setattr(sys.stderr, "isatty", lambda tty=tty: tty)
         assert reproduce_cli._show_progress(argparse.Namespace(quiet=quiet)) is shown
+
+
+def test_a_far_start_names_the_cause_of_its_crs(caplog):
+    """QA round 13: a distant start in a projected CRS was warned as "swapped longitude and
+    latitude?", which lon/lat input alone can have."""
+    from boustro import geo
+    from boustro.io import embedded_field
+
+    square = np.array([[0, 0], [200, 0], [200, 200], [0, 200]], float) + np.array([155e3, 463e3])
+    with caplog.at_level(logging.WARNING):
+        geo.plan_area(square, 20.0, crs="EPSG:28992", start=[0.0, 0.0])
+    assert "times its size" in caplog.text and "swapped longitude" not in caplog.text
+    caplog.clear()
+    field = embedded_field()
+    with caplog.at_level(logging.WARNING):
+        geo.plan_area(field.ring, 20.0, crs=field.crs, start=field.ring[0][::-1])
+    assert "swapped longitude and latitude?" in caplog.text

@@ -162,3 +162,11 @@ def test_a_start_or_home_off_the_globe_is_named_in_one_line(tmp_path, capsys, ex
 def test_split_mission_refuses_a_home_that_cannot_be_projected(mission):
     with pytest.raises(InvalidParameterError, match=r"home \(6\.06, 91\)"):
         split_mission(mission, home=(6.06, 91.0), max_distance=5000.0)
+
+
+@pytest.mark.parametrize("home", [(6.06,), (6.06, 51.5, 3.0), [[6.06, 51.5]] * 2, ("a", 1), []])
+def test_with_home_refuses_a_home_that_is_not_a_pair_by_name(mission, home):
+    """QA round 13: ``with_home`` reshaped the home before checking it, so a home that was not
+    a pair was a bare numpy ValueError ("cannot reshape array of size 3 into shape (2,)")."""
+    with pytest.raises(InvalidParameterError, match="home must be a finite"):
+        split_mission(mission, home=home, max_distance=5000.0)

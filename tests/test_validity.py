@@ -248,3 +248,39 @@ def test_coordinates_near_the_float_limit_give_one_line_and_no_warning(tmp_path)
     assert run.returncode == 2
     assert run.stderr.strip().splitlines() == [run.stderr.strip()]
     assert "within +-1e+100" in run.stderr and "Warning" not in run.stderr
+
+
+def test_a_hole_touching_the_shell_at_a_point_is_planned_with_full_coverage(tmp_path, capsys):
+    """QA round 13: a hole touching the shell at one point (valid for GEOS) was refused. It is
+    now cut back from the shell (the area planned contains the file's), and the lanes cover
+    the file's own area, measured here with shapely."""
+    shell = [[0, 0], [100, 0], [100, 100], [0, 100], [0, 0]]
+    hole = [[50, 0], [60, 20], [40, 20], [50, 0]]  # its vertex (50, 0) on the shell's edge
+    path = tmp_path / "touch.geojson"
+    path.write_text(json.dumps({"type": "Polygon", "coordinates": [shell, hole]}))
+    out = tmp_path / "m.geojson"
+    argv = ["plan", path, "--crs", "planar", "--spacing", "10", "--out", out]
+    code, _, err = run_cli(capsys, *argv)
+    assert code == 0 and "hole 0 at [50.0, 0.0] touches the shell" in err
+    features = json.loads(out.read_text())["features"]
+    lanes = [
+        shapely.geometry.shape(f["geometry"]).buffer(5.0, cap_style="flat")
+        for f in features
+        if "transect" in f["properties"]
+    ]
+    original = shapely.Polygon(shell, [hole])
+    assert lanes and original.difference(shapely.union_all(lanes)).area < 1e-9 * original.area
+
+
+def test_a_nan_vertex_is_refused_in_one_line_with_or_without_repair(tmp_path, capsys):
+    """QA round 13: a NaN vertex was refused with "try --repair", and --repair then ended in a
+    GEOS traceback (make_valid raises on NaN); a zero-area polygon was told to try --repair,
+    which leaves no polygon."""
+    nan = tmp_path / "nan.json"
+    nan.write_text("[[0,0],[10,0],[NaN,5],[0,10]]")
+    flat = tmp_path / "flat.json"
+    flat.write_text("[[0,0],[10,0],[20,0]]")
+    for path, extra in ((nan, []), (nan, ["--repair"]), (flat, [])):
+        code, out, err = run_cli(capsys, "plan", path, "--crs", "planar", "--spacing", "1", *extra)
+        assert code == 2 and out == "" and "Traceback" not in err, err
+        assert len(err.strip().splitlines()) == 1 and "try --repair" not in err

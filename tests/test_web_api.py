@@ -514,3 +514,14 @@ def test_every_file_of_the_page_is_package_data():
     missing = [f for f in missing if not any(fnmatch.fnmatch(f, g) for g in globs)]
     assert not missing, missing
     assert "src/boustro/web/static/leaflet/LICENSE" in text  # its licence in the metadata too
+
+
+def test_a_hole_touching_the_shell_at_a_point_is_planned(client):
+    """QA round 13: as ``boustro plan``, a hole touching the shell at one point (valid for
+    GEOS) is cut back from it and planned (it was HTTP 400)."""
+    outer = [[5, 52], [5.004, 52], [5.004, 52.003], [5, 52.003], [5, 52]]
+    hole = [[5.002, 52], [5.0025, 52.001], [5.0015, 52.001], [5.002, 52]]
+    square = {"type": "Polygon", "coordinates": [outer, hole]}
+    response = client.post("/api/plan", json={"area": square, "options": {"spacing": 20}})
+    assert response.status_code == 200, response.text
+    assert response.json()["covered_share"] == pytest.approx(1.0)

@@ -27,7 +27,7 @@ from ..errors import BoustroError, PolygonFileError
 from ..io.area import Area, close_ring
 from ..io.formats import FORMATS, render
 from ..io.formats._fields import safe_name
-from ..io.repair import check_area, repair_area
+from ..io.repair import check_area, detach_holes, repair_area
 from ..mission import Mission, plan_area
 from .gpkg import gpkg_geometry
 from .options import PlanOptions
@@ -141,10 +141,14 @@ def _plan_part(area: Area, options: PlanOptions) -> tuple[Mission, list[str]]:
         area, note = repair_area(area)
         if note is not None:
             notes.append(note)
-    elif _plans_in_place(area.crs):
-        deferred = True
-    else:
-        check_area(area)
+    area, note = detach_holes(area)  # a hole touching the shell at a point, as plan does
+    if note is not None:
+        notes.append(note)
+    if not options.repair:
+        if _plans_in_place(area.crs):
+            deferred = True
+        else:
+            check_area(area)
     _captured.notes = notes
     try:
         mission = plan_area(area, options.spacing_arg(), **options.plan_kwargs())

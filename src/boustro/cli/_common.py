@@ -7,9 +7,11 @@ import json
 import math
 import os
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, NonConvexPolygonError
 from ..geometry import Polygon
 from ..io import PAPER_PARALLELOGRAM, read_polygon
 
@@ -17,6 +19,7 @@ __all__ = [
     "add_polygon_argument",
     "check_output_path",
     "check_plot_target",
+    "concave_to_plan",
     "finite_float",
     "load_polygon",
     "nonnegative_int",
@@ -105,6 +108,21 @@ def add_polygon_argument(parser: argparse.ArgumentParser) -> None:
         "FeatureCollection: first polygon); coordinates taken as planar. Default: the paper's "
         "parallelogram (8,4), (8,10), (4,8), (4,2)",
     )
+
+
+@contextmanager
+def concave_to_plan(path: str | None, spacing: float | None) -> Iterator[None]:
+    """Add to a concave polygon's refusal (the models of ``score`` and ``optimize`` need a
+    convex one) the command that plans it: ``boustro plan``, with the file's coordinates kept
+    planar."""
+    try:
+        yield
+    except NonConvexPolygonError as exc:
+        raise NonConvexPolygonError(
+            f"{exc}; concave areas are planned by boustro plan: "
+            f"boustro plan {path or 'FILE'} --crs planar --spacing "
+            f"{'S' if spacing is None else format(spacing, 'g')}"
+        ) from None
 
 
 def load_polygon(path: str | None) -> Polygon:

@@ -7,7 +7,9 @@ each failed field and its error (``--field`` plans the others one by one).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import logging
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import TypeVar
 
 from ..errors import BoustroError, InvalidParameterError
@@ -16,7 +18,14 @@ from ..io.formats import render
 from ..io.formats._fields import field_path, render_fields
 from ..mission import Mission
 
-__all__ = ["FieldsError", "mission_files", "output_files", "pick_fields", "plan_fields"]
+__all__ = [
+    "FieldsError",
+    "mission_files",
+    "output_files",
+    "pick_fields",
+    "plan_fields",
+    "read_picked",
+]
 
 T = TypeVar("T")
 
@@ -46,6 +55,49 @@ def pick_fields(areas: list[Area], field: str | None) -> list[Area]:
             f"--field {field!r}: no field of that name or index; the file's fields: {names}"
         )
     return [areas[index - 1]]
+
+
+def read_picked(read: Callable[[], list[Area]], field: str | None) -> list[Area]:
+    """``pick_fields(read(), field)``; with ``--field``, the warnings of reading the other
+    fields (an open ring, a part left out: each names its field's place in the file, its
+    ``source``) are not shown, only the picked field's and the file's own."""
+    if field is None:
+        return pick_fields(read(), field)
+    with _held_log() as held:
+        areas = read()
+        picked = pick_fields(areas, field)
+        others = [a.source + ":" for a in areas if a.source and all(a is not p for p in picked)]
+        held[:] = [r for r in held if not r.getMessage().startswith(tuple(others))]
+    return picked
+
+
+class _Hold(logging.Handler):
+    """A handler that keeps its records."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.records: list[logging.LogRecord] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.records.append(record)
+
+
+@contextmanager
+def _held_log() -> Iterator[list[logging.LogRecord]]:
+    """Hold the records of the ``boustro`` loggers (the caller may drop some from the list),
+    and log the rest at the end, in order (all of them if the block raised)."""
+    handler = _Hold()
+    records = handler.records
+    logger = logging.getLogger("boustro")
+    propagate, logger.propagate = logger.propagate, False
+    logger.addHandler(handler)
+    try:
+        yield records
+    finally:
+        logger.removeHandler(handler)
+        logger.propagate = propagate
+        for record in records:
+            logging.getLogger(record.name).handle(record)
 
 
 def plan_fields(areas: Sequence[Area], plan_one: Callable[[Area], T]) -> list[T]:

@@ -19,6 +19,7 @@ from ..scoring import score
 from ._common import (
     add_polygon_argument,
     check_plot_target,
+    concave_to_plan,
     load_polygon,
     nonnegative_int,
     positive_float,
@@ -256,8 +257,9 @@ def run(args: argparse.Namespace) -> int:
         check_plot_target(args.plot)
     fitness = SmithFitness(a=args.a, b=args.b)
     model = model_from_args(args)  # validates the scoring model's settings before the search
-    found = optimize(polygon, spacing, method=args.method, fitness=fitness, **_options(args))
-    result = score(polygon, spacing, found.angle, found.offset, model=model, fitness=fitness)
+    with concave_to_plan(args.polygon, args.spacing):
+        found = optimize(polygon, spacing, method=args.method, fitness=fitness, **_options(args))
+        result = score(polygon, spacing, found.angle, found.offset, model=model, fitness=fitness)
     if args.plot is not None:
         _save_plot(args.plot, polygon, result, found)
     if args.json:

@@ -13,7 +13,7 @@ from .. import objectives
 from ..errors import InvalidParameterError
 from ..io import Area, embedded_field, read_areas
 from ..io.formats import FORMATS, atomic_write, format_for
-from ..io.repair import check_area, repair_area
+from ..io.repair import check_area, detach_holes, repair_area
 from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission
 from ..mission.camera import camera_presets
 from ..mission.options import sensor_of, vehicle_of
@@ -28,7 +28,7 @@ from ._common import (
     print_json,
     print_table,
 )
-from ._fields import mission_files, output_files, pick_fields, plan_fields
+from ._fields import mission_files, output_files, pick_fields, plan_fields, read_picked
 from ._flight import add_flight_options, fly, plan_mission
 from ._plan_rows import rows as _rows
 from ._sweep import check_sweep, sweep_noted
@@ -455,19 +455,23 @@ def _load(args: argparse.Namespace) -> list[Area]:
             raise InvalidParameterError(
                 "--crs applies to an AREA file; the embedded field is lon/lat"
             )
-    else:
-        areas = read_areas(args.area, crs=args.crs)
-    return pick_fields(areas, args.field)
+        return pick_fields(areas, args.field)
+    return read_picked(lambda: read_areas(args.area, crs=args.crs), args.field)
 
 
 def _validated(args: argparse.Namespace, area: Area) -> Area:
-    """``area`` checked by GEOS (refused with its reason), or made valid with ``--repair``."""
-    if not args.repair:
-        check_area(area)
-        return area
-    area, note = repair_area(area)
+    """``area`` checked by GEOS (refused with its reason), or made valid with ``--repair``;
+    a hole that touches the shell (valid for GEOS) cut back from it (:func:`detach_holes`)."""
+    note = None
+    if args.repair:
+        area, note = repair_area(area)
     if note is not None:
         print(f"boustro: {note}", file=sys.stderr)
+    area, note = detach_holes(area)
+    if note is not None:
+        print(f"boustro: {note}", file=sys.stderr)
+    if not args.repair:
+        check_area(area)
     return area
 
 

@@ -13,6 +13,7 @@ from ..objectives import SmithFitness
 from ..scoring import Score, make_model, score
 from ._common import (
     add_polygon_argument,
+    concave_to_plan,
     finite_float,
     load_polygon,
     positive_float,
@@ -158,14 +159,15 @@ def score_rows(result: Score) -> list[tuple[str, str]]:
 def run(args: argparse.Namespace) -> int:
     polygon = load_polygon(args.polygon)
     spacing = resolve_spacing(args)
-    result = score(
-        polygon,
-        spacing,
-        math.radians(args.angle),
-        args.offset,
-        model=model_from_args(args),
-        fitness=SmithFitness(a=args.a, b=args.b),
-    )
+    with concave_to_plan(args.polygon, args.spacing):
+        result = score(
+            polygon,
+            spacing,
+            math.radians(args.angle),
+            args.offset,
+            model=model_from_args(args),
+            fitness=SmithFitness(a=args.a, b=args.b),
+        )
     if args.json:
         print_json(score_to_json(result, args))
     else:

@@ -257,7 +257,10 @@ class Projection:
             InvalidParameterError: not a finite pair, or a point the projection cannot map
                 (e.g. a latitude outside [-90, 90]), named by ``what`` with its coordinates.
         """
-        p = np.asarray(point, dtype=np.float64).reshape(-1)
+        try:
+            p = np.asarray(point, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):  # not numbers, or a ragged list
+            p = np.full(0, np.nan)
         if p.shape != (2,) or not np.all(np.isfinite(p)):
             raise InvalidParameterError(f"{what} must be a finite (x, y) pair, got {point!r}")
         out = self.to_plan(p)

@@ -15,11 +15,16 @@ import numpy as np
 
 from ..errors import InvalidPolygonError
 from ..geometry import Region
+from ..geometry.region import TOUCH_TOLERANCE
 from ..geometry.validity import geos_reason
 from .area import LONLAT, Area, crs_name
 from .crs import check_lonlat
 
-__all__ = ["area_problem", "check_area", "repair_area"]
+__all__ = ["area_problem", "check_area", "detach_holes", "repair_area"]
+
+#: How far :func:`detach_holes` cuts a hole back from the shell it touches, a fraction of the
+#: shell's largest extent (1 cm on a 100 m field).
+DETACH_GAP = 1e-4
 
 
 def _shapely_area(area: Area):
@@ -66,8 +71,66 @@ def check_area(area: Area) -> None:
         if problem is not None:
             if problem not in message:
                 message += f" (GEOS: {problem})"
-            message += "; try --repair (shapely.make_valid; it says what it changes)"
+            if _repairable(area):
+                message += "; try --repair (shapely.make_valid; it says what it changes)"
         raise InvalidPolygonError(message) from None
+
+
+def _repairable(area: Area) -> bool:
+    """Whether ``make_valid`` leaves some area (not for NaN, inf, or collinear vertices)."""
+    import shapely
+
+    return _finite(area) and shapely.make_valid(_shapely_area(area)).area > 0
+
+
+def _finite(area: Area) -> bool:
+    return all(np.all(np.isfinite(r)) for r in [area.ring, *area.holes])
+
+
+def detach_holes(area: Area) -> tuple[Area, str | None]:
+    """``area`` with every hole that touches the shell (GEOS allows one point in common; the
+    planner needs holes strictly inside, :class:`~boustro.geometry.Region`) cut back from the
+    shell by :data:`DETACH_GAP` of the shell's extent, and a line saying so (None when no hole
+    touches it, or the area is invalid for GEOS: :func:`check_area` says why).
+
+    The cut only shrinks holes, so the area planned contains the file's area: lanes that cover
+    it cover the file's area too; the path may cross the cut-off tip of the hole (within the
+    gap of the touch point), which ``outside_length_m`` does not count.
+    """
+    import shapely
+
+    if not area.holes or area_problem(area) is not None:
+        return area, None
+    shell = shapely.linearrings(area.ring)
+    extent = float(np.max(np.ptp(area.ring, axis=0)))
+    gap = DETACH_GAP * extent
+    touch = 10 * TOUCH_TOLERANCE * extent  # beyond the Region's (its diameter <= 1.5 extent)
+    holes: list[np.ndarray] = []
+    touched: list[str] = []
+    for i, h in enumerate(area.holes):
+        ring = shapely.linearrings(h)
+        if not shapely.dwithin(shell, ring, touch):
+            holes.append(h)
+            continue
+        at = shapely.get_coordinates(shapely.shortest_line(ring, shell))[0].tolist()
+        touched.append(f"hole {i} at {at}")
+        cut = shapely.Polygon(h).difference(shell.buffer(gap))
+        holes += [
+            np.asarray(p.exterior.coords, dtype=np.float64)[:-1]
+            for p in shapely.get_parts(cut)
+            if p.geom_type == "Polygon" and not p.is_empty
+        ]
+    if not touched:
+        return area, None
+    before = _shapely_area(area).area
+    after = replace(area, holes=tuple(holes))
+    note = (
+        f"{area.source or 'the area'}: {', '.join(touched)} touches the shell; planned with "
+        f"the hole cut back {gap:.3g} (file units) from the shell, area {before:.6g} -> "
+        f"{_shapely_area(after).area:.6g} (coverage of the file's area is kept: it lies "
+        "inside the area planned)"
+    )
+    return after, note
 
 
 def repair_area(area: Area) -> tuple[Area, str | None]:
@@ -83,6 +146,11 @@ def repair_area(area: Area) -> tuple[Area, str | None]:
     problem = area_problem(area)
     if problem is None:
         return area, None
+    if not _finite(area):  # GEOS's make_valid raises on NaN or inf
+        raise InvalidPolygonError(
+            f"{area.source or 'the area'}: {problem}: a coordinate is not a finite number "
+            "(NaN or inf), which --repair cannot mend; fix the file"
+        )
     before = _shapely_area(area)
     fixed = shapely.make_valid(before)
     parts = [g for g in shapely.get_parts(fixed) if g.geom_type in ("Polygon", "MultiPolygon")]

@@ -165,7 +165,7 @@ def project(
         else proj.point_to_plan(start, "the start point (also the mission's home)")
     )
     if start is not None:
-        _warn_far_start(ring_plan, start_plan, k_lo)
+        _warn_far_start(ring_plan, start_plan, k_lo, proj.geographic)
     ground_area = proj.ground_area(ring_plan) - sum(proj.ground_area(h) for h in holes_plan)
     return Frame(
         area=area,
@@ -183,13 +183,20 @@ def project(
     )
 
 
-def _warn_far_start(ring: NDArray[np.float64], start: NDArray[np.float64], k_lo: float) -> None:
+def _warn_far_start(
+    ring: NDArray[np.float64], start: NDArray[np.float64], k_lo: float, geographic: bool
+) -> None:
+    """Warn of a start more than 10 times the area's size away from it, with the likely cause:
+    longitude and latitude swapped (lon/lat input), else a point in other coordinates than
+    the area's (projected or planar input, where there is no longitude to swap)."""
     far = float(np.min(np.hypot(*(ring - start).T))) / k_lo
     size = float(np.max(np.hypot(*(ring - ring.mean(axis=0)).T))) * 2 / k_lo
     if far > 10 * size:
+        cause = (
+            "swapped longitude and latitude?"
+            if geographic
+            else "a point in other coordinates than the area's (the start is in the area's CRS)?"
+        )
         log.warning(
-            "the start is %.3g m from the area, %.0f times its size: swapped longitude and "
-            "latitude?",
-            far,
-            far / size,
+            "the start is %.3g m from the area, %.0f times its size: %s", far, far / size, cause
         )

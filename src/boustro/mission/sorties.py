@@ -117,9 +117,10 @@ def plan_sorties(
 
 def with_home(mission: Mission, home: ArrayLike) -> Mission:
     """``mission`` with its home at ``home`` (the area's coordinates)."""
-    h = np.asarray(home, dtype=np.float64).reshape(2)
     proj = mission.projection
-    lonlat = None if proj.planar else proj.to_lonlat(proj.point_to_plan(h, "home"))
+    plan_home = proj.point_to_plan(home, "home")  # checked before it is reshaped
+    h = np.asarray(home, dtype=np.float64).reshape(2)
+    lonlat = None if proj.planar else proj.to_lonlat(plan_home)
     return dataclasses.replace(mission, home=h, home_lonlat=lonlat)
 
 

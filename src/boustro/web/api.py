@@ -24,7 +24,7 @@ from ..io import Area, areas_from_object, read_areas
 from ..io.crs import Projection
 from ..io.formats import FORMATS, format_for, render
 from ..io.formats._fields import render_fields, safe_name
-from ..io.repair import check_area, repair_area
+from ..io.repair import check_area, detach_holes, repair_area
 from ..mission import Mission, WorkEstimate, estimate_work, plan_area
 from .limits import MAX_FIELDS, MAX_SECONDS, RequestTooLargeError, check_epsg, count_vertices
 from .options import PlanOptions, parse_options
@@ -101,10 +101,13 @@ def request_areas(area: Any, opts: PlanOptions) -> list[Area]:
 
 
 def _valid(area: Area, repair: bool) -> Area:
+    """As ``boustro plan``: repaired or checked; a hole touching the shell cut back."""
+    if repair:
+        area = repair_area(area)[0]
+    area = detach_holes(area)[0]
     if not repair:
         check_area(area)
-        return area
-    return repair_area(area)[0]
+    return area
 
 
 def _estimate(area: Area, opts: PlanOptions) -> WorkEstimate:
