@@ -208,11 +208,16 @@ def test_no_library_module_imports_a_compatibility_path():
                 "boustro.experiments",
                 "boustro.mission",
                 "boustro.plot",
+                "torch",
             ),
         ),
-        ("import boustro.optimize", ("boustro.learned", "numba", "matplotlib")),
-        ("import boustro.learned", ("boustro.io", "boustro.cli", "matplotlib", "shapely")),
-        ("import boustro.plan", ("boustro.io", "boustro.cli", "matplotlib", "boustro.learned")),
+        ("import boustro.optimize", ("boustro.learned", "numba", "matplotlib", "torch")),
+        ("import boustro.learned", ("boustro.io", "boustro.cli", "matplotlib", "shapely", "torch")),
+        (
+            "import boustro.plan",
+            ("boustro.io", "boustro.cli", "matplotlib", "boustro.learned", "torch"),
+        ),
+        ("import boustro.cli, boustro.batch, boustro.web", ("torch",)),
     ],
 )
 def test_what_an_import_loads(statement, absent):

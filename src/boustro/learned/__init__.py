@@ -12,26 +12,22 @@ import importlib
 from typing import TYPE_CHECKING
 
 from ..objectives import LengthObjective, PlanObjective, PreferredAngle, as_plan_objective
+from .batch import PlanBatch, batch_lengths, batch_objective, make_batch, random_batch
 from .config import PlannerConfig, TrainConfig
+from .refine import NUDGE as NUDGE  # defined here before, not in __all__
+from .refine import RefineOptions, refine
 
 if TYPE_CHECKING:
-    from .batch import PlanBatch, batch_lengths, batch_objective, make_batch, random_batch
     from .infer import BatchResult, learned, learned_batch, warm_start
     from .network import LearnedPlanner, Prediction
-    from .refine import NUDGE as NUDGE  # defined here before, not in __all__
-    from .refine import RefineOptions, refine
     from .train import TrainResult, train_planner
     from .weights import DEFAULT_WEIGHTS, check_weights_path, load_planner, save_planner
 
-#: The names of the modules that compute with torch, each imported on its first use (PEP 562),
-#: so that ``import boustro.learned`` (the command line's ``train`` options) imports no torch.
+#: The names of the modules that import torch (the network's), each imported on its first use
+#: (PEP 562), so that ``import boustro.learned`` (``train``'s options) imports no torch.
 _LAZY = {
-    **dict.fromkeys(
-        ("PlanBatch", "batch_lengths", "batch_objective", "make_batch", "random_batch"), "batch"
-    ),
     **dict.fromkeys(("BatchResult", "learned", "learned_batch", "warm_start"), "infer"),
     **dict.fromkeys(("LearnedPlanner", "Prediction"), "network"),
-    **dict.fromkeys(("NUDGE", "RefineOptions", "refine"), "refine"),
     **dict.fromkeys(("TrainResult", "train_planner"), "train"),
     **dict.fromkeys(
         ("DEFAULT_WEIGHTS", "check_weights_path", "load_planner", "save_planner"), "weights"
