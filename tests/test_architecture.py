@@ -208,11 +208,16 @@ def test_no_library_module_imports_a_compatibility_path():
                 "boustro.experiments",
                 "boustro.mission",
                 "boustro.plot",
+                "torch",
             ),
         ),
-        ("import boustro.optimize", ("boustro.learned", "numba", "matplotlib")),
-        ("import boustro.learned", ("boustro.io", "boustro.cli", "matplotlib", "shapely")),
-        ("import boustro.plan", ("boustro.io", "boustro.cli", "matplotlib", "boustro.learned")),
+        ("import boustro.optimize", ("boustro.learned", "numba", "matplotlib", "torch")),
+        ("import boustro.learned", ("boustro.io", "boustro.cli", "matplotlib", "shapely", "torch")),
+        (
+            "import boustro.plan",
+            ("boustro.io", "boustro.cli", "matplotlib", "boustro.learned", "torch"),
+        ),
+        ("import boustro.cli, boustro.batch, boustro.web", ("torch",)),
     ],
 )
 def test_what_an_import_loads(statement, absent):
@@ -220,3 +225,76 @@ def test_what_an_import_loads(statement, absent):
     code = f"import sys; {statement}; print(','.join(m for m in {absent!r} if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "", f"{statement} loaded {out.stdout.strip()}"
+
+
+#: The modules that may import torch when they are imported: the learned planner's network code
+#: (entries of ``boustro.learned._LAZY``) and the paper's experiments; every other module names
+#: torch through ``boustro._torch`` (docs/architecture.md, "Which layers may import torch").
+TORCH_AT_IMPORT = ("boustro.experiments", "boustro.learned.")
+
+
+def test_only_the_learned_planner_and_the_experiments_import_torch_at_module_level():
+    bad = []
+    for module, path in MODULES.items():
+        if module.startswith(TORCH_AT_IMPORT) and module != "boustro.learned.config":
+            continue
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            names = (
+                [a.name for a in node.names]
+                if isinstance(node, ast.Import)
+                else [node.module or ""]
+                if isinstance(node, ast.ImportFrom) and not node.level
+                else []
+            )
+            if any(n == "torch" or n.startswith("torch.") for n in names):
+                bad.append(f"{module}:{node.lineno}")
+    assert not bad, "torch imported at module level (use boustro._torch): " + ", ".join(bad)
+
+
+def test_help_and_plans_import_no_torch(tmp_path):
+    """``boustro --help``, ``boustro train --help`` and plans of the certified searches (the
+    embedded concave field: its hull's Eq. 1, the time and fewest-transects objectives,
+    ``--keep-inside``, a decomposition, a vehicle's turns, a camera, every export format) run in
+    one fresh process without importing torch; a plan of the smooth model's gradient descent
+    then does (so the check itself can fail)."""
+    out = str(tmp_path)
+    commands = [
+        ["plan", "--out", f"{out}/a.geojson"],
+        ["plan", "--objective", "time", "--speed", "5", "--out", f"{out}/b.kml"],
+        ["plan", "--keep-inside", "--out", f"{out}/c.gpx"],
+        ["plan", "--objective", "fewest-transects", "--out", f"{out}/d.csv"],
+        ["plan", "--keep-inside", "--objective", "time", "--speed", "5", "--json"],
+        ["plan", "--decompose", "--out", f"{out}/e.plan", "--altitude", "30"],
+        [
+            "plan",
+            "--turn-radius",
+            "6",
+            "--speed",
+            "2",
+            "--out",
+            f"{out}/f.waypoints",
+            "--altitude",
+            "0",
+        ],
+        ["plan", "--camera", "dji-phantom-4-pro", "--altitude", "80", "--json"],
+    ]
+    code = f"""
+import contextlib, io, sys
+from boustro.cli import build_parser, main
+for command in (["--help"], ["train", "--help"]):
+    with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):
+        build_parser().parse_args(command)
+print("help", "torch" in sys.modules)
+for argv in {commands!r}:
+    with contextlib.redirect_stdout(io.StringIO()):
+        status = main(["-q", *argv])
+    print(" ".join(argv[:3]), status, "torch" in sys.modules)
+with contextlib.redirect_stdout(io.StringIO()):
+    main(["-q", "plan", "--method", "gradient", "--json"])
+print("gradient", "torch" in sys.modules)
+"""
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    lines = run.stdout.strip().splitlines()
+    assert lines[-1] == "gradient True", run.stdout + run.stderr
+    loaded = [line for line in lines[:-1] if not line.endswith(" 0 False") and line != "help False"]
+    assert len(lines) == len(commands) + 2 and not loaded, run.stdout + run.stderr

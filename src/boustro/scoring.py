@@ -11,9 +11,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike, NDArray
 
+from ._torch import torch
 from ._validate import check_finite, check_spacing
 from .errors import InvalidParameterError, NoTransectError
 from .geometry import Polygon, as_polygon, halfplanes

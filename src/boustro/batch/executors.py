@@ -18,6 +18,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
+from .._torch import threads
 from ..errors import MissingDependencyError
 from .source import Feature
 from .worker import FieldResult, Job, plan_chunk, start_worker
@@ -31,15 +32,9 @@ Outcome = tuple[list[Feature], "list[FieldResult] | BaseException"]
 def run_inline(chunks: Iterable[list[Feature]], job: Job) -> Iterator[Outcome]:
     """Every chunk in this process, in order, on one torch thread as a worker process (small
     fields plan several times faster so on a loaded machine; restored afterwards)."""
-    import torch
-
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
+    with threads(1):  # torch is imported by the plans that need it only
         for chunk in chunks:
             yield chunk, plan_chunk(chunk, job)
-    finally:
-        torch.set_num_threads(threads)
 
 
 def _bounded(

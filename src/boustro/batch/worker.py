@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from .._torch import set_threads
 from ..errors import BoustroError, PolygonFileError
 from ..io.area import Area, close_ring
 from ..io.formats import FORMATS, render
@@ -79,9 +80,7 @@ def start_worker() -> None:
     Ctrl-C left to the parent (which commits what is done and stops the pool)."""
     import signal
 
-    import torch
-
-    torch.set_num_threads(1)
+    set_threads(1)  # when torch is imported: a plan that needs it (most need none)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 

@@ -19,10 +19,9 @@ import time
 from typing import Any
 
 import numpy as np
-import torch
 
-from .. import experiments as ex
 from .._files import atomic_write
+from .._torch import torch
 from .._version import __version__
 from ._common import nonnegative_int, positive_int
 
@@ -119,6 +118,8 @@ def _read_json(path: str, part: str) -> dict[str, Any] | None:
     the file exists but is not such a result: another program's file, an older format)."""
     if not os.path.exists(path):
         return None
+    from .. import experiments as ex  # torch: imported by `boustro reproduce` only
+
     try:
         with open(path, encoding="utf-8") as fh:
             data = json.load(fh)
@@ -173,6 +174,8 @@ def _show_progress(args: argparse.Namespace) -> bool:
 
 
 def run(args: argparse.Namespace) -> int:
+    from .. import experiments as ex  # torch: imported by `boustro reproduce` only
+
     parts = PARTS if args.part == "all" else (args.part,)
     progress = _show_progress(args)
     os.makedirs(args.out, exist_ok=True)

@@ -7,14 +7,9 @@ import math
 from pathlib import Path
 from typing import Any
 
+from .. import learned  # its network and training import torch when first used (PEP 562)
 from ..errors import InvalidParameterError
-from ..learned import (
-    PlannerConfig,
-    TrainConfig,
-    check_weights_path,
-    save_planner,
-    train_planner,
-)
+from ..learned import PlannerConfig, TrainConfig
 from ._common import (
     check_plot_target,
     nonnegative_int,
@@ -139,7 +134,7 @@ def plot_training(history: dict[str, list[float]], path: Path | None = None, *, 
 
 def _check_outputs(args: argparse.Namespace) -> None:
     """Fail before training if the results cannot be written."""
-    check_weights_path(args.out)
+    learned.check_weights_path(args.out)
     if args.out.is_dir():
         raise InvalidParameterError(f"--out {args.out}: is a folder; give a file name")
     if args.plot is not None:
@@ -159,14 +154,14 @@ def run(args: argparse.Namespace) -> int:
         threads=args.threads,
     )
     planner = PlannerConfig(hidden=args.hidden, hypotheses=args.hypotheses)
-    result = train_planner(config, planner_config=planner, progress=not args.quiet)
+    result = learned.train_planner(config, planner_config=planner, progress=not args.quiet)
     final = result.history["val_fitness"][-1]
     if not math.isfinite(final):
         raise InvalidParameterError(
             f"training diverged (held-out fitness {final}); nothing written: try a smaller --lr "
             f"than {args.lr:g}"
         )
-    weights, meta = save_planner(result.planner, args.out, metadata=result.metadata())
+    weights, meta = learned.save_planner(result.planner, args.out, metadata=result.metadata())
     if args.plot is not None:
         plot_training(result.history, args.plot)
     h = result.history

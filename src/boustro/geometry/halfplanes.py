@@ -12,9 +12,9 @@ from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
-import torch
 from numpy.typing import NDArray
 
+from .._torch import torch
 from ..errors import InvalidPolygonError
 from .polygon import Polygon
 
@@ -56,8 +56,9 @@ def halfplanes(
     polygons: Polygon | Sequence[Polygon],
     *,
     normalise: bool = True,
-    dtype: torch.dtype = torch.float64,
+    dtype: torch.dtype | None = None,
     device: torch.device | str | None = None,
+    tensors: bool = True,
 ) -> HalfPlanes:
     """Tensor half-planes of one convex polygon, or of a batch of them (padded to equal E).
 
@@ -65,6 +66,9 @@ def halfplanes(
         polygons: a convex :class:`Polygon` or a sequence of them.
         normalise: take each polygon in its normalised frame (default), as the paper does.
         dtype, device: of the returned tensors (float64 by default).
+        tensors: ``False``: float64 numpy arrays instead, which the chord kernel
+            (:func:`boustro.models.exact_chords`) takes as well, for callers that take no
+            gradient (a plan): torch is not imported.
 
     Returns:
         :class:`HalfPlanes` with ``normals`` ``(E, 2)`` for one polygon or ``(P, E, 2)`` for P.
@@ -93,6 +97,10 @@ def halfplanes(
         normals[k, : len(p)] = n
         offsets[k, : len(p)] = b
     radius = max(float(np.max(np.linalg.norm(p.vertices, axis=1))) for p in items)
+    if not tensors:
+        hp = HalfPlanes(normals, offsets, radius)  # type: ignore[arg-type] # numpy: no torch
+        return HalfPlanes(hp.normals[0], hp.offsets[0], radius) if single else hp
+    dtype = torch.float64 if dtype is None else dtype
     hp = HalfPlanes(
         torch.as_tensor(normals, dtype=dtype, device=device),
         torch.as_tensor(offsets, dtype=dtype, device=device),

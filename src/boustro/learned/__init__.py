@@ -8,14 +8,42 @@ Lifecycle: :mod:`~boustro.learned.batch` (polygons as padded tensors, batched sc
 
 from __future__ import annotations
 
+import importlib
+from typing import TYPE_CHECKING
+
 from ..objectives import LengthObjective, PlanObjective, PreferredAngle, as_plan_objective
 from .batch import PlanBatch, batch_lengths, batch_objective, make_batch, random_batch
-from .infer import BatchResult, learned, learned_batch, warm_start
-from .network import LearnedPlanner, PlannerConfig, Prediction
+from .config import PlannerConfig, TrainConfig
 from .refine import NUDGE as NUDGE  # defined here before, not in __all__
 from .refine import RefineOptions, refine
-from .train import TrainConfig, TrainResult, train_planner
-from .weights import DEFAULT_WEIGHTS, check_weights_path, load_planner, save_planner
+
+if TYPE_CHECKING:
+    from .infer import BatchResult, learned, learned_batch, warm_start
+    from .network import LearnedPlanner, Prediction
+    from .train import TrainResult, train_planner
+    from .weights import DEFAULT_WEIGHTS, check_weights_path, load_planner, save_planner
+
+#: The names of the modules that import torch (the network's), each imported on its first use
+#: (PEP 562), so that ``import boustro.learned`` (``train``'s options) imports no torch.
+_LAZY = {
+    **dict.fromkeys(("BatchResult", "learned", "learned_batch", "warm_start"), "infer"),
+    **dict.fromkeys(("LearnedPlanner", "Prediction"), "network"),
+    **dict.fromkeys(("TrainResult", "train_planner"), "train"),
+    **dict.fromkeys(
+        ("DEFAULT_WEIGHTS", "check_weights_path", "load_planner", "save_planner"), "weights"
+    ),
+}
+
+
+def __getattr__(name: str) -> object:
+    """A name of :data:`_LAZY`, from its module, imported on first use."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "DEFAULT_WEIGHTS",

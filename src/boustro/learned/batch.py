@@ -7,9 +7,9 @@ from collections.abc import Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike, NDArray
 
+from .._torch import torch
 from ..errors import InvalidParameterError, NoTransectError
 from ..geometry import PAD_OFFSET, HalfPlanes, Polygon, random_convex_polygon
 from ..models import ExactModel, TransectLengths, check_spacing
@@ -71,9 +71,11 @@ def from_normalised(
     spacing: ArrayLike,
     scale: ArrayLike,
     centre: ArrayLike,
-    dtype: torch.dtype,
+    dtype: torch.dtype | None,
 ) -> PlanBatch:
-    """A :class:`PlanBatch` of CCW vertices already in their normalised frames."""
+    """A :class:`PlanBatch` of CCW vertices already in their normalised frames (float64 tensors
+    unless ``dtype``)."""
+    dtype = torch.float64 if dtype is None else dtype
     n_max = max(len(v) for v in vertices)
     verts = np.empty((len(vertices), n_max, 2))
     mask = np.zeros((len(vertices), n_max), dtype=bool)
@@ -110,7 +112,7 @@ def make_batch(
     polygons: Sequence[Polygon | ArrayLike],
     spacings: ArrayLike,
     *,
-    dtype: torch.dtype = torch.float64,
+    dtype: torch.dtype | None = None,
 ) -> PlanBatch:
     """A :class:`PlanBatch` of convex polygons (user units) and spacings (user units).
 
@@ -148,7 +150,7 @@ def random_batch(
     max_vertices: int = 9,
     min_spacing: float = 0.01,
     max_spacing: float = 1.0 / 3.0,
-    dtype: torch.dtype = torch.float64,
+    dtype: torch.dtype | None = None,
 ) -> PlanBatch:
     """``count`` random convex polygons (Valtr, ``min..max`` vertices, normalised frame) with
     spacings uniform in ``(min_spacing, max_spacing)`` of the diameter: the benchmarks'

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import NamedTuple, cast
 
 import torch
@@ -13,20 +12,11 @@ from torch import nn
 from ..geometry import HalfPlanes
 from ..models import chords_at
 from .batch import PlanBatch
+from .config import PlannerConfig
 
 __all__ = ["LearnedPlanner", "PlannerConfig", "Prediction", "hypotheses"]
 
 _TWO_PI = 2.0 * math.pi
-
-
-@dataclass(frozen=True)
-class PlannerConfig:
-    """Hyperparameters of :class:`LearnedPlanner` (saved next to the weights as JSON)."""
-
-    hidden: int = 64
-    hypotheses: int = 16
-    rounds: int = 1
-    profile: bool = True  # chord-length profile near both extremes as offset-head features
 
 
 def _mlp(sizes: Sequence[int]) -> nn.Sequential:

@@ -6,8 +6,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
-import torch
-
+from .._torch import torch
 from ..objectives import as_plan_objective
 from .batch import PlanBatch, batch_objective
 

@@ -16,30 +16,10 @@ from torch import nn
 from ..geometry import random_convex_polygon
 from ..objectives import as_plan_objective
 from .batch import PlanBatch, batch_objective, from_normalised, random_batch
+from .config import TrainConfig
 from .network import LearnedPlanner, PlannerConfig, hypotheses
 
 __all__ = ["TrainConfig", "TrainResult", "train_planner"]
-
-
-@dataclass(frozen=True)
-class TrainConfig:
-    """Settings of :func:`train_planner` (the defaults made the shipped weights)."""
-
-    epochs: int = 30
-    steps_per_epoch: int = 40
-    batch_size: int = 128
-    pool: int = 6000  # random polygons generated once; spacings are redrawn every batch
-    validation: int = 256
-    lr: float = 3e-3
-    weight_decay: float = 1e-5
-    smoothing_start: float = 0.2  # fractions of the spacing, annealed geometrically
-    smoothing_end: float = 0.02
-    wta_temperature: float = 0.01  # soft winner-takes-all over the hypotheses (fitness units)
-    wta_floor: float = 0.05  # weight of the plain mean of the hypotheses in the loss
-    min_spacing: float = 0.01
-    max_spacing: float = 1.0 / 3.0
-    seed: int = 0
-    threads: int | None = 1  # the shipped weights were trained on 1 thread
 
 
 @dataclass

@@ -10,8 +10,9 @@ from __future__ import annotations
 import math
 from typing import NamedTuple, Protocol, runtime_checkable
 
-import torch
+import numpy as np
 
+from .._torch import as_array, broadcast, namespace, torch
 from .._validate import MAX_TRANSECTS, check_finite, check_spacing
 from ..errors import InvalidParameterError
 from ..geometry import HalfPlanes
@@ -85,11 +86,9 @@ def _prepare(
     ``across_j c + along_j t + b_j >= 0``. Rotating the edges instead of the transects is the
     paper's "rotate W, keep B".
     """
-    dtype, device = hp.normals.dtype, hp.normals.device
-    theta_t = torch.as_tensor(theta, dtype=dtype, device=device)
-    offset_t = torch.as_tensor(offset, dtype=dtype, device=device)
-    theta_t, offset_t = torch.broadcast_tensors(theta_t, offset_t)
-    across, along, b = _components(torch.cos(theta_t), torch.sin(theta_t), hp.normals, hp.offsets)
+    xp = namespace(hp.normals)  # numpy arrays (a plan) or tensors: ``halfplanes(tensors=)``
+    theta_t, offset_t = broadcast(as_array(theta, hp.normals), as_array(offset, hp.normals))
+    across, along, b = _components(xp.cos(theta_t), xp.sin(theta_t), hp.normals, hp.offsets)
     return theta_t, offset_t, across, along, b
 
 
@@ -103,7 +102,7 @@ def _components(
     cos, sin = cos[..., None], sin[..., None]
     across = -nx * sin + ny * cos
     along = nx * cos + ny * sin
-    return across, along, torch.broadcast_to(offsets, across.shape)
+    return across, along, namespace(offsets).broadcast_to(offsets, across.shape)
 
 
 def grid_size(spacing: float, radius: float) -> tuple[int, int]:
@@ -139,8 +138,8 @@ def _grid(offset: torch.Tensor, spacing: float, radius: float) -> tuple[torch.Te
     that :func:`transect_positions` is ``d[..., None] + q``."""
     spacing = check_spacing(spacing)
     k_count, m = grid_size(spacing, radius)
-    k = torch.arange(k_count, dtype=offset.dtype, device=offset.device) - m
-    return torch.remainder(offset, spacing), k * spacing
+    k = as_array(np.arange(k_count) - m, offset)
+    return namespace(offset).remainder(offset, spacing), k * spacing
 
 
 def _window_mask(positions: torch.Tensor, clip: bool) -> torch.Tensor | None:

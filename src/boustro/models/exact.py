@@ -21,8 +21,7 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
-import torch
-
+from .._torch import as_array, namespace, torch
 from ..geometry import HalfPlanes
 from .base import (
     PAPER_WINDOW,
@@ -87,13 +86,14 @@ def chord_bounds(
         parallel = ~(pos | neg)
     else:
         pos, neg, parallel = along > 0, along < 0, along == 0
+    xp = namespace(along)  # numpy arrays or tensors
     num = -lhs if delta is None else delta - lhs
-    bound = num / torch.where(parallel, torch.ones_like(along), along)
-    inf = torch.as_tensor(math.inf, dtype=bound.dtype, device=bound.device)
-    lower = torch.where(pos, bound, -inf).amax(dim=-1)
-    upper = torch.where(neg, bound, inf).amin(dim=-1)
+    bound = num / xp.where(parallel, xp.ones_like(along), along)
+    inf = as_array(math.inf, bound)
+    lower = xp.amax(xp.where(pos, bound, -inf), -1)
+    upper = xp.amin(xp.where(neg, bound, inf), -1)
     outside = lhs < 0 if delta is None else lhs < delta
-    return ChordBounds(lower, upper, (parallel & outside).any(dim=-1))
+    return ChordBounds(lower, upper, xp.any(parallel & outside, -1))
 
 
 def line_chords(
@@ -123,14 +123,15 @@ def line_chords(
     """
     if fused:
         return _fused_chords(across, along, b, positions, clip)
+    xp = namespace(positions)  # numpy arrays or tensors
     across, along, b = across[..., None, :], along[..., None, :], b[..., None, :]
     lhs = across * positions[..., :, None] + b  # (*, K, E): edge j holds iff lhs + along t >= 0
     lower, upper, blocked = chord_bounds(lhs, along)
     if clip:
-        lower = lower.clamp(min=-PAPER_WINDOW)
-        upper = upper.clamp(max=PAPER_WINDOW)
-    length = torch.where(blocked, torch.zeros_like(lower), (upper - lower).clamp(min=0))
-    return Chords(torch.broadcast_to(positions, length.shape), lower, upper, length)
+        lower = xp.clip(lower, -PAPER_WINDOW, None)
+        upper = xp.clip(upper, None, PAPER_WINDOW)
+    length = xp.where(blocked, xp.zeros_like(lower), xp.clip(upper - lower, 0, None))
+    return Chords(xp.broadcast_to(positions, length.shape), lower, upper, length)
 
 
 def _fused_chords(
@@ -238,7 +239,8 @@ def exact_chords(
     mask = _window_mask(c, clip)
     if mask is None:
         return chords
-    length = torch.where(mask, chords.lengths, torch.zeros_like(chords.lengths))
+    xp = namespace(c)
+    length = xp.where(mask, chords.lengths, xp.zeros_like(chords.lengths))
     return chords._replace(lengths=length)
 
 

@@ -5,9 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-import torch
-import torch.nn.functional as F
-
+from .._torch import functional as F
+from .._torch import torch
 from .._validate import as_number
 from ..errors import InvalidParameterError
 from ..geometry import HalfPlanes

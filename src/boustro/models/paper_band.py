@@ -6,7 +6,7 @@ import bisect
 import math
 from typing import NamedTuple
 
-import torch
+from .._torch import torch
 
 __all__ = ["band_tau", "integrand"]
 

@@ -4,9 +4,7 @@ from __future__ import annotations
 
 from typing import Any, NamedTuple
 
-import torch
-from torch.autograd.function import once_differentiable
-
+from .._torch import Function, autograd_function, once_differentiable, torch
 from .paper_band import _Band, _band, _band_integrand, _group_points, integrand
 
 __all__ = ["SigmoidIntegral"]
@@ -77,7 +75,8 @@ def _plan(lhs: torch.Tensor, slope: torch.Tensor, temp: torch.Tensor, g: _Grids)
     return _band(it.lhs, it.slope, g.t, it.grid, lhs.shape[1], _TARGET)
 
 
-class _SigmoidIntegral(torch.autograd.Function):
+@autograd_function
+class _SigmoidIntegral(Function):
     """Eq. 4-6 fused: lengths ``(N, K)`` from ``tv = lhs[n, k, j] + slope[n, j] * t[p]``.
 
     Each block ``n`` of ``K`` lines shares its slopes, its temperature ``temp[n]`` and its

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import torch
+from .._torch import torch
 
 __all__ = ["subsets_blocks", "subsets_lengths"]
 

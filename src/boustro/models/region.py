@@ -12,9 +12,9 @@ from dataclasses import dataclass
 from typing import Literal, NamedTuple
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike, NDArray
 
+from .._torch import torch
 from .._validate import check_spacing
 from ..errors import InvalidParameterError
 from ..geometry import Polygon
@@ -58,7 +58,7 @@ def region_edges(
     region: Region | Polygon | ArrayLike,
     *,
     normalise: bool = True,
-    dtype: torch.dtype = torch.float64,
+    dtype: torch.dtype | None = None,
     device: torch.device | str | None = None,
 ) -> RegionEdges:
     """The tensor edges of a region, in its normalised frame by default."""
@@ -67,6 +67,7 @@ def region_edges(
     if normalise:
         e = r.frame.to_normalised(e)
     radius = float(np.max(np.linalg.norm(e[:, 0], axis=1)))
+    dtype = torch.float64 if dtype is None else dtype
     return RegionEdges(
         torch.as_tensor(np.ascontiguousarray(e[:, 0]), dtype=dtype, device=device),
         torch.as_tensor(np.ascontiguousarray(e[:, 1]), dtype=dtype, device=device),

@@ -12,9 +12,8 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
-import torch
-import torch.nn.functional as F
-
+from .._torch import functional as F
+from .._torch import torch
 from .._validate import check_positive, check_spacing
 from ..errors import InvalidParameterError
 from .base import TransectLengths, transect_positions

@@ -16,9 +16,9 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-import torch
-import torch.nn.functional as F
 
+from .._torch import Function, autograd_function, torch
+from .._torch import functional as F
 from .._validate import as_number, check_spacing
 from ..errors import InvalidParameterError
 from ..geometry import HalfPlanes
@@ -98,7 +98,8 @@ def _as_smoothing(
 _SPARSE_MIN = 1 << 15
 
 
-class _SoftChords(torch.autograd.Function):
+@autograd_function
+class _SoftChords(Function):
     """Soft chords ``(softplus(z), sigmoid(z))``, ``(N, K)``, from the edges' components.
 
     Inputs ``across, along, b`` ``(N, E)`` (edge ``j`` holds at ``(c, t)`` iff
@@ -240,7 +241,8 @@ def _numpy(x: torch.Tensor) -> Any:
     return x.detach().contiguous().numpy()
 
 
-class _CompiledChords(torch.autograd.Function):
+@autograd_function
+class _CompiledChords(Function):
     """Soft lengths and weights ``(N, K)`` by the compiled kernels: the same model as
     :class:`_SoftChords` (roles, clamps, windows), evaluated and differentiated per pair in one
     loop. Inputs: ``cos, sin`` of the angles, wrapped offsets ``d`` and smoothing ``h``, all

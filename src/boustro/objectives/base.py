@@ -4,8 +4,7 @@ from __future__ import annotations
 
 from typing import Any, Literal, Protocol, runtime_checkable
 
-import torch
-
+from .._torch import torch
 from ..errors import InvalidParameterError
 from ..models import TransectLengths
 

@@ -5,8 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-import torch
-
+from .._torch import torch
 from ..errors import InvalidParameterError
 from ..models import Chords, TransectLengths
 from .base import BaseObjective

@@ -7,8 +7,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-import torch
-
+from .._torch import torch
 from ..errors import InvalidParameterError
 from ..models import TransectLengths
 from .base import PlanObjective, objective_sign

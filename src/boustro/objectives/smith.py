@@ -7,8 +7,8 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-import torch
 
+from .._torch import Function, autograd_function, torch
 from .._validate import as_number
 from ..errors import InvalidParameterError
 from ..models import TransectLengths, smooth
@@ -124,7 +124,8 @@ def _compiled_kernels(lengths: torch.Tensor, weights: torch.Tensor) -> _compiled
     return smooth._compiled_kernels(lengths, lengths.numel())
 
 
-class _CompiledSmith(torch.autograd.Function):
+@autograd_function
+class _CompiledSmith(Function):
     """Eq. 1 with weighted statistics by the compiled kernels, batched over leading dims.
 
     Its backward pass is the kernel's; asked for a differentiable gradient (``create_graph``),

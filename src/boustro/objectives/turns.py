@@ -5,8 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import torch
-
+from .._torch import torch
 from ..models import Chords, TransectLengths
 from .base import BaseObjective
 from .registry import register_objective

@@ -7,9 +7,9 @@ import time
 from typing import Any, NamedTuple
 
 import numpy as np
-import torch
 from numpy.typing import NDArray
 
+from .._torch import torch
 from ..models import (
     TransectModel,
 )

@@ -24,9 +24,9 @@ import time
 from typing import Any
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike
 
+from .._torch import torch
 from ..errors import InvalidParameterError, NoTransectError
 from ..geometry import Polygon
 from ..geometry.region import Region, as_region

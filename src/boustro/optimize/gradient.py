@@ -8,9 +8,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike
 
+from .._torch import torch
 from ..errors import InvalidParameterError
 from ..geometry import Polygon
 from ..models import (

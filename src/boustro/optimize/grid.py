@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 import time
 
-import torch
 from numpy.typing import ArrayLike
 
+from .._torch import torch
 from ..geometry import Polygon
 from ..objectives import Objective
 from .methods import register_method

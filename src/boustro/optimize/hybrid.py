@@ -7,9 +7,9 @@ import math
 import time
 from typing import NamedTuple
 
-import torch
 from numpy.typing import ArrayLike
 
+from .._torch import torch
 from ..geometry import Polygon
 from ..models import (
     TransectModel,

@@ -7,9 +7,9 @@ import sys
 from typing import Any, NamedTuple
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike
 
+from .._torch import torch
 from .._validate import as_number
 from ..errors import InvalidParameterError, NoTransectError
 from ..geometry import HalfPlanes, Polygon, halfplanes

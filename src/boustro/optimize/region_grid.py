@@ -10,9 +10,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike, NDArray
 
+from .._torch import torch
 from ..errors import InvalidParameterError
 from ..models.region import RegionEdges, RegionExactModel, segment_moments
 from ..objectives import objective_sign

@@ -6,7 +6,6 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike, NDArray
 
 from .._validate import as_number
@@ -108,12 +107,11 @@ def guaranteed_segments(
         )
     frame = poly.frame
     s, h, d = spacing / frame.scale, reach / frame.scale, offset / frame.scale
-    hp = halfplanes(poly)
+    hp = halfplanes(poly, tensors=False)  # numpy arrays: a plan imports no torch
     # Enough candidate lines for every band that can meet the polygon.
     wide = HalfPlanes(hp.normals, hp.offsets, hp.radius + h + s)
-    with torch.no_grad():
-        mid, lo, hi = (exact_chords(wide, angle, d + shift, s) for shift in (0.0, -h, h))
-    c = mid.positions.numpy()
+    mid, lo, hi = (exact_chords(wide, angle, d + shift, s) for shift in (0.0, -h, h))
+    c = np.asarray(mid.positions)  # numpy arrays: ``tensors=False``
     u = np.array([math.cos(angle), math.sin(angle)])
     n = np.array([-math.sin(angle), math.cos(angle)])
     v = frame.to_normalised(poly.vertices)
@@ -125,10 +123,10 @@ def guaranteed_segments(
     t_lo = np.full(len(c), np.inf)
     t_hi = np.full(len(c), -np.inf)
     for ch, target in ((lo, c - h), (hi, c + h)):
-        pos = ch.positions.numpy()
-        length, valid = _aligned(ch.lengths.numpy(), pos, target, s)
-        lower, _ = _aligned(ch.lower.numpy(), pos, target, s)
-        upper, _ = _aligned(ch.upper.numpy(), pos, target, s)
+        pos = np.asarray(ch.positions)
+        length, valid = _aligned(np.asarray(ch.lengths), pos, target, s)
+        lower, _ = _aligned(np.asarray(ch.lower), pos, target, s)
+        upper, _ = _aligned(np.asarray(ch.upper), pos, target, s)
         has = valid & (length > 0)
         t_lo = np.where(has, np.minimum(t_lo, lower), t_lo)
         t_hi = np.where(has, np.maximum(t_hi, upper), t_hi)

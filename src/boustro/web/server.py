@@ -13,6 +13,7 @@ import sys
 import threading
 import webbrowser
 
+from .._torch import threads as torch_threads
 from ..errors import InvalidParameterError, MissingDependencyError
 from .app import create_app
 
@@ -59,11 +60,5 @@ def serve(
         print(f"boustro: serving the planner on {url} (Ctrl-C stops it)", file=sys.stderr)
     if open_browser:
         threading.Timer(1.0, webbrowser.open, args=(url,)).start()
-    import torch
-
-    previous = torch.get_num_threads()
-    torch.set_num_threads(threads)
-    try:
+    with torch_threads(threads):  # torch is imported by the plans that need it only
         uvicorn.run(app, host=host, port=port, log_level="warning" if quiet else "info")
-    finally:
-        torch.set_num_threads(previous)

@@ -8,9 +8,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike, NDArray
 
+from ..._torch import torch
 from ...errors import NoTransectError
 from ...geometry import Polygon, halfplanes
 from ...models import (

@@ -8,9 +8,9 @@ from functools import cache, cached_property
 from typing import Any, NamedTuple
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike, NDArray
 
+from ..._torch import torch
 from ...errors import InvalidParameterError, NoTransectError
 from ...geometry import Polygon, halfplanes
 from ...geometry.polygon import edge_halfplanes

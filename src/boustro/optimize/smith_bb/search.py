@@ -18,9 +18,9 @@ import time
 from typing import Any
 
 import numpy as np
-import torch
 from numpy.typing import ArrayLike, NDArray
 
+from ..._torch import torch
 from ...errors import InvalidParameterError, NoTransectError
 from ...geometry import Polygon, halfplanes
 from ...geometry.region import Region
