@@ -270,3 +270,21 @@ def test_the_spur_cache_is_bounded_by_its_points(monkeypatch):
             assert len(geo._spurs) == 1 or kept <= 60
             seen += 1
     assert seen > 0
+
+
+@pytest.mark.parametrize("margin", [0.0, 1.0])
+def test_clip_lanes_keep_the_chords_ends_on_ties_of_signed_zeros(margin):
+    """A lane's end equal to its chord's end keeps the chord's (as ``max`` / ``min`` did): a
+    lane from ``-0.0`` on a chord from ``0.0`` gives ``0.0``, byte for byte (np.maximum
+    returns its second argument on ties)."""
+    from boustro.plan.lanes import Lanes
+
+    square = Region([(0, 0), (10, 0), (10, 4), (0, 4)])
+    ls = Lanes(0.0, np.zeros(2), np.arange(2, dtype=np.int64), np.array([2.0, 3.0]),
+               np.array([-0.0, 1.0]), np.array([10.0, 9.0]), frozenset())  # fmt: skip
+    if margin > 0:  # the shrunk square's chords start at x = 1: the origin there
+        ls = ls._replace(origin=np.array([1.0, 0.0]), c=np.array([2.0, 2.5]))
+    got = inside.clip_lanes(ls, square, 1e-9, margin, 2.0)
+    want = _clip_before(ls, square, 1e-9, margin, 2.0)
+    for x, y in zip(got[2:6], want[2:6], strict=True):
+        assert x.tobytes() == y.tobytes()

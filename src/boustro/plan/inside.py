@@ -178,7 +178,10 @@ def clip_lanes(
         i, a, b = _shrunk_intervals(lanes, geo.shrunk(margin))
     else:
         i, a, b = _chords(area.edges - lanes.origin, u, n, lanes.c)
-    lo, hi = np.maximum(a, lanes.t0[i]), np.minimum(b, lanes.t1[i])
+    # a lane's end cuts its chord only where strictly inside it (ties keep the chord's end,
+    # -0.0 against 0.0 included: np.maximum / np.minimum would return the lane's)
+    t0, t1 = lanes.t0[i], lanes.t1[i]
+    lo, hi = np.where(t0 > a, t0, a), np.where(t1 < b, t1, b)
     keep = hi - lo > tol
     i = i[keep]
     return Lanes(
