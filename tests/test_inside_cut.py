@@ -195,3 +195,38 @@ def test_a_decomposition_cell_search_bounds_as_before():
     assert np.array_equal(got[(False, "bound")], got[(False, "off")])
     assert (got[(True, "bound")] >= got[(False, "off")]).all()
     assert (got[(True, "bound")] > got[(False, "off")] + 1e-9).any()
+
+
+@pytest.mark.parametrize("index", range(15))
+def test_a_box_counts_no_more_than_any_layout_in_it(index):
+    """Per stretch, a box's counted part (``theta +- delta``) lies inside the part counted at
+    every angle of the box, and its travel along the lanes is no more: the box's terms hold at
+    each of its layouts (boxes straddling ~27 degrees, 89.4 degrees and random ones)."""
+    region = (_adversarial() + _areas() + _gaps())[index]
+    edges = contour_edges(region, S, S / 2)
+    rng = np.random.default_rng(500 + index)
+    e = region.edges
+    along = np.arctan2(e[:, 1, 1] - e[:, 0, 1], e[:, 1, 0] - e[:, 0, 0]) % math.pi
+    n = 40
+    turn = rng.choice([0.47, 0.5, 0.6, 1.0, 1.55, 1.5607], n) * rng.choice([-1, 1], n)
+    theta = np.concatenate([(rng.choice(along, n) + turn) % math.pi, rng.uniform(0, math.pi, n)])
+    delta = rng.choice([0.005, 0.02, 0.05], 2 * n)
+    core, k_lo = cut_cores(edges, theta, delta, S)
+    p, a, rings = cut_stretches(edges, theta, delta, S)
+    inner = 0
+    for i in np.flatnonzero((core > 0).any(axis=1)):
+        for angle in (
+            theta[i] - delta[i],
+            theta[i] + delta[i],
+            theta[i] + rng.uniform(-1, 1) * delta[i],
+        ):
+            at = np.array([angle % math.pi])
+            c1, k1 = cut_cores(edges, at, np.zeros(1), S)
+            p1, a1, r1 = cut_stretches(edges, at, np.zeros(1), S)
+            on = core[i] > 0
+            assert (c1[0, on] > 0).all(), (theta[i], delta[i], angle)
+            assert (k1[0, on] <= k_lo[i, on] + 1e-9).all()
+            assert (k1[0, on] + c1[0, on] >= k_lo[i, on] + core[i, on] - 1e-9).all()
+            assert p[i] <= p1[0] + 1e-9 and a[i] <= a1[0] + 1e-9 and rings[i] <= r1[0]
+            inner += 1
+    assert inner or not edges.core.any()
