@@ -91,3 +91,21 @@ def test_partial_round_only_on_simplified_searches_without_keep_inside():
     small = traced_field(100, 1, radius=120.0)  # exact sandwiches: the search as before
     s = search_module.CoverSearch(small, SPACING, SPACING / 2, COST, lambda a, d: 0.0, False)
     assert s.sandwich.tolerance <= 0 and not branch_module.partial_round(s)
+
+
+def test_boxes_within_is_the_most_boxes_the_budget_allows():
+    """:meth:`boxes_within` is the largest ``n`` with :meth:`work_spent` ``(n)`` within the
+    budget (a partial round takes no fewer boxes than the budget allows, nor more)."""
+    region = _field()
+    search = search_module.CoverSearch(region, SPACING, SPACING / 2, COST, None, False)
+    assert search.boxes_within(1e9) == 0  # no work yet: no cost per layout known
+    theta = np.radians(np.arange(0.0, 180.0, 7.0))
+    z = np.zeros(len(theta))
+    search.point_values(Boxes(theta, z + 2.0, z + 1.0, z + 2.0))  # some work spent
+    assert search.work > 0
+    assert search.boxes_within(search.work_spent(0) - 1.0) == 0
+    for extra in (0.5, 1.5, 7.25, 40.5, 1000.5):
+        budget = search.work_spent(0) + extra * (search.work_spent(1) - search.work_spent(0))
+        n = search.boxes_within(budget)
+        assert n == int(extra), (extra, n)
+        assert search.work_spent(n) <= budget < search.work_spent(n + 1)

@@ -190,13 +190,9 @@ class CoverSearch:
 
     def boxes_within(self, max_work: float) -> int:
         """The most boxes a next round may have with :meth:`work_spent` within ``max_work``
-        (0 if none)."""
-        if self.sandwich.tolerance <= 0:
-            edges = float(len(self.sandwich.exact.outer.xy))
-            n = math.floor((max_work / edges - self.bound_evaluations) / 8)
-        else:
-            per_layout = self.work / max(self.bound_evaluations, 1)
-            n = math.floor((max_work - self.work) / (8 * per_layout)) if per_layout > 0 else 0
+        (0 if none): :meth:`work_spent` is linear in its boxes (box edges)."""
+        per_box = self.work_spent(1) - self.work_spent(0)
+        n = math.floor((max_work - self.work_spent(0)) / per_box) if per_box > 0 else 0
         n = max(n, 0)
         while n > 0 and self.work_spent(n) > max_work:  # rounding
             n -= 1
