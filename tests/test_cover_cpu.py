@@ -68,7 +68,7 @@ def test_layouts_ruled_out_by_their_bound_are_not_planned_the_same_search(seed, 
     _ruled_out_same_search(_region(seed), monkeypatch)
 
 
-def test_ruled_out_only_with_exact_bounds_and_real_plans():
+def test_ruled_out_only_where_a_plan_is_dearer_than_its_model():
     region = _region(71)
     s = search_module.CoverSearch(region, SPACING, SPACING / 2, COST, None, False)
     assert not plans_module.bounds_rule_out(s)  # the model is the plan: nothing to save
