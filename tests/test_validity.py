@@ -19,7 +19,7 @@ from boustro.geometry import Polygon, Region
 from boustro.geometry import polygon as polygon_module
 from boustro.geometry.validity import geos_reason
 from boustro.io import Area
-from boustro.io.repair import area_problem, repair_area
+from boustro.io.repair import area_problem, detach_holes, repair_area
 
 from .conftest import run_cli
 
@@ -284,3 +284,20 @@ def test_a_nan_vertex_is_refused_in_one_line_with_or_without_repair(tmp_path, ca
         code, out, err = run_cli(capsys, "plan", path, "--crs", "planar", "--spacing", "1", *extra)
         assert code == 2 and out == "" and "Traceback" not in err, err
         assert len(err.strip().splitlines()) == 1 and "try --repair" not in err
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e6])
+def test_detach_holes_cuts_exactly_the_holes_the_region_refuses(scale):
+    """Review of round 14: a hole that the Region accepts (farther than TOUCH_TOLERANCE times the
+    shell's diameter from it, here 5e-9 of the side) planned before and must be left as it is;
+    only a hole the Region refuses as touching is cut back (it was cut within 1e-8 of the
+    extent, changing the plan of an input that planned before)."""
+    shell = np.array([(0, 0), (100, 0), (100, 100), (0, 100)]) * scale
+    for gap, cut in ((5e-7, False), (1e-7, True), (0.0, True)):  # tolerance 1.41e-7 (side 100)
+        hole = np.array([(50, gap), (60, 20), (40, 20)]) * scale
+        area = Area(shell, None, "x", "f.json", (hole,))
+        planned, note = detach_holes(area)
+        assert (note is not None) == cut, (gap, note)
+        Region(planned.ring, list(planned.holes))  # what is planned is a valid Region
+        if not cut:
+            assert planned is area
