@@ -301,3 +301,20 @@ def test_detach_holes_cuts_exactly_the_holes_the_region_refuses(scale):
         Region(planned.ring, list(planned.holes))  # what is planned is a valid Region
         if not cut:
             assert planned is area
+
+
+def test_a_touching_hole_refused_for_another_reason_is_not_said_to_be_planned(tmp_path, capsys):
+    """Review of round 14: a hole touching the shell at a point and another hole at a point (the
+    holes must be disjoint) is refused; stderr said first that it was "planned with the hole cut
+    back", then refused it. Now the refusal alone, and nothing written."""
+    shell = [[0, 0], [100, 0], [100, 100], [0, 100], [0, 0]]
+    first = [[50, 0], [60, 20], [40, 20], [50, 0]]
+    second = [[60, 20], [70, 40], [60, 40], [60, 20]]
+    path = tmp_path / "chain.geojson"
+    path.write_text(json.dumps({"type": "Polygon", "coordinates": [shell, first, second]}))
+    out = tmp_path / "m.geojson"
+    argv = ["plan", path, "--crs", "planar", "--spacing", "10", "--out", out]
+    code, _, err = run_cli(capsys, *argv)
+    assert code == 2 and not out.exists()
+    assert err.strip().splitlines() == [err.strip()] and "holes 0 and 1 touch" in err, err
+    assert "planned" not in err
