@@ -318,3 +318,32 @@ def test_a_touching_hole_refused_for_another_reason_is_not_said_to_be_planned(tm
     assert code == 2 and not out.exists()
     assert err.strip().splitlines() == [err.strip()] and "holes 0 and 1 touch" in err, err
     assert "planned" not in err
+
+
+@pytest.mark.parametrize(
+    "holes",
+    [
+        [[(50, 0), (60, 20), (40, 20)]],  # a vertex on the shell's edge
+        [[(50, 0), (90, 0.1), (90, 20)]],  # an edge at 0.14 degrees to the shell's
+        [[(0, 0), (20, 10), (10, 20)]],  # at the shell's vertex
+        [[(50, 0), (60, 20), (50, 12), (40, 20)]],  # concave
+        [[(50, 0), (60, 20), (52, 20)], [(50, 0), (48, 20), (40, 20)]],  # two at one point
+    ],
+)
+def test_detach_holes_only_shrinks_the_holes_that_touch(holes):
+    """Review of round 14: the area planned contains the file's (the coverage argument of
+    detach_holes), is a valid Region, and differs from it only within the gap of the shell; a
+    hole along the shell's edge (invalid for GEOS) is left to be refused."""
+    shell = np.array([(0, 0), (100, 0), (100, 100), (0, 100)], dtype=float)
+    area = Area(shell, None, "x", "f.json", tuple(np.array(h, dtype=float) for h in holes))
+    planned, note = detach_holes(area)
+    assert note is not None and np.array_equal(planned.ring, area.ring)
+    Region(planned.ring, list(planned.holes))
+    original = shapely.Polygon(shell, holes)
+    after = shapely.Polygon(planned.ring, list(planned.holes))
+    assert original.difference(after).area < 1e-12 * original.area  # contains it, to rounding
+    gap = 100 * 1e-4  # DETACH_GAP of the side
+    band = shapely.LinearRing(shell).buffer(1.01 * gap)
+    assert after.difference(original).difference(band).area < 1e-12 * original.area
+    edge = Area(shell, None, "x", "f.json", (np.array([(40, 0), (60, 0), (50, 20)], float),))
+    assert detach_holes(edge) == (edge, None)
