@@ -19,7 +19,7 @@ from boustro.geometry import Polygon, Region
 from boustro.geometry import polygon as polygon_module
 from boustro.geometry.validity import geos_reason
 from boustro.io import Area
-from boustro.io.repair import area_problem, repair_area
+from boustro.io.repair import area_problem, detach_holes, repair_area
 
 from .conftest import run_cli
 
@@ -284,3 +284,66 @@ def test_a_nan_vertex_is_refused_in_one_line_with_or_without_repair(tmp_path, ca
         code, out, err = run_cli(capsys, "plan", path, "--crs", "planar", "--spacing", "1", *extra)
         assert code == 2 and out == "" and "Traceback" not in err, err
         assert len(err.strip().splitlines()) == 1 and "try --repair" not in err
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e6])
+def test_detach_holes_cuts_exactly_the_holes_the_region_refuses(scale):
+    """Review of round 14: a hole that the Region accepts (farther than TOUCH_TOLERANCE times the
+    shell's diameter from it, here 5e-9 of the side) planned before and must be left as it is;
+    only a hole the Region refuses as touching is cut back (it was cut within 1e-8 of the
+    extent, changing the plan of an input that planned before)."""
+    shell = np.array([(0, 0), (100, 0), (100, 100), (0, 100)]) * scale
+    for gap, cut in ((5e-7, False), (1e-7, True), (0.0, True)):  # tolerance 1.41e-7 (side 100)
+        hole = np.array([(50, gap), (60, 20), (40, 20)]) * scale
+        area = Area(shell, None, "x", "f.json", (hole,))
+        planned, note = detach_holes(area)
+        assert (note is not None) == cut, (gap, note)
+        Region(planned.ring, list(planned.holes))  # what is planned is a valid Region
+        if not cut:
+            assert planned is area
+
+
+def test_a_touching_hole_refused_for_another_reason_is_not_said_to_be_planned(tmp_path, capsys):
+    """Review of round 14: a hole touching the shell at a point and another hole at a point (the
+    holes must be disjoint) is refused; stderr said first that it was "planned with the hole cut
+    back", then refused it. Now the refusal alone, and nothing written."""
+    shell = [[0, 0], [100, 0], [100, 100], [0, 100], [0, 0]]
+    first = [[50, 0], [60, 20], [40, 20], [50, 0]]
+    second = [[60, 20], [70, 40], [60, 40], [60, 20]]
+    path = tmp_path / "chain.geojson"
+    path.write_text(json.dumps({"type": "Polygon", "coordinates": [shell, first, second]}))
+    out = tmp_path / "m.geojson"
+    argv = ["plan", path, "--crs", "planar", "--spacing", "10", "--out", out]
+    code, _, err = run_cli(capsys, *argv)
+    assert code == 2 and not out.exists()
+    assert err.strip().splitlines() == [err.strip()] and "holes 0 and 1 touch" in err, err
+    assert "planned" not in err
+
+
+@pytest.mark.parametrize(
+    "holes",
+    [
+        [[(50, 0), (60, 20), (40, 20)]],  # a vertex on the shell's edge
+        [[(50, 0), (90, 0.1), (90, 20)]],  # an edge at 0.14 degrees to the shell's
+        [[(0, 0), (20, 10), (10, 20)]],  # at the shell's vertex
+        [[(50, 0), (60, 20), (50, 12), (40, 20)]],  # concave
+        [[(50, 0), (60, 20), (52, 20)], [(50, 0), (48, 20), (40, 20)]],  # two at one point
+    ],
+)
+def test_detach_holes_only_shrinks_the_holes_that_touch(holes):
+    """Review of round 14: the area planned contains the file's (the coverage argument of
+    detach_holes), is a valid Region, and differs from it only within the gap of the shell; a
+    hole along the shell's edge (invalid for GEOS) is left to be refused."""
+    shell = np.array([(0, 0), (100, 0), (100, 100), (0, 100)], dtype=float)
+    area = Area(shell, None, "x", "f.json", tuple(np.array(h, dtype=float) for h in holes))
+    planned, note = detach_holes(area)
+    assert note is not None and np.array_equal(planned.ring, area.ring)
+    Region(planned.ring, list(planned.holes))
+    original = shapely.Polygon(shell, holes)
+    after = shapely.Polygon(planned.ring, list(planned.holes))
+    assert original.difference(after).area < 1e-12 * original.area  # contains it, to rounding
+    gap = 100 * 1e-4  # DETACH_GAP of the side
+    band = shapely.LinearRing(shell).buffer(1.01 * gap)
+    assert after.difference(original).difference(band).area < 1e-12 * original.area
+    edge = Area(shell, None, "x", "f.json", (np.array([(40, 0), (60, 0), (50, 20)], float),))
+    assert detach_holes(edge) == (edge, None)

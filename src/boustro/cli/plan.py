@@ -468,10 +468,10 @@ def _validated(args: argparse.Namespace, area: Area) -> Area:
     if note is not None:
         print(f"boustro: {note}", file=sys.stderr)
     area, note = detach_holes(area)
+    if not args.repair:
+        check_area(area)  # before the note: a refused area is not said to be planned
     if note is not None:
         print(f"boustro: {note}", file=sys.stderr)
-    if not args.repair:
-        check_area(area)
     return area
 
 

@@ -14,7 +14,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import InvalidPolygonError
-from ..geometry import Region
+from ..geometry import Polygon, Region
 from ..geometry.region import TOUCH_TOLERANCE
 from ..geometry.validity import geos_reason
 from .area import LONLAT, Area, crs_name
@@ -89,22 +89,28 @@ def _finite(area: Area) -> bool:
 
 def detach_holes(area: Area) -> tuple[Area, str | None]:
     """``area`` with every hole that touches the shell (GEOS allows one point in common; the
-    planner needs holes strictly inside, :class:`~boustro.geometry.Region`) cut back from the
+    planner needs holes strictly inside, :class:`~boustro.geometry.Region`: farther than
+    :data:`~boustro.geometry.region.TOUCH_TOLERANCE` times the shell's diameter, the rule applied
+    here too, so that a hole the Region accepts is left as it is) cut back from the
     shell by :data:`DETACH_GAP` of the shell's extent, and a line saying so (None when no hole
     touches it, or the area is invalid for GEOS: :func:`check_area` says why).
 
     The cut only shrinks holes, so the area planned contains the file's area: lanes that cover
-    it cover the file's area too; the path may cross the cut-off tip of the hole (within the
-    gap of the touch point), which ``outside_length_m`` does not count.
+    it cover the file's area too. The path may run through the cut-off part of the hole, which
+    ``outside_length_m`` does not count: at most the gap deep, but as long as the gap divided by
+    the sine of the angle between the hole's edge and the shell's (2026-11-28, 100 m square,
+    ``--keep-inside``: 4 mm of path for a hole edge at 63 degrees, 4 m at 0.14 degrees).
     """
     import shapely
 
     if not area.holes or area_problem(area) is not None:
         return area, None
+    try:  # the Region's own rule for a hole touching the shell: no other hole is changed
+        touch = TOUCH_TOLERANCE * Polygon(area.ring).diameter
+    except InvalidPolygonError:  # a shell boustro refuses: check_area or the plan says why
+        return area, None
     shell = shapely.linearrings(area.ring)
-    extent = float(np.max(np.ptp(area.ring, axis=0)))
-    gap = DETACH_GAP * extent
-    touch = 10 * TOUCH_TOLERANCE * extent  # beyond the Region's (its diameter <= 1.5 extent)
+    gap = DETACH_GAP * float(np.max(np.ptp(area.ring, axis=0)))
     holes: list[np.ndarray] = []
     touched: list[str] = []
     for i, h in enumerate(area.holes):
