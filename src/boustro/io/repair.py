@@ -134,7 +134,8 @@ def detach_holes(area: Area) -> tuple[Area, str | None]:
         f"{area.source or 'the area'}: {', '.join(touched)} touches the shell; planned with "
         f"the hole cut back {gap:.3g} (file units) from the shell, area {before:.6g} -> "
         f"{_shapely_area(after).area:.6g} (coverage of the file's area is kept: it lies "
-        "inside the area planned)"
+        "inside the area planned; the path may run through the cut-off part of the hole, up "
+        "to that gap deep, which outside_length_m does not count)"
     )
     return after, note
 
