@@ -272,6 +272,37 @@ def test_a_hole_touching_the_shell_at_a_point_is_planned_with_full_coverage(tmp_
     assert lanes and original.difference(shapely.union_all(lanes)).area < 1e-9 * original.area
 
 
+@pytest.mark.parametrize("keep_inside", [False, True])
+def test_a_cut_back_hole_counts_in_the_length_outside(keep_inside, tmp_path, capsys):
+    """Review of round 14: a hole meeting the shell at a slant (0.14 degrees) is cut back, and
+    the path ran 3.98 m through its cut-off part with --keep-inside while outside_length_m said
+    0 (207.27 m outside without it, 200.00 reported): the length outside is measured against
+    the file's holes, as shapely measures the path's legs on the file's area here."""
+    shell = [[0, 0], [100, 0], [100, 100], [0, 100], [0, 0]]
+    hole = [[50, 0], [90, 20], [90, 0.1], [50, 0]]
+    path = tmp_path / "slant.geojson"
+    path.write_text(json.dumps({"type": "Polygon", "coordinates": [shell, hole]}))
+    out = tmp_path / "m.geojson"
+    argv = ["plan", path, "--crs", "planar", "--spacing", "10", "--json", "--out", out]
+    code, stdout, err = run_cli(capsys, *argv, *(["--keep-inside"] if keep_inside else []))
+    assert code == 0 and "touches the shell" in err
+    got = json.loads(stdout)["outside_length_m"]
+    features = json.loads(out.read_text())["features"]
+    legs = np.asarray(
+        next(f for f in features if f["properties"].get("role") == "path")["geometry"][
+            "coordinates"
+        ]
+    )
+    # a pass along the hole's edge is on its boundary, not in it: 1 um of tolerance
+    original = shapely.Polygon(shell, [hole]).buffer(1e-6, join_style="mitre")
+    want = sum(
+        shapely.LineString(legs[i : i + 2]).difference(original).length
+        for i in range(len(legs) - 1)
+    )
+    assert want > 1.0  # the path does cross the cut-off part of the hole
+    assert got == pytest.approx(want, rel=1e-3)
+
+
 def test_a_nan_vertex_is_refused_in_one_line_with_or_without_repair(tmp_path, capsys):
     """QA round 13: a NaN vertex was refused with "try --repair", and --repair then ended in a
     GEOS traceback (make_valid raises on NaN); a zero-area polygon was told to try --repair,

@@ -29,6 +29,9 @@ class Area:
         source: where it came from (a path, or ``"<embedded>"``).
         holes: the inner rings (obstacles), each ``(M, 2)`` like ``ring``; validated with the
             area (:class:`boustro.regions.Region`).
+        cut_holes: the holes as read where :func:`boustro.io.repair.detach_holes` cut one
+            that touches the shell back from it (``holes`` is then what is planned); the
+            path's length outside is measured against these. Empty otherwise.
     """
 
     ring: NDArray[np.float64]
@@ -36,6 +39,7 @@ class Area:
     name: str
     source: str
     holes: tuple[NDArray[np.float64], ...] = ()
+    cut_holes: tuple[NDArray[np.float64], ...] = ()
 
 
 def close_ring(ring: np.ndarray, where: str) -> np.ndarray:

@@ -96,10 +96,12 @@ def detach_holes(area: Area) -> tuple[Area, str | None]:
     touches it, or the area is invalid for GEOS: :func:`check_area` says why).
 
     The cut only shrinks holes, so the area planned contains the file's area: lanes that cover
-    it cover the file's area too. The path may run through the cut-off part of the hole, which
-    ``outside_length_m`` does not count: at most the gap deep, but as long as the gap divided by
-    the sine of the angle between the hole's edge and the shell's (2026-11-28, 100 m square,
-    ``--keep-inside``: 4 mm of path for a hole edge at 63 degrees, 4 m at 0.14 degrees).
+    it cover the file's area too. The path may run through the cut-off part of the hole: at
+    most the gap deep, but as long as the gap divided by the sine of the angle between the
+    hole's edge and the shell's (2026-11-28, 100 m square, ``--keep-inside``: 4 mm of path for
+    a hole edge at 63 degrees, 4 m at 0.14 degrees). The returned area keeps the holes as read
+    (``Area.cut_holes``), against which the plan's ``outside_length_m`` is measured, so that
+    length is counted.
     """
     import shapely
 
@@ -129,13 +131,12 @@ def detach_holes(area: Area) -> tuple[Area, str | None]:
     if not touched:
         return area, None
     before = _shapely_area(area).area
-    after = replace(area, holes=tuple(holes))
+    after = replace(area, holes=tuple(holes), cut_holes=area.holes)
     note = (
         f"{area.source or 'the area'}: {', '.join(touched)} touches the shell; planned with "
         f"the hole cut back {gap:.3g} (file units) from the shell, area {before:.6g} -> "
         f"{_shapely_area(after).area:.6g} (coverage of the file's area is kept: it lies "
-        "inside the area planned; the path may run through the cut-off part of the hole, up "
-        "to that gap deep, which outside_length_m does not count)"
+        "inside the area planned; the path's length outside is measured on the file's holes)"
     )
     return after, note
 

@@ -227,11 +227,23 @@ def plan_area(
         )
     # the length outside, measured once on the path flown (lanes, passes, moves, curves)
     # against the whole area (not its hull, nor the inner field of a headland)
-    planned = planned._replace(plan=with_outside_length(planned.plan, whole))
+    # (the file's holes where a touching one was cut back: io.repair.detach_holes)
+    planned = planned._replace(plan=with_outside_length(planned.plan, _as_read(frame, whole)))
     if keep_inside:  # planned on the area, not its hull: nothing reaches beyond it
         frame = frame._replace(depth=0.0)
     mission = map_back(frame, planned, altitude=altitude, turnaround=turnaround)
     return with_camera(mission, camera_trigger(spacing))
+
+
+def _as_read(frame: Frame, whole: Region) -> Any:
+    """The area the path's length outside is measured against: ``whole``, or, where
+    :func:`~boustro.io.repair.detach_holes` cut a hole back from the shell, the plan frame's
+    shell with the file's holes (a shapely Polygon: the Region refuses a touching hole)."""
+    if not frame.area.cut_holes:
+        return whole
+    import shapely
+
+    return shapely.Polygon(frame.ring, [frame.proj.to_plan(h) for h in frame.area.cut_holes])
 
 
 def _plan_and_drive(

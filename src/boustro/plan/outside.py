@@ -27,11 +27,12 @@ def shapely_area(area: Region | Polygon | ArrayLike) -> Any:
     return shapely.Polygon(r.shell.vertices, [h.vertices for h in r.holes])
 
 
-def outside_length(waypoints: ArrayLike, area: Region | Polygon | ArrayLike) -> float:
+def outside_length(waypoints: ArrayLike, area: Region | Polygon | ArrayLike | Any) -> float:
     """The length of the path through ``waypoints`` outside ``area`` or inside one of its holes
     (plan units), measured with shapely segment by segment (a path that doubles back over
     itself outside counts each time); a point within ``1e-9`` of the area's diameter of its
-    boundary counts as on it."""
+    boundary counts as on it. ``area`` may also be a shapely Polygon (one that
+    :class:`~boustro.geometry.Region` refuses: a hole touching the shell)."""
     import shapely
 
     w = np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)
@@ -42,9 +43,14 @@ def outside_length(waypoints: ArrayLike, area: Region | Polygon | ArrayLike) -> 
     keep = lengths > 0
     if not keep.any():
         return 0.0
-    r = as_region(area)
+    if isinstance(area, shapely.Polygon):
+        x0, y0, x1, y1 = area.bounds
+        polygon, diameter = area, float(np.hypot(x1 - x0, y1 - y0))
+    else:
+        r = as_region(area)
+        polygon, diameter = shapely_area(r), r.diameter
     # within 1e-9 of the diameter of the boundary counts as on it (the routing's convention)
-    target = shapely_area(r).buffer(1e-9 * r.diameter, join_style="mitre")
+    target = polygon.buffer(1e-9 * diameter, join_style="mitre")
     shapely.prepare(target)
     segs, lengths = segs[keep], lengths[keep]
     # a segment the (prepared) area covers is not outside at all; the others are cut where
@@ -99,7 +105,7 @@ def _inside_lengths(segs: NDArray[np.float64], target: Any) -> NDArray[np.float6
     return np.bincount(o, weights=np.where(inside, t1 - t0, 0.0), minlength=len(segs)) * length
 
 
-def with_outside_length(plan: Plan, area: Region | Polygon | ArrayLike) -> Plan:
+def with_outside_length(plan: Plan, area: Region | Polygon | ArrayLike | Any) -> Plan:
     """``plan`` with its ``outside_length`` measured on its whole path (every waypoint, the
     turns' curves included) against ``area`` (plan frame; its holes count as outside), in
     ground units."""
