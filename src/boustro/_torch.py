@@ -109,13 +109,17 @@ def threads(count: int) -> Iterator[None]:
         finally:
             torch.set_num_threads(previous)
         return
+    outer = _PENDING[:]  # an enclosing block's or set_threads' wish, still pending
     _PENDING[:] = [count]
     try:
         yield
     finally:
-        if len(_PENDING) == 2:  # torch came in the block: give it back its own count
-            torch.set_num_threads(_PENDING[1])
-        _PENDING.clear()
+        if len(_PENDING) == 2:  # torch came in the block: the outer wish, else its own count
+            default = _PENDING[1]
+            torch.set_num_threads(outer[0] if outer else default)
+            _PENDING[:] = [outer[0], default] if outer else []
+        else:
+            _PENDING[:] = outer
 
 
 def namespace(like: Any) -> Any:
