@@ -142,3 +142,14 @@ def test_once_differentiable_is_applied_in_the_call():
     (g,) = torch.autograd.grad(Square.apply(x).sum(), x, create_graph=True)
     assert torch.equal(g, 2 * x.detach())
     assert not g.requires_grad  # once_differentiable: the backward pass is not differentiated
+
+
+def test_a_function_naming_the_stand_in_pickles_before_torch_is_imported():
+    code = (
+        "import sys, cloudpickle\n"
+        "from boustro._torch import torch\n"
+        "f = lambda n: float(torch.ones(n, dtype=torch.float64).sum())\n"
+        "data = cloudpickle.dumps(f)\n"
+        "print('torch' in sys.modules, cloudpickle.loads(data)(3))\n"
+    )
+    assert _fresh(code) == "False 3.0"

@@ -63,6 +63,11 @@ class _LazyModule(types.ModuleType):
             module.set_num_threads(_PENDING[0])
         return getattr(module, name)
 
+    def __reduce__(self) -> tuple[Any, tuple[str]]:
+        """Pickled as the module's import (cloudpickle, for Dask, pickles by value a function
+        whose globals name the stand-in before torch is imported)."""
+        return importlib.import_module, (self.__name__,)
+
 
 def loaded() -> bool:
     """Whether torch has been imported in this process (by boustro or by anyone)."""
