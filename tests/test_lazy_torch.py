@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import torch
 
-from boustro._torch import autograd_function, namespace
+from boustro._torch import autograd_function, namespace, once_differentiable, set_threads, threads
 from boustro.geometry import halfplanes, random_convex_polygon
 from boustro.models import exact_chords
 
@@ -89,3 +89,67 @@ def test_threads_wait_for_torch_and_are_restored():
         )
         == "1"
     )
+
+
+def test_threads_and_set_threads_with_torch_imported():
+    before = torch.get_num_threads()
+    with threads(before + 1):
+        assert torch.get_num_threads() == before + 1
+    assert torch.get_num_threads() == before
+    try:
+        set_threads(before + 2)
+        assert torch.get_num_threads() == before + 2
+    finally:
+        torch.set_num_threads(before)
+
+
+def test_threads_nested_and_after_set_threads_before_torch():
+    """An inner block (or one after :func:`set_threads`) keeps the outer wish for torch."""
+    out = _fresh(
+        "from boustro._torch import set_threads, threads, torch\n"
+        "with threads(3):\n"
+        "    with threads(1):\n"
+        "        pass\n"
+        "    inside = torch.get_num_threads()\n"
+        "print(inside)\n"
+    )
+    assert out == "3"
+    out = _fresh(
+        "from boustro._torch import set_threads, threads, torch\n"
+        "set_threads(3)\n"
+        "with threads(1):\n"
+        "    pass\n"
+        "print(torch.get_num_threads())\n"
+    )
+    assert out == "3"
+
+
+def test_once_differentiable_is_applied_in_the_call():
+    @autograd_function
+    class Square:
+        @staticmethod
+        def forward(ctx, x):
+            ctx.save_for_backward(x)
+            return x**2
+
+        @staticmethod
+        @once_differentiable
+        def backward(ctx, grad):
+            (x,) = ctx.saved_tensors
+            return 2 * x * grad
+
+    x = torch.tensor([0.5, -2.0], dtype=torch.float64, requires_grad=True)
+    (g,) = torch.autograd.grad(Square.apply(x).sum(), x, create_graph=True)
+    assert torch.equal(g, 2 * x.detach())
+    assert not g.requires_grad  # once_differentiable: the backward pass is not differentiated
+
+
+def test_a_function_naming_the_stand_in_pickles_before_torch_is_imported():
+    code = (
+        "import sys, cloudpickle\n"
+        "from boustro._torch import torch\n"
+        "f = lambda n: float(torch.ones(n, dtype=torch.float64).sum())\n"
+        "data = cloudpickle.dumps(f)\n"
+        "print('torch' in sys.modules, cloudpickle.loads(data)(3))\n"
+    )
+    assert _fresh(code) == "False 3.0"

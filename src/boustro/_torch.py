@@ -63,6 +63,11 @@ class _LazyModule(types.ModuleType):
             module.set_num_threads(_PENDING[0])
         return getattr(module, name)
 
+    def __reduce__(self) -> tuple[Any, tuple[str]]:
+        """Pickled as the module's import (cloudpickle, for Dask, pickles by value a function
+        whose globals name the stand-in before torch is imported)."""
+        return importlib.import_module, (self.__name__,)
+
 
 def loaded() -> bool:
     """Whether torch has been imported in this process (by boustro or by anyone)."""
@@ -109,13 +114,17 @@ def threads(count: int) -> Iterator[None]:
         finally:
             torch.set_num_threads(previous)
         return
+    outer = _PENDING[:]  # an enclosing block's or set_threads' wish, still pending
     _PENDING[:] = [count]
     try:
         yield
     finally:
-        if len(_PENDING) == 2:  # torch came in the block: give it back its own count
-            torch.set_num_threads(_PENDING[1])
-        _PENDING.clear()
+        if len(_PENDING) == 2:  # torch came in the block: the outer wish, else its own count
+            default = _PENDING[1]
+            torch.set_num_threads(outer[0] if outer else default)
+            _PENDING[:] = [outer[0], default] if outer else []
+        else:
+            _PENDING[:] = outer
 
 
 def namespace(like: Any) -> Any:
