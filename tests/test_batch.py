@@ -246,8 +246,10 @@ def test_killed_half_way_and_resumed(fields, planned, tmp_path):
     seen, reads = 0, 0
     deadline = time.monotonic() + 120
     try:
-        while seen < total // 3 and time.monotonic() < deadline and proc.poll() is None:
-            time.sleep(0.2)
+        # killed at the first commit seen: a batch whose workers no longer import torch wrote
+        # all 248 rows between two reads when it waited for a third of them (CI, 2026-11-28)
+        while seen < 1 and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.02)
             if out.exists() and os.path.getsize(out) > 0:
                 seen = _snapshot(out)  # readable and whole, mid-run (created whole)
                 reads += 1
@@ -255,7 +257,7 @@ def test_killed_half_way_and_resumed(fields, planned, tmp_path):
         proc.kill()  # a crash: no clean-up at all
         proc.wait()
     assert proc.returncode != 0, "the run ended before it could be killed"
-    assert reads >= 3 and 0 < seen < total
+    assert reads >= 1 and 0 < seen < total
     before = _consistent(out)  # the last commit, after the kill
     # the same command, resumed through the API (its fork server is already up: quicker)
     resumed = boustro.batch(fields, out, spacing=10.0, columns={"spacing": "sp"}, workers=2,
