@@ -38,7 +38,7 @@ from ._sweep import check_sweep, sweep_noted
 #: (:data:`boustro.objectives.OBJECTIVES`) in kebab case. Objectives that score the chords' ends
 #: (``needs_chords``, e.g. ShortestPath) are not offered: the coverage-guaranteed lanes that a
 #: plan flies can add a lane and length, so their optimum is not the shortest flown path (see
-#: README, "Known limitations").
+#: README, "Known limitations", and docs/limitations.md).
 def cli_objectives() -> dict[str, Any]:
     """The objectives ``--objective`` offers, read from the registry when called."""
     return {

@@ -38,7 +38,8 @@ __all__ = ["DEFAULT_GUIDE", "ZOOM_ANGLE", "ZOOM_OFFSET", "GradientOptions", "gra
 #: (:class:`boustro.smooth.SmoothModel`, ``model=``) is the more accurate model and cheaper per
 #: call (0.49 vs 0.60 ms at 4 starts, 0.50 vs 0.91 ms at 16, parallelogram, one thread), but as
 #: the guide it gave slightly larger final gaps on the same 200 polygons (0.00156 at the best
-#: schedule tried, against 0.00134; README, "Benchmarks"), so it is not the default.
+#: schedule tried, against 0.00134; docs/benchmarks.md, "Optimisers on convex polygons"), so
+#: it is not the default.
 DEFAULT_GUIDE = PaperModel(temperature=100.0, points_per_transect=64)
 
 
