@@ -143,3 +143,41 @@ def test_margin0_bound_with_the_lines_below_the_margin0_plans(index):
         lifted += bound[0] > before[0] + 1e-6
     # the traced ellipse (index 4): its 3 m edges hold almost no stretch, nothing to lift
     assert lifted or index == 4
+
+
+def test_where_the_rule_counts():
+    """``NEAR_CUT``: with ``"boxes"`` (the default) the layouts' own bounds are those without
+    the rule (``"off"``) and a box's are no lower; with ``"all"`` the layouts' bounds are no
+    lower and higher at some layouts; an unknown value raises."""
+    import boustro.optimize.cover.inside_bound as ib
+    from boustro.optimize.cover.boxes import Boxes
+
+    region = _areas()[0]
+    cost = CoverCost.time(5.0, 10.0)
+    rng = np.random.default_rng(11)
+    n = 16
+    e = region.edges
+    along = np.arctan2(e[:, 1, 1] - e[:, 0, 1], e[:, 1, 0] - e[:, 0, 0]) % math.pi
+    theta = (rng.choice(along, n) + rng.uniform(-0.4, 0.4, n)) % math.pi
+    d = rng.uniform(0, S, n)
+    points, boxes = {}, {}
+    for mode in ("off", "boxes", "all"):
+        search = CoverSearch(region, S, S / 2, cost, None, False, keep_inside=True)
+        ib.NEAR_CUT = mode
+        try:
+            points[mode] = search.point_values(Boxes(theta, np.zeros(n), d, np.zeros(n)))
+            search.top_eps = 0.05
+            boxes[mode] = search.box_bounds(Boxes(theta, np.full(n, 1e-4), d, np.full(n, 1e-3)))
+        finally:
+            ib.NEAR_CUT = "boxes"
+    assert np.array_equal(points["boxes"], points["off"])
+    assert (boxes["boxes"] >= boxes["off"]).all() and (points["all"] >= points["off"]).all()
+    assert (points["all"] > points["off"] + 1e-6).any()
+    assert (boxes["boxes"] > boxes["off"] + 1e-6).any()
+    search = CoverSearch(region, S, S / 2, cost, None, False, keep_inside=True)
+    ib.NEAR_CUT = "everywhere"
+    try:
+        with pytest.raises(ValueError):
+            search.point_values(Boxes(theta, np.zeros(n), d, np.zeros(n)))
+    finally:
+        ib.NEAR_CUT = "boxes"
