@@ -61,8 +61,8 @@ band (widened by ``eps`` each side in a box) the strip's points up to ``CUT_DEPT
 band): each such part of ``J`` flags the contour samples within ``rho`` of it, and each union
 of flagged stretches a step long or more is kept whole. The stretch's count is the larger of
 this and :func:`cut_cores` (each is a part of the plan's passes); this rule needs the grid, so
-it applies where the bound has it (the boxes, and the layouts' own bounds with
-:data:`~.inside_bound.NEAR_AT_LAYOUTS`), not in the value that ranks the layouts. It counts a
+it applies where the bound has it (the boxes and the layouts' own bounds, as
+:data:`~.inside_bound.NEAR_CUT` says), not in the value that ranks the layouts. It counts a
 stretch parallel to the lanes whole when the nearest line inside is more than ``1.005 s/2``
 from it (no lane reaches its edge), and about half of a stretch at a small angle (the
 triangles' sides and ``rho`` either side).
