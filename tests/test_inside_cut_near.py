@@ -13,7 +13,7 @@ import pytest
 from boustro.geometry.region import Region
 from boustro.optimize.cover import CoverCost
 from boustro.optimize.cover.inside_bound import _near_cut, _with_cut_passes, contour_edges
-from boustro.optimize.cover.inside_cut import cut_lengths
+from boustro.optimize.cover.inside_cut import CUT_DEPTH, NEAR_CUT_ANGLE, cut_lengths, near_cut_use
 from boustro.optimize.cover.search import CoverSearch
 
 from .test_inside_bound import _adversarial, _areas
@@ -146,9 +146,9 @@ def test_margin0_bound_with_the_lines_below_the_margin0_plans(index):
 
 
 def test_where_the_rule_counts():
-    """``NEAR_CUT``: with ``"boxes"`` (the default) the layouts' own bounds are those without
-    the rule (``"off"``) and a box's are no lower; with ``"all"`` the layouts' bounds are no
-    lower and higher at some layouts; an unknown value raises."""
+    """``NEAR_CUT``: on (the default) a box's bound is no lower than with it off and higher at
+    some boxes; the layouts' own bounds are those with it off, though the rule counts at some
+    of those layouts (so they would rise with it there)."""
     import boustro.optimize.cover.inside_bound as ib
     from boustro.optimize.cover.boxes import Boxes
 
@@ -161,23 +161,34 @@ def test_where_the_rule_counts():
     theta = (rng.choice(along, n) + rng.uniform(-0.4, 0.4, n)) % math.pi
     d = rng.uniform(0, S, n)
     points, boxes = {}, {}
-    for mode in ("off", "boxes", "all"):
+    for on in (False, True):
         search = CoverSearch(region, S, S / 2, cost, None, False, keep_inside=True)
-        ib.NEAR_CUT = mode
+        ib.NEAR_CUT = on
         try:
-            points[mode] = search.point_values(Boxes(theta, np.zeros(n), d, np.zeros(n)))
+            points[on] = search.point_values(Boxes(theta, np.zeros(n), d, np.zeros(n)))
             search.top_eps = 0.05
-            boxes[mode] = search.box_bounds(Boxes(theta, np.full(n, 1e-4), d, np.full(n, 1e-3)))
+            boxes[on] = search.box_bounds(Boxes(theta, np.full(n, 1e-4), d, np.full(n, 1e-3)))
         finally:
-            ib.NEAR_CUT = "boxes"
-    assert np.array_equal(points["boxes"], points["off"])
-    assert (boxes["boxes"] >= boxes["off"]).all() and (points["all"] >= points["off"]).all()
-    assert (points["all"] > points["off"] + 1e-6).any()
-    assert (boxes["boxes"] > boxes["off"] + 1e-6).any()
-    search = CoverSearch(region, S, S / 2, cost, None, False, keep_inside=True)
-    ib.NEAR_CUT = "everywhere"
-    try:
-        with pytest.raises(ValueError):
-            search.point_values(Boxes(theta, np.zeros(n), d, np.zeros(n)))
-    finally:
-        ib.NEAR_CUT = "boxes"
+            ib.NEAR_CUT = True
+    assert np.array_equal(points[True], points[False])
+    assert (boxes[True] >= boxes[False]).all() and (boxes[True] > boxes[False] + 1e-6).any()
+    near = _near_cut(search.contour, theta, d, 0.0, search.origin, S)
+    zero = np.zeros(n)
+    counted = cut_lengths(search.contour, theta, zero, S, near)
+    assert (counted > cut_lengths(search.contour, theta, zero, S) + 1e-6).any()
+
+
+def test_the_rule_needs_the_box_within_its_angle_and_clearance():
+    """:func:`near_cut_use`: a stretch counts only when every lane angle of the box (``rel +-
+    delta``) is within ``NEAR_CUT_ANGLE`` of it (the band's lower end divides by the cosine
+    there) and its clearance holds half a spacing and ``CUT_DEPTH`` of it (1e-4 less: not)."""
+    region = Region([(0, 0), (150, 0), (150, 80), (0, 80)])
+    edges = contour_edges(region, S, S / 2)
+    j = int(np.flatnonzero(edges.core > 0)[0])
+    theta = np.array([edges.angle[j] + NEAR_CUT_ANGLE - 0.01])
+    for delta, counts in ((0.0, True), (0.0099, True), (0.0101, False)):
+        assert near_cut_use(edges, theta, np.array([delta]), S)[0, j] == counts, delta
+    need = S / 2 * (1 + CUT_DEPTH)
+    for clear, counts in ((need * (1 + 1e-4), True), (need * (1 - 1e-4), False)):
+        tight = edges._replace(clear=np.full_like(edges.clear, clear))
+        assert near_cut_use(tight, theta, np.zeros(1), S)[0, j] == counts, clear

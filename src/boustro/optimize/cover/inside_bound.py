@@ -91,13 +91,12 @@ CUT_PASSES = "bound"
 #: the lanes' direction (:func:`_near_lengths`, at a box of radius 0) as the boxes' do.
 NEAR_AT_LAYOUTS = True
 
-#: Where the margin-0 bound counts the stretches its lanes leave uncovered by the lines'
-#: positions (:mod:`~.inside_cut`, "Where the lines are"), among the bounds that know the grid
-#: (``d``): ``"all"``, ``"boxes"`` (radius above 0), ``"layouts"`` (radius 0) or ``"off"``.
-#: ``"boxes"``: in the layouts' own bounds it raises the lowest model and with it the settling
-#: value (``branch.retire_at``), which is where the certificate gains, but random area 9's
-#: plan came out 7.0 s longer (docs/mission_time.md, fifteenth round).
-NEAR_CUT = "boxes"
+#: Whether the boxes' bounds (radius above 0, the grid ``d`` known) count the stretches margin
+#: 0's lanes leave uncovered by the lines' positions (:mod:`~.inside_cut`, "Where the lines
+#: are"); ``False``: off. The layouts' own bounds never do: there it raises the lowest model and
+#: with it the settling value (``branch.retire_at``), and random area 9's plan came out 7.0 s
+#: longer (docs/mission_time.md, fifteenth round, measured at a97f56f).
+NEAR_CUT = True
 
 #: Edges closer than this to the lanes' direction (radians, over the whole box) are left out
 #: of ``P`` by the angle rule (:data:`NEAR_ANGLE`'s rule may count them): the strip the lanes
@@ -491,11 +490,7 @@ def keep_inside_bounds(
     kw: dict[str, Any] = {"boustrophedon": False, "ends": None}
     half = lower_bounds(st_half, level_half, cost, spacing, runins=runins, **kw)
     zero = lower_bounds(_no_holes(st_zero), level_zero, cost, spacing, runins=False, **kw)
-    modes = {"all": True, "boxes": eps > 0, "layouts": eps == 0, "off": False}
-    if NEAR_CUT not in modes:
-        raise ValueError(f"NEAR_CUT must be one of {sorted(modes)}, not {NEAR_CUT!r}")
-    where = modes[NEAR_CUT]
-    near0 = _near_cut(contour, theta, d, eps, origin, spacing) if where else None
+    near0 = _near_cut(contour, theta, d, eps, origin, spacing) if NEAR_CUT and eps > 0 else None
     cut = _with_cut_passes(zero, st_zero, cost, spacing, contour, theta, delta, near0)
     halves = [half, half] if ranking else [half]
     moved = half

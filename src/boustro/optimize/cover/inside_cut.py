@@ -61,8 +61,8 @@ band (widened by ``eps`` each side in a box) the strip's points up to ``CUT_DEPT
 band): each such part of ``J`` flags the contour samples within ``rho`` of it, and each union
 of flagged stretches a step long or more is kept whole. The stretch's count is the larger of
 this and :func:`cut_cores` (each is a part of the plan's passes); this rule needs the grid, so
-it applies where the bound has it (the boxes and the layouts' own bounds, as
-:data:`~.inside_bound.NEAR_CUT` says), not in the value that ranks the layouts. It counts a
+it applies where the bound has it, in the boxes' bounds only (:data:`~.inside_bound.NEAR_CUT`),
+not in the layouts' own bounds nor the value that ranks the layouts. It counts a
 stretch parallel to the lanes whole when the nearest line inside is more than ``1.005 s/2``
 from it (no lane reaches its edge), and about half of a stretch at a small angle (the
 triangles' sides and ``rho`` either side).
@@ -89,6 +89,7 @@ __all__ = [
     "cut_cores",
     "cut_lengths",
     "cut_stretches",
+    "near_cut_use",
     "relative_angle",
     "rings_holding",
 ]
