@@ -5,6 +5,7 @@ clearance beyond an edge, and the margin-0 bound with them below the real margin
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -128,22 +129,27 @@ def test_margin0_bound_with_its_passes_below_the_margin0_plans(index):
     cost = CoverCost.time(5.0, 10.0)
     search = CoverSearch(region, S, S / 2, cost, None, False, keep_inside=True)
     rng = np.random.default_rng(300 + index)
-    lv0 = search.sandwich.level(0.0, 0.0)
     lifted = 0
     for angle in _angles(region, rng)[:8]:
         offset = rng.uniform(0, S)
         theta, d = np.array([angle % math.pi]), np.array([offset])
-        st0 = band_stats(
-            lv0.inner, lv0.outer, theta, d, S, 0.0, search.origin, search.k_range(0.0),
-            search.n_holes, search.tol, inner_reach=0.0,
-        )  # fmt: skip
-        kw = {"boustrophedon": False, "ends": None, "runins": False}
-        zero = lower_bounds(_no_holes(st0), lv0, cost, S, **kw)
+        zero, st0 = _zero_bound(search, theta, d)
         bound = _with_cut_passes(zero, st0, cost, S, search.contour, theta, np.zeros(1))
         plan = _forced_plan(region, angle % math.pi, offset, cost)
         assert bound[0] <= plan + 1e-6
         lifted += bound[0] > zero[0] + 1e-9
     assert lifted
+
+
+def _zero_bound(search: CoverSearch, theta: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, Any]:
+    """The margin-0 bound without passes at the layouts ``(theta, d)`` and its band stats."""
+    lv0 = search.sandwich.level(0.0, 0.0)
+    st0 = band_stats(
+        lv0.inner, lv0.outer, theta, d, S, 0.0, search.origin, search.k_range(0.0),
+        search.n_holes, search.tol, inner_reach=0.0,
+    )  # fmt: skip
+    kw = {"boustrophedon": False, "ends": None, "runins": False}
+    return lower_bounds(_no_holes(st0), lv0, search.cost, S, **kw), st0
 
 
 def _forced_plan(region: Region, angle: float, offset: float, cost: CoverCost) -> float:

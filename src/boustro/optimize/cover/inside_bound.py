@@ -7,7 +7,9 @@ the smaller of two bounds (docs/mission_time.md, "Keep-inside: the bound"):
 
 * **lanes cut at the boundary** (margin 0): each lane is its line's chord of the area itself,
   so :func:`~.bounds.lower_bounds` over the sandwich's inner set *not* shrunk by half a spacing
-  holds (chords, no run-ins: they end at the boundary; no hole passes counted);
+  holds (chords, no run-ins: they end at the boundary; no hole passes counted), with the
+  contour stretches its lanes leave uncovered (:mod:`~.inside_cut`: by the angle, and where
+  the grid is known by the lines' positions, :func:`_near_cut`);
 * **lanes cut half a spacing inside** (margin 1/2): the search's keep-inside bound (chords of
   the inner set shrunk by half a spacing), with the non-lane part of the path (moves and
   passes) at least the largest of: the moves across the lines, the length ``P`` of the
@@ -38,7 +40,14 @@ from ...geometry.region import Region
 from .bands import BandStats, band_stats
 from .bounds import lower_bounds
 from .cost import CoverCost
-from .inside_cut import clearance, cut_stretches, relative_angle, rings_holding
+from .inside_cut import (
+    CUT_BAND,
+    NEAR_CUT_ANGLE,
+    clearance,
+    cut_stretches,
+    relative_angle,
+    rings_holding,
+)
 from .inside_moves import line_moves, pass_count
 from .sandwich import Level
 
@@ -81,6 +90,13 @@ CUT_PASSES = "bound"
 #: Whether the layouts' own bounds (not the value that ranks them) count the stretches near
 #: the lanes' direction (:func:`_near_lengths`, at a box of radius 0) as the boxes' do.
 NEAR_AT_LAYOUTS = True
+
+#: Whether the boxes' bounds (radius above 0, the grid ``d`` known) count the stretches margin
+#: 0's lanes leave uncovered by the lines' positions (:mod:`~.inside_cut`, "Where the lines
+#: are"); ``False``: off. The layouts' own bounds never do: there it raises the lowest model and
+#: with it the settling value (``branch.retire_at``), and random area 9's plan came out 7.0 s
+#: longer (docs/mission_time.md, fifteenth round, measured at a97f56f).
+NEAR_CUT = True
 
 #: Edges closer than this to the lanes' direction (radians, over the whole box) are left out
 #: of ``P`` by the angle rule (:data:`NEAR_ANGLE`'s rule may count them): the strip the lanes
@@ -264,12 +280,17 @@ def _near_lengths(
     origin: NDArray[np.float64],
     spacing: float,
     parts: list[NDArray[np.int64]] | None = None,
+    band: tuple[float, float] = (BAND_LO, BAND_HI),
+    max_angle: float = NEAR_ANGLE,
 ) -> NDArray[np.float64]:
     """``(L, S)`` per layout and stretch, the length of the stretch the planner keeps for the
     parts of its strip (feet ``J`` on the edge) that no line of the grid ``(theta, d)``, moved
-    across by up to ``eps``, passes between :data:`BAND_LO` and :data:`BAND_HI` half-spacings
-    inside (then no lane covers their points at depth 0.005-0.0055 half-spacings; the rule
-    for stretches near the lanes' direction, docs/mission_time.md, "Keep-inside: the bound"):
+    across by up to ``eps``, passes between ``band`` (half-spacings inside; default
+    :data:`BAND_LO` and :data:`BAND_HI`, margin 1/2: then no lane covers their points at
+    depth 0.005-0.0055 half-spacings; the rule for stretches near the lanes' direction,
+    docs/mission_time.md, "Keep-inside: the bound"; margin 0's is
+    :data:`~.inside_cut.CUT_BAND`), computed where the stretch is within ``max_angle`` of
+    the lanes at ``theta`` (the caller gates the box's angles):
     each such part (at least :data:`MIN_PART` long) flags the stretch's samples up to
     ``rho`` beyond it, and a flagged run at least a sample step long is kept whole.
     ``parts``: a list that gets ``(L, S)``, the number of separate parts of that union (each a
@@ -284,13 +305,13 @@ def _near_lengths(
     sigma = np.where(side >= 0, 1.0, -1.0)  # (L, S): the side of the area across the lanes
     u = sigma[..., None] * h  # across, towards the area: at j_lo and at j_hi
     e = np.broadcast_to(np.asarray(eps, dtype=np.float64), theta.shape)[:, None]
-    lo, hi = BAND_LO * half - e, BAND_HI * half + e  # (L, 1)
+    lo, hi = band[0] * half - e, band[1] * half + e  # (L, 1)
     g0, g1, j_lo, j_hi = (contour.feet[None, :, i] for i in range(4))
     step, rho = contour.reach[None, :, 0], contour.reach[None, :, 1]
     sd = sigma * d[:, None]
     u_min, u_max = u.min(axis=2), u.max(axis=2)
     angle = relative_angle(contour.angle, theta)
-    use = (angle <= NEAR_ANGLE) & (hi - lo < spacing) & (contour.core[None, :] > 0)
+    use = (angle <= max_angle) & (hi - lo < spacing) & (contour.core[None, :] > 0)
     if not use.any():
         if parts is not None:
             parts.append(np.zeros((n_l, n_s), dtype=np.int64))
@@ -395,17 +416,37 @@ def _with_cut_passes(
     contour: ContourEdges,
     theta: NDArray[np.float64],
     delta: NDArray[np.float64],
+    near: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """The margin-0 bound ``zero`` with the passes its lanes need (:mod:`~.inside_cut`):
     the non-lane path at least the larger of their length ``P0`` and ``sqrt(A0^2 + C0^2)``
-    (``C0`` the moves across the lines ``zero`` counts), one turn per ring holding one."""
+    (``C0`` the moves across the lines ``zero`` counts), one turn per ring holding one.
+    ``near``: the stretches' lengths by the lines' positions (:func:`_near_cut`), or none."""
     if not contour.applies or not len(contour.core):
         return zero
-    p, a, rings = cut_stretches(contour, theta, delta, spacing)
+    p, a, rings = cut_stretches(contour, theta, delta, spacing, near)
     c = _moves(st_zero, spacing)
     extra = _extra(p, a, c)
     turns = np.where(st_zero.count.sum(axis=1) > 0, rings, 0)
     return zero + cost.per_length * extra + cost.per_turn * turns
+
+
+def _near_cut(
+    contour: ContourEdges,
+    theta: NDArray[np.float64],
+    d: NDArray[np.float64] | None,
+    eps: float,
+    origin: NDArray[np.float64] | None,
+    spacing: float,
+) -> NDArray[np.float64] | None:
+    """``(L, S)`` margin 0's stretch lengths by the lines' positions (:mod:`~.inside_cut`,
+    "Where the lines are"; :data:`~.inside_cut.CUT_BAND`), or ``None`` without the grid."""
+    if d is None or origin is None or not contour.applies or not len(contour.core):
+        return None
+    e = np.full(len(theta), eps)
+    return _near_lengths(
+        contour, theta, d, e, origin, spacing, band=CUT_BAND, max_angle=NEAR_CUT_ANGLE
+    )
 
 
 def _no_holes(st: BandStats) -> BandStats:
@@ -449,7 +490,8 @@ def keep_inside_bounds(
     kw: dict[str, Any] = {"boustrophedon": False, "ends": None}
     half = lower_bounds(st_half, level_half, cost, spacing, runins=runins, **kw)
     zero = lower_bounds(_no_holes(st_zero), level_zero, cost, spacing, runins=False, **kw)
-    cut = _with_cut_passes(zero, st_zero, cost, spacing, contour, theta, delta)
+    near0 = _near_cut(contour, theta, d, eps, origin, spacing) if NEAR_CUT and eps > 0 else None
+    cut = _with_cut_passes(zero, st_zero, cost, spacing, contour, theta, delta, near0)
     halves = [half, half] if ranking else [half]
     moved = half
     if contour.applies and len(contour.core):

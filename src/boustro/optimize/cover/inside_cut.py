@@ -38,6 +38,34 @@ planner keeps the whole of it (its runs reach from an unflagged sample to the ne
 ``clear`` are the same and only ``phi`` varies (``rel +- delta``): the smallest ``phi`` bounds
 ``h`` and ``cot phi``, the largest the sliver rule. Each ring holding a counted stretch has a
 pass of its own (a turn), as at margin 1/2.
+
+**Where the lines are** (:func:`near_cut_use`; the fifteenth round). Where ``h/2 > rho``
+(``phi`` under about 27 degrees) the triangles are too far apart for the whole stretch, but a
+layout's grid (``theta``, ``d``: the box's centre, the area moved rigidly by at most ``eps``
+across the lines) says where they are. Take a point ``p`` of the strip at depth ``0 < delta <=
+CUT_DEPTH s/2`` over a foot ``f`` in ``J`` (in the area, as above), ``p_E`` its foot on ``E``,
+``u`` the coordinate across the lanes, oriented so that the area side of ``E`` is ``+``
+(``u(p) = u(p_E) + delta cos phi``). A lane covering ``p`` passes through ``q = p - c n`` with
+``|c| <= s/2`` (flat swaths, ``n`` the lanes' normal), and ``q`` lies on a chord of the area (a
+margin-0 lane is a piece of one). ``q`` is within ``s/2 + delta`` of ``E``'s part over ``J``,
+so where ``clear`` exceeds that no point of the area beyond ``E``'s line deeper than ``D =
+DEPTH s`` is there: ``q`` is at least ``-D`` inside ``E``'s line, i.e. ``delta - c' cos phi
+>= -D`` (``c'`` the signed ``c`` along ``+u``). Its line's ``u`` is ``u(p) - c'``, so it lies
+between ``delta cos phi - (delta + D) / cos phi >= -(CUT_DEPTH s/2 + D) / cos(NEAR_CUT_ANGLE)``
+and ``delta cos phi + s/2 <= (1 + CUT_DEPTH) s/2`` across from ``p_E``: inside ``CUT_BAND``
+(-0.005 to 1.005 half-spacings, with room for rounding). So wherever no grid line lies in that
+band (widened by ``eps`` each side in a box) the strip's points up to ``CUT_DEPTH s/2`` (1.5e-3
+``s``) deep are uncovered by every lane: a residual far above the planner's sliver rule
+(``1e-7 s``) once at least ``MIN_PART`` (1e-4 spacings) long. From there the count is
+:func:`~.inside_bound._near_lengths`' (the margin-1/2 rule near the lanes' direction, with this
+band): each such part of ``J`` flags the contour samples within ``rho`` of it, and each union
+of flagged stretches a step long or more is kept whole. The stretch's count is the larger of
+this and :func:`cut_cores` (each is a part of the plan's passes); this rule needs the grid, so
+it applies where the bound has it, in the boxes' bounds only (:data:`~.inside_bound.NEAR_CUT`),
+not in the layouts' own bounds nor the value that ranks the layouts. It counts a
+stretch parallel to the lanes whole when the nearest line inside is more than ``1.005 s/2``
+from it (no lane reaches its edge), and about half of a stretch at a small angle (the
+triangles' sides and ``rho`` either side).
 """
 
 from __future__ import annotations
@@ -52,11 +80,16 @@ from ...geometry.region import Region
 
 __all__ = [
     "COT_MIN",
+    "CUT_BAND",
+    "CUT_DEPTH",
     "DEPTH",
+    "NEAR_CUT_ANGLE",
     "TOUCH_SLACK",
     "clearance",
     "cut_cores",
+    "cut_lengths",
     "cut_stretches",
+    "near_cut_use",
     "relative_angle",
     "rings_holding",
 ]
@@ -71,6 +104,15 @@ DEPTH = 1e-7
 #: argument's (a lane piece coming back shallower than :data:`DEPTH`: at most ``DEPTH /
 #: (sin phi cos phi)``, under ``2.3e-5`` at ``sin phi >= 0.44`` and ``cot phi >= COT_MIN``).
 TOUCH_SLACK = 1e-4
+#: Margin 0's rule by the lines' positions (module docstring, "Where the lines are"): stretches
+#: up to this angle from the lanes (radians, over the box) ...
+NEAR_CUT_ANGLE = 0.6
+#: ... whose strip's points up to this deep (half-spacings) are uncovered wherever no grid
+#: line lies between ``CUT_BAND`` half-spacings inside the strip's point on the edge:
+#: ``-(CUT_DEPTH + 2 DEPTH) / cos(NEAR_CUT_ANGLE) = -0.00364`` and ``1 + CUT_DEPTH``, widened
+#: for rounding.
+CUT_DEPTH = 0.003
+CUT_BAND = (-0.005, 1.005)
 
 
 def relative_angle(angle: NDArray[np.float64], theta: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -150,20 +192,53 @@ def cut_cores(
     return np.where(ok, length, 0.0), k_lo
 
 
+def near_cut_use(
+    contour: Any, theta: NDArray[np.float64], delta: NDArray[np.float64], spacing: float
+) -> NDArray[np.bool_]:
+    """``(L, S)`` where margin 0's rule by the lines' positions applies (module docstring):
+    the stretch within :data:`NEAR_CUT_ANGLE` of every lane angle ``theta +- delta`` and no
+    point of the area beyond its edge's line (deeper than :data:`DEPTH`) within half a
+    spacing and :data:`CUT_DEPTH` of its strip."""
+    half = spacing / 2
+    rel = relative_angle(contour.angle, theta)
+    clear = contour.clear >= half * (1 + CUT_DEPTH) * (1 + 1e-6) + DEPTH * spacing
+    return (rel + delta[:, None] <= NEAR_CUT_ANGLE) & clear[None, :] & (contour.core > 0)
+
+
+def cut_lengths(
+    contour: Any,
+    theta: NDArray[np.float64],
+    delta: NDArray[np.float64],
+    spacing: float,
+    near: NDArray[np.float64] | None = None,
+) -> NDArray[np.float64]:
+    """``(L, S)`` per layout and stretch, the length every margin-0 plan keeps: the larger of
+    :func:`cut_cores`' and, where :func:`near_cut_use`, ``near``'s (``(L, S)``, the lengths of
+    :func:`~.inside_bound._near_lengths` in :data:`CUT_BAND`; ``None``: not counted)."""
+    core, _ = cut_cores(contour, theta, delta, spacing)
+    if near is None:
+        return core
+    use = near_cut_use(contour, theta, delta, spacing)
+    return np.where(use, np.maximum(core, np.minimum(near, contour.core[None, :])), core)
+
+
 def cut_stretches(
     contour: Any,
     theta: NDArray[np.float64],
     delta: NDArray[np.float64],
     spacing: float,
+    near: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
     """``(P0, A0, R0)`` per layout (angles ``theta +- delta``): the length of the contour
-    stretches every margin-0 plan keeps (:func:`cut_cores`), their least travel along the lanes
-    and the number of contour rings holding one."""
+    stretches every margin-0 plan keeps (:func:`cut_cores`; with ``near``, ``(L, S)`` the
+    lengths of :func:`~.inside_bound._near_lengths` in :data:`CUT_BAND`, the larger of the
+    two where :func:`near_cut_use`), their least travel along the lanes and the number of
+    contour rings holding one."""
     n_l = len(theta)
     if not contour.applies or not len(contour.core):
         z = np.zeros(n_l)
         return z, z, np.zeros(n_l, dtype=np.int64)
-    core, _ = cut_cores(contour, theta, delta, spacing)
+    core = cut_lengths(contour, theta, delta, spacing, near)
     rel = relative_angle(contour.angle, theta)
     along = core * np.cos(np.minimum(rel + delta[:, None], math.pi / 2))
     return core.sum(axis=1), along.sum(axis=1), rings_holding(core, contour.ring)
