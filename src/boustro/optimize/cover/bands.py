@@ -38,6 +38,7 @@ from .rigid import (
     _rigid_cuts,
     _split_gaps,
     _split_pieces,
+    jit_wide,
     split_rings,
 )
 
@@ -165,6 +166,7 @@ def _leaf(
     sstart,
     sparent,
     split,
+    swide,
     first_lo,
     last_hi,
 ):
@@ -178,7 +180,9 @@ def _leaf(
     ext = np.empty((n_h, 5))
     if delta >= 0:
         _hole_extents(sxy, sstart, cs, sn, ox, oy, delta, eta, tol, ext)
-        _rigid_cuts(ext, sparent, d, s, k0, nb, i_start, i_m, i_lo, i_hi, rigid)
+        _rigid_cuts(
+            ext, sparent, d, s, k0, nb, i_start, i_m, i_lo, i_hi, rigid, swide, delta, tol
+        )
     # chords where the lines tau either side cross the hole too (the planner's rule, with its
     # 1e-7 spacings): the inner set's tau within its holes' margin over the real ones (the
     # sandwich's pad, tol), the outer set's beyond the planner's (fewer chords: a lower bound)
@@ -271,6 +275,7 @@ def _all(
     sstart,
     sparent,
     split,
+    swide,
 ):
     n = cs.shape[0]
     length = np.zeros((n, nb))
@@ -321,6 +326,7 @@ def _all(
             sstart,
             sparent,
             split,
+            swide,
             first_lo[leaf],
             last_hi[leaf],
         )
@@ -332,7 +338,7 @@ def _all(
 def _compiled() -> Any:
     """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
     helpers = ("_rigid_cuts", "_hole_extents", "_split_gaps", "_split_pieces", "_leaf")
-    return compiled(globals(), "_all", helpers, [lambda: jit_into(globals())])
+    return compiled(globals(), "_all", helpers, [lambda: jit_into(globals()), jit_wide])
 
 
 def band_stats(
@@ -377,6 +383,7 @@ def band_stats(
         holes = [rigid.xy[a:b] for a, b in zip(rigid.start[:-1], rigid.start[1:], strict=True)]
         rings = split_rings(holes, float(spacing), float(tol))
     gone_ring = gone[rings.parent]
+    wide = np.full(len(rings.parent), np.nan) if rings.wide is None else rings.wide
     out = fn(
         np.ascontiguousarray(inner.xy), np.ascontiguousarray(inner.hole),
         np.ascontiguousarray(outer.xy), np.ascontiguousarray(outer.hole),
@@ -389,5 +396,6 @@ def band_stats(
         np.ascontiguousarray(rings.xy, dtype=np.float64),
         np.ascontiguousarray(rings.start, dtype=np.int64),
         np.ascontiguousarray(rings.parent, dtype=np.int64), np.ascontiguousarray(gone_ring),
+        np.ascontiguousarray(wide, dtype=np.float64),
     )  # fmt: skip
     return BandStats(int(k0), *out)
