@@ -180,9 +180,7 @@ def _leaf(
     ext = np.empty((n_h, 5))
     if delta >= 0:
         _hole_extents(sxy, sstart, cs, sn, ox, oy, delta, eta, tol, ext)
-        _rigid_cuts(
-            ext, sparent, d, s, k0, nb, i_start, i_m, i_lo, i_hi, rigid, swide, delta, tol
-        )
+        _rigid_cuts(ext, sparent, d, s, k0, nb, i_start, i_m, i_lo, i_hi, rigid, swide, delta, tol)
     # chords where the lines tau either side cross the hole too (the planner's rule, with its
     # 1e-7 spacings): the inner set's tau within its holes' margin over the real ones (the
     # sandwich's pad, tol), the outer set's beyond the planner's (fewer chords: a lower bound)
