@@ -103,7 +103,8 @@ class BandStats(NamedTuple):
       (``rho``: the hole's farthest vertex from the origin; every point of the hole moves by
       at most ``m``), so it crosses every moved hole (connected), and one inner projection
       interval of band ``k`` covers the hole's extent along the line grown by ``m``, so the
-      chord lies inside every such plan's lane;
+      chord lies inside every such plan's lane; or a convex, isolated hole is wider than the
+      spacing across every line direction of the box (:func:`~.rigid._wide_cut`);
     * ``first_hi, last_lo``: the end of the first and the start of the last piece of the inner
       projection minus the chords of its holes (``nan`` where none): the lane holding the
       first piece ends at ``first_hi`` or beyond (:mod:`~boustro.optimize.cover.ends`);
