@@ -178,3 +178,24 @@ def test_box_bounds_below_plans_sampled_in_the_box_with_wide_holes(seed):
         bound = float(search.box_bounds(box)[0])
         for a, o in _samples(box, rng, 1):
             assert bound <= _plan_cost(region, a, o) + 1e-6
+
+
+def test_an_edge_across_the_lines_within_the_planners_tol_of_the_band_is_not_a_rigid_cut():
+    """Review: a strictly convex hole 13 m across, its edges across the lines 10 - 2e-10 m long
+    (below ``2 reach``, the band) and the next ones turning by a sine of 2e-6: on the line
+    through its middle the band's slabs beyond the edge's ends are 1e-10 m thin, below the
+    planner's tolerance (``lanes._band_intervals`` drops them), so the band's projection has
+    the chord as its gap already and the plan there does not cut the hole (no pass, no turn).
+    The width test must not count it (``WIDE_EDGE_TOLS``); with it the box's bound was 213.8 s
+    against that plan's 196.6 s."""
+    h, x, r = 5.0 - 1e-10, 3e-6, 4.0
+    hole = np.array([(r, -h), (r, h), (r - x, 6.5), (-r + x, 6.5), (-r, h), (-r, -h),
+                     (-r + x, -6.5), (r - x, -6.5)]) + np.array([60.0, 45.0])  # fmt: skip
+    region = _rect_with(hole)
+    search = _search(region)
+    d = (45.0 - search.origin[1]) % SPACING  # the line through the hole's middle
+    assert _cut(region, 0.0, d) == set()
+    box = Boxes(np.array([0.0]), np.array([1e-4]), np.array([d]), np.array([0.05]))
+    assert _rigid(region, box) == set()
+    search.top_eps = 1.5 * float(box_radius(box, search.radius)[0])
+    assert float(search.box_bounds(box)[0]) <= _plan_cost(region, 0.0, d) + 1e-6

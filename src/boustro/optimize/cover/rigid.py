@@ -62,7 +62,7 @@ def split_rings(
     out = SplitRings(xy, start, np.asarray(parent, dtype=np.int64))
     if shell is None or reach <= 0:
         return out
-    return out._replace(wide=wide_rings(out, holes, shell, reach))
+    return out._replace(wide=wide_rings(out, holes, shell, reach, tol))
 
 
 #: Whether a convex, isolated hole wider than the spacing across every line direction of a box
@@ -75,15 +75,26 @@ WIDE_CUTS = True
 #: (nearly) one straight piece.
 WIDE_TURN = 1e-6
 
+#: :func:`wide_rings` admits a hole whose edges are all shorter than ``2 reach`` less this many
+#: planner's tolerances (``tol``, :data:`boustro.plan.cells._TOL` times the area's diameter):
+#: the planner drops a band's slab thinner than ``tol`` (``lanes._band_intervals``), so an edge
+#: across the lines within ``tol`` of the band's width leaves its lane uncut (docs/scale.md).
+WIDE_EDGE_TOLS = 8.0
+
 
 def wide_rings(
-    rings: SplitRings, holes: list[NDArray[np.float64]], shell: NDArray[np.float64], reach: float
+    rings: SplitRings,
+    holes: list[NDArray[np.float64]],
+    shell: NDArray[np.float64],
+    reach: float,
+    tol: float,
 ) -> NDArray[np.float64]:
     """Per ring of ``rings``: its diameter (largest distance between two of its vertices) where
     the hole it comes from is the ring's only part, strictly convex (every vertex turns by a
     sine of at least :data:`WIDE_TURN`, one way), every edge shorter than ``2 reach`` (a lane's
-    band), and at least ``reach`` from the ``shell``'s boundary and from every other hole; else
-    ``nan`` (no width test, :func:`_rigid_cuts`)."""
+    band) less :data:`WIDE_EDGE_TOLS` ``tol`` (the planner's tolerance, plan units), and at
+    least ``reach`` from the ``shell``'s boundary and from every other hole; else ``nan`` (no
+    width test, :func:`_rigid_cuts`)."""
     import shapely  # lazily: ``import boustro`` does not load shapely
 
     wide = np.full(len(rings.parent), np.nan)
@@ -96,7 +107,7 @@ def wide_rings(
         ring = np.asarray(holes[h], dtype=np.float64)
         e = np.roll(ring, -1, axis=0) - ring
         length = np.hypot(e[:, 0], e[:, 1])
-        if parts[h] != 1 or length.min() <= 0 or length.max() >= 2 * reach:
+        if parts[h] != 1 or length.min() <= 0 or length.max() >= 2 * reach - WIDE_EDGE_TOLS * tol:
             continue
         nxt = np.roll(e, -1, axis=0)
         sine = (e[:, 0] * nxt[:, 1] - e[:, 1] * nxt[:, 0]) / (length * np.roll(length, -1))
