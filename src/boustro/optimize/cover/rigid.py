@@ -118,7 +118,7 @@ def wide_rings(
         if any(g != h and shapely.distance(polys[h], p) < reach for g, p in enumerate(polys)):
             continue
         v = rings.xy[rings.start[j] : rings.start[j + 1]]
-        wide[j] = float(np.sqrt(((v[:, None, :] - v[None, :, :]) ** 2).sum(axis=2).max()))
+        wide[j] = max(float(np.hypot(*(v - p).T).max()) for p in v)  # O(len(v)) memory
     return wide
 
 
