@@ -116,13 +116,22 @@ def _rect_with(hole: np.ndarray) -> Region:
     return Region(shell, [Polygon(hole)])
 
 
-def test_a_square_hole_spanning_the_band_is_not_a_rigid_cut():
+@pytest.mark.parametrize("split", [False, True])
+def test_a_square_hole_spanning_the_band_is_not_a_rigid_cut(split):
     """A 12 m square hole with edges along the lines: a line through its middle has the whole
     band inside it, so the band's projection already has the chord as its gap and the planner
     does not cut it (no pass); its perpendicular edges are longer than the band (2 reach), so
-    the width test must not apply. The plan at the box's centre does not cut it."""
+    the width test must not apply. The plan at the box's centre does not cut it. With
+    ``split`` (review) each side is two 6 m edges, shorter than the band, through a vertex
+    dented inwards by 1e-5 m (the line through it meets the hole's side there, its band's
+    neighbours farther out: still no cut): the convexity test (``WIDE_TURN``) must refuse it."""
     c = np.array([60.0, 45.0])
-    square = c + np.array([[-6, -6], [6, -6], [6, 6], [-6, 6]], dtype=float)
+    corners = np.array([[-6, -6], [6, -6], [6, 6], [-6, 6]], dtype=float)
+    if split:
+        corners = np.repeat(corners, 2, axis=0)
+        corners[1::2] = (corners[1::2] + np.roll(corners, -2, axis=0)[1::2]) / 2
+        corners[1::2] *= 1 - 1e-5 / 6  # dented by 1e-5 m (an exactly straight vertex is dropped)
+    square = c + corners
     region = _rect_with(square)
     d = (45.0 - _search(region).origin[1]) % SPACING  # a line through the square's middle
     box = Boxes(np.array([0.0]), np.array([1e-5]), np.array([d]), np.array([0.5]))
