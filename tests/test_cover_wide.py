@@ -226,3 +226,16 @@ def test_the_width_tests_diameter_is_the_rings_largest_vertex_distance():
     pond = np.c_[100 + 8 * np.cos(t), 75 + 8 * np.sin(t)]
     rings = rigid_mod.split_rings([pond], SPACING, 1e-7, shell, SPACING / 2)
     assert rings.wide is not None and rings.wide[0] == pytest.approx(16.0, rel=1e-6)
+
+
+def test_a_hole_narrower_than_the_spacing_between_two_lines_is_not_rigid():
+    """Review: a 12-gon of 4 m (8 m across, below the 10 m spacing) halfway between two lines
+    of the box's centre: no line crosses it there, the plan does not cut it, so the width test
+    must not mark it (the mutant comparing the width with half the spacing survived the other
+    tests)."""
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    region = _rect_with(np.c_[60 + 4 * np.cos(t), 45 + 4 * np.sin(t)])
+    d = (45.0 + SPACING / 2 - _search(region).origin[1]) % SPACING  # lines at 45 +- 5
+    assert _cut(region, 0.0, d) == set()
+    box = Boxes(np.array([0.0]), np.array([1e-5]), np.array([d]), np.array([0.1]))
+    assert _rigid(region, box) == set()
