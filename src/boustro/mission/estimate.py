@@ -123,14 +123,19 @@ REGION_EXTENDED = (1.14e-6, 1.26, 0.92)
 #: (``"cover-region"``) adds ``c h^kappa n^gamma`` seconds (the passes around the holes and the
 #: moves past them in every plan the search makes, and the plans they add). The
 #: ``"cover-region"`` row was fitted on stars without holes; on issue 21's traced fields it said
-#: 5.3-55 s for 8.8-83 s measured (0.27-0.66x). Fitted (least worst ratio) on
-#: ``benchmarks/scale.py --part time`` (2026-11-27, load 3.4-5.5, 5 m/s, 10 s a turn, 10 m):
-#: traced fields of 500-5000 vertices with 10 holes (20.4, 25.1, 33.3, 83.0 s) and of 500 and
-#: 2000 vertices with 2 (8.8, 35.6 s): estimate / measured 0.77-1.29 there (the calibration
-#: itself; docs/scale.md; a held-out field, 1000 vertices and 5 holes at load 13: 0.62, a
-#: review). The search's time is irregular: 2000 vertices took longer with 2
-#: holes than with 10. A small area with one hole gains about 0.4 s.
-COVER_HOLES = (0.0467, 0.25, 0.75)
+#: 5.3-55 s for 8.8-83 s measured (0.27-0.66x) on 2026-11-27, when ``(0.0467, 0.25, 0.75)``
+#: was fitted. Since then the searches got 2-4x faster on big fields (a simplified sandwich's
+#: plans ruled out by their exact bound, a partial last round, the holes wider than the
+#: spacing as rigid cuts) and the row over-estimated them (38.9 s for 9.4 s at 2000 vertices,
+#: 105 s for 22.1 s at 5000). Refitted (least squares on the log, ``gamma`` held at 0: the
+#: time per hole no longer grows with the vertices, the big areas' searches run on
+#: simplified sandwiches) on ``benchmarks/scale.py --part time`` (2026-11-28, load 8-13, 5 m/s,
+#: 10 s a turn, 10 m): traced fields of 500, 1000, 2000, 5000 vertices with 10 holes (11.9,
+#: 11.7, 9.4, 22.1 s) and of 500 and 2000 with 2 (6.4, 9.9 s): estimate / measured 0.72,
+#: 0.87, 1.71, 2.62, 0.92, 1.29 (the 5000-vertex field's estimate is the row's ``n^2.06``,
+#: fitted on stars of at most 2000 vertices: 54.7 s alone; not refitted). A small area with
+#: one hole gains about 0.3 s.
+COVER_HOLES = (0.315, 1.0, 0.0)
 
 #: Above this many (hull) vertices the certified optimiser's work is over its limit whatever
 #: the spacing (at least ``n^3 (n - 1)``), so :func:`global_work` is not computed.

@@ -38,6 +38,7 @@ from .rigid import (
     _rigid_cuts,
     _split_gaps,
     _split_pieces,
+    jit_wide,
     split_rings,
 )
 
@@ -102,7 +103,8 @@ class BandStats(NamedTuple):
       (``rho``: the hole's farthest vertex from the origin; every point of the hole moves by
       at most ``m``), so it crosses every moved hole (connected), and one inner projection
       interval of band ``k`` covers the hole's extent along the line grown by ``m``, so the
-      chord lies inside every such plan's lane;
+      chord lies inside every such plan's lane; or a convex, isolated hole is wider than the
+      spacing across every line direction of the box (:func:`~.rigid._wide_cut`);
     * ``first_hi, last_lo``: the end of the first and the start of the last piece of the inner
       projection minus the chords of its holes (``nan`` where none): the lane holding the
       first piece ends at ``first_hi`` or beyond (:mod:`~boustro.optimize.cover.ends`);
@@ -165,6 +167,7 @@ def _leaf(
     sstart,
     sparent,
     split,
+    swide,
     first_lo,
     last_hi,
 ):
@@ -178,7 +181,7 @@ def _leaf(
     ext = np.empty((n_h, 5))
     if delta >= 0:
         _hole_extents(sxy, sstart, cs, sn, ox, oy, delta, eta, tol, ext)
-        _rigid_cuts(ext, sparent, d, s, k0, nb, i_start, i_m, i_lo, i_hi, rigid)
+        _rigid_cuts(ext, sparent, d, s, k0, nb, i_start, i_m, i_lo, i_hi, rigid, swide, delta, tol)
     # chords where the lines tau either side cross the hole too (the planner's rule, with its
     # 1e-7 spacings): the inner set's tau within its holes' margin over the real ones (the
     # sandwich's pad, tol), the outer set's beyond the planner's (fewer chords: a lower bound)
@@ -271,6 +274,7 @@ def _all(
     sstart,
     sparent,
     split,
+    swide,
 ):
     n = cs.shape[0]
     length = np.zeros((n, nb))
@@ -321,6 +325,7 @@ def _all(
             sstart,
             sparent,
             split,
+            swide,
             first_lo[leaf],
             last_hi[leaf],
         )
@@ -332,7 +337,7 @@ def _all(
 def _compiled() -> Any:
     """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
     helpers = ("_rigid_cuts", "_hole_extents", "_split_gaps", "_split_pieces", "_leaf")
-    return compiled(globals(), "_all", helpers, [lambda: jit_into(globals())])
+    return compiled(globals(), "_all", helpers, [lambda: jit_into(globals()), jit_wide])
 
 
 def band_stats(
@@ -377,6 +382,7 @@ def band_stats(
         holes = [rigid.xy[a:b] for a, b in zip(rigid.start[:-1], rigid.start[1:], strict=True)]
         rings = split_rings(holes, float(spacing), float(tol))
     gone_ring = gone[rings.parent]
+    wide = np.full(len(rings.parent), np.nan) if rings.wide is None else rings.wide
     out = fn(
         np.ascontiguousarray(inner.xy), np.ascontiguousarray(inner.hole),
         np.ascontiguousarray(outer.xy), np.ascontiguousarray(outer.hole),
@@ -389,5 +395,6 @@ def band_stats(
         np.ascontiguousarray(rings.xy, dtype=np.float64),
         np.ascontiguousarray(rings.start, dtype=np.int64),
         np.ascontiguousarray(rings.parent, dtype=np.int64), np.ascontiguousarray(gone_ring),
+        np.ascontiguousarray(wide, dtype=np.float64),
     )  # fmt: skip
     return BandStats(int(k0), *out)

@@ -10,7 +10,9 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["RigidBoxes", "SplitRings", "split_rings"]
+from ..._jit import jit_globals
+
+__all__ = ["WIDE_CUTS", "RigidBoxes", "SplitRings", "jit_wide", "split_rings", "wide_rings"]
 
 #: The rigid cuts' and split gaps' holes are the holes eroded by this many planner's ``eps``
 #: (``1e-7 max(spacing, tol)``: :func:`boustro.plan.lanes._cut_holes` cuts a line only where
@@ -30,11 +32,19 @@ class SplitRings(NamedTuple):
     xy: NDArray[np.float64]
     start: NDArray[np.int64]
     parent: NDArray[np.int64]
+    wide: NDArray[np.float64] | None = None  # per ring: :func:`wide_rings`
 
 
-def split_rings(holes: list[NDArray[np.float64]], spacing: float, tol: float) -> SplitRings:
+def split_rings(
+    holes: list[NDArray[np.float64]],
+    spacing: float,
+    tol: float,
+    shell: NDArray[np.float64] | None = None,
+    reach: float = 0.0,
+) -> SplitRings:
     """The holes (rings ``(n, 2)``) eroded by ``SPLIT_ERODE * 1e-7 * max(spacing, tol)``, one
-    ring per connected part (a hole thinner than that anywhere gives none there)."""
+    ring per connected part (a hole thinner than that anywhere gives none there); with the
+    area's ``shell`` and the lanes' ``reach``, also :func:`wide_rings` (else no width test)."""
     import shapely  # lazily: ``import boustro`` does not load shapely
 
     r = SPLIT_ERODE * 1e-7 * max(spacing, tol)
@@ -49,7 +59,67 @@ def split_rings(holes: list[NDArray[np.float64]], spacing: float, tol: float) ->
             parent.append(h)
     xy = np.concatenate(rings) if rings else np.zeros((0, 2))
     start = np.concatenate([[0], np.cumsum([len(g) for g in rings])]).astype(np.int64)
-    return SplitRings(xy, start, np.asarray(parent, dtype=np.int64))
+    out = SplitRings(xy, start, np.asarray(parent, dtype=np.int64))
+    if shell is None or reach <= 0:
+        return out
+    return out._replace(wide=wide_rings(out, holes, shell, reach, tol))
+
+
+#: Whether a convex, isolated hole wider than the spacing across every line direction of a box
+#: is a rigid cut of the box (:func:`wide_rings`, :func:`_rigid_cuts`): issue 21's 6 m holes
+#: span a 10 m band, so no inner piece covers them at a box of metres (docs/scale.md, "Holes
+#: wider than the spacing (fifteenth round)").
+WIDE_CUTS = True
+
+#: The least turn (its sine) at every vertex of a hole for :func:`wide_rings`: no two edges are
+#: (nearly) one straight piece.
+WIDE_TURN = 1e-6
+
+#: :func:`wide_rings` admits a hole whose edges are all shorter than ``2 reach`` less this many
+#: planner's tolerances (``tol``, :data:`boustro.plan.cells._TOL` times the area's diameter):
+#: the planner drops a band's slab thinner than ``tol`` (``lanes._band_intervals``), so an edge
+#: across the lines within ``tol`` of the band's width leaves its lane uncut (docs/scale.md).
+WIDE_EDGE_TOLS = 8.0
+
+
+def wide_rings(
+    rings: SplitRings,
+    holes: list[NDArray[np.float64]],
+    shell: NDArray[np.float64],
+    reach: float,
+    tol: float,
+) -> NDArray[np.float64]:
+    """Per ring of ``rings``: its diameter (largest distance between two of its vertices) where
+    the hole it comes from is the ring's only part, strictly convex (every vertex turns by a
+    sine of at least :data:`WIDE_TURN`, one way), every edge shorter than ``2 reach`` (a lane's
+    band) less :data:`WIDE_EDGE_TOLS` ``tol`` (the planner's tolerance, plan units), and at
+    least ``reach`` from the ``shell``'s boundary and from every other hole; else ``nan`` (no
+    width test, :func:`_rigid_cuts`)."""
+    import shapely  # lazily: ``import boustro`` does not load shapely
+
+    wide = np.full(len(rings.parent), np.nan)
+    if not WIDE_CUTS:
+        return wide
+    polys = [shapely.Polygon(h) for h in holes]
+    boundary = shapely.LinearRing(shell)
+    parts = np.bincount(rings.parent, minlength=len(holes))
+    for j, h in enumerate(rings.parent):
+        ring = np.asarray(holes[h], dtype=np.float64)
+        e = np.roll(ring, -1, axis=0) - ring
+        length = np.hypot(e[:, 0], e[:, 1])
+        if parts[h] != 1 or length.min() <= 0 or length.max() >= 2 * reach - WIDE_EDGE_TOLS * tol:
+            continue
+        nxt = np.roll(e, -1, axis=0)
+        sine = (e[:, 0] * nxt[:, 1] - e[:, 1] * nxt[:, 0]) / (length * np.roll(length, -1))
+        if not (np.all(sine >= WIDE_TURN) or np.all(sine <= -WIDE_TURN)):
+            continue
+        if shapely.distance(polys[h], boundary) < reach:
+            continue
+        if any(g != h and shapely.distance(polys[h], p) < reach for g, p in enumerate(polys)):
+            continue
+        v = rings.xy[rings.start[j] : rings.start[j + 1]]
+        wide[j] = max(float(np.hypot(*(v - p).T).max()) for p in v)  # O(len(v)) memory
+    return wide
 
 
 class RigidBoxes(NamedTuple):
@@ -81,14 +151,18 @@ def _hole_extents(hxy, hstart, cs, sn, ox, oy, delta, eta, tol, ext):
         ext[h, 4] = delta * rho + eta + tol
 
 
-def _rigid_cuts(ext, parent, d, s, k0, nb, i_start, i_m, i_lo, i_hi, rigid):
+def _rigid_cuts(ext, parent, d, s, k0, nb, i_start, i_m, i_lo, i_hi, rigid, wide, delta, tol):
     """``rigid[parent[h]]``: the hole of ring ``h`` (of the holes eroded past the planner's eps,
     :func:`split_rings`: a line through them is cut by the planner; extents ``ext`` from
-    :func:`_hole_extents`) is cut by every plan of the box (:class:`BandStats`)."""
+    :func:`_hole_extents`) is cut by every plan of the box (:class:`BandStats`), by one line
+    through it at every layout or (:func:`_wide_cut`) by its width."""
     for h in range(ext.shape[0]):
         if rigid[parent[h]]:
             continue
         n_lo, n_hi, u_lo, u_hi, m = ext[h, 0], ext[h, 1], ext[h, 2], ext[h, 3], ext[h, 4]
+        if _wide_cut(n_lo, n_hi, m, wide[h], delta, tol, d, s, k0, nb):
+            rigid[parent[h]] = True
+            continue
         ka = max(math.ceil((n_lo + m - d) / s), k0)
         kb = min(math.floor((n_hi - m - d) / s), k0 + nb - 1)
         for k in range(ka, kb + 1):
@@ -104,6 +178,30 @@ def _rigid_cuts(ext, parent, d, s, k0, nb, i_start, i_m, i_lo, i_hi, rigid):
             if found:
                 rigid[parent[h]] = True
                 break
+
+
+def _wide_cut(n_lo, n_hi, m, wide, delta, tol, d, s, k0, nb):
+    """Whether a ring of :func:`wide_rings` (``wide``: its diameter, ``nan`` if none; extents
+    across ``n_lo, n_hi`` and motion ``m`` from :func:`_hole_extents`) is cut by every plan of
+    a box of angles ``+- delta``: its width across the lines at every angle of the box is at
+    least ``n_hi - n_lo - wide delta - 2 tol`` (a rotation by ``a`` turns the lines' normal by
+    ``2 sin(a / 2) <= a``, so each pair of its points' distance across changes by at most
+    ``wide a``; a shift changes no width); above the spacing, the open extent across of every
+    moved ring holds a line, which crosses the ring (connected), so the planner cuts that line
+    there (:func:`split_rings`), and the lane on it enters the chord of the convex, isolated
+    hole (docs/scale.md, "Holes wider than the spacing"). Every line that may cross it (within
+    ``m`` of its extent) must be one of the box's ``nb`` lines from ``k0``."""
+    if not (n_hi - n_lo - wide * delta - 2.0 * tol > s):  # false for nan
+        return False
+    ka = math.ceil((n_lo - m - d) / s)
+    kb = math.floor((n_hi + m - d) / s)
+    return ka >= k0 and kb <= k0 + nb - 1
+
+
+def jit_wide() -> None:
+    """Swap :func:`_wide_cut` for its compiled version here, where the compiled
+    :func:`_rigid_cuts` looks it up (:func:`~.bands._compiled`)."""
+    jit_globals(globals(), ("_wide_cut",))
 
 
 def _split_gaps(hxy, hstart, ext, split, cs, sn, ox, oy, c, glo, ghi):

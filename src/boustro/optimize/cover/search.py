@@ -148,7 +148,9 @@ class CoverSearch:
         self.hole_start = np.concatenate([[0], np.cumsum([len(h) for h in rings])]).astype(np.int64)
         self.tol = 1e-9 * region.diameter
         # the holes eroded past the planner's eps: rigid cuts, split gaps (rigid.split_rings)
-        self.split_rings = split_rings(rings, spacing, self.tol)
+        self.split_rings = split_rings(
+            rings, spacing, self.tol, region.shell.vertices, 0.0 if keep_inside else reach
+        )
         # the lane-ends bound on a routed tour's moves (not with boundary or headland passes)
         self.ends = not self.boustrophedon and not keep_inside and cost.fixed == 0
         # the 1-tree bound on the moves (optimize/cover/one_tree.py)
