@@ -56,6 +56,25 @@ def test_a_move_past_a_reflex_corner_cuts_it_within_the_reach():
     assert flat.path(p, q).length == pytest.approx(inside.length)
 
 
+def test_an_end_beyond_the_reach_is_not_routed_in_the_grown_domain(monkeypatch):
+    """A run-in's end lies up to the reach plus the run-in out: a move from it would fail the
+    straight test on its first segment, so the grown domain is not searched for it (with
+    run-ins most moves were, each rejected) and the move is the one inside the area."""
+    router = Router(Region(L_SHELL, [L_HOLE]), 5.0)
+    assert router._grown is not None
+    asked = []
+    grown_path = router._grown.path
+    monkeypatch.setattr(router._grown, "path", lambda p, q: asked.append(1) or grown_path(p, q))
+    p, q = np.array([90.0, 48.0]), np.array([43.0, 90.0])  # p 8 m above the arm, q 3 m out
+    move = router.path(p, q)
+    assert not asked
+    inside = router._inside_detour(p, q)
+    assert move.length == inside.length and np.array_equal(move.points, inside.points)
+    # with both ends within the reach it is searched (and its move cuts the corner)
+    assert router.path(np.array([90.0, 43.0]), q).length < inside.length - 10
+    assert asked
+
+
 def test_pockets_the_dilation_closes_are_holes_of_the_grown_domain():
     """A C whose mouth (4 m) is narrower than twice the reach: the bay's middle, farther than
     the reach from the shell, is a hole of the grown domain."""

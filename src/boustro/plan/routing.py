@@ -294,8 +294,17 @@ class Router:
 
     def _grown_detour(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> Route | None:
         """The move from ``p`` to ``q`` routed in the grown domain, if every segment of it
-        passes this router's straight test (within the reach, no hole; else ``None``)."""
+        passes this router's straight test (within the reach, no hole; else ``None``).
+
+        ``None`` at once where an end lies outside the shell farther than the reach (a run-in's
+        end, up to the reach plus the run-in out): the test samples a segment's ends, so the
+        move's first or last segment would fail it; not routing it spares the grown domain's
+        search (with a 6 m run-in and 10 m lanes 94% of these moves, 2026-11-28)."""
         assert self._grown is not None
+        ends = np.stack([p, q])
+        far = ~self._index.within(ends, self.reach * (1 + 1e-9), len(self._shell_edges))
+        if far.any() and bool(np.any(self.classify(ends[far]) == 2)):
+            return None
         route = self._grown.path(p, q)
         if not route.found:
             return None
