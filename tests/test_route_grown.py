@@ -75,6 +75,25 @@ def test_an_end_beyond_the_reach_is_not_routed_in_the_grown_domain(monkeypatch):
     assert asked
 
 
+def test_the_tours_distances_are_the_moves_flown():
+    """The matrix a tour is ordered on (``Router.distances``) is the length of the move the
+    router flies, for every pair of these few points (all within each other's nearest): grown
+    moves past the corner (106 m inside against 90.09 m flown before), straight moves outside
+    within the reach, moves from an end beyond the reach (routed inside, not grown)."""
+    router = Router(Region(L_SHELL, [L_HOLE]), 5.0)
+    pts = np.array(
+        [(90, 43), (43, 90), (90, 48), (5, 5), (30, 30), (60, 20), (20, 60), (103, 20),
+         (60, 43), (25, 25), (-3, 50), (43, 43)], dtype=float,
+    )  # fmt: skip
+    dist = router.distances(pts)
+    grown = 0
+    for i, j in itertools.permutations(range(len(pts)), 2):
+        move = router.path(pts[i], pts[j])
+        assert dist[i, j] == pytest.approx(move.length, rel=1e-9), (i, j)
+        grown += not move.straight and move.length < router._inside_detour(pts[i], pts[j]).length
+    assert grown >= 10
+
+
 def test_pockets_the_dilation_closes_are_holes_of_the_grown_domain():
     """A C whose mouth (4 m) is narrower than twice the reach: the bay's middle, farther than
     the reach from the shell, is a hole of the grown domain."""

@@ -19,11 +19,11 @@ checks every segment of the result with its own straight test (within the reach 
 sixteenth of it apart, no hole), and keeps it if it is shorter than the move inside the area:
 so a plan's moves lie where its straight moves may already lie (the premise of the search's
 walls outside the shell, :mod:`boustro.optimize.cover.walls`), and no move is longer than
-before. With keep-inside the reach is 0 and there is no grown domain. A tour's order is still
-chosen with the area's distances (:meth:`~boustro.plan.routing.Router.distances`): with the
-grown domain's, one random area of ``benchmarks/mission_time.py`` (15) got a plan 2.5 s longer;
-with the area's, a layout's tour is chosen among the same candidates, now measured as flown,
-so never longer. shapely is imported on use.
+before. With keep-inside the reach is 0 and there is no grown domain. A tour's distances
+(:meth:`~boustro.plan.routing.Router.distances`) are the moves flown: the shorter of the move
+inside the area and the grown domain's (the grown router's own distances), the latter only
+between ends the router would route there (:meth:`~boustro.plan.routing.Router._grown_ends`),
+so that the exact order is the shortest flown. shapely is imported on use.
 """
 
 from __future__ import annotations

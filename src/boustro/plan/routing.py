@@ -301,9 +301,7 @@ class Router:
         move's first or last segment would fail it; not routing it spares the grown domain's
         search (with a 6 m run-in and 10 m lanes 94% of these moves, 2026-11-28)."""
         assert self._grown is not None
-        ends = np.stack([p, q])
-        far = ~self._index.within(ends, self.reach * (1 + 1e-9), len(self._shell_edges))
-        if far.any() and bool(np.any(self.classify(ends[far]) == 2)):
+        if not self._grown_ends(np.stack([p, q])).all():
             return None
         route = self._grown.path(p, q)
         if not route.found:
@@ -313,6 +311,15 @@ class Router:
         if not ok.all():
             return None
         return Route(pts, route.length, float(outside.sum()), False)
+
+    def _grown_ends(self, points: NDArray[np.float64]) -> NDArray[np.bool_]:
+        """``(P,)``: whether a move from or to each point may be routed in the grown domain:
+        not outside the shell farther than the reach (:meth:`_grown_detour`)."""
+        far = ~self._index.within(points, self.reach * (1 + 1e-9), len(self._shell_edges))
+        ok = np.ones(len(points), dtype=bool)
+        if far.any():
+            ok[far] = self.classify(points[far]) != 2
+        return ok
 
     def _inside_detour(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> Route:
         """The move from ``p`` to ``q`` inside the area (its legs to it excepted)."""
