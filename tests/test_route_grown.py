@@ -159,3 +159,17 @@ def test_plans_never_longer_covered_timed_as_flown(angle, monkeypatch):
     # the hole's ring: the area's boundary counts as in it
     shapely_outside = shapely.length(shapely.difference(segments, area.buffer(1e-7))).sum()
     assert new.summary()["outside_length_m"] == pytest.approx(shapely_outside, rel=1e-6)
+
+
+def test_a_point_inside_a_hole_is_measured_as_flown():
+    """From a point strictly inside a hole the grown route's first segment crosses the hole, so
+    the router flies the move inside the area: the matrix must not take the grown length
+    (it was 4-11 m shorter than the move flown for these pairs)."""
+    region = Region(L_SHELL, [[(60, 10), (90, 10), (90, 30), (60, 30)]])
+    router = Router(region, 5.0)
+    pts = np.array([(75, 20), (88, 28), (62, 28), (43, 90), (2, 98), (75, 9)], dtype=float)
+    assert list(router.classify(pts)) == [1, 1, 1, 2, 0, 0]
+    dist = router.distances(pts)
+    for i, j in itertools.permutations(range(len(pts)), 2):
+        assert dist[i, j] == pytest.approx(router.path(pts[i], pts[j]).length, rel=1e-9), (i, j)
+    assert list(router._grown_ends(pts)) == [False, False, False, True, True, True]

@@ -314,11 +314,17 @@ class Router:
 
     def _grown_ends(self, points: NDArray[np.float64]) -> NDArray[np.bool_]:
         """``(P,)``: whether a move from or to each point may be routed in the grown domain:
-        not outside the shell farther than the reach (:meth:`_grown_detour`)."""
-        far = ~self._index.within(points, self.reach * (1 + 1e-9), len(self._shell_edges))
-        ok = np.ones(len(points), dtype=bool)
-        if far.any():
-            ok[far] = self.classify(points[far]) != 2
+        not strictly inside a hole, not outside the shell farther than the reach
+        (:meth:`_grown_detour`). From either, the grown route's first or last segment (to the
+        grown domain's nearest point) fails the straight test, so the move is flown inside
+        the area and :meth:`distances` must not take the grown length for it."""
+        where = self.classify(points)
+        ok = where == 0
+        out = np.flatnonzero(where == 2)
+        if len(out):
+            ok[out] = self._index.within(
+                points[out], self.reach * (1 + 1e-9), len(self._shell_edges)
+            )
         return ok
 
     def _inside_detour(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> Route:
