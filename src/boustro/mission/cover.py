@@ -143,8 +143,10 @@ LEFT_NOTES = (BLOCKED_NOTE, OUTSIDE_NOTE)
 #: 1): a lane within ``reach`` of the area (it spans its band's projection), a run-in
 #: ``turnaround`` beyond its lane, a straight connecting move within ``max(reach, turnaround)``
 #: at points ``1/16`` of that apart (:meth:`~boustro.plan.routing.Router.path`: within
-#: ``1 + 1/32`` of it between them), a routed one inside the area; a move the router found no
-#: way for voids the certificate (:data:`LEFT_NOTES`).
+#: ``1 + 1/32`` of it between them), a routed one inside the area or, where shorter, through
+#: the shell grown by that allowance with every segment passing the same straight test
+#: (:mod:`boustro.plan.route_grown`); a move the router found no way for voids the
+#: certificate (:data:`LEFT_NOTES`).
 OUTSIDE_FACTOR = 1.0 + 1.0 / 16
 
 

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError, MissingDependencyError
 from .routing import Router
-from .tour import _order, _Pass
+from .tour import _orders, _Pass
 
 __all__ = ["EXACT_PASSES", "ORDER_SOLVERS", "OrderSolver", "solve_order", "tour_cost"]
 
@@ -185,7 +185,7 @@ def solve_order(
 
     ``solver``: ``"auto"`` (default) solves exactly up to :data:`EXACT_PASSES` passes, by
     OR-Tools beyond (``pip install 'boustro[order]'``; the better of its tour and the greedy +
-    2-opt one is kept), else greedy + 2-opt (:func:`boustro.plan.tour._order`) with a note;
+    2-opt one is kept), else greedy + 2-opt (:func:`boustro.plan.tour._orders`) with a note;
     ``"exact"``, ``"or-tools"`` or ``"heuristic"`` asks for one (``"exact"`` refuses more than
     :data:`EXACT_PASSES` passes, ``"or-tools"`` needs the extra). With ``force_start`` the tour
     begins at ``start`` (the routed approach to the first entry counted; the greedy order begins
@@ -221,7 +221,7 @@ def solve_order(
                 "optimum: this order may differ on another machine or load"
             )
         if found is not None:
-            order, choice = _order(passes, start, router, force_start=force_start)
+            order, choice = _orders(passes, start, router, force_start=force_start)[0]
             greedy = pb.nodes(order, choice)
             best = found if pb.cost(found) <= pb.cost(greedy) else greedy
             used: OrderSolver = "or-tools" if best is found else "heuristic"
@@ -231,7 +231,7 @@ def solve_order(
             f"{pb.n} passes ordered by greedy + 2-opt (more than {EXACT_PASSES} for the exact "
             f"order, and {why}: pip install 'boustro[order]')"
         )
-    order, choice = _order(passes, start, router, force_start=force_start)
+    order, choice = _orders(passes, start, router, force_start=force_start)[0]
     return order, choice, "heuristic", notes
 
 

@@ -1,7 +1,7 @@
 """The 2-opt improvement of a tour's order, compiled by numba on first use.
 
 Each evaluated order is costed by the same dynamic programme as
-:func:`boustro.plan.tour._order` (the driving option of every pass chosen for the least total),
+:func:`boustro.plan.tour._orders` (the driving option of every pass chosen for the least total),
 with the same floating-point operations in the same order, so the compiled loop returns the
 order the Python loop would; it only removes the interpreter's overhead (a few microseconds
 per pass per evaluated order, seconds for the :data:`~boustro.plan.tour.ORDER_BUDGET` orders of

@@ -22,7 +22,7 @@ from ..optimize.problem import _progress_bar
 from .cell_order import solve_order
 from .cells import _TOL, _check_float
 from .inside import inside_layout
-from .lane_tour import refine_tour
+from .lane_tour import refine_best, refine_tour
 from .lanes import Lanes, region_lanes
 from .outside import outside_length
 from .region_opt import _cells_for_sweep, _estimate, choose_sweep, optimize_region
@@ -33,7 +33,7 @@ from .tour import (
     _chains,
     _Driver,
     _hole_pass,
-    _order,
+    _orders,
     _Pass,
     _Path,
 )
@@ -432,14 +432,15 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
     forced = start is not None
     solver: str | None = None  # greedy + 2-opt, not reported
     if opts.order == "heuristic":
-        order, choice = _order(passes, start_pt, router, force_start=forced)
+        tours = _orders(passes, start_pt, router, force_start=forced)
     else:
         order, choice, solver, said = solve_order(
             passes, start_pt, router, force_start=forced, solver=opts.order
         )
+        tours = [(order, choice)]
         notes.extend(said)
     run = (opts.turnaround, opts.keep_inside)  # the lanes' run-ins and run-outs
-    passes, order, choice = refine_tour(passes, order, choice, start_pt, router, forced, *run)
+    passes, order, choice = refine_best(passes, tours, start_pt, router, forced, *run, refine_tour)
     return _Tour(passes, order, choice, router, solver)
 
 

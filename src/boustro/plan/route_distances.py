@@ -7,6 +7,17 @@ chains, then the lane-by-lane refinement) and a search plans hundreds of nearby 
 point's rows of shortest lengths to the graph's nodes are remembered by the router
 (:meth:`~boustro.plan.routing.Router._rows`); every matrix equals the one computed from
 scratch, bit for bit.
+
+With a grown domain (:mod:`~boustro.plan.route_grown`) a pair's length is the shorter of the
+move inside the area and the grown router's :func:`distances` (the same visibility-graph
+lengths its :meth:`~boustro.plan.routing.Router.path` flies), between the points from which
+:meth:`~boustro.plan.routing.Router._detour` may take a grown move
+(:meth:`~boustro.plan.routing.Router._grown_ends`): the lengths the router flies. A grown
+move's segments lie in the grown domain, within the reach of the shell, so the router's segment
+test keeps it (the test is a safety net; if it rejected one, the matrix would be shorter than
+that move as flown). A straight move allowed outside the shell within the reach is measured
+straight by the grown router where the pair is among the nearest (else through its graph,
+an upper bound, as inside the area).
 """
 
 from __future__ import annotations
@@ -53,6 +64,11 @@ def distances(router: Any, points: Any, nearest: int = 24) -> NDArray[np.float64
     # :meth:`path` then flies it
     direct = np.where(np.isfinite(direct), direct, euclid)
     out = direct + legs[:, None] + legs[None, :]
+    if router._grown is not None:  # the moves routed in the grown domain where shorter
+        idx = np.flatnonzero(router._grown_ends(p))
+        if len(idx) > 1:
+            block = np.ix_(idx, idx)
+            out[block] = np.minimum(out[block], router._grown.distances(p[idx]))
     np.fill_diagonal(out, 0.0)
     return out
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -120,15 +120,23 @@ def _boundary_pass(pts: NDArray[np.float64], max_options: int = 8) -> _Pass:
 ORDER_BUDGET = 4000
 
 
-def _order(
+def _order(*args: Any, **kwargs: Any) -> tuple[list[int], list[int]]:
+    """Order and driving option of every pass: the first of :func:`_orders` (the same
+    arguments)."""
+    return _orders(*args, **kwargs)[0]
+
+
+def _orders(
     passes: list[_Pass],
     start: NDArray[np.float64],
     router: Router,
     budget: int = ORDER_BUDGET,
     *,
     force_start: bool = True,
-) -> tuple[list[int], list[int]]:
-    """Order and driving option of every pass. With ``force_start`` the first is the pass and
+) -> list[tuple[list[int], list[int]]]:
+    """Orders and driving options of every pass, the shortest first: the exact one where it
+    is shorter than the heuristic's, then the heuristic's (only the latter where the exact
+    order is not solved or not shorter). With ``force_start`` the first is the pass and
     option whose entry (a lane end) is nearest ``start``; without, ``start`` only seeds the
     greedy order and the tour begins where it is shortest. The rest greedy, then 2-opt (at most
     ``budget`` orders evaluated) with the options chosen by dynamic programming; for at most
@@ -205,8 +213,10 @@ def _order(
     _, choice = cost(order)
     if 1 < len(passes) <= EXACT_TOUR_PASSES:
         pin = forced if force_start else None
-        return _exact(order, choice, dist, entry_idx, exit_idx, internal, pin, first_pass)
-    return order, choice
+        exact = _exact(order, choice, dist, entry_idx, exit_idx, internal, pin, first_pass)
+        if exact is not None:
+            return [exact, (order, choice)]
+    return [(order, choice)]
 
 
 def _exact(
@@ -218,11 +228,12 @@ def _exact(
     internal: list[NDArray[np.float64]],
     forced: NDArray[np.float64] | None,
     first_pass: int,
-) -> tuple[list[int], list[int]]:
-    """The exact order of few passes (:mod:`.tour_exact`), or ``order, choice`` where it is
-    not shorter. The tour's cost is the driven one: its passes and the moves between them, plus
-    with a forced start (``forced``: the first pass's options, 0 for the forced one) the
-    approach from the start (the greedy + 2-opt order also counts that approach without one)."""
+) -> tuple[list[int], list[int]] | None:
+    """The exact order of few passes (:mod:`.tour_exact`), or ``None`` where it is not
+    shorter than ``order, choice``. The tour's cost is the driven one: its passes and the
+    moves between them, plus with a forced start (``forced``: the first pass's options, 0 for
+    the forced one) the approach from the start (the greedy + 2-opt order also counts that
+    approach without one)."""
     pass_of = np.concatenate([np.full(len(e), k) for k, e in enumerate(entry_idx)])
     option = np.concatenate([np.arange(len(e)) for e in entry_idx])
     entries, exits = np.concatenate(entry_idx), np.concatenate(exit_idx)
@@ -238,7 +249,7 @@ def _exact(
     base_cost = float(first[base[0]]) + sum(float(move[a, b]) for a, b in itertools.pairwise(base))
     nodes, cost = exact_nodes(pass_of, first, move)
     if not cost < base_cost * (1 - 1e-12):
-        return order, choice
+        return None
     return [int(pass_of[a]) for a in nodes], [int(option[a]) for a in nodes]
 
 

@@ -1,13 +1,16 @@
 """The exact order of a tour's few passes (Held-Karp over subsets of passes, the driving option
 of each pass a node), compiled by numba on first use.
 
-:func:`boustro.plan.tour._order` orders passes greedily and improves the order by 2-opt; for
+:func:`boustro.plan.tour._orders` orders passes greedily and improves the order by 2-opt; for
 at most :data:`EXACT_TOUR_PASSES` passes it also solves the order exactly with this dynamic
-programme (``2^n x options^2`` steps: about a millisecond for 8 passes) and keeps the cheaper
-of the two, so a plan's tour is never longer than the heuristic's and is the shortest tour of
-its passes. The same problem as :func:`boustro.plan.cell_order.solve_order`'s ``"exact"``, as
-a compiled loop (the cover search plans tens of layouts per area). numba is imported on use;
-without it the plain Python function runs.
+programme (``2^n x options^2`` steps: about a millisecond for 8 passes) and puts it first where
+it is cheaper, the shortest tour of its passes (on the moves flown,
+:meth:`~boustro.plan.routing.Router.distances`); where the tour is then refined lane by lane,
+both are refined and the shorter kept (:func:`boustro.plan.lane_tour.refine_best`), so a
+plan's tour is never longer than the heuristic's. The same problem as
+:func:`boustro.plan.cell_order.solve_order`'s ``"exact"``, as a compiled loop (the cover search
+plans tens of layouts per area). numba is imported on use; without it the plain Python
+function runs.
 """
 
 from __future__ import annotations

@@ -27,8 +27,11 @@ the hole's corner, short of it by the inset only.
 from the area any point of a plan lies; ``plan_cover`` passes it without a vehicle's turns,
 headland passes or keep-inside). A lane lies within its reach of the area (it spans its band's
 projection), a run-in within the reach plus the run-in, a straight connecting move within the
-router's allowance (``max(reach, run-in)`` at points a sixteenth of it apart), a routed one and
-a hole pass inside the area; a move the router found no way for voids the certificate. Every
+router's allowance (``max(reach, run-in)`` at points a sixteenth of it apart), a routed one
+inside the area, or in the shell grown by that allowance where shorter, each of its segments
+passing the straight move's test (:mod:`boustro.plan.route_grown`: so within the same
+allowance, never in a hole), and a hole pass inside the area; a move the router found no way
+for voids the certificate. Every
 area ``S`` of a box lies in the outer set, so every plan of the box lies within ``outside`` of
 the outer set. The pockets of the outer set's shells dilated by ``outside`` (shapely's mitred
 dilation, which holds the round one: the parts of its convex hull outside it) lie farther than
