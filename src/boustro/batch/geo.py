@@ -96,7 +96,7 @@ def plan_area(
     geometry: Any,
     spacing: float | Any,
     *,
-    crs: str | None = None,
+    crs: Any = None,
     repair: bool = False,
     **options: Any,
 ) -> GeoPlan:
@@ -105,7 +105,8 @@ def plan_area(
     Args:
         geometry: the area; a MultiPolygon's (or collection's) polygons are planned one by one.
         spacing: metres on the ground (planar units for planar input), or a sensor.
-        crs: the CRS of the coordinates (default planar; a mapping's ``crs`` member is used).
+        crs: the CRS of the coordinates (default planar; a mapping's ``crs`` member is used):
+            a name, an EPSG integer or a ``pyproj.CRS`` (``gdf.crs``).
         repair: make an invalid polygon valid first (``boustro plan --repair``); else an invalid
             one is refused with GEOS's reason.
         options: the other arguments of :func:`boustro.mission.plan_area`.
