@@ -287,6 +287,23 @@ def _ring(response):
     return features, np.array(features[0]["geometry"]["coordinates"][0])
 
 
+def test_a_file_is_read_while_a_plan_runs(client):
+    # Opening a file on the page while a plan runs (another client's, or the page's own long
+    # one) waited for the plan lock: the page showed nothing, neither a bar nor the field, for
+    # up to the plan's 60 s. Reading plans nothing, so it does not queue behind plans.
+    import threading
+
+    answer: list = []
+    with web_app._PLAN_LOCK:  # a plan running
+        reader = threading.Thread(target=lambda: answer.append(_read(client, "f.kml", KML)))
+        reader.start()
+        reader.join(timeout=10)
+        read_during_the_plan = not reader.is_alive()
+    reader.join()
+    assert read_during_the_plan, "the upload waited for the running plan"
+    assert answer[0].status_code == 200, answer[0].text
+
+
 def test_every_area_format_is_read_from_an_upload(client):
     square = [[5.0, 52.0], [5.003, 52.0], [5.003, 52.002], [5.0, 52.002], [5.0, 52.0]]
     geojson = json.dumps({"type": "Polygon", "coordinates": [square]})
