@@ -12,6 +12,7 @@ import sqlite3
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import distributed
@@ -341,6 +342,22 @@ def test_a_failing_worker_loses_nothing(fields, tmp_path, monkeypatch):
     assert set(rows["error"]) == {
         "the worker planning it failed: RuntimeError: worker lost with two lines"
     }
+
+
+def test_a_shapefile_output_says_its_renamed_columns_once(tmp_path, caplog):
+    # GDAL cuts a Shapefile's column names to 10 characters; pyogrio said so in ten
+    # RuntimeWarnings echoing its own source line, even with -q.
+    small = tmp_path / "small.gpkg"
+    _write(small, [shapely.box(0, 0, 100, 50)], ["a"], [10.0])
+    out = tmp_path / "plans.shp"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a warning that escapes fails the test
+        result = boustro.batch(small, out, spacing=10.0, workers=1)
+    assert (result.planned, result.failed) == (1, 0)
+    said = [r.getMessage() for r in caplog.records if "renamed columns" in r.getMessage()]
+    assert len(said) == 1 and "'transect_length_m' to 'transect_l'" in said[0]
+    assert str(tmp_path / "plans.fields.shp") in said[0]
+    assert "transect_l" in pyogrio.read_info(str(tmp_path / "plans.fields.shp"))["fields"]
 
 
 def test_cli_batch_missions_and_other_formats(fields, tmp_path, capsys):
