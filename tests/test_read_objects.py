@@ -124,3 +124,16 @@ def test_a_crs_object_as_a_geodataframe_has_is_taken_as_its_name():
     name = area_from_object(utm, crs=custom).crs
     assert pyproj.CRS.from_user_input(name).equals(custom)
     assert boustro.plan_area(utm, 20.0, crs=custom).mission.area.crs is not None
+
+
+def test_a_geo_plan_names_its_crs_for_a_geodataframe():
+    # from_features(plan) has no CRS (GeoJSON carries none): plan.crs is the input's.
+    import boustro
+
+    geopandas = pytest.importorskip("geopandas")
+    lonlat = shapely.box(5.0, 52.0, 5.003, 52.002)
+    plan = boustro.plan_area(lonlat, 20.0, crs="EPSG:4326")
+    frame = geopandas.GeoDataFrame.from_features(plan, crs=plan.crs)
+    assert plan.crs == "EPSG:4326" and frame.crs.to_epsg() == 4326
+    assert frame.total_bounds[0] > 4.99 and frame.total_bounds[3] < 52.01
+    assert boustro.plan_area(shapely.box(0, 0, 300, 200), 20.0).crs is None

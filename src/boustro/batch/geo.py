@@ -42,6 +42,13 @@ class GeoPlan:
         return self.missions[0]
 
     @property
+    def crs(self) -> str | None:
+        """The CRS of the coordinates (the input's: ``"EPSG:n"``, another name, or ``None`` for
+        planar), for ``geopandas.GeoDataFrame.from_features(plan, crs=plan.crs)``: GeoJSON,
+        and so ``__geo_interface__``, carries none."""
+        return self.missions[0].area.crs
+
+    @property
     def lanes(self) -> Any:
         """Every lane (transect) as a shapely MultiLineString, in driving order."""
         import shapely
