@@ -360,6 +360,22 @@ def test_a_shapefile_output_says_its_renamed_columns_once(tmp_path, caplog):
     assert "transect_l" in pyogrio.read_info(str(tmp_path / "plans.fields.shp"))["fields"]
 
 
+def test_a_missing_missions_folder_is_made_and_a_file_refused(tmp_path, capsys):
+    # ``--missions DIR`` refused a DIR that did not exist yet ("no such folder").
+    small = tmp_path / "small.gpkg"
+    _write(small, [shapely.box(0, 0, 100, 50)], ["a"], [10.0])
+    folder = tmp_path / "new" / "missions"
+    code = main(["batch", str(small), "--out", str(tmp_path / "o.gpkg"), "--spacing", "10",
+                 "--workers", "1", "--missions", str(folder), "-q"])  # fmt: skip
+    assert code == 0, capsys.readouterr().err
+    assert sorted(p.name for p in folder.iterdir()) == ["1-a.geojson"]
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    with pytest.raises(InvalidParameterError, match="a file, not a folder"):
+        boustro.batch(small, tmp_path / "p.gpkg", spacing=10.0, workers=1, missions=a_file)
+    assert a_file.read_text() == "x" and not (tmp_path / "p.gpkg").exists()
+
+
 def test_cli_batch_missions_and_other_formats(fields, tmp_path, capsys):
     small = tmp_path / "small.gpkg"
     rng = np.random.default_rng(1)

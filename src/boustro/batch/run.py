@@ -84,13 +84,17 @@ def _check_missions(missions: str | None, mission_format: str | None) -> str | N
         if mission_format is not None:
             raise InvalidParameterError("--mission-format needs --missions FOLDER")
         return None
-    if not os.path.isdir(missions):
-        raise InvalidParameterError(f"--missions {missions}: no such folder")
     fmt = mission_format or "geojson"
     if fmt not in FORMATS:
         raise InvalidParameterError(
             f"--mission-format {fmt!r}: expected one of {', '.join(FORMATS)}"
         )
+    if os.path.exists(missions) and not os.path.isdir(missions):
+        raise InvalidParameterError(f"--missions {missions}: a file, not a folder")
+    try:  # a missing folder is made, its parents too
+        os.makedirs(missions, exist_ok=True)
+    except OSError as exc:
+        raise InvalidParameterError(f"--missions {missions}: cannot make it: {exc}") from None
     return fmt
 
 
@@ -156,7 +160,8 @@ def batch(
         workers: local processes (default: the CPU count; 1 plans in this process).
         client: a ``dask.distributed.Client`` to run on instead; ``scheduler``: its address.
         missions: a folder for one mission file per field, in ``mission_format`` (default
-            ``geojson``; any ``boustro plan --format``), named ``ID-NAME.EXT``.
+            ``geojson``; any ``boustro plan --format``), named ``ID-NAME.EXT``; made (its
+            parents too) if missing, refused if it is a file.
         chunk_size: fields sent to a worker at a time.
         progress: a progress bar on stderr with fields/s (``None``: if stderr is a terminal).
 
