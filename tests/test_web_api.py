@@ -310,6 +310,37 @@ def test_a_file_is_read_while_a_plan_runs(client):
     assert answer[0].status_code == 200, answer[0].text
 
 
+def test_files_read_at_once_leave_the_warnings_of_the_process_as_they_were(client, tmp_path):
+    # Reads run at once since /api/read left the plan lock; GDAL's reader recorded warnings
+    # with warnings.catch_warnings, whose enter/exit on two threads interleaved left a finished
+    # read's list as the process's printer: every later warning of the server went into it.
+    import threading
+    import warnings
+
+    pyogrio = pytest.importorskip("pyogrio")
+    import shapely
+
+    path = tmp_path / "f.gpkg"
+    wkb = np.array([shapely.to_wkb(shapely.box(5.0, 52.0, 5.003, 52.002))], dtype=object)
+    pyogrio.raw.write(str(path), wkb, [np.array(["a"], dtype=object)], ["name"],
+                      crs="EPSG:4326", driver="GPKG", geometry_type="Polygon")  # fmt: skip
+    data = path.read_bytes()
+    filters, printer = list(warnings.filters), warnings._showwarnmsg_impl  # type: ignore[attr-defined]
+    codes: list[int] = []
+
+    def reads() -> None:
+        codes.extend(_read(client, "f.gpkg", data).status_code for _ in range(15))
+
+    readers = [threading.Thread(target=reads) for _ in range(4)]
+    for reader in readers:
+        reader.start()
+    for reader in readers:
+        reader.join()
+    assert codes == [200] * 60
+    assert warnings._showwarnmsg_impl is printer  # type: ignore[attr-defined]
+    assert warnings.filters == filters
+
+
 def test_every_area_format_is_read_from_an_upload(client):
     square = [[5.0, 52.0], [5.003, 52.0], [5.003, 52.002], [5.0, 52.002], [5.0, 52.0]]
     geojson = json.dumps({"type": "Polygon", "coordinates": [square]})

@@ -17,7 +17,7 @@ import tempfile
 import warnings
 
 from ..errors import InvalidParameterError
-from ..io.read_gdal import _one_line, _pyogrio
+from ..io.read_gdal import _one_line, _pyogrio, recorded_warnings
 from .gpkg import LAYERS
 
 __all__ = ["export_layers", "layer_paths"]
@@ -65,8 +65,7 @@ def export_layers(store: str, targets: dict[str, str]) -> None:
             level = quiet.level
             quiet.setLevel(logging.WARNING)  # not "Created N records" on the command line
             try:
-                with warnings.catch_warnings(record=True) as caught:
-                    warnings.simplefilter("always")
+                with recorded_warnings() as caught:
                     pyogrio.raw.write(
                         path, geometry, data, meta["fields"], crs=meta["crs"], driver=driver,
                         geometry_type=kind, **extra,
