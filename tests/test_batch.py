@@ -397,6 +397,19 @@ def test_a_missing_missions_folder_is_made_and_a_file_refused(tmp_path, capsys):
     assert a_file.read_text() == "x" and not (tmp_path / "p.gpkg").exists()
 
 
+def test_the_other_warnings_of_an_output_are_passed_on():
+    from boustro.batch.export import _say_renamed
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        warnings.warn("Normalized/laundered field name: 'long_name' to 'long_nam'", stacklevel=1)
+        warnings.warn("GDAL says something else", RuntimeWarning, stacklevel=1)
+    with warnings.catch_warnings(record=True) as passed:
+        warnings.simplefilter("always")
+        _say_renamed("x.shp", caught)
+    assert [str(w.message) for w in passed] == ["GDAL says something else"]
+
+
 def test_cli_batch_missions_and_other_formats(fields, tmp_path, capsys):
     small = tmp_path / "small.gpkg"
     rng = np.random.default_rng(1)

@@ -115,6 +115,9 @@ def test_a_crs_object_as_a_geodataframe_has_is_taken_as_its_name():
     pyproj = pytest.importorskip("pyproj")
     utm = shapely.box(500000.0, 5700000.0, 500300.0, 5700200.0)
     assert area_from_object(utm, crs=pyproj.CRS("EPSG:32632")).crs == "EPSG:32632"
+    # a CRS made from a WKT (as read from a file) is still named by its code, not its WKT
+    from_wkt = pyproj.CRS.from_wkt(pyproj.CRS("EPSG:32632").to_wkt())
+    assert area_from_object(utm, crs=from_wkt).crs == "EPSG:32632"
     lonlat = shapely.box(5.0, 52.0, 5.003, 52.002)
     plan = boustro.plan_area(lonlat, 20.0, crs=pyproj.CRS("EPSG:4326"))
     assert plan.mission.area.crs == "EPSG:4326" and plan.mission.area_lonlat is not None
