@@ -12,6 +12,7 @@ import sqlite3
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import distributed
@@ -341,6 +342,72 @@ def test_a_failing_worker_loses_nothing(fields, tmp_path, monkeypatch):
     assert set(rows["error"]) == {
         "the worker planning it failed: RuntimeError: worker lost with two lines"
     }
+
+
+def test_a_shapefile_output_says_its_renamed_columns_once(tmp_path, caplog):
+    # GDAL cuts a Shapefile's column names to 10 characters; pyogrio said so in ten
+    # RuntimeWarnings echoing its own source line, even with -q.
+    small = tmp_path / "small.gpkg"
+    _write(small, [shapely.box(0, 0, 100, 50)], ["a"], [10.0])
+    out = tmp_path / "plans.shp"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a warning that escapes fails the test
+        result = boustro.batch(small, out, spacing=10.0, workers=1)
+    assert (result.planned, result.failed) == (1, 0)
+    said = [r.getMessage() for r in caplog.records if "renamed columns" in r.getMessage()]
+    assert len(said) == 1 and "'transect_length_m' to 'transect_l'" in said[0]
+    assert str(tmp_path / "plans.fields.shp") in said[0]
+    assert "transect_l" in pyogrio.read_info(str(tmp_path / "plans.fields.shp"))["fields"]
+
+
+@pytest.mark.parametrize("cold", [True, False])
+def test_a_cold_kernel_cache_is_filled_by_one_field_in_this_process(tmp_path, monkeypatch, cold):
+    # A fresh installation's first batch compiled the numba kernels in every worker at once
+    # (QA: 55 s of CPU per worker, 262 s of wall on 2 workers): with the cache cold, the first
+    # field is planned here (compiling them once, into the cache), the others on the workers.
+    from boustro.batch import run as run_module
+
+    sent: list = []
+
+    def pool(chunks, job, workers):
+        sent.extend(f.field_id for chunk in chunks for f in chunk)
+        return iter(())
+
+    monkeypatch.setattr(run_module, "first_compile", lambda: cold)
+    monkeypatch.setattr(run_module, "run_local", pool)
+    small = tmp_path / "small.gpkg"
+    _write(small, [shapely.box(0, 0, 100, 50 + i) for i in range(3)], list("abc"), [10.0] * 3)
+    result = boustro.batch(small, tmp_path / "o.gpkg", spacing=10.0, workers=2)
+    assert (result.planned, sent) == ((1, [2, 3]) if cold else (0, [1, 2, 3]))
+
+
+def test_a_missing_missions_folder_is_made_and_a_file_refused(tmp_path, capsys):
+    # ``--missions DIR`` refused a DIR that did not exist yet ("no such folder").
+    small = tmp_path / "small.gpkg"
+    _write(small, [shapely.box(0, 0, 100, 50)], ["a"], [10.0])
+    folder = tmp_path / "new" / "missions"
+    code = main(["batch", str(small), "--out", str(tmp_path / "o.gpkg"), "--spacing", "10",
+                 "--workers", "1", "--missions", str(folder), "-q"])  # fmt: skip
+    assert code == 0, capsys.readouterr().err
+    assert sorted(p.name for p in folder.iterdir()) == ["1-a.geojson"]
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    with pytest.raises(InvalidParameterError, match="a file, not a folder"):
+        boustro.batch(small, tmp_path / "p.gpkg", spacing=10.0, workers=1, missions=a_file)
+    assert a_file.read_text() == "x" and not (tmp_path / "p.gpkg").exists()
+
+
+def test_the_other_warnings_of_an_output_are_passed_on():
+    from boustro.batch.export import _say_renamed
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        warnings.warn("Normalized/laundered field name: 'long_name' to 'long_nam'", stacklevel=1)
+        warnings.warn("GDAL says something else", RuntimeWarning, stacklevel=1)
+    with warnings.catch_warnings(record=True) as passed:
+        warnings.simplefilter("always")
+        _say_renamed("x.shp", caught)
+    assert [str(w.message) for w in passed] == ["GDAL says something else"]
 
 
 def test_cli_batch_missions_and_other_formats(fields, tmp_path, capsys):

@@ -180,3 +180,13 @@ def test_the_first_compile_is_known_from_the_cache():
     """After a certified optimum the kernels are in numba's cache: no 'compiling' note."""
     global_optimum(np.array([(0, 0), (4, 0), (5, 3), (0, 2)], dtype=float), 0.5)
     assert kernel_module.compiled() is not None and not kernel_module.first_compile()
+
+
+def test_the_first_compile_is_looked_for_where_numba_caches(monkeypatch, tmp_path):
+    """Under ``NUMBA_CACHE_DIR`` (an empty one: a fresh installation's) the kernels are not
+    cached, whatever the package's ``__pycache__`` holds; it looked there only."""
+    numba = pytest.importorskip("numba")
+    global_optimum(np.array([(0, 0), (4, 0), (5, 3), (0, 2)], dtype=float), 0.5)
+    assert not kernel_module.first_compile()  # the usual cache holds them
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path / "empty"))
+    assert kernel_module.first_compile()

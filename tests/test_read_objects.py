@@ -105,3 +105,38 @@ def test_vertices_stay_lonlat_by_default():
 def test_import_boustro_still_loads_no_shapely():
     code = "import sys, boustro; assert 'shapely' not in sys.modules, 'shapely loaded'"
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_a_crs_object_as_a_geodataframe_has_is_taken_as_its_name():
+    # A GeoPandas user passes ``gdf.crs`` (a pyproj.CRS): boustro.plan_area raised
+    # AttributeError ('CRS' object has no attribute 'strip') in its lon/lat check.
+    import boustro
+
+    pyproj = pytest.importorskip("pyproj")
+    utm = shapely.box(500000.0, 5700000.0, 500300.0, 5700200.0)
+    assert area_from_object(utm, crs=pyproj.CRS("EPSG:32632")).crs == "EPSG:32632"
+    # a CRS made from a WKT (as read from a file) is still named by its code, not its WKT
+    from_wkt = pyproj.CRS.from_wkt(pyproj.CRS("EPSG:32632").to_wkt())
+    assert area_from_object(utm, crs=from_wkt).crs == "EPSG:32632"
+    lonlat = shapely.box(5.0, 52.0, 5.003, 52.002)
+    plan = boustro.plan_area(lonlat, 20.0, crs=pyproj.CRS("EPSG:4326"))
+    assert plan.mission.area.crs == "EPSG:4326" and plan.mission.area_lonlat is not None
+    assert plan.lanes.bounds[0] >= 4.99 and plan.lanes.bounds[3] <= 52.01  # lon/lat out
+    custom = pyproj.CRS.from_proj4("+proj=tmerc +lon_0=10 +k=0.9996 +x_0=500000 +ellps=WGS84")
+    assert custom.to_authority() is None
+    name = area_from_object(utm, crs=custom).crs
+    assert pyproj.CRS.from_user_input(name).equals(custom)
+    assert boustro.plan_area(utm, 20.0, crs=custom).mission.area.crs is not None
+
+
+def test_a_geo_plan_names_its_crs_for_a_geodataframe():
+    # from_features(plan) has no CRS (GeoJSON carries none): plan.crs is the input's.
+    import boustro
+
+    geopandas = pytest.importorskip("geopandas")
+    lonlat = shapely.box(5.0, 52.0, 5.003, 52.002)
+    plan = boustro.plan_area(lonlat, 20.0, crs="EPSG:4326")
+    frame = geopandas.GeoDataFrame.from_features(plan, crs=plan.crs)
+    assert plan.crs == "EPSG:4326" and frame.crs.to_epsg() == 4326
+    assert frame.total_bounds[0] > 4.99 and frame.total_bounds[3] < 52.01
+    assert boustro.plan_area(shapely.box(0, 0, 300, 200), 20.0).crs is None

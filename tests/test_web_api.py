@@ -72,6 +72,12 @@ def test_the_page_and_its_files_are_served_from_the_package(client):
         "/static/app.js",
     ]
     assert "http" not in page.text  # nothing fetched from elsewhere (no CDN)
+    # the page names its icon (an empty data: URL, which the policy allows): without one the
+    # browser asked for /favicon.ico and logged a 404 in the console at every load
+    assert (
+        '<link rel="icon" href="data:,">' in page.text
+        and "data:" in page.headers["content-security-policy"].split("img-src")[1].split(";")[0]
+    )
     leaflet = client.get("/static/leaflet/leaflet.js")
     assert leaflet.status_code == 200 and "Leaflet 1.9.4" in leaflet.text[:200]
     assert "BSD 2-Clause" in client.get("/static/leaflet/LICENSE").text
@@ -285,6 +291,54 @@ def _ring(response):
     assert response.status_code == 200, response.text
     features = response.json()["features"]
     return features, np.array(features[0]["geometry"]["coordinates"][0])
+
+
+def test_a_file_is_read_while_a_plan_runs(client):
+    # Opening a file on the page while a plan runs (another client's, or the page's own long
+    # one) waited for the plan lock: the page showed nothing, neither a bar nor the field, for
+    # up to the plan's 60 s. Reading plans nothing, so it does not queue behind plans.
+    import threading
+
+    answer: list = []
+    with web_app._PLAN_LOCK:  # a plan running
+        reader = threading.Thread(target=lambda: answer.append(_read(client, "f.kml", KML)))
+        reader.start()
+        reader.join(timeout=10)
+        read_during_the_plan = not reader.is_alive()
+    reader.join()
+    assert read_during_the_plan, "the upload waited for the running plan"
+    assert answer[0].status_code == 200, answer[0].text
+
+
+def test_files_read_at_once_leave_the_warnings_of_the_process_as_they_were(client, tmp_path):
+    # Reads run at once since /api/read left the plan lock; GDAL's reader recorded warnings
+    # with warnings.catch_warnings, whose enter/exit on two threads interleaved left a finished
+    # read's list as the process's printer: every later warning of the server went into it.
+    import threading
+    import warnings
+
+    pyogrio = pytest.importorskip("pyogrio")
+    import shapely
+
+    path = tmp_path / "f.gpkg"
+    wkb = np.array([shapely.to_wkb(shapely.box(5.0, 52.0, 5.003, 52.002))], dtype=object)
+    pyogrio.raw.write(str(path), wkb, [np.array(["a"], dtype=object)], ["name"],
+                      crs="EPSG:4326", driver="GPKG", geometry_type="Polygon")  # fmt: skip
+    data = path.read_bytes()
+    filters, printer = list(warnings.filters), warnings._showwarnmsg_impl  # type: ignore[attr-defined]
+    codes: list[int] = []
+
+    def reads() -> None:
+        codes.extend(_read(client, "f.gpkg", data).status_code for _ in range(15))
+
+    readers = [threading.Thread(target=reads) for _ in range(4)]
+    for reader in readers:
+        reader.start()
+    for reader in readers:
+        reader.join()
+    assert codes == [200] * 60
+    assert warnings._showwarnmsg_impl is printer  # type: ignore[attr-defined]
+    assert warnings.filters == filters
 
 
 def test_every_area_format_is_read_from_an_upload(client):

@@ -5,6 +5,8 @@ The run appends to its GeoPackage (:func:`boustro.batch.run.store_path`); for an
 extension) each layer is then written as ``plans.lanes.fgb``, ``plans.paths.fgb``,
 ``plans.fields.fgb``: into a temporary folder beside them, then renamed into place, so that a
 reader sees either the previous complete file or the new one. pyogrio is imported on use.
+A format that renames columns (a Shapefile cuts them to 10 characters: ``transect_length_m`` is
+``transect_l``) says so in one warning per file, instead of GDAL's ten Python warnings.
 """
 
 from __future__ import annotations
@@ -12,12 +14,18 @@ from __future__ import annotations
 import logging
 import os
 import tempfile
+import warnings
 
 from ..errors import InvalidParameterError
-from ..io.read_gdal import _one_line, _pyogrio
+from ..io.read_gdal import _one_line, _pyogrio, recorded_warnings
 from .gpkg import LAYERS
 
 __all__ = ["export_layers", "layer_paths"]
+
+log = logging.getLogger("boustro")
+
+#: How GDAL (through pyogrio) says that it renamed a column for the format.
+_RENAMED = "Normalized/laundered field name: "
 
 
 def layer_paths(out: str) -> dict[str, str]:
@@ -57,10 +65,12 @@ def export_layers(store: str, targets: dict[str, str]) -> None:
             level = quiet.level
             quiet.setLevel(logging.WARNING)  # not "Created N records" on the command line
             try:
-                pyogrio.raw.write(
-                    path, geometry, data, meta["fields"], crs=meta["crs"], driver=driver,
-                    geometry_type=kind, **extra,
-                )  # fmt: skip
+                with recorded_warnings() as caught:
+                    pyogrio.raw.write(
+                        path, geometry, data, meta["fields"], crs=meta["crs"], driver=driver,
+                        geometry_type=kind, **extra,
+                    )  # fmt: skip
+                _say_renamed(target, caught)
             except pyogrio.errors.DataSourceError as exc:
                 raise InvalidParameterError(
                     f"--out {target}: GDAL cannot write it: {_one_line(exc)}"
@@ -75,3 +85,16 @@ def export_layers(store: str, targets: dict[str, str]) -> None:
             for name in sorted(os.listdir(tmp)):  # a Shapefile is several files
                 if name.startswith(stem):
                     os.replace(os.path.join(tmp, name), os.path.join(folder, name))
+
+
+def _say_renamed(target: str, caught: list[warnings.WarningMessage]) -> None:
+    """The columns the format renamed, in one warning; other warnings passed on."""
+    renamed = []
+    for w in caught:
+        text = str(w.message)
+        if text.startswith(_RENAMED):
+            renamed.append(text[len(_RENAMED) :])
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if renamed:
+        log.warning("%s: the format renamed columns: %s", target, ", ".join(renamed))

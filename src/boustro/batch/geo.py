@@ -42,6 +42,13 @@ class GeoPlan:
         return self.missions[0]
 
     @property
+    def crs(self) -> str | None:
+        """The CRS of the coordinates (the input's: ``"EPSG:n"``, another name, or ``None`` for
+        planar), for ``geopandas.GeoDataFrame.from_features(plan, crs=plan.crs)``: GeoJSON,
+        and so ``__geo_interface__``, carries none."""
+        return self.missions[0].area.crs
+
+    @property
     def lanes(self) -> Any:
         """Every lane (transect) as a shapely MultiLineString, in driving order."""
         import shapely
@@ -96,7 +103,7 @@ def plan_area(
     geometry: Any,
     spacing: float | Any,
     *,
-    crs: str | None = None,
+    crs: Any = None,
     repair: bool = False,
     **options: Any,
 ) -> GeoPlan:
@@ -105,7 +112,8 @@ def plan_area(
     Args:
         geometry: the area; a MultiPolygon's (or collection's) polygons are planned one by one.
         spacing: metres on the ground (planar units for planar input), or a sensor.
-        crs: the CRS of the coordinates (default planar; a mapping's ``crs`` member is used).
+        crs: the CRS of the coordinates (default planar; a mapping's ``crs`` member is used):
+            a name, an EPSG integer or a ``pyproj.CRS`` (``gdf.crs``).
         repair: make an invalid polygon valid first (``boustro plan --repair``); else an invalid
             one is refused with GEOS's reason.
         options: the other arguments of :func:`boustro.mission.plan_area`.

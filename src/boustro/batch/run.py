@@ -7,6 +7,12 @@ that have no row yet (resume). Any other output format (by extension: ``.fgb``, 
 ``.geojson``, ...) is written from a hidden GeoPackage beside it (the resume state), as one file
 per layer, ``STEM.lanes.EXT``, ``STEM.paths.EXT``, ``STEM.fields.EXT``, each written to a
 temporary file and renamed when the run ends (or is interrupted).
+
+On local workers, when numba's on-disk cache lacks the certified optimiser's kernels (a fresh
+installation: :func:`boustro.optimize.exact.kernel.first_compile`), the first field is planned
+in this process first, so that they compile once, into the cache, which every worker then
+loads, instead of compiling in every worker at once. Dask workers (other machines, other
+caches) are left as they are.
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ from typing import Any
 from .._files import atomic_write
 from ..errors import InvalidParameterError, MissingDependencyError
 from ..io.formats import FORMATS
+from ..optimize.exact.kernel import first_compile
 from .executors import Outcome, run_dask, run_inline, run_local
 from .export import export_layers, layer_paths
 from .frames import source_from_frame
@@ -84,13 +91,17 @@ def _check_missions(missions: str | None, mission_format: str | None) -> str | N
         if mission_format is not None:
             raise InvalidParameterError("--mission-format needs --missions FOLDER")
         return None
-    if not os.path.isdir(missions):
-        raise InvalidParameterError(f"--missions {missions}: no such folder")
     fmt = mission_format or "geojson"
     if fmt not in FORMATS:
         raise InvalidParameterError(
             f"--mission-format {fmt!r}: expected one of {', '.join(FORMATS)}"
         )
+    if os.path.exists(missions) and not os.path.isdir(missions):
+        raise InvalidParameterError(f"--missions {missions}: a file, not a folder")
+    try:  # a missing folder is made, its parents too
+        os.makedirs(missions, exist_ok=True)
+    except OSError as exc:
+        raise InvalidParameterError(f"--missions {missions}: cannot make it: {exc}") from None
     return fmt
 
 
@@ -156,7 +167,8 @@ def batch(
         workers: local processes (default: the CPU count; 1 plans in this process).
         client: a ``dask.distributed.Client`` to run on instead; ``scheduler``: its address.
         missions: a folder for one mission file per field, in ``mission_format`` (default
-            ``geojson``; any ``boustro plan --format``), named ``ID-NAME.EXT``.
+            ``geojson``; any ``boustro plan --format``), named ``ID-NAME.EXT``; made (its
+            parents too) if missing, refused if it is a file.
         chunk_size: fields sent to a worker at a time.
         progress: a progress bar on stderr with fields/s (``None``: if stderr is a terminal).
 
@@ -227,7 +239,11 @@ def _outcomes(
         raise InvalidParameterError(f"workers must be >= 1, got {workers!r}")
     if count == 1 or len(todo) <= 1:
         yield from run_inline(_chunks(todo, chunk_size), job)
-    else:  # chunks small enough that every worker gets several (few fields: no idle worker)
+    else:
+        if first_compile():  # a cold kernel cache: one field here compiles the kernels once
+            yield from run_inline([todo[:1]], job)  # into it, not in every worker at once
+            todo = todo[1:]
+        # chunks small enough that every worker gets several (few fields: no idle worker)
         size = max(1, min(chunk_size, len(todo) // (4 * count)))
         yield from run_local(_chunks(todo, size), job, count)
 

@@ -93,7 +93,9 @@ def register(sub: argparse._SubParsersAction) -> None:
             help=f"--{flag} of each field from its COLUMN",
         )  # fmt: skip
     out = p.add_argument_group("output and parallelism")
-    out.add_argument("--missions", metavar="DIR", help="write one mission file per field here")
+    out.add_argument(
+        "--missions", metavar="DIR", help="write one mission file per field here (made if missing)"
+    )
     out.add_argument(
         "--mission-format",
         choices=tuple(FORMATS),

@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 
 from ..errors import PolygonFileError
 
-__all__ = ["LONLAT", "Area", "close_ring", "crs_name"]
+__all__ = ["LONLAT", "Area", "close_ring", "crs_name", "crs_text"]
 
 #: WGS 84 longitude/latitude, the CRS of GeoJSON (RFC 7946), KML and GPX.
 LONLAT = "EPSG:4326"
@@ -57,3 +57,13 @@ def crs_name(name: str) -> str:
         return LONLAT
     m = re.search(r"EPSG(?:::|:|/0/|/)(\d+)$", text, flags=re.IGNORECASE)
     return f"EPSG:{m.group(1)}" if m else text
+
+
+def crs_text(crs: object) -> str:
+    """A CRS given as an object as its name: a ``pyproj.CRS`` (a GeoDataFrame's ``.crs``) as
+    ``"AUTHORITY:code"`` when it has one, else its WKT; a string (or an EPSG integer) as text."""
+    to_authority = getattr(crs, "to_authority", None)
+    if callable(to_authority):
+        authority = to_authority()
+        return f"{authority[0]}:{authority[1]}" if authority else str(crs.to_wkt())  # type: ignore[attr-defined]
+    return str(crs)

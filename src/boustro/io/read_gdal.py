@@ -9,7 +9,12 @@ code, or a WKT that names no file or grid), and the CRS text of a Shapefile (its
 GeoPackage (its ``gpkg_spatial_ref_sys`` definitions, read with ``sqlite3``) is checked the same
 way BEFORE GDAL opens the file, so that GDAL's PROJ never sees a refused definition. A layer
 without a CRS is WGS 84 longitude/latitude, as for the other readers, unless ``crs`` is given.
-pyogrio and shapely are imported on use.
+pyogrio and shapely are imported on use. GDAL's warnings are recorded by
+:func:`recorded_warnings`, one block at a time in the process: ``warnings.catch_warnings``
+swaps the process's filters and printer (not thread-safe before Python 3.14), so two at once on
+two threads (the web server reading two files at once) left a finished block's printer in place
+and every later warning of the process went into its list. A warning raised on another thread
+during a block is still recorded by it (as with ``catch_warnings``).
 """
 
 from __future__ import annotations
@@ -18,7 +23,10 @@ import logging
 import os
 import sqlite3
 import tempfile
+import threading
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -30,12 +38,24 @@ from .area import close_ring as _close_open
 from .file_crs import MAX_WKT_CHARS, crs_from_file
 from .read_zip import shapefile_members
 
-__all__ = ["NAME_COLUMNS", "gdal_fields", "zipped_shapefile_fields"]
+__all__ = ["NAME_COLUMNS", "gdal_fields", "recorded_warnings", "zipped_shapefile_fields"]
 
 log = logging.getLogger("boustro")
 
 #: The columns that name a feature, first found first.
 NAME_COLUMNS = ("name", "Name", "NAME", "id", "ID", "Id")
+
+#: Held by :func:`recorded_warnings` (re-entrant: a block inside a block on one thread).
+_WARNINGS_LOCK = threading.RLock()
+
+
+@contextmanager
+def recorded_warnings() -> Iterator[list[warnings.WarningMessage]]:
+    """Every warning raised inside, recorded (``catch_warnings(record=True)``, each one
+    shown), one such block at a time in the process (see the module)."""
+    with _WARNINGS_LOCK, warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        yield caught
 
 
 def _pyogrio(what: str) -> Any:
@@ -160,8 +180,7 @@ def gdal_fields(path: str, where: str, crs: str | None, what: str) -> list[tuple
         if crs is None:
             _check_gpkg(path, where)
     try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
+        with recorded_warnings() as caught:
             layers = pyogrio.list_layers(path)
             out = []
             for name, _kind in layers:

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import PolygonFileError
-from .area import Area
+from .area import Area, crs_text
 from .read_fields import _json_fields
 from .read_geojson import _geojson_crs
 
@@ -67,18 +67,19 @@ def _mapping(obj: Any, where: str) -> dict[str, Any]:
     return _plain(geo)
 
 
-def areas_from_object(obj: Any, crs: str | None = None, where: str = "<geometry>") -> list[Area]:
+def areas_from_object(obj: Any, crs: Any = None, where: str = "<geometry>") -> list[Area]:
     """Every polygon of a geometry object as an :class:`Area`, in order (see the module).
 
     Args:
         obj: a shapely geometry, an object with ``__geo_interface__``, or a GeoJSON mapping.
-        crs: the CRS of its coordinates (default: the mapping's ``crs`` member, else planar).
+        crs: the CRS of its coordinates (default: the mapping's ``crs`` member, else planar): a
+            name, an EPSG integer or a ``pyproj.CRS`` (a GeoDataFrame's ``.crs``).
 
     Raises:
         PolygonFileError: not a geometry object, or no polygon in it.
     """
     data = _mapping(obj, where)
-    area_crs = crs if crs is not None else _geojson_crs(data, where)
+    area_crs = crs_text(crs) if crs is not None else _geojson_crs(data, where)
     fields = _json_fields(data, where, area_crs or "planar")
     if not fields:
         raise PolygonFileError(f"{where}: no Polygon in the {data['type']} given")

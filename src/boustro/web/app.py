@@ -54,6 +54,7 @@ log = logging.getLogger("boustro.web")
 ALLOWED_HOSTS = ("127.0.0.1", "localhost", "[::1]", "::1")
 
 #: One plan at a time: the optimiser uses every core, and a queue keeps the answers in order.
+#: Plans and exports take it; estimates and file reads (which plan nothing) do not.
 _PLAN_LOCK = threading.Lock()
 
 
@@ -274,7 +275,9 @@ def create_app(tiles: str | None = None, allowed_hosts: tuple[str, ...] = ALLOWE
         routing.Route("/api/plan", _endpoint(responses, _plan), methods=post),
         routing.Route("/api/estimate", _endpoint(responses, _estimate, lock=False), methods=post),
         routing.Route("/api/export", _endpoint(responses, _export), methods=post),
-        routing.Route("/api/read", _endpoint(responses, _read, json_body=False), methods=post),
+        routing.Route(  # reading plans nothing: never queued behind a plan
+            "/api/read", _endpoint(responses, _read, json_body=False, lock=False), methods=post
+        ),
         routing.Mount("/static", app=sl.staticfiles.StaticFiles(directory=static_dir())),
     ]
     middleware = [

@@ -21,7 +21,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._jit import LOCK, fresh_cache, jit_cached, jit_globals
+from ..._jit import LOCK, jit_cached, jit_globals
 from ...models import MAX_CANDIDATES, grid_size
 from . import (
     kernel_bounds,
@@ -109,14 +109,15 @@ log = logging.getLogger("boustro")
 
 
 def first_compile() -> bool:
-    """Whether the search kernel is missing from numba's cache in the package's own
-    ``__pycache__`` while that folder is writable: this installation's first use, which
-    compiles the kernels (10-30 s, once). ``False`` where the cache lives elsewhere (a
-    read-only installation), which this does not look into."""
-    folder = Path(kernel_search.__file__).parent / "__pycache__"
-    if not os.access(folder if folder.exists() else folder.parent, os.W_OK):
+    """Whether the search kernel is missing from numba's on-disk cache (the folder numba
+    itself would use: the package's ``__pycache__``, or under ``NUMBA_CACHE_DIR``): this
+    installation's first use, which compiles the kernels (10-30 s, once). ``False`` where no
+    cache location is writable (then every process compiles; nothing to warm). Makes a
+    dispatcher of the kernel (imports numba), compiles nothing."""
+    dispatcher, on_disk = jit_cached(kernel_search._search)  # also drops stale kernels first
+    if not on_disk:
         return False
-    fresh_cache(folder)  # kernels of other sources are dropped first: they compile again
+    folder = Path(dispatcher._cache.cache_path)
     return not any(folder.glob("kernel_search._search-*.nbi"))
 
 
