@@ -360,27 +360,6 @@ def test_a_shapefile_output_says_its_renamed_columns_once(tmp_path, caplog):
     assert "transect_l" in pyogrio.read_info(str(tmp_path / "plans.fields.shp"))["fields"]
 
 
-@pytest.mark.parametrize("cold", [True, False])
-def test_a_cold_kernel_cache_is_filled_by_one_field_in_this_process(tmp_path, monkeypatch, cold):
-    # A fresh installation's first batch compiled the numba kernels in every worker at once
-    # (QA: 55 s of CPU per worker, 262 s of wall on 2 workers): with the cache cold, the first
-    # field is planned here (compiling them once, into the cache), the others on the workers.
-    from boustro.batch import run as run_module
-
-    sent: list = []
-
-    def pool(chunks, job, workers):
-        sent.extend(f.field_id for chunk in chunks for f in chunk)
-        return iter(())
-
-    monkeypatch.setattr(run_module, "first_compile", lambda: cold)
-    monkeypatch.setattr(run_module, "run_local", pool)
-    small = tmp_path / "small.gpkg"
-    _write(small, [shapely.box(0, 0, 100, 50 + i) for i in range(3)], list("abc"), [10.0] * 3)
-    result = boustro.batch(small, tmp_path / "o.gpkg", spacing=10.0, workers=2)
-    assert (result.planned, sent) == ((1, [2, 3]) if cold else (0, [1, 2, 3]))
-
-
 def test_a_missing_missions_folder_is_made_and_a_file_refused(tmp_path, capsys):
     # ``--missions DIR`` refused a DIR that did not exist yet ("no such folder").
     small = tmp_path / "small.gpkg"

@@ -8,11 +8,6 @@ that have no row yet (resume). Any other output format (by extension: ``.fgb``, 
 per layer, ``STEM.lanes.EXT``, ``STEM.paths.EXT``, ``STEM.fields.EXT``, each written to a
 temporary file and renamed when the run ends (or is interrupted).
 
-On local workers, when numba's on-disk cache lacks the certified optimiser's kernels (a fresh
-installation: :func:`boustro.optimize.exact.kernel.first_compile`), the first field is planned
-in this process first, so that they compile once, into the cache, which every worker then
-loads, instead of compiling in every worker at once. Dask workers (other machines, other
-caches) are left as they are.
 """
 
 from __future__ import annotations
@@ -27,7 +22,6 @@ from typing import Any
 from .._files import atomic_write
 from ..errors import InvalidParameterError, MissingDependencyError
 from ..io.formats import FORMATS
-from ..optimize.exact.kernel import first_compile
 from .executors import Outcome, run_dask, run_inline, run_local
 from .export import export_layers, layer_paths
 from .frames import source_from_frame
@@ -239,11 +233,7 @@ def _outcomes(
         raise InvalidParameterError(f"workers must be >= 1, got {workers!r}")
     if count == 1 or len(todo) <= 1:
         yield from run_inline(_chunks(todo, chunk_size), job)
-    else:
-        if first_compile():  # a cold kernel cache: one field here compiles the kernels once
-            yield from run_inline([todo[:1]], job)  # into it, not in every worker at once
-            todo = todo[1:]
-        # chunks small enough that every worker gets several (few fields: no idle worker)
+    else:  # chunks small enough that every worker gets several (few fields: no idle worker)
         size = max(1, min(chunk_size, len(todo) // (4 * count)))
         yield from run_local(_chunks(todo, size), job, count)
 
