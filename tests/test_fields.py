@@ -347,3 +347,15 @@ def test_field_shows_only_its_own_reading_warnings(tmp_path, capsys, caplog):
     caplog.clear()
     assert main(["plan", str(path), "--spacing", "10", "--field", "Open"]) == 0
     assert caplog.text.count("feature 1: the ring is not closed") == 1
+
+
+def test_unknown_field_shows_no_field_warnings_before_its_error(tmp_path, capsys, caplog):
+    """QA round 15: ``--field`` naming no field printed every field's reading warnings (the
+    open ring of each) before its one-line error."""
+    path = tmp_path / "two.geojson"
+    doc = {"type": "FeatureCollection", "features": [_feature({"name": "Open"}, [SOUTH[:-1]])]}
+    doc["features"].append(_feature({"name": "Good"}, [NORTH]))
+    path.write_text(json.dumps(doc))
+    assert main(["plan", str(path), "--spacing", "10", "--field", "Nope"]) == 2
+    assert "not closed" not in caplog.text
+    assert "no field of that name" in capsys.readouterr().err

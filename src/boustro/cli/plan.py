@@ -13,6 +13,7 @@ from .. import objectives
 from ..errors import InvalidParameterError
 from ..io import Area, embedded_field, read_areas
 from ..io.formats import FORMATS, atomic_write, format_for
+from ..io.formats._common import ALTITUDE_FORMATS, check_altitude
 from ..io.repair import check_area, detach_holes, repair_area
 from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission
 from ..mission.camera import camera_presets
@@ -535,9 +536,14 @@ def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:
 
 
 def run(args: argparse.Namespace) -> int:
-    # Refuse unwritable outputs before any work (an error writes nothing).
+    # Refuse unwritable outputs before any work (an error writes nothing): a missing folder,
+    # an unknown format, a MAVLink mission without an altitude.
+    fmt = None
     if args.out is not None:
         check_output_path(args.out, "--out")
+        fmt = format_for(args.out, args.format)
+        if fmt in ALTITUDE_FORMATS and args.camera is None:
+            check_altitude(args.altitude, ALTITUDE_FORMATS[fmt])
     if args.plot is not None:
         check_plot_target(args.plot)
     if args.format is not None and args.out is None:
@@ -550,8 +556,7 @@ def run(args: argparse.Namespace) -> int:
     missions = [m for ms in planned for m in ms]  # a field's sorties follow one another
     # Render everything before touching any file, so that an error writes nothing.
     outputs: list[tuple[str, bytes | str, str, int | None]] = []
-    if args.out is not None:
-        fmt = format_for(args.out, args.format)
+    if fmt is not None:
         outputs += [(p, d, fmt, i) for p, d, i in mission_files(missions, args.out, fmt)]
     if args.plot is not None:
         plots = output_files(
