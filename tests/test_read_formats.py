@@ -379,6 +379,25 @@ def test_a_plan_file_gives_its_surveys_and_inclusion_fences_as_lonlat(tmp_path):
     assert [a.name for a in read_areas(tmp_path / "as.json")] == ["survey 2", "geofence 1"]
 
 
+def test_a_plan_names_the_fences_it_does_not_avoid(tmp_path, caplog):
+    """QA round 15: an exclusion geofence (a no-fly zone over the survey) and the fence's
+    circles were dropped without a word, and the plan crossed them."""
+    path = tmp_path / "mission.plan"
+    fence = {**PLAN["geoFence"], "circles": [{"circle": {"center": [52.0, 5.0], "radius": 9}}]}
+    path.write_text(json.dumps({**PLAN, "geoFence": fence}))
+    read_areas(path)
+    said = [r.getMessage() for r in caplog.records if "not an obstacle" in r.getMessage()]
+    assert len(said) == 2
+    assert "geoFence.polygons[1] (an exclusion fence)" in said[0]
+    assert "geoFence.circles[0]" in said[1]
+    caplog.clear()
+    path.write_text(
+        json.dumps({**PLAN, "geoFence": {"polygons": PLAN["geoFence"]["polygons"][:1]}})
+    )
+    read_areas(path)
+    assert "not an obstacle" not in caplog.text
+
+
 def test_a_plan_without_a_polygon_is_one_line(capsys, tmp_path):
     path = tmp_path / "waypoints.plan"
     path.write_text(json.dumps({**PLAN, "mission": {"items": []}, "geoFence": {}}))

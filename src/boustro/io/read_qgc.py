@@ -6,11 +6,13 @@ A ``.plan`` is JSON (``"fileType": "Plan"``). Its fields: each survey of the mis
 (``geoFence.polygons[*]`` with ``"inclusion": true``, or the single ``geoFence.polygon`` of a
 version 1 file), named ``geofence N``. Every vertex is ``[latitude, longitude]`` (latitude
 FIRST, unlike GeoJSON), read as WGS 84 longitude/latitude; exclusion fences, circles and
-corridor scans are not fields.
+corridor scans are not fields. An exclusion fence or a circle is not an obstacle either: each
+is named in a warning (the plan may cross it; give it as a hole in GeoJSON, KML or WKT).
 """
 
 from __future__ import annotations
 
+import logging
 from typing import Any
 
 import numpy as np
@@ -21,6 +23,8 @@ from .area import close_ring as _close_open
 from .read_geojson import _ring
 
 __all__ = ["is_qgc_plan", "qgc_fields"]
+
+log = logging.getLogger("boustro.io.read")  # as the other readers
 
 
 def is_qgc_plan(data: Any) -> bool:
@@ -51,6 +55,22 @@ def _fence_polygons(fence: Any, where: str) -> list[tuple[str, Any, str]]:
     polygons = fence.get("polygons", [])
     if not isinstance(polygons, list):
         raise PolygonFileError(f"{where}: geoFence.polygons must be a list")
+    circles = fence.get("circles", [])
+    ignored = [
+        f"geoFence.polygons[{k}] (an exclusion fence)"
+        for k, p in enumerate(polygons)
+        if isinstance(p, dict) and p.get("inclusion", True) is not True
+    ]
+    ignored += [
+        f"geoFence.circles[{k}]" for k in range(len(circles) if isinstance(circles, list) else 0)
+    ]
+    for what in ignored:
+        log.warning(
+            "%s: %s is not an obstacle for boustro: the plan may cross it (give it as a hole "
+            "of the area in GeoJSON, KML or WKT)",
+            where,
+            what,
+        )
     return [
         (f"geofence {k}", p.get("polygon"), f"{where}: geoFence.polygons[{k - 1}]")
         for k, p in enumerate(polygons, start=1)
