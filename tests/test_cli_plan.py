@@ -317,3 +317,22 @@ def test_altitude_formats_are_those_that_need_one():
             assert ALTITUDE_FORMATS[fmt] in str(exc)
             refused.add(fmt)
     assert refused == set(ALTITUDE_FORMATS)
+
+
+@pytest.mark.parametrize(
+    ("extra", "match"),
+    [
+        (["--max-flight-time", "300"], "a maximum flight time needs the speed"),
+        (["--dem", "DIR/none.tif", "--altitude", "30"], "--dem DIR/none.tif"),
+        (["--dem", "DIR/none.tif"], "--dem needs the height above ground"),
+        (["--terrain-tolerance", "2"], "--terrain-tolerance needs --dem"),
+    ],
+)
+def test_flight_option_errors_come_before_reading(capsys, tmp_path, extra, match):
+    """QA round 15: ``--max-flight-time`` without ``--speed`` and an unreadable ``--dem`` (or
+    one without a height) were refused only after the area was read and planned."""
+    extra = [a.replace("DIR", str(tmp_path)) for a in extra]
+    match = match.replace("DIR", str(tmp_path))
+    missing = str(tmp_path / "missing.geojson")
+    code, _, err = run(capsys, "plan", missing, "--spacing", "10", *extra)
+    assert code == 2 and match in err and "no such file" not in err.split(match)[0]

@@ -433,3 +433,27 @@ def test_an_open_geojson_ring_is_read_closed_with_a_warning(tmp_path, caplog):
     with caplog.at_level("WARNING"):
         np.testing.assert_array_equal(read_area(path).ring, square)
     assert "not closed" not in caplog.text
+
+
+def test_a_gpx_file_is_named_as_such_not_as_a_kml_without_a_polygon(tmp_path, capsys):
+    """QA round 15: reading back the GPX that ``boustro plan`` wrote (or a walked boundary's
+    track) said 'no Polygon in the file (expected a KML Polygon placemark)'."""
+    path = tmp_path / "mission.gpx"
+    ring = [[6.0, 51.0], [6.001, 51.0], [6.001, 51.001], [6.0, 51.001]]
+    code, _, _ = run_cli(capsys, "plan", "--spacing", "20", "--out", path)
+    assert code == 0
+    for name in (path, tmp_path / "as.xml"):
+        if name != path:
+            name.write_bytes(path.read_bytes())
+        code, _, err = run_cli(capsys, "plan", name, "--spacing", "20")
+        line = _one_line(code, err, name)
+        assert "a GPX file holds routes and tracks, not an area" in line
+        assert "expected a KML Polygon" not in line
+    ok = tmp_path / "ok.kml"  # a KML without a polygon keeps its message
+    ok.write_text(
+        f"<kml><Placemark><LineString><coordinates>{ring}</coordinates></LineString>"
+        "</Placemark></kml>"
+    )
+    assert "expected a KML Polygon" in _one_line(
+        *run_cli(capsys, "plan", ok, "--spacing", "20")[::2], ok
+    )

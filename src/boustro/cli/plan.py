@@ -30,7 +30,7 @@ from ._common import (
     print_table,
 )
 from ._fields import mission_files, output_files, pick_fields, plan_fields, read_picked
-from ._flight import add_flight_options, fly, plan_mission
+from ._flight import add_flight_options, check_flight, fly, plan_mission
 from ._plan_rows import rows as _rows
 from ._sweep import check_sweep, sweep_noted
 
@@ -314,7 +314,8 @@ def _add_path(p: argparse.ArgumentParser) -> None:
         metavar="M",
         help="the vehicle's smallest turning radius, metres: the moves between lanes become "
         "Dubins turns (forward only: fixed-wing, boats, tractors), their waypoints along the "
-        "curves in every export (densified to 5 cm), their length in the path length and "
+        "curves in every export (no chord more than 5 cm off the curve: the waypoints fly a "
+        "U-turn about 5 cm shorter than the curve), the curves' length in the path length and "
         "duration; a convex area's lanes are flown every other one and back when that turns "
         "less (2R > spacing)",
     )
@@ -548,6 +549,7 @@ def run(args: argparse.Namespace) -> int:
         check_plot_target(args.plot)
     if args.format is not None and args.out is None:
         raise InvalidParameterError("--format needs --out FILE")
+    check_flight(args)
     areas = _load(args)
     _vehicle(args)  # --reverse without --turn-radius: one error before any work
     check_sweep(args)
