@@ -66,9 +66,10 @@ DETAILS = """\
 area files:
   GeoJSON (RFC 7946: Polygon, MultiPolygon, Feature, FeatureCollection), a JSON list of [x, y]
   pairs, KML, KMZ, GML, WKT/EWKT (POLYGON, MULTIPOLYGON, GEOMETRYCOLLECTION), QGroundControl
-  .plan (survey polygons and inclusion geofences, [lat, lon] read as lon/lat); with pyogrio
-  (pip install 'boustro[geo]'): Shapefile (.shp, .shp.zip, .zip), GeoPackage, FlatGeobuf,
-  GeoParquet and any binary vector format GDAL reads. Chosen by extension, else by content.
+  .plan (survey polygons and inclusion geofences, [lat, lon] read as lon/lat; exclusion fences
+  and circles are not obstacles: each is named in a warning); with pyogrio (pip install
+  'boustro[geo]'): Shapefile (.shp, .shp.zip, .zip), GeoPackage, FlatGeobuf, GeoParquet, each
+  recognised by its signature (no other GDAL format). Chosen by extension, else by content.
   Coordinates are longitude, latitude (WGS 84) unless the file or --crs says otherwise; lon/lat
   areas are planned in the UTM zone of the area and written back in lon/lat. Without AREA, an
   embedded 3.6 ha field in the Netherlands (Fields2Cover, BSD-3-Clause) is planned at 10 m.
