@@ -383,13 +383,17 @@ def test_a_plan_names_the_fences_it_does_not_avoid(tmp_path, caplog):
     """QA round 15: an exclusion geofence (a no-fly zone over the survey) and the fence's
     circles were dropped without a word, and the plan crossed them."""
     path = tmp_path / "mission.plan"
-    fence = {**PLAN["geoFence"], "circles": [{"circle": {"center": [52.0, 5.0], "radius": 9}}]}
+    circle = {"circle": {"center": [52.0, 5.0], "radius": 9}, "inclusion": False, "version": 1}
+    stay = {**circle, "inclusion": True}  # an inclusion circle: a boundary, not an obstacle
+    fence = {**PLAN["geoFence"], "circles": [circle, stay]}
     path.write_text(json.dumps({**PLAN, "geoFence": fence}))
     read_areas(path)
     said = [r.getMessage() for r in caplog.records if "not an obstacle" in r.getMessage()]
     assert len(said) == 2
     assert "geoFence.polygons[1] (an exclusion fence)" in said[0]
-    assert "geoFence.circles[0]" in said[1]
+    assert "geoFence.circles[0] (an exclusion circle)" in said[1]
+    (left,) = [r.getMessage() for r in caplog.records if "circles[1]" in r.getMessage()]
+    assert "(an inclusion circle) is not a boundary" in left and "hole" not in left
     caplog.clear()
     path.write_text(
         json.dumps({**PLAN, "geoFence": {"polygons": PLAN["geoFence"]["polygons"][:1]}})
