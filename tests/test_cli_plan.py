@@ -281,3 +281,58 @@ def test_sweep_that_changes_nothing_says_so(capsys, tmp_path):
     summary = json.loads(out)
     changed = any("--sweep 0 changed nothing" in n for n in summary.get("notes", []))
     assert changed == (summary["n_cells"] == 1) and changed == ("--sweep 0 " in err)
+
+
+@pytest.mark.parametrize(
+    ("out", "match"),
+    [("OUT.gpkg", "cannot tell the format"), ("OUT.plan", "needs a mission altitude")],
+)
+def test_unwritable_output_is_refused_before_reading(capsys, tmp_path, out, match):
+    """QA round 15: ``--out x.gpkg`` (and a ``.plan`` without an altitude) was refused only
+    after the area was read and planned (minutes on a large field). The area here does not
+    exist: the output's error comes first."""
+    out = out.replace("OUT", str(tmp_path / "out"))
+    code, _, err = run(
+        capsys, "plan", str(tmp_path / "missing.geojson"), "--spacing", "10", "--out", out
+    )
+    assert code == 2 and match in err and "no such file" not in err
+    assert os.listdir(tmp_path) == []
+
+
+def test_altitude_formats_are_those_that_need_one():
+    """``ALTITUDE_FORMATS`` (checked before planning) is exactly the formats whose renderer
+    refuses a mission without an altitude."""
+    from boustro.errors import InvalidParameterError
+    from boustro.io.formats import FORMATS, render
+    from boustro.io.formats._common import ALTITUDE_FORMATS
+    from boustro.mission import plan_area
+
+    mission = plan_area(embedded_field(), 10.0)
+    assert mission.altitude is None
+    refused = set()
+    for fmt in FORMATS:
+        try:
+            render(mission, fmt)
+        except InvalidParameterError as exc:
+            assert ALTITUDE_FORMATS[fmt] in str(exc)
+            refused.add(fmt)
+    assert refused == set(ALTITUDE_FORMATS)
+
+
+@pytest.mark.parametrize(
+    ("extra", "match"),
+    [
+        (["--max-flight-time", "300"], "a maximum flight time needs the speed"),
+        (["--dem", "DIR/none.tif", "--altitude", "30"], "--dem DIR/none.tif"),
+        (["--dem", "DIR/none.tif"], "--dem needs the height above ground"),
+        (["--terrain-tolerance", "2"], "--terrain-tolerance needs --dem"),
+    ],
+)
+def test_flight_option_errors_come_before_reading(capsys, tmp_path, extra, match):
+    """QA round 15: ``--max-flight-time`` without ``--speed`` and an unreadable ``--dem`` (or
+    one without a height) were refused only after the area was read and planned."""
+    extra = [a.replace("DIR", str(tmp_path)) for a in extra]
+    match = match.replace("DIR", str(tmp_path))
+    missing = str(tmp_path / "missing.geojson")
+    code, _, err = run(capsys, "plan", missing, "--spacing", "10", *extra)
+    assert code == 2 and match in err and "no such file" not in err.split(match)[0]

@@ -161,7 +161,7 @@ def test_a_planar_file_read_as_lonlat_is_refused_with_the_cause(tmp_path, capsys
     assert "refusing to plan" in line and "lanes (more than 100000)" in line
     assert "km^2 (more than 10000)" in line and "4 vertices" in line
     assert "a planar file read as longitude/latitude?" in line and "--crs" in line
-    assert "swapped" in line and "pass --force" in line
+    assert "swapped" in line and line.endswith("; give --force to plan anyway")
     # the same file given its CRS (planar metres) plans.
     assert main(["-q", "plan", path, "--spacing", "2", "--crs", "planar", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["n_transects"] >= 4  # 8 m across at 2 m
@@ -273,6 +273,29 @@ def test_a_long_sliver_of_small_area_is_refused_for_its_time(capsys, tmp_path):
     lines = err.strip().splitlines()
     assert code == 2 and out == "" and len(lines) == 1
     assert "estimated" in lines[0] and "--force" in lines[0]
+
+
+def test_a_refusal_names_each_number_once_in_cli_words(capsys, tmp_path):
+    """The sliver at 10 m: too many lanes AND too long; the lanes were named twice ('~1.4e+05
+    lanes (more than 100000) and an estimated .. s (more than 600) for 42 km^2 and ~1.4e+05
+    lanes') and the remedy in two languages ('pass --force (force=True)')."""
+    path = tmp_path / "sliver.wkt"
+    path.write_text("POLYGON ((0 0, 1400000 0, 1400000 40, 700000 40, 700000 20, 0 20, 0 0))")
+    code, _, err = run_cli(capsys, "plan", path, "--crs", "planar", "--spacing", "10")
+    (line,) = err.strip().splitlines()
+    assert code == 2 and line.count("lanes") == 1 and line.count("km^2") == 1
+    assert "refusing to plan 6 vertices at spacing 10: ~1.4e+05 lanes (more than 100000) and" in (
+        line
+    )
+    assert "force=True" not in line and line.endswith("; give --force to plan anyway")
+    # all three reasons: listed 'a, b and c', the time's reason naming neither size again.
+    est = WorkEstimate(2e5, 4, 0, 2e4, "certified", 0.0, 1e4)
+    why = refusals(est)
+    assert len(why) == 3 and why[2] == "an estimated 1e+04 s (more than 600)"
+    assert " ".join(why).count("lanes") == 1 and " ".join(why).count("km^2") == 1
+    # the time alone names the sizes that make the area more than a field.
+    alone = refusals(est._replace(lanes=3e4, area_km2=42.0))
+    assert alone == ["an estimated 1e+04 s (more than 600) for 42 km^2 and ~3e+04 lanes"]
 
 
 def test_the_cover_searchs_estimate_counts_the_holes():

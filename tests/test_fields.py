@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from boustro.cli import main
 from boustro.errors import PolygonFileError
 from boustro.io import embedded_field, read_area, read_areas
 from boustro.io.formats._fields import field_path, safe_name
+from boustro.io.formats.kml import to_kml
 from boustro.mission import plan_area
 
 NORTH = [[5.0, 52.0], [5.002, 52.0], [5.002, 52.001], [5.0, 52.001], [5.0, 52.0]]
@@ -244,6 +246,23 @@ def test_kml_has_a_folder_per_field_read_by_fastkml(collection, tmp_path, capsys
         np.testing.assert_allclose(path, m.waypoints_lonlat, atol=1e-9, rtol=0)
 
 
+def test_a_kml_boustro_wrote_reads_back_with_its_fields_names(collection, tmp_path, capsys):
+    """The area's placemark was named 'Area' (the field's name on the Document or Folder):
+    read back, every field was 'Area' and ``--field North`` failed on boustro's own KML."""
+    two, one = tmp_path / "m.kml", tmp_path / "one.kml"
+    _plan([str(collection), "--out", str(two)], capsys)
+    _plan([str(collection), "--field", "s-7", "--out", str(one)], capsys)
+    assert [a.name for a in read_areas(two)] == ["North", "s-7"]
+    assert [a.name for a in read_areas(one)] == ["s-7"] and read_area(one).name == "s-7"
+    for path, pick in ((two, "North"), (two, "s-7"), (one, "s-7")):
+        out = json.loads(_plan([str(path), "--field", pick, "--json"], capsys))
+        ref = plan_area(read_areas(collection)[1 if pick == "s-7" else 0], 10.0)
+        assert out["name"] == pick and out["n_transects"] == ref.stats.n_transects
+    # a field without a name keeps the placemark's old name.
+    unnamed = plan_area(read_areas(collection)[0], 10.0)
+    assert "<name>Area</name>" in to_kml(replace(unnamed, name=""))
+
+
 def test_gpx_has_a_route_per_field_read_by_gpxpy(collection, tmp_path, capsys):
     gpxpy = pytest.importorskip("gpxpy")
     out = tmp_path / "m.gpx"
@@ -347,3 +366,15 @@ def test_field_shows_only_its_own_reading_warnings(tmp_path, capsys, caplog):
     caplog.clear()
     assert main(["plan", str(path), "--spacing", "10", "--field", "Open"]) == 0
     assert caplog.text.count("feature 1: the ring is not closed") == 1
+
+
+def test_unknown_field_shows_no_field_warnings_before_its_error(tmp_path, capsys, caplog):
+    """QA round 15: ``--field`` naming no field printed every field's reading warnings (the
+    open ring of each) before its one-line error."""
+    path = tmp_path / "two.geojson"
+    doc = {"type": "FeatureCollection", "features": [_feature({"name": "Open"}, [SOUTH[:-1]])]}
+    doc["features"].append(_feature({"name": "Good"}, [NORTH]))
+    path.write_text(json.dumps(doc))
+    assert main(["plan", str(path), "--spacing", "10", "--field", "Nope"]) == 2
+    assert "not closed" not in caplog.text
+    assert "no field of that name" in capsys.readouterr().err

@@ -101,7 +101,7 @@ def test_kml_read_by_fastkml(tmp_path, mission):
     coords = np.array(placemarks["Path"].geometry.coords)
     np.testing.assert_allclose(coords[:, :2], mission.waypoints_lonlat, atol=1e-9, rtol=0)
     assert coords[:, 2] == pytest.approx(35.0)
-    area = np.array(placemarks["Area"].geometry.exterior.coords)[:-1]
+    area = np.array(placemarks[mission.name].geometry.exterior.coords)[:-1]  # the field's name
     assert len(area) == len(mission.area.ring)
     (folder,) = [f for f in doc.features if getattr(f, "name", "") == "Transects"]
     lines = [np.array(p.geometry.coords)[:, :2] for p in folder.features]

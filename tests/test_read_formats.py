@@ -379,6 +379,29 @@ def test_a_plan_file_gives_its_surveys_and_inclusion_fences_as_lonlat(tmp_path):
     assert [a.name for a in read_areas(tmp_path / "as.json")] == ["survey 2", "geofence 1"]
 
 
+def test_a_plan_names_the_fences_it_does_not_avoid(tmp_path, caplog):
+    """QA round 15: an exclusion geofence (a no-fly zone over the survey) and the fence's
+    circles were dropped without a word, and the plan crossed them."""
+    path = tmp_path / "mission.plan"
+    circle = {"circle": {"center": [52.0, 5.0], "radius": 9}, "inclusion": False, "version": 1}
+    stay = {**circle, "inclusion": True}  # an inclusion circle: a boundary, not an obstacle
+    fence = {**PLAN["geoFence"], "circles": [circle, stay]}
+    path.write_text(json.dumps({**PLAN, "geoFence": fence}))
+    read_areas(path)
+    said = [r.getMessage() for r in caplog.records if "not an obstacle" in r.getMessage()]
+    assert len(said) == 2
+    assert "geoFence.polygons[1] (an exclusion fence)" in said[0]
+    assert "geoFence.circles[0] (an exclusion circle)" in said[1]
+    (left,) = [r.getMessage() for r in caplog.records if "circles[1]" in r.getMessage()]
+    assert "(an inclusion circle) is not a boundary" in left and "hole" not in left
+    caplog.clear()
+    path.write_text(
+        json.dumps({**PLAN, "geoFence": {"polygons": PLAN["geoFence"]["polygons"][:1]}})
+    )
+    read_areas(path)
+    assert "not an obstacle" not in caplog.text
+
+
 def test_a_plan_without_a_polygon_is_one_line(capsys, tmp_path):
     path = tmp_path / "waypoints.plan"
     path.write_text(json.dumps({**PLAN, "mission": {"items": []}, "geoFence": {}}))
@@ -414,3 +437,27 @@ def test_an_open_geojson_ring_is_read_closed_with_a_warning(tmp_path, caplog):
     with caplog.at_level("WARNING"):
         np.testing.assert_array_equal(read_area(path).ring, square)
     assert "not closed" not in caplog.text
+
+
+def test_a_gpx_file_is_named_as_such_not_as_a_kml_without_a_polygon(tmp_path, capsys):
+    """QA round 15: reading back the GPX that ``boustro plan`` wrote (or a walked boundary's
+    track) said 'no Polygon in the file (expected a KML Polygon placemark)'."""
+    path = tmp_path / "mission.gpx"
+    ring = [[6.0, 51.0], [6.001, 51.0], [6.001, 51.001], [6.0, 51.001]]
+    code, _, _ = run_cli(capsys, "plan", "--spacing", "20", "--out", path)
+    assert code == 0
+    for name in (path, tmp_path / "as.xml"):
+        if name != path:
+            name.write_bytes(path.read_bytes())
+        code, _, err = run_cli(capsys, "plan", name, "--spacing", "20")
+        line = _one_line(code, err, name)
+        assert "a GPX file holds routes and tracks, not an area" in line
+        assert "expected a KML Polygon" not in line
+    ok = tmp_path / "ok.kml"  # a KML without a polygon keeps its message
+    ok.write_text(
+        f"<kml><Placemark><LineString><coordinates>{ring}</coordinates></LineString>"
+        "</Placemark></kml>"
+    )
+    assert "expected a KML Polygon" in _one_line(
+        *run_cli(capsys, "plan", ok, "--spacing", "20")[::2], ok
+    )

@@ -186,3 +186,35 @@ def test_everything_together_in_qgc_files(tmp_path, capsys):
         lanes += n
         assert summary["sortie"]["duration_s"] <= 400
     assert lanes == sum(p["n_transects"] for p in summaries[0]["crosshatch"])
+
+
+def test_a_cameras_height_passes_the_checks_before_reading(tmp_path, capsys):
+    """A .plan output and ``--dem`` are refused before reading without a height, but a
+    camera with ``--gsd`` (no ``--altitude``) has one: its flying height."""
+    dem = write_dem(tmp_path / "bump.tif", bump)
+    out = tmp_path / "m.plan"
+    args = ["-q", "plan", "--camera", "sony-rx1r-ii", "--gsd", "1.5", "--dem", str(dem)]
+    assert main([*args, "--out", str(out), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["terrain"]["height_above_ground_m"] == pytest.approx(summary["altitude_m"])
+    assert json.loads(out.read_text())["mission"]["globalPlanAltitudeMode"] == 3
+
+
+def test_an_unreadable_dem_is_one_line_on_the_command_line(tmp_path):
+    """rasterio logged 'GDAL signalled an error: ...' at INFO before boustro's error: two lines
+    in a terminal (pytest's own log handlers hide it: a real process is run)."""
+    import os
+    import subprocess
+    import sys
+
+    import boustro
+
+    src = os.path.dirname(os.path.dirname(boustro.__file__))
+    env = {**os.environ, "PYTHONPATH": src}
+    missing = str(tmp_path / "missing.tif")
+    cmd = [sys.executable, "-m", "boustro", "plan", "--altitude", "40", "--dem", missing]
+    done = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert done.returncode == 2 and done.stdout == ""
+    (line,) = done.stderr.splitlines()
+    assert line.startswith(f"boustro: error: --dem {missing}: ")
+    assert os.listdir(tmp_path) == []

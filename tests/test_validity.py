@@ -378,3 +378,30 @@ def test_detach_holes_only_shrinks_the_holes_that_touch(holes):
     assert after.difference(original).difference(band).area < 1e-12 * original.area
     edge = Area(shell, None, "x", "f.json", (np.array([(40, 0), (60, 0), (50, 20)], float),))
     assert detach_holes(edge) == (edge, None)
+
+
+@pytest.mark.parametrize(
+    ("holes", "said"),
+    [
+        (
+            [[(50, 0), (60, 20), (40, 20)]],
+            "hole 0 at [50.0, 0.0] touches the shell; planned with the hole cut back",
+        ),
+        (
+            [
+                [(50, 0), (60, 20), (52, 20)],
+                [(20, 20), (30, 30), (20, 30)],
+                [(0, 50), (9, 60), (9, 50)],
+            ],
+            "hole 0 at [50.0, 0.0] and hole 2 at [0.0, 50.0] touch the shell; planned with each "
+            "hole cut back",
+        ),
+    ],
+)
+def test_the_touching_hole_note_agrees_in_number(holes, said):
+    """QA round 15: two touching holes were said as 'hole 0 at [...], hole 1 at [...] touches
+    the shell; planned with the hole cut back'."""
+    shell = np.array([(0, 0), (100, 0), (100, 100), (0, 100)], dtype=float)
+    area = Area(shell, None, "x", "f.json", tuple(np.array(h, dtype=float) for h in holes))
+    _, note = detach_holes(area)
+    assert note is not None and said in note

@@ -79,6 +79,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     level = logging.WARNING if args.quiet else (logging.DEBUG if args.verbose else logging.INFO)
     logging.basicConfig(level=level, format="boustro: %(message)s")
+    # rasterio logs GDAL's errors at INFO before raising them (as boustro's one-line error,
+    # e.g. an unreadable --dem): said once, unless -v.
+    logging.getLogger("rasterio").setLevel(logging.WARNING if level > logging.DEBUG else level)
     try:
         return int(args.func(args))
     except BoustroError as exc:

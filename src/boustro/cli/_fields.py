@@ -60,14 +60,18 @@ def pick_fields(areas: list[Area], field: str | None) -> list[Area]:
 def read_picked(read: Callable[[], list[Area]], field: str | None) -> list[Area]:
     """``pick_fields(read(), field)``; with ``--field``, the warnings of reading the other
     fields (an open ring, a part left out: each names its field's place in the file, its
-    ``source``) are not shown, only the picked field's and the file's own."""
+    ``source``) are not shown, only the picked field's and the file's own; a ``--field`` that
+    names no field shows none of the fields' warnings before its error."""
     if field is None:
         return pick_fields(read(), field)
     with _held_log() as held:
         areas = read()
-        picked = pick_fields(areas, field)
-        others = [a.source + ":" for a in areas if a.source and all(a is not p for p in picked)]
-        held[:] = [r for r in held if not r.getMessage().startswith(tuple(others))]
+        picked: list[Area] = []
+        try:
+            picked = pick_fields(areas, field)
+        finally:
+            others = [a.source + ":" for a in areas if a.source and not any(a is p for p in picked)]
+            held[:] = [r for r in held if not r.getMessage().startswith(tuple(others))]
     return picked
 
 

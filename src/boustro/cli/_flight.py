@@ -8,11 +8,11 @@ from typing import Any
 from ..errors import InvalidParameterError
 from ..mission import Mission, plan_area
 from ..mission.crosshatch import plan_crosshatch
-from ..mission.sorties import split_mission
-from ..mission.terrain import DEFAULT_TOLERANCE, follow_terrain
+from ..mission.sorties import check_speed, split_mission
+from ..mission.terrain import DEFAULT_TOLERANCE, check_height, follow_terrain, open_dem
 from ._common import positive_float
 
-__all__ = ["add_flight_options", "fly", "plan_mission"]
+__all__ = ["add_flight_options", "check_flight", "fly", "plan_mission"]
 
 
 def add_flight_options(p: argparse.ArgumentParser, point: Any) -> None:
@@ -75,10 +75,22 @@ def plan_mission(args: argparse.Namespace, area: Any, spacing: Any, **kwargs: An
     return plan_area(area, spacing, **kwargs)
 
 
-def fly(args: argparse.Namespace, mission: Mission) -> list[Mission]:
-    """The mission's sorties (or the mission), each over the terrain with ``--dem``."""
+def check_flight(args: argparse.Namespace) -> None:
+    """The flight options' errors that need no plan, raised before any work: a tolerance
+    without a DEM, a flight time without a speed, a DEM without a height or that cannot be
+    read (read here, once: ``args.dem`` becomes the :class:`~boustro.mission.terrain.Dem`)."""
     if args.terrain_tolerance != DEFAULT_TOLERANCE and args.dem is None:
         raise InvalidParameterError("--terrain-tolerance needs --dem")
+    check_speed(args.max_flight_time, args.speed)
+    if args.dem is not None:
+        if args.camera is None:  # a camera always has its flying height
+            check_height(args.altitude)
+        args.dem = open_dem(args.dem)
+
+
+def fly(args: argparse.Namespace, mission: Mission) -> list[Mission]:
+    """The mission's sorties (or the mission), each over the terrain with ``--dem``
+    (:func:`check_flight` first)."""
     missions = split_mission(
         mission,
         home=args.home,

@@ -13,6 +13,7 @@ from .. import objectives
 from ..errors import InvalidParameterError
 from ..io import Area, embedded_field, read_areas
 from ..io.formats import FORMATS, atomic_write, format_for
+from ..io.formats._common import ALTITUDE_FORMATS, check_altitude
 from ..io.repair import check_area, detach_holes, repair_area
 from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission
 from ..mission.camera import camera_presets
@@ -29,7 +30,7 @@ from ._common import (
     print_table,
 )
 from ._fields import mission_files, output_files, pick_fields, plan_fields, read_picked
-from ._flight import add_flight_options, fly, plan_mission
+from ._flight import add_flight_options, check_flight, fly, plan_mission
 from ._plan_rows import rows as _rows
 from ._sweep import check_sweep, sweep_noted
 
@@ -65,9 +66,10 @@ DETAILS = """\
 area files:
   GeoJSON (RFC 7946: Polygon, MultiPolygon, Feature, FeatureCollection), a JSON list of [x, y]
   pairs, KML, KMZ, GML, WKT/EWKT (POLYGON, MULTIPOLYGON, GEOMETRYCOLLECTION), QGroundControl
-  .plan (survey polygons and inclusion geofences, [lat, lon] read as lon/lat); with pyogrio
-  (pip install 'boustro[geo]'): Shapefile (.shp, .shp.zip, .zip), GeoPackage, FlatGeobuf,
-  GeoParquet and any binary vector format GDAL reads. Chosen by extension, else by content.
+  .plan (survey polygons and inclusion geofences, [lat, lon] read as lon/lat; exclusion fences
+  and circles are not obstacles: each is named in a warning); with pyogrio (pip install
+  'boustro[geo]'): Shapefile (.shp, .shp.zip, .zip), GeoPackage, FlatGeobuf, GeoParquet, each
+  recognised by its signature (no other GDAL format). Chosen by extension, else by content.
   Coordinates are longitude, latitude (WGS 84) unless the file or --crs says otherwise; lon/lat
   areas are planned in the UTM zone of the area and written back in lon/lat. Without AREA, an
   embedded 3.6 ha field in the Netherlands (Fields2Cover, BSD-3-Clause) is planned at 10 m.
@@ -313,7 +315,8 @@ def _add_path(p: argparse.ArgumentParser) -> None:
         metavar="M",
         help="the vehicle's smallest turning radius, metres: the moves between lanes become "
         "Dubins turns (forward only: fixed-wing, boats, tractors), their waypoints along the "
-        "curves in every export (densified to 5 cm), their length in the path length and "
+        "curves in every export (no chord more than 5 cm off the curve: the waypoints fly a "
+        "U-turn about 5 cm shorter than the curve), the curves' length in the path length and "
         "duration; a convex area's lanes are flown every other one and back when that turns "
         "less (2R > spacing)",
     )
@@ -535,13 +538,19 @@ def _plan_one(args: argparse.Namespace, area: Area) -> list[Mission]:
 
 
 def run(args: argparse.Namespace) -> int:
-    # Refuse unwritable outputs before any work (an error writes nothing).
+    # Refuse unwritable outputs before any work (an error writes nothing): a missing folder,
+    # an unknown format, a MAVLink mission without an altitude.
+    fmt = None
     if args.out is not None:
         check_output_path(args.out, "--out")
+        fmt = format_for(args.out, args.format)
+        if fmt in ALTITUDE_FORMATS and args.camera is None:
+            check_altitude(args.altitude, ALTITUDE_FORMATS[fmt])
     if args.plot is not None:
         check_plot_target(args.plot)
     if args.format is not None and args.out is None:
         raise InvalidParameterError("--format needs --out FILE")
+    check_flight(args)
     areas = _load(args)
     _vehicle(args)  # --reverse without --turn-radius: one error before any work
     check_sweep(args)
@@ -550,8 +559,7 @@ def run(args: argparse.Namespace) -> int:
     missions = [m for ms in planned for m in ms]  # a field's sorties follow one another
     # Render everything before touching any file, so that an error writes nothing.
     outputs: list[tuple[str, bytes | str, str, int | None]] = []
-    if args.out is not None:
-        fmt = format_for(args.out, args.format)
+    if fmt is not None:
         outputs += [(p, d, fmt, i) for p, d, i in mission_files(missions, args.out, fmt)]
     if args.plot is not None:
         plots = output_files(

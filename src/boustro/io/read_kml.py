@@ -70,6 +70,12 @@ def area_from_kml(text: str, where: str = "input", crs: str | None = None) -> Ar
         raise PolygonFileError(f"{where}: malformed XML: {exc}") from None
     polygon = next((e for e in root.iter() if _local(e.tag) == "Polygon"), None)
     if polygon is None:
+        if _local(root.tag) == "gpx":  # a mission boustro wrote, or a walked boundary's track
+            raise PolygonFileError(
+                f"{where}: a GPX file holds routes and tracks, not an area (boustro writes GPX "
+                "but reads areas as polygons: GeoJSON, KML, GML, WKT, ...; a boundary track "
+                "must be made a polygon first)"
+            )
         raise PolygonFileError(
             f"{where}: no Polygon in the file (expected a KML Polygon placemark)"
         )

@@ -132,9 +132,12 @@ def detach_holes(area: Area) -> tuple[Area, str | None]:
         return area, None
     before = _shapely_area(area).area
     after = replace(area, holes=tuple(holes), cut_holes=area.holes)
+    many = len(touched) > 1
+    which = ", ".join(touched[:-1]) + " and " + touched[-1] if many else touched[0]
     note = (
-        f"{area.source or 'the area'}: {', '.join(touched)} touches the shell; planned with "
-        f"the hole cut back {gap:.3g} (file units) from the shell, area {before:.6g} -> "
+        f"{area.source or 'the area'}: {which} {'touch' if many else 'touches'} the shell; "
+        f"planned with {'each' if many else 'the'} hole cut back {gap:.3g} (file units) from "
+        f"the shell, area {before:.6g} -> "
         f"{_shapely_area(after).area:.6g} (coverage of the file's area is kept: it lies "
         "inside the area planned; the path's length outside is measured on the file's holes)"
     )

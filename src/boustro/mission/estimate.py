@@ -240,18 +240,28 @@ def refusals(est: WorkEstimate) -> list[str]:
     """Why ``est`` is absurd (empty when it is not): more than :data:`MAX_LANES` lanes, an area
     over :data:`MAX_AREA_KM2` km^2, or an estimated time over :data:`MAX_SECONDS` s for an
     area larger than a real field (:data:`FIELD_AREA_KM2`, :data:`FIELD_LANES`; a real field
-    is never refused for its time: it is told the estimate and shown progress)."""
+    is never refused for its time: it is told the estimate and shown progress). Each number is
+    named once: the time's reason (the area and lanes) leaves out what a first reason named."""
     why = []
-    if est.lanes > MAX_LANES:
+    many_lanes, large = est.lanes > MAX_LANES, est.area_km2 > MAX_AREA_KM2
+    if many_lanes:
         why.append(f"~{est.lanes:.3g} lanes (more than {MAX_LANES})")
-    if est.area_km2 > MAX_AREA_KM2:
+    if large:
         why.append(f"an area of {est.area_km2:.3g} km^2 (more than {MAX_AREA_KM2:.0f})")
     if est.seconds > MAX_SECONDS and (est.area_km2 > FIELD_AREA_KM2 or est.lanes > FIELD_LANES):
+        size = [f"{est.area_km2:.3g} km^2"] * (not large) + [f"~{est.lanes:.3g} lanes"] * (
+            not many_lanes
+        )
         why.append(
-            f"an estimated {est.seconds:.3g} s (more than {MAX_SECONDS:.0f}) for "
-            f"{est.area_km2:.3g} km^2 and ~{est.lanes:.3g} lanes"
+            f"an estimated {est.seconds:.3g} s (more than {MAX_SECONDS:.0f})"
+            + (f" for {' and '.join(size)}" if size else "")
         )
     return why
+
+
+def _listed(items: list[str]) -> str:
+    """``"a"``, ``"a and b"``, ``"a, b and c"``."""
+    return " and ".join([", ".join(items[:-1]), items[-1]] if len(items) > 1 else items)
 
 
 def check_work(
@@ -278,7 +288,7 @@ def check_work(
     why = [] if force else refusals(est)
     if why:
         raise TooMuchWorkError(
-            f"{where}: refusing to plan {' and '.join(why)} for {est.vertices} vertices at "
-            f"spacing {spacing:g}{_cause(frame, est)}; pass --force (force=True) to plan anyway"
+            f"{where}: refusing to plan {est.vertices} vertices at spacing {spacing:g}: "
+            f"{_listed(why)}{_cause(frame, est)}; give --force to plan anyway"
         )
     return est

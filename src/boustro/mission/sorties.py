@@ -25,7 +25,7 @@ from .camera import with_camera
 from .flight import Sortie
 from .types import Mission
 
-__all__ = ["lane_units", "plan_sorties", "split_mission", "with_home"]
+__all__ = ["check_speed", "lane_units", "plan_sorties", "split_mission", "with_home"]
 
 
 def lane_units(kinds: tuple[str, ...] | list[str]) -> list[tuple[int, int]]:
@@ -124,6 +124,12 @@ def with_home(mission: Mission, home: ArrayLike) -> Mission:
     return dataclasses.replace(mission, home=h, home_lonlat=lonlat)
 
 
+def check_speed(max_time: float | None, speed: float | None) -> None:
+    """Raise :class:`InvalidParameterError` for a maximum flight time without a speed."""
+    if max_time is not None and speed is None:
+        raise InvalidParameterError("a maximum flight time needs the speed (--speed M/S)")
+
+
 def split_mission(
     mission: Mission,
     *,
@@ -142,8 +148,7 @@ def split_mission(
     if max_time is None and max_distance is None:
         return [mission]
     s = mission.stats
-    if max_time is not None and s.speed is None:
-        raise InvalidParameterError("a maximum flight time needs the speed (--speed M/S)")
+    check_speed(max_time, s.speed)
     plan = mission.plan
     path = plan.waypoints / plan.ground_scale
     home_ground = mission.projection.to_plan(mission.home) / plan.ground_scale

@@ -23,7 +23,14 @@ from ..errors import InvalidParameterError
 from .flight import TerrainRoute
 from .types import Mission
 
-__all__ = ["DEFAULT_TOLERANCE", "Dem", "follow_terrain", "open_dem", "profile_points"]
+__all__ = [
+    "DEFAULT_TOLERANCE",
+    "Dem",
+    "check_height",
+    "follow_terrain",
+    "open_dem",
+    "profile_points",
+]
 
 #: Largest vertical error between two waypoints, metres, by default.
 DEFAULT_TOLERANCE = 1.0
@@ -130,6 +137,15 @@ def profile_points(
     return sorted(keep)
 
 
+def check_height(altitude: float | None) -> float:
+    """The height above ground; :class:`InvalidParameterError` when there is none."""
+    if altitude is None:
+        raise InvalidParameterError(
+            "--dem needs the height above ground: --altitude METRES, or a camera's"
+        )
+    return float(altitude)
+
+
 def follow_terrain(
     mission: Mission, dem: str | os.PathLike[str] | Dem, *, tolerance: float = DEFAULT_TOLERANCE
 ) -> Mission:
@@ -137,10 +153,7 @@ def follow_terrain(
     tol = as_number("terrain tolerance", tolerance)
     if not (math.isfinite(tol) and tol > 0):
         raise InvalidParameterError(f"terrain tolerance must be > 0 metres, got {tolerance!r}")
-    if mission.altitude is None:
-        raise InvalidParameterError(
-            "--dem needs the height above ground: --altitude METRES, or a camera's"
-        )
+    height = check_height(mission.altitude)
     proj = mission.projection
     if proj.planar:
         raise InvalidParameterError(
@@ -168,7 +181,7 @@ def follow_terrain(
         lonlat=proj.to_lonlat(plan_points),
         kinds=tuple(kinds),
         ground=np.concatenate(ground),
-        height=float(mission.altitude),
+        height=height,
         tolerance=tol,
         home_ground=float(grid.sample(home)[0]),
         dem=os.path.basename(grid.name),

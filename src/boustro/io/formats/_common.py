@@ -16,11 +16,13 @@ if TYPE_CHECKING:
     from ...mission import Mission
 
 __all__ = [
+    "ALTITUDE_FORMATS",
     "MAV_CMD_DO_CHANGE_SPEED",
     "MAV_CMD_NAV_WAYPOINT",
     "MAV_FRAME_GLOBAL",
     "MAV_FRAME_GLOBAL_RELATIVE_ALT",
     "MAV_FRAME_MISSION",
+    "check_altitude",
     "describe",
     "lonlat",
     "need_altitude",
@@ -85,14 +87,24 @@ def lonlat(
     return wp, tr, area, home
 
 
+#: The formats whose renderer calls :func:`need_altitude` (MAVLink missions, by
+#: :mod:`._mavlink`): ``boustro plan`` refuses them without an altitude before any work.
+ALTITUDE_FORMATS = {"plan": "a QGroundControl plan", "wpl": "a QGC WPL 110 waypoint file"}
+
+
 def need_altitude(mission: Mission, what: str) -> float:
     """The mission's altitude; raises :class:`InvalidParameterError` naming ``what`` if unset."""
-    if mission.altitude is None:
+    check_altitude(mission.altitude, what)
+    return float(mission.altitude)  # type: ignore[arg-type]
+
+
+def check_altitude(altitude: float | None, what: str) -> None:
+    """Raise :class:`InvalidParameterError` naming ``what`` if ``altitude`` is unset."""
+    if altitude is None:
         raise InvalidParameterError(
             f"{what} needs a mission altitude: give --altitude METRES above take-off (0 for a "
             "ground or surface vehicle), or a camera with --altitude or --gsd"
         )
-    return float(mission.altitude)
 
 
 #: Characters XML 1.0 does not allow anywhere (control characters other than tab, newline, CR).

@@ -1,4 +1,9 @@
-"""KML 2.2 (Google Earth): the area, the path and each transect, in WGS 84."""
+"""KML 2.2 (Google Earth): the area, the path and each transect, in WGS 84.
+
+The area's placemark is named after the field (``Area`` when it has no name), so that a KML
+boustro wrote reads back (:func:`boustro.io.read_areas`) with its fields' names, which
+``--field NAME`` picks.
+"""
 
 from __future__ import annotations
 
@@ -23,9 +28,12 @@ def _kml_coords(points: NDArray[np.float64], altitude: float | None = None) -> s
     return " ".join(f"{x:.10f},{y:.10f},{altitude:.3f}" for x, y in points)
 
 
-def _area_placemark(area: NDArray[np.float64], holes: Sequence[NDArray[np.float64]]) -> str:
+def _area_placemark(
+    name: str, area: NDArray[np.float64], holes: Sequence[NDArray[np.float64]]
+) -> str:
     return (
-        "<Placemark><name>Area</name><Polygon><outerBoundaryIs><LinearRing><coordinates>"
+        f"<Placemark><name>{xml_text(name or 'Area')}</name>"
+        "<Polygon><outerBoundaryIs><LinearRing><coordinates>"
         + _kml_coords(ring_closed(ring_ccw(area)))
         + "</coordinates></LinearRing></outerBoundaryIs>"
         + "".join(
@@ -59,7 +67,8 @@ def _transect_placemarks(mission: Mission, transects: NDArray[np.float64], mode:
 
 @register_format("kml", extensions=(".kml",))
 def to_kml(mission: Mission) -> str:
-    """KML 2.2: a Document with the area (Polygon), the path and one LineString per transect.
+    """KML 2.2: a Document with the area (a Polygon named after the field), the path and one
+    LineString per transect.
 
     >>> from boustro.io import embedded_field
     >>> from boustro.mission import plan_area
@@ -85,7 +94,7 @@ def kml_body(mission: Mission) -> list[str]:
     alt = mission.altitude
     mode = "" if alt is None else "<altitudeMode>relativeToGround</altitudeMode>"
     out = [
-        _area_placemark(area, mission.holes_lonlat),
+        _area_placemark(mission.name, area, mission.holes_lonlat),
         "<Placemark><name>Path</name><LineString><tessellate>1</tessellate>"
         + mode
         + "<coordinates>"

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from typing import TYPE_CHECKING, Any
 
-from ._common import MAV_CMD_NAV_WAYPOINT, lonlat
+from ._common import ALTITUDE_FORMATS, MAV_CMD_NAV_WAYPOINT, lonlat
 from ._mavlink import home_altitude, mission_items
 from .registry import register_format
 
@@ -13,6 +13,8 @@ if TYPE_CHECKING:
     from ...mission import Mission
 
 __all__ = ["to_qgc_plan"]
+
+_WHAT = ALTITUDE_FORMATS["plan"]
 
 #: QGroundControl's ``AltitudeModeRelative``.
 _QGC_ALTITUDE_RELATIVE = 1
@@ -46,7 +48,7 @@ def _mission_items(mission: Mission) -> list[dict[str, Any]]:
     ``SimpleItem`` objects: waypoints at a relative altitude, or over terrain at their AMSL
     altitude in ``MAV_FRAME_GLOBAL`` with QGC's "calculated above terrain" mode."""
     items: list[dict[str, Any]] = []
-    for item in mission_items(mission, "a QGroundControl plan"):
+    for item in mission_items(mission, _WHAT):
         seq = len(items) + 1
         if item.command != MAV_CMD_NAV_WAYPOINT:
             items.append(_qgc_item(seq, item.command, item.frame, [*item.params, 0, 0, 0], 0))
@@ -84,7 +86,7 @@ def to_qgc_plan(mission: Mission, *, firmware_type: int = 0, vehicle_type: int =
     ('Plan', 16)
     """
     items = _mission_items(mission)
-    _, _, _, home = lonlat(mission, "a QGroundControl plan")
+    _, _, _, home = lonlat(mission, _WHAT)
     speed = mission.stats.speed
     home_lon, home_lat = (float(v) for v in home)
     doc = {

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from ._common import MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL, lonlat
+from ._common import ALTITUDE_FORMATS, MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL, lonlat
 from ._mavlink import home_altitude, mission_items
 from .registry import register_format
 
@@ -14,7 +14,7 @@ if TYPE_CHECKING:
 
 __all__ = ["to_wpl"]
 
-_WHAT = "a QGC WPL 110 waypoint file"
+_WHAT = ALTITUDE_FORMATS["wpl"]
 
 
 def _line(
