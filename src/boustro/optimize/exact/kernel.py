@@ -111,8 +111,8 @@ log = logging.getLogger("boustro")
 def first_compile() -> bool:
     """Whether the search kernel is missing from numba's on-disk cache (the folder numba
     itself would use: the package's ``__pycache__``, or under ``NUMBA_CACHE_DIR``): this
-    installation's first use, which compiles the kernels (10-30 s, once). ``False`` where no
-    cache location is writable (then every process compiles; nothing to warm). Makes a
+    installation's first use, which compiles the kernels (once, up to about a minute of CPU).
+    ``False`` where no cache location is writable (then every process compiles). Makes a
     dispatcher of the kernel (imports numba), compiles nothing."""
     dispatcher, on_disk = jit_cached(kernel_search._search)  # also drops stale kernels first
     if not on_disk:
@@ -131,7 +131,7 @@ def compiled() -> Compiled | None:
     if find_spec("numba") is None:  # pragma: no cover - numba is a dependency
         return None
     if first_compile():
-        log.info("compiling the certified optimiser for this installation (once, 10-30 s)")
+        log.info("compiling the certified optimiser for this installation (once, up to a minute)")
     options: dict[str, Any] = {"nogil": True, "error_model": "numpy"}
     # Helpers first: the functions call them by their module-level names, which from here on
     # are compiled functions (numba resolves those names when it compiles a caller); a helper
