@@ -63,7 +63,7 @@ BASELINE = "42b81be"  # main when issue 21's work started
 AREA_BASELINE = "8882b43"  # main before the vectorised trace and links (parts area*)
 TIME_BASELINE = "bc75ccd"  # main before the twelfth round (OR-Tools matrix, compiled moves)
 #: The plan's stages in :mod:`boustro.plan.region` timed by part ``time``.
-PLAN_STAGES = ("_plan_cells", "_plan_lanes", "_order", "refine_tour", "_drive", "_assemble")
+PLAN_STAGES = ("_plan_cells", "_plan_lanes", "_orders", "refine_tour", "_drive", "_assemble")
 STAGES = (
     "choose_sweep",
     "_cells_for_sweep",

@@ -14,8 +14,10 @@ import numpy as np
 
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region
-from boustro.optimize.cover import CoverCost
-from boustro.optimize.cover.boxes import Boxes
+from boustro.optimize.cover import CoverCost, band_stats
+from boustro.optimize.cover.bands import BandStats, RigidBoxes
+from boustro.optimize.cover.boxes import Boxes, box_radius
+from boustro.optimize.cover.search import CoverSearch
 from boustro.plan import vehicle_stats
 from boustro.plan.region import plan_region
 from boustro.vehicle import Vehicle
@@ -77,6 +79,24 @@ def plan_cost(
         return cost.of(st.path_length, st.n_turns)
 
     return evaluate
+
+
+def box_stats(
+    search: CoverSearch, box: Boxes, *, rigid: bool = True, exact: bool = False
+) -> BandStats:
+    """The band statistics of the one box ``box`` as ``search``'s bound sees them (its
+    sandwich level for the box's radius, or the exact area with ``exact``; the rigid holes'
+    cuts and splits where ``rigid``)."""
+    eps = float(box_radius(box, search.radius)[0])
+    lv = search.sandwich.exact if exact else search.sandwich.level(eps)
+    rb = None
+    if rigid:
+        rb = RigidBoxes(search.hole_xy, search.hole_start, box.delta, box.eta, search.split_rings)
+    return band_stats(
+        lv.inner, lv.outer, box.theta, box.d, search.s, search.reach, search.origin,
+        search.k_range(eps), search.n_holes, search.tol, inner_reach=search._inner_reach(),
+        rigid=rb,
+    )  # fmt: skip
 
 
 def sample_boxes(

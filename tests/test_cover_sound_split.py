@@ -11,11 +11,12 @@ import pytest
 
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region
-from boustro.optimize.cover import CoverCost, band_stats
-from boustro.optimize.cover.bands import RigidBoxes
+from boustro.optimize.cover import CoverCost
 from boustro.optimize.cover.boxes import Boxes, box_radius
 from boustro.optimize.cover.search import CoverSearch
 from boustro.plan.region import plan_region
+
+from .plan_samples import box_stats
 
 SPACING = 10.0
 COST = CoverCost.time(5.0, 10.0)
@@ -53,17 +54,7 @@ def _counts(region: Region, box: Boxes, rigid: bool, exact: bool = False) -> np.
     """The box's lanes per line (with the split gaps where ``rigid``; at its centre with
     ``exact``), over the lines of the box."""
     search = CoverSearch(region, SPACING, SPACING / 2, COST, None, False)
-    eps = float(box_radius(box, search.radius)[0])
-    lv = search.sandwich.exact if exact else search.sandwich.level(eps)
-    rb = None
-    if rigid:
-        rb = RigidBoxes(search.hole_xy, search.hole_start, box.delta, box.eta, search.split_rings)
-    st = band_stats(
-        lv.inner, lv.outer, box.theta, box.d, SPACING, SPACING / 2, search.origin,
-        search.k_range(eps), search.n_holes, search.tol, inner_reach=search._inner_reach(),
-        rigid=rb,
-    )  # fmt: skip
-    return st.count[0]
+    return box_stats(search, box, rigid=rigid, exact=exact).count[0]
 
 
 @pytest.mark.parametrize("theta", [2.3, 0.3, 1.2])

@@ -14,13 +14,13 @@ import pytest
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region
 from boustro.geometry.traced import traced_field
-from boustro.optimize.cover import CoverCost, band_stats
+from boustro.optimize.cover import CoverCost
 from boustro.optimize.cover import rigid as rigid_mod
-from boustro.optimize.cover.bands import RigidBoxes
 from boustro.optimize.cover.boxes import Boxes, box_radius
 from boustro.optimize.cover.search import CoverSearch
 from boustro.plan.lanes import region_lanes
-from boustro.plan.region import plan_region
+
+from .plan_samples import box_stats, plan_cost
 
 SPACING = 10.0
 COST = CoverCost.time(5.0, 10.0)
@@ -34,14 +34,7 @@ def _search(region: Region) -> CoverSearch:
 def _rigid(region: Region, box: Boxes) -> set[int]:
     """The holes the box's bound counts as cut by every plan of the box (not by ``cut``)."""
     search = _search(region)
-    eps = float(box_radius(box, search.radius)[0])
-    lv = search.sandwich.level(eps)
-    rb = RigidBoxes(search.hole_xy, search.hole_start, box.delta, box.eta, search.split_rings)
-    st = band_stats(
-        lv.inner, lv.outer, box.theta, box.d, SPACING, SPACING / 2, search.origin,
-        search.k_range(eps), search.n_holes, search.tol, inner_reach=search._inner_reach(),
-        rigid=rb,
-    )  # fmt: skip
+    st = box_stats(search, box)
     return {int(h) for h in np.flatnonzero(st.rigid[0, : search.n_holes])}
 
 
@@ -62,11 +55,7 @@ def _samples(box: Boxes, rng: np.random.Generator, n: int) -> list[tuple[float, 
 
 
 def _plan_cost(region: Region, theta: float, offset: float) -> float:
-    plan = plan_region(
-        region, SPACING, decompose_area=False, angle=theta, offset=offset, speed=5.0,
-        turn_time=10.0,
-    )  # fmt: skip
-    return COST.of(plan.stats.path_length, plan.stats.n_turns)
+    return plan_cost(region, COST, spacing=SPACING)(theta, offset)
 
 
 def _moved(region: Region, shift: np.ndarray) -> Region:

@@ -29,7 +29,15 @@ from .plan.region_opt import (
     choose_sweep,
     optimize_region,
 )
-from .plan.tour import ORDER_BUDGET, _chain_pass, _chains, _extension_end, _hole_pass, _order, _Pass
+from .plan.tour import (
+    ORDER_BUDGET,
+    _chain_pass,
+    _chains,
+    _extension_end,
+    _hole_pass,
+    _orders,
+    _Pass,
+)
 from .plan.types import Layout
 
 __all__ = [
@@ -57,7 +65,7 @@ __all__ = [
     "_links",
     "_merge_by_angle",
     "_merge_intervals",
-    "_order",
+    "_orders",
     "_ring_area",
     "_straighten",
     "_subtract",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -118,12 +118,6 @@ def _boundary_pass(pts: NDArray[np.float64], max_options: int = 8) -> _Pass:
 #: Orders the 2-opt improvement of a tour evaluates at most (about 0.25 s for 60 passes on the
 #: project's machine): a count, not a time, so that plans do not depend on the machine's load.
 ORDER_BUDGET = 4000
-
-
-def _order(*args: Any, **kwargs: Any) -> tuple[list[int], list[int]]:
-    """Order and driving option of every pass: the first of :func:`_orders` (the same
-    arguments)."""
-    return _orders(*args, **kwargs)[0]
 
 
 def _orders(
