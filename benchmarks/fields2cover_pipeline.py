@@ -12,7 +12,8 @@ module) with the pipeline its tutorials document, and boustro on the same planar
   tutorial's route) are also flown, and the shortest of the four missions is reported as
   ``f2c best``. OR-tools' route (``RP_RoutePlannerBase``) is not run (see below).
 * ``boustro``: ``plan_area(ring, 10, crs=None, holes=..., speed=5, turn_time=10)`` (the time
-  objective), and the same with ``keep_inside=True``.
+  objective), and the same with ``keep_inside=True``; with ``--eq1`` also with
+  ``fitness=SmithFitness()`` (Eq. 1, boustro's default objective when no speed is given).
 
 Both tools' missions are measured by the same code from the flown path: its length (every
 waypoint, straight moves between them), the turns (``passes - 1``: F2C's swaths; boustro's
@@ -59,6 +60,7 @@ import mission_time as mt
 import numpy as np
 
 from boustro.mission import plan_area
+from boustro.objectives import SmithFitness
 from boustro.optimize.cover import CoverCost
 from boustro.plan.outside import outside_length
 
@@ -205,7 +207,9 @@ def _line(label: str, r: dict) -> str:
     )
 
 
-def _run_field(f2c: Any, name: str, ring: np.ndarray, holes: list[np.ndarray]) -> dict:
+def _run_field(
+    f2c: Any, name: str, ring: np.ndarray, holes: list[np.ndarray], with_eq1: bool
+) -> dict:
     area = _shapely_area(ring, holes)
     cell = _f2c_cell(f2c, ring, holes)
     f2c_rows = {}
@@ -219,12 +223,17 @@ def _run_field(f2c: Any, name: str, ring: np.ndarray, holes: list[np.ndarray]) -
     best_key = min(f2c_rows, key=lambda k: f2c_rows[k]["time"])
     timed = _boustro_row(ring, holes, area)
     inside = _boustro_row(ring, holes, area, keep_inside=True)
+    eq1 = _boustro_row(ring, holes, area, fitness=SmithFitness()) if with_eq1 else None
     print(f"{name}: {area.area / 1e4:.2f} ha, {len(holes)} holes", flush=True)
     print(_line("f2c nswath+boustr", main))
     print(_line("f2c best of 4", f2c_rows[best_key]) + f" ({best_key[0]}, {best_key[1]})")
     print(_line("boustro time", timed) + f" (own {timed['own_time']:.1f} s)")
     print(_line("boustro inside", inside) + f" (own {inside['own_time']:.1f} s)", flush=True)
-    return {"name": name, "f2c": main, "best": f2c_rows[best_key], "time": timed, "inside": inside}
+    row = {"name": name, "f2c": main, "best": f2c_rows[best_key], "time": timed, "inside": inside}
+    if eq1 is not None:
+        print(_line("boustro eq1", eq1) + f" (own {eq1['own_time']:.1f} s)", flush=True)
+        row["eq1"] = eq1
+    return row
 
 
 def _summary(rows: list[dict]) -> None:
@@ -238,14 +247,14 @@ def _summary(rows: list[dict]) -> None:
                 f"  F2C {key:4s}: {_spread(sel, key)}, fewer lanes than boustro time on "
                 f"{sum(r[key]['lanes'] < r['time']['lanes'] for r in sel)}/{len(sel)}"
             )
-            for b in ("time", "inside"):
+            for b in [x for x in ("time", "inside", "eq1") if x in sel[0]]:
                 ratio = [r[b]["time"] / r[key]["time"] for r in sel]
                 print(
                     f"    boustro {b:6s} / F2C {key}: median {statistics.median(ratio):.4f}, "
                     f"range {min(ratio):.4f}-{max(ratio):.4f}, no longer on "
                     f"{sum(x <= 1 + 1e-9 for x in ratio)}/{len(sel)}"
                 )
-        for b in ("time", "inside"):
+        for b in [x for x in ("time", "inside", "eq1") if x in sel[0]]:
             print(
                 f"  boustro {b}: {_spread(sel, b)}, CPU median "
                 f"{statistics.median(r[b]['cpu'] for r in sel):.2f} s"
@@ -264,13 +273,18 @@ def main() -> None:
     ap.add_argument("--data", help="Fields2Cover's data/ folder")
     ap.add_argument("--random", type=int, default=7, help="random concave areas (default 7)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument(
+        "--eq1",
+        action="store_true",
+        help="also fly boustro's plan for Eq. 1 (its default objective without a speed)",
+    )
     args = ap.parse_args()
     f2c = _import_f2c()
     print(f"Fields2Cover {getattr(f2c, '__version__', '?')} from {os.path.dirname(f2c.__file__)}")
     fields = (_f2c_fields(f2c, args.data) if args.data else []) + _random_fields(
         args.random, args.seed
     )
-    rows = [_run_field(f2c, name, ring, holes) for name, ring, holes in fields]
+    rows = [_run_field(f2c, name, ring, holes, args.eq1) for name, ring, holes in fields]
     _summary(rows)
 
 
