@@ -33,14 +33,17 @@ N`` of ``benchmarks/mission_time.py``'s random concave areas with 1-3 holes (~30
 
 How Fields2Cover was obtained (2026-11-28; nothing of it is committed here): its 2.1.0 sdist
 from PyPI (``pip download fields2cover==2.1.0 --no-deps --no-binary :all:``), built with CMake
-3.25 / GCC 12 on Debian 12 against Debian's GDAL 3.6.2, GEOS, Eigen, TinyXML2, TBB and SWIG
-4.1.0; its FetchContent dependencies from snapshots of their GitHub repositories at the
-commits its CMake pins (steering_functions 13e3f56, matplotplusplus 5d01eb3 without its
-high-resolution world map), nlohmann/json at 3.11.3; OR-tools has neither a Debian package nor
+3.25 / GCC 12 on Debian 12 against Debian's GDAL 3.6.2, GEOS 3.11, Eigen, TinyXML2, Boost
+headers and SWIG 4.1.0 (``BUILD_SHARED_LIBS=OFF``, Release); its FetchContent dependencies from
+snapshots of their GitHub repositories at the commits its CMake pins (steering_functions
+13e3f56, matplotplusplus 5d01eb3 without its high-resolution world map, whose source file was
+missing from the snapshot), nlohmann/json at 3.11.3; OR-tools has neither a Debian package nor
 headers in its PyPI wheel and its release tarball is not reachable here, so the local copy was
-patched to build without it: ``RoutePlannerBase::computeBestRoute`` throws, everything else is
-Fields2Cover's code unchanged. The Python module was installed outside the project's venv; put
-its folder on the path::
+patched to build without it: its CMake's OR-tools lookup removed and
+``RoutePlannerBase::computeBestRoute`` throwing, everything else Fields2Cover's code unchanged
+(the Python tests of Fields2Cover's repository: 104 pass, the one of ``RoutePlannerBase`` fails
+as expected). The Python module was installed outside the project's venv; put its folder on
+the path::
 
     PYTHONPATH=src:/work/f2c_venv/f2c_py python benchmarks/fields2cover_pipeline.py \\
         --data <Fields2Cover>/data --random 20
