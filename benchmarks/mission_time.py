@@ -25,6 +25,7 @@ boundary), path outside the area, and planning CPU time (``time.process_time``).
 from __future__ import annotations
 
 import argparse
+import hashlib
 import os
 import statistics
 import time
@@ -85,6 +86,7 @@ def _row(area, crs, **kw):
         "gap": s.get("gap") if s.get("gap") is not None else float("nan"),
         "cpu": cpu,
         "method": s["method"],
+        "path": hashlib.sha256(np.ascontiguousarray(m.waypoints).tobytes()).hexdigest()[:12],
     }
 
 

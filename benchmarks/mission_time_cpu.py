@@ -7,8 +7,9 @@ tree's ``src`` and one with the baseline's (e.g. ``git archive fff0927 src | tar
 compiles its kernels on a small field first (not timed). Per field: ``time.process_time`` of
 ``plan_area(..., speed, turn_time)`` in each, the missions' times, and the 1-degree brute
 force's (``mission_time._brute_centred``, this tree). Printed: the distribution of CPU (median,
-max, fields over 5 s), the ratio of CPU to the baseline's, and how many plans are longer than
-the brute force's.
+max, fields over 5 s), the ratio of CPU to the baseline's, how many plans are longer than
+the brute force's, and how many plans have the baseline's waypoints (a hash of their bytes:
+a behaviour-preserving change must keep every one).
 
     python benchmarks/mission_time_cpu.py --baseline /tmp/base/src [--random 30] [--first 0]
         [--data <Fields2Cover>/data]
@@ -40,7 +41,8 @@ print("ready", flush=True)
 for line in sys.stdin:
     name, area, crs = fields[int(line)]
     row = mt._row(area, crs)
-    print(json.dumps({k: row[k] for k in ("time", "cpu", "gap", "lanes", "certified")}), flush=True)
+    keys = ("time", "cpu", "gap", "lanes", "certified", "path")
+    print(json.dumps({k: row[k] for k in keys}), flush=True)
 """
 
 
@@ -99,7 +101,8 @@ def main() -> None:
             f"{_cert(t)}) | base {b['time']:8.1f} s ({b['cpu']:5.2f} s CPU, gap "
             f"{b['gap']:6.2f}{_cert(b)}) | brute "
             f"{brute:8.1f} | new/brute {t['time'] / brute:.4f} base/brute {b['time'] / brute:.4f}"
-            f" | CPU new/base {t['cpu'] / b['cpu']:.2f}",
+            f" | CPU new/base {t['cpu'] / b['cpu']:.2f}"
+            f"{'' if t['path'] == b['path'] else ' | PATH DIFFERS'}",
             flush=True,
         )
     for p in (new, base):
@@ -117,6 +120,8 @@ def main() -> None:
             f"brute force {longer}/{len(rows)}; time/brute median "
             f"{statistics.median(r[k]['time'] / r[3] for r in rows):.4f}"
         )
+    same = sum(r[1]["path"] == r[2]["path"] for r in rows)
+    print(f"the same waypoints (a hash of their bytes) as the baseline: {same}/{len(rows)}")
     ratio = [r[1]["cpu"] / r[2]["cpu"] for r in rows]
     print(
         f"CPU new/base: median {statistics.median(ratio):.2f}, max {max(ratio):.2f}; "

@@ -11,7 +11,14 @@ import numpy as np
 from boustro.geometry.region import Region, random_region
 from boustro.geometry.traced import traced_field
 from boustro.optimize.cover import band_lines, bands
-from boustro.plan import build_plan, drive_vehicle, edge_index, route_visibility, vehicle_stats
+from boustro.plan import (
+    build_plan,
+    drive_vehicle,
+    edge_index,
+    route_visibility,
+    straight_moves,
+    vehicle_stats,
+)
 from boustro.plan.edge_index import EdgeIndex
 from boustro.plan.region import plan_region
 from boustro.plan.routing import Router, router_for
@@ -52,6 +59,66 @@ def test_straight_moves_at_once_equal_one_at_a_time_bit_for_bit():
                 one = router.path(a, b)
                 assert route.length == one.length and route.outside == one.outside
                 assert np.array_equal(route.points, one.points) and route.found == one.found
+
+
+def test_inside_moves_at_once_equal_router_inside_one_at_a_time():
+    """The visibility test's segments that touch a vertex (``route_visibility.decide``) are
+    decided by ``inside_moves`` all at once: the same answer as ``Router.inside`` for each."""
+    rng = np.random.default_rng(4)
+    regions = [traced_field(150, 2, seed=1), *(random_region(rng, 12, 2) for _ in range(8))]
+    for region in regions:
+        router = Router(region, reach=0.02 * region.diameter)
+        p, q = _moves(region, rng)
+        v = region.shell.vertices  # from vertex to vertex: along edges, through others
+        i, j = rng.integers(0, len(v), 40), rng.integers(0, len(v), 40)
+        p, q = np.vstack([p, v[i]]), np.vstack([q, v[j]])
+        single = [router.inside(a, b) for a, b in zip(p, q, strict=True)]
+        assert straight_moves.inside_moves(router, p, q).tolist() == single
+        assert any(single) and not all(single)
+        assert (
+            router._visible_many(p, q).tolist()
+            == route_visibility.visible_tree(router, p, q).tolist()
+        )
+
+
+def _greedy_pass_by_pass(dist, entry_idx, exit_idx, first_pass, first_option):
+    """The greedy order as ``tour._orders`` computed it before ``tour._greedy``: one pass's
+    moves at a time (the reference)."""
+    remaining = set(range(len(entry_idx))) - {first_pass}
+    order = [first_pass]
+    here = exit_idx[first_pass][first_option : first_option + 1]
+    while remaining:
+        best = (np.inf, -1, -1)
+        for candidate in remaining:
+            d = dist[np.ix_(here, entry_idx[candidate])].min(axis=0)
+            j = int(np.argmin(d))
+            if d[j] < best[0]:
+                best = (float(d[j]), candidate, j)
+        order.append(best[1])
+        remaining.discard(best[1])
+        here = exit_idx[best[1]][best[2] : best[2] + 1]
+    return order
+
+
+def test_greedy_order_all_passes_at_once_equals_pass_by_pass():
+    """``tour._greedy`` takes every pass's moves from the last exit at once: the same order as
+    pass by pass, ties (small integer distances) included."""
+    from boustro.plan.tour import _greedy
+
+    rng = np.random.default_rng(8)
+    for trial in range(300):
+        n = int(rng.integers(1, 30))
+        sizes = rng.choice([1, 2, 4, 8, 16], n)
+        entry_idx, exit_idx, at = [], [], 1
+        for k in sizes:
+            entry_idx.append(np.arange(at, at + 2 * k, 2))
+            exit_idx.append(np.arange(at + 1, at + 2 * k, 2))
+            at += 2 * k
+        dist = rng.integers(0, 4 if trial % 2 else 1000, (at, at)).astype(np.float64)
+        first = int(rng.integers(n))
+        option = int(rng.integers(sizes[first]))
+        want = _greedy_pass_by_pass(dist, entry_idx, exit_idx, first, option)
+        assert _greedy(dist, entry_idx, exit_idx, first, option) == want
 
 
 def test_router_is_built_once_per_region_and_reach():

@@ -124,3 +124,54 @@ def test_an_anchor_of_a_nan_point_is_nan(field):
     router = Router(field, 5.0)
     got = router.anchor(np.array([[np.nan, np.nan], [np.nan, 0.0], [0.0, np.nan]]))
     assert np.isnan(got).any(axis=1).all()
+
+
+def _distances_point_by_point(router, p, nearest=24):
+    """``Router.distances`` as it was before points given twice were measured once (the
+    reference: every point anchored, tested and measured on its own)."""
+    m = len(p)
+    pa = router.anchor(p)
+    legs = np.linalg.norm(pa - p, axis=1)
+    euclid = np.linalg.norm(pa[:, None] - pa[None], axis=-1)
+    direct = np.full((m, m), np.inf)
+    k = min(nearest, m - 1)
+    near = np.argsort(euclid, axis=1)[:, 1 : k + 1]
+    i, j = np.repeat(np.arange(m), k), near.ravel()
+    keep = (i < j) | ~np.isin(j * m + i, i[i < j] * m + j[i < j])
+    i, j = i[keep], j[keep]
+    vis = np.array(
+        [router._visible_many(pa[a][None], pa[b][None])[0] for a, b in zip(i, j, strict=True)]
+    )
+    direct[i[vis], j[vis]] = euclid[i[vis], j[vis]]
+    direct[j[vis], i[vis]] = euclid[i[vis], j[vis]]
+    np.fill_diagonal(direct, 0.0)
+    v, w = router._via_nodes_now(pa)
+    direct = np.minimum(direct, np.min(w[:, None, :] + v[None, :, :], axis=-1))
+    out = np.where(np.isfinite(direct), direct, euclid) + legs[:, None] + legs[None, :]
+    if router._grown is not None:
+        idx = np.flatnonzero(router._grown_ends(p))
+        sub = _distances_point_by_point(router._grown, p[idx], nearest)
+        out[np.ix_(idx, idx)] = np.minimum(out[np.ix_(idx, idx)], sub)
+    np.fill_diagonal(out, 0.0)
+    return out
+
+
+@pytest.mark.parametrize("reach", [0.0, 4.0])
+def test_distances_of_points_given_twice_equal_point_by_point(reach):
+    """A pass's driving options share their ends: ``Router.distances`` measures each distinct
+    point once, and its matrix is the one measured point by point, bit for bit."""
+    from boustro.geometry.region import random_region
+
+    rng = np.random.default_rng(12)
+    for _ in range(4):
+        region = random_region(rng, 12, 2)
+        k = 300.0 / region.diameter
+        region = type(region)(region.shell.vertices * k, [h.vertices * k for h in region.holes])
+        router = Router(region, reach)
+        assert len(router.nodes) and (router._grown is not None) == (reach > 0)
+        base = _points(region, 15, int(rng.integers(1000)))
+        twice = base[rng.integers(0, len(base), 2 * len(base))]
+        pts = np.vstack([base, twice])[rng.permutation(3 * len(base))]
+        got = router.distances(pts)
+        assert np.array_equal(got, _distances_point_by_point(Router(region, reach), pts))
+        assert np.isfinite(got).all() and (got > 0).sum() > len(pts) ** 2 // 2

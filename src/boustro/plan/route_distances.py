@@ -32,12 +32,19 @@ __all__ = ["coarse_distances", "distances"]
 
 
 def distances(router: Any, points: Any, nearest: int = 24) -> NDArray[np.float64]:
-    """:meth:`Router.distances <boustro.plan.routing.Router.distances>` of ``router``."""
+    """:meth:`Router.distances <boustro.plan.routing.Router.distances>` of ``router``.
+
+    Points given more than once (a pass's driving options share their ends) are anchored,
+    tested and measured once, by their bytes: every answer depends on the points' coordinates
+    only, so the matrix is the one computed point by point, bit for bit (the pairs tested
+    straight are still chosen among all ``points``, as before)."""
     p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     m = len(p)
-    pa = router.anchor(p)
+    first, back = _distinct(p)
+    pa_u = router.anchor(p[first])
+    pa = pa_u[back]
     legs = np.linalg.norm(pa - p, axis=1)
-    euclid = np.linalg.norm(pa[:, None] - pa[None], axis=-1)
+    euclid = np.linalg.norm(pa_u[:, None] - pa_u[None], axis=-1)[np.ix_(back, back)]
     direct = np.full((m, m), math.inf)
     if m > 1:
         k = min(nearest, m - 1)
@@ -47,17 +54,19 @@ def distances(router: Any, points: Any, nearest: int = 24) -> NDArray[np.float64
         keep = i < j
         keep |= ~np.isin(j * m + i, i[i < j] * m + j[i < j])
         i, j = i[keep], j[keep]
-        vis = router._visible_many(pa[i], pa[j])
+        vis = _visible(router, pa_u, back[i], back[j])
         direct[i[vis], j[vis]] = euclid[i[vis], j[vis]]
         direct[j[vis], i[vis]] = euclid[i[vis], j[vis]]
     np.fill_diagonal(direct, 0.0)
     if router._coarse is not None:
         direct = np.minimum(direct, coarse_distances(router, pa))
     elif len(router.nodes):
-        v, w = router._via_nodes(pa)  # (M, N) each
-        for r0 in range(0, m, 64):  # (M, M) in blocks of rows: memory O(64 M N)
-            via = np.min(w[r0 : r0 + 64, None, :] + v[None, :, :], axis=-1)
-            direct[r0 : r0 + 64] = np.minimum(direct[r0 : r0 + 64], via)
+        v, w = router._via_nodes(pa_u)  # (U, N) each
+        u = len(pa_u)
+        via = np.empty((u, u))
+        for r0 in range(0, u, 64):  # (U, U) in blocks of rows: memory O(64 U N)
+            via[r0 : r0 + 64] = np.min(w[r0 : r0 + 64, None, :] + v[None, :, :], axis=-1)
+        direct = np.minimum(direct, via[np.ix_(back, back)])
     else:  # a convex shell without holes: every straight move stays inside
         direct = euclid
     # no move inside the area found (a pocket no route reaches): the straight line, as
@@ -65,12 +74,31 @@ def distances(router: Any, points: Any, nearest: int = 24) -> NDArray[np.float64
     direct = np.where(np.isfinite(direct), direct, euclid)
     out = direct + legs[:, None] + legs[None, :]
     if router._grown is not None:  # the moves routed in the grown domain where shorter
-        idx = np.flatnonzero(router._grown_ends(p))
+        idx = np.flatnonzero(router._grown_ends(p[first])[back])
         if len(idx) > 1:
             block = np.ix_(idx, idx)
             out[block] = np.minimum(out[block], router._grown.distances(p[idx]))
     np.fill_diagonal(out, 0.0)
     return out
+
+
+def _distinct(p: NDArray[np.float64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """``(first, back)``: the index of each distinct point of ``p`` (by its bytes) and, for
+    each point, its distinct point's position in ``first`` (``p[first][back]`` is ``p``)."""
+    rows = np.ascontiguousarray(p).view(np.dtype((np.void, 16))).ravel()
+    _, first, back = np.unique(rows, return_index=True, return_inverse=True)
+    return first, back.ravel()
+
+
+def _visible(
+    router: Any, pts: NDArray[np.float64], a: NDArray[np.int64], b: NDArray[np.int64]
+) -> NDArray[np.bool_]:
+    """Whether each segment ``pts[a[i]] -> pts[b[i]]`` stays in the area, each distinct one
+    (in its direction) tested once (:meth:`~boustro.plan.routing.Router._visible_many`)."""
+    key = a * len(pts) + b
+    pairs, back = np.unique(key, return_inverse=True)
+    vis = router._visible_many(pts[pairs // len(pts)], pts[pairs % len(pts)])
+    return vis[back.ravel()]
 
 
 def coarse_distances(router: Any, pa: NDArray[np.float64]) -> NDArray[np.float64]:

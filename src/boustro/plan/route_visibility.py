@@ -2,7 +2,8 @@
 
 A segment is visible when it properly crosses no ring edge and its midpoint lies in the closed
 area; a segment that touches a ring vertex in its middle is decided piece by piece between the
-breakpoints (:meth:`~boustro.plan.routing.Router.inside`). Up to
+breakpoints (:meth:`~boustro.plan.routing.Router.inside`, for all such segments at once:
+:func:`~boustro.plan.straight_moves.inside_moves`). Up to
 :data:`~boustro.plan.visibility_kernel.DENSE_EDGES` edges every pair is tested by a
 compiled kernel; above, only the edges whose bounding box meets the segment's (the grid of
 :mod:`~boustro.plan.edge_grid`; before it an STRtree, :func:`visible_tree`), with the same
@@ -18,6 +19,7 @@ from numpy.typing import NDArray
 
 from ..geometry.polygon import _cross
 from .edge_index import CHUNK
+from .straight_moves import inside_moves
 from .visibility_kernel import DENSE_EDGES, segment_crossings
 
 __all__ = ["decide", "visible_many", "visible_tree"]
@@ -89,6 +91,7 @@ def decide(
     res = np.zeros(m, dtype=bool)
     if simple.any():
         res[simple] = router.classify(((a + b) / 2)[simple]) == 0
-    for i in np.flatnonzero(ok & touched):
-        res[i] = router.inside(a[i], b[i])
+    hard = np.flatnonzero(ok & touched)
+    if len(hard):  # Router.inside of each, all at once (the same arithmetic)
+        res[hard] = inside_moves(router, a[hard], b[hard])
     return res

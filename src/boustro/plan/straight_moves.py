@@ -43,6 +43,52 @@ def straight_moves(
     outside = np.zeros(m)
     if m == 0:
         return ok, outside
+    r, rn, p_seg, lo, hi, cls = _pieces(router, p, q)
+    in_hole = np.bincount(p_seg[cls == 1], minlength=m) > 0
+    out_piece = cls == 2
+    any_out = np.bincount(p_seg[out_piece], minlength=m) > 0
+    length = rn
+    for i in np.flatnonzero(any_out & ~in_hole):
+        sel = out_piece & (p_seg == i)
+        outside[i] = float(np.sum((hi - lo)[sel])) * length[i]
+    ok[~in_hole & ~any_out] = True
+    outside[in_hole] = math.inf
+    if router.reach <= 0:
+        return ok, outside
+    step = router.reach / 16
+    pts, owner = [], []
+    for k in np.flatnonzero(out_piece & ~in_hole[p_seg]):
+        j = int(p_seg[k])
+        n = max(2, math.ceil((hi[k] - lo[k]) * length[j] / step) + 1)
+        pts.append(p[j] + np.linspace(lo[k], hi[k], n)[:, None] * r[j])
+        owner.append(np.full(n, j))
+    if pts:
+        near = router._index.within(
+            np.concatenate(pts), router.reach * (1 + 1e-9), len(router._shell_edges)
+        )
+        who = np.concatenate(owner)
+        fail = np.bincount(who[~near], minlength=m) > 0
+        ok[any_out & ~in_hole & ~fail] = True
+    return ok, outside
+
+
+def inside_moves(router: Any, p: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """``(M,)``: whether each straight move ``p[i] -> q[i]`` stays in ``router``'s closed area,
+    ``Router.inside`` for each move (every piece between its breakpoints in the area: the same
+    pieces and classes as :func:`straight_moves`, bit for bit)."""
+    m = len(p)
+    if m == 0:
+        return np.zeros(0, dtype=bool)
+    _, _, p_seg, _, _, cls = _pieces(router, p, q)
+    return np.bincount(p_seg[cls != 0], minlength=m) == 0
+
+
+def _pieces(
+    router: Any, p: NDArray[np.float64], q: NDArray[np.float64]
+) -> tuple[NDArray[Any], ...]:
+    """``(r, |r|, move of each piece, its parameters lo and hi, its class)`` of the moves
+    ``p[i] -> q[i] = p[i] + r[i]`` (``Router._pieces`` of each move, all at once; ``M >= 1``)."""
+    m = len(p)
     r = q - p  # (M, 2)
     s = router._e2 - router._e1  # (E, 2)
     # dot products as numpy's matmul rounds them (as ``r @ r`` in ``Router._breaks``)
@@ -75,32 +121,7 @@ def straight_moves(
     if keep.any():
         mids = (lo[keep] + hi[keep]) / 2
         cls[keep] = router.classify(p[p_seg[keep]] + mids[:, None] * r[p_seg[keep]])
-    in_hole = np.bincount(p_seg[cls == 1], minlength=m) > 0
-    out_piece = cls == 2
-    any_out = np.bincount(p_seg[out_piece], minlength=m) > 0
-    length = rn
-    for i in np.flatnonzero(any_out & ~in_hole):
-        sel = out_piece & (p_seg == i)
-        outside[i] = float(np.sum((hi - lo)[sel])) * length[i]
-    ok[~in_hole & ~any_out] = True
-    outside[in_hole] = math.inf
-    if router.reach <= 0:
-        return ok, outside
-    step = router.reach / 16
-    pts, owner = [], []
-    for k in np.flatnonzero(out_piece & ~in_hole[p_seg]):
-        j = int(p_seg[k])
-        n = max(2, math.ceil((hi[k] - lo[k]) * length[j] / step) + 1)
-        pts.append(p[j] + np.linspace(lo[k], hi[k], n)[:, None] * r[j])
-        owner.append(np.full(n, j))
-    if pts:
-        near = router._index.within(
-            np.concatenate(pts), router.reach * (1 + 1e-9), len(router._shell_edges)
-        )
-        who = np.concatenate(owner)
-        fail = np.bincount(who[~near], minlength=m) > 0
-        ok[any_out & ~in_hole & ~fail] = True
-    return ok, outside
+    return r, rn, p_seg, lo, hi, cls
 
 
 def _edge_tests(p, r, rn, pos, e1, s, snorm, tol, seg, par, near):

@@ -181,20 +181,7 @@ def _orders(
             choice.append(int(arg[choice[-1]]))
         return float(acc.min()), choice[::-1]
 
-    # Greedy nearest pass from the first pass's exit.
-    remaining = set(range(len(passes))) - {first_pass}
-    order: list[int] = [first_pass]
-    here = exit_idx[first_pass][first_option : first_option + 1]
-    while remaining:
-        best = (math.inf, -1, -1)
-        for candidate in remaining:
-            d = dist[np.ix_(here, entry_idx[candidate])].min(axis=0)
-            j = int(np.argmin(d))
-            if d[j] < best[0]:
-                best = (float(d[j]), candidate, j)
-        order.append(best[1])
-        remaining.discard(best[1])
-        here = exit_idx[best[1]][best[2] : best[2] + 1]
+    order = _greedy(dist, entry_idx, exit_idx, first_pass, first_option)
     best_cost, _ = cost(order)
     # 2-opt within a budget of evaluated orders, not of seconds, so that the same input gives
     # the same plan on a busy machine and an idle one (compiled: the same orders and costs)
@@ -211,6 +198,40 @@ def _orders(
         if exact is not None:
             return [exact, (order, choice)]
     return [(order, choice)]
+
+
+def _greedy(
+    dist: NDArray[np.float64],
+    entry_idx: list[NDArray[np.int64]],
+    exit_idx: list[NDArray[np.int64]],
+    first_pass: int,
+    first_option: int,
+) -> list[int]:
+    """The greedy order of the passes from ``first_pass`` (left by ``first_option``'s exit):
+    each step the pass with the nearest entry from the last exit (its first nearest option;
+    ties: the first pass in the set's order), all passes' moves from that exit at once."""
+    remaining = set(range(len(entry_idx))) - {first_pass}
+    order: list[int] = [first_pass]
+    here = int(exit_idx[first_pass][first_option])
+    entries = _padded(entry_idx)
+    while remaining:
+        row = dist[here, entries]  # (passes, options), the last option repeated past the end
+        near, option = row.min(axis=1).tolist(), row.argmin(axis=1).tolist()
+        best = (math.inf, -1, -1)
+        for candidate in remaining:
+            if near[candidate] < best[0]:
+                best = (near[candidate], candidate, option[candidate])
+        order.append(best[1])
+        remaining.discard(best[1])
+        here = int(exit_idx[best[1]][best[2]])
+    return order
+
+
+def _padded(idx: list[NDArray[np.int64]]) -> NDArray[np.int64]:
+    """``(passes, options)``: each pass's points, the last one repeated past its options
+    (a minimum over a row and its first position are the pass's own)."""
+    width = max(len(i) for i in idx)
+    return np.array([np.concatenate([i, np.full(width - len(i), i[-1])]) for i in idx])
 
 
 def _exact(
@@ -350,7 +371,11 @@ class _Driver:
         self.moves = []
 
     def chain(
-        self, pts: NDArray[np.float64], angle: float, cell: int, origin: NDArray[np.float64]
+        self,
+        pts: NDArray[np.float64],
+        angle: float,
+        cell: int,
+        origin: NDArray[np.float64],
     ) -> None:
         """A chain of lanes driven back and forth, with run-in and run-out."""
         u, n = _frame(angle)
