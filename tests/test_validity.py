@@ -208,6 +208,48 @@ def test_cli_repair_refuses_a_split_and_writes_nothing(capsys, tmp_path):
     assert len(err.strip().splitlines()) == 1
 
 
+def _traced(n: int = 3000, noise: float = 0.3) -> np.ndarray:
+    """A field's boundary walked with a GPS: a 300 m x 200 m rounded rectangle, 0.3 m of noise
+    and a duplicate point every 17th (self-intersecting: the noise loops back on itself)."""
+    rng = np.random.default_rng(16)
+    t = np.linspace(0, 2 * math.pi, n, endpoint=False)
+    x = 150 * np.sign(np.cos(t)) * np.abs(np.cos(t)) ** 0.6 + rng.normal(0, noise, n)
+    y = 100 * np.sign(np.sin(t)) * np.abs(np.sin(t)) ** 0.6 + rng.normal(0, noise, n)
+    return np.repeat(np.stack([x, y], axis=1), [2 if i % 17 == 0 else 1 for i in range(n)], axis=0)
+
+
+def test_repair_drops_the_loops_of_a_traced_boundary_and_keeps_the_file_holes():
+    """QA round 16 (hostile fields): a GPS-traced boundary (self-intersecting) was refused even
+    with --repair: make_valid splits it into the field and hundreds of 0.1 m^2 loops ("splits
+    the area into 258 polygons of areas ..." on one line of 5000 characters), and its largest
+    part kept dozens of loop holes, some touching one another (refused again). The loops, at
+    most NEGLIGIBLE of the area together, are now dropped and the holes the repair made filled;
+    a hole of the file stays; a bow-tie is still refused, its message short."""
+    ring = _traced()
+    pylon = np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 3.0], [0.0, 3.0]])
+    area = Area(ring, None, "walked", "walked.json", (pylon,))
+    made = shapely.make_valid(shapely.Polygon(ring, [pylon]))
+    assert len(shapely.get_parts(made)) > 10  # the repair does split it
+    fixed, note = repair_area(area)
+    assert note is not None and "dropped" in note and "filled" in note, note
+    assert len(fixed.holes) == 1 and sorted(map(tuple, fixed.holes[0])) == sorted(map(tuple, pylon))
+    Region(fixed.ring, list(fixed.holes))  # plannable
+    kept = shapely.Polygon(fixed.ring, list(fixed.holes))
+    assert made.difference(kept).area < 1e-3 * made.area  # what was dropped is negligible
+    tie = Area(np.array(BOW_TIE, dtype=float) * 10, None, "tie", "tie.json")
+    with pytest.raises(InvalidPolygonError, match="2 polygons of areas 2500, 2500"):
+        repair_area(tie)
+    many = Area(
+        np.array([[x, y] for x in range(40) for y in (0, 10)[:: 1 if x % 2 else -1]], dtype=float),
+        None,
+        "zigzag",
+        "z.json",
+    )
+    with pytest.raises(InvalidPolygonError) as err:
+        repair_area(many)
+    assert len(str(err.value)) < 400
+
+
 def test_diameter_of_a_large_ring_is_its_largest_vertex_distance():
     """Above 1024 vertices the diameter is sought on the convex hull, in blocks: the same value
     as the all-pairs maximum."""
@@ -405,3 +447,61 @@ def test_the_touching_hole_note_agrees_in_number(holes, said):
     area = Area(shell, None, "x", "f.json", tuple(np.array(h, dtype=float) for h in holes))
     _, note = detach_holes(area)
     assert note is not None and said in note
+
+
+def test_a_small_hole_at_utm_coordinates_is_not_zero_area():
+    """QA round 16 (hostile fields): a GPS-traced boundary fixed by make_valid keeps 1 cm^2 holes
+    (its noise's loops); in the UTM frame (x ~ 6.5e5, y ~ 5.8e6 m) the shoelace summed at
+    absolute coordinates cancelled to 0.0 and the field was refused ("hole 82: the polygon has
+    zero area"). Its area is now summed about a vertex: exact to rounding at any offset."""
+    triangle = np.array([[0.0, 0.0], [0.046, 0.001], [0.044, 0.0053]])  # 1.0e-4 m^2
+    want = 0.5 * abs(0.046 * 0.0053 - 0.001 * 0.044)
+    for offset in ([0.0, 0.0], [650831.0, 5774394.0], [-3e6, 9e6]):
+        hole = Polygon(triangle + offset)
+        assert hole.area == pytest.approx(want, rel=1e-6)
+    far = np.array([650831.0, 5774394.0])
+    shell = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]) + far
+    Region(shell, [triangle + far])  # planned, not refused
+
+
+def test_a_lonlat_hole_that_crosses_the_shell_only_in_the_utm_frame_is_cut_back(tmp_path, capsys):
+    """QA round 16 (hostile fields): a hole with a vertex snapped onto a 300 m shell edge, given
+    in lon/lat, lies 2 mm inside the shell in the file (valid, farther than the touching
+    tolerance) but crosses the edge in the UTM frame (a straight lon/lat edge bends there), and
+    was refused ("hole 0 touches or crosses the shell's boundary near [650785.378,
+    5774443.868]", plan-frame coordinates). detach_holes now applies the Region's rule in both
+    frames: the hole is cut back and the field planned, its own area covered (shapely)."""
+    from pyproj import Transformer
+
+    to_ll = Transformer.from_crs("EPSG:32631", "EPSG:4326", always_xy=True)
+    x0, y0 = 650685.0, 5774443.0
+
+    def ll(ring):
+        return [list(to_ll.transform(x0 + x, y0 + y)) for x, y in ring]
+
+    shell = ll([(0, 0), (300, 0), (300, 200), (0, 200), (0, 0)])
+    hole = ll([(100, 0), (150, 50), (120, 60), (100, 0)])  # (100, 0) on the shell's edge
+    original = shapely.Polygon(shell, [hole])
+    assert original.is_valid and original.exterior.distance(original.interiors[0]) > 1e-8
+    area = Area(np.array(shell[:-1]), "EPSG:4326", "x", "f.json", (np.array(hole[:-1]),))
+    _, note = detach_holes(area)
+    assert note is not None and "hole 0" in note
+    path = tmp_path / "snapped.geojson"
+    path.write_text(json.dumps({"type": "Polygon", "coordinates": [shell, hole]}))
+    out = tmp_path / "m.geojson"
+    code, stdout, err = run_cli(capsys, "plan", path, "--spacing", "10", "--json", "--out", out)
+    assert code == 0, err
+    assert json.loads(stdout)["covered_share"] > 1 - 1e-9
+    to_utm = Transformer.from_crs("EPSG:4326", "EPSG:32631", always_xy=True)
+
+    def utm(geom):
+        return shapely.transform(geom, lambda c: np.column_stack(to_utm.transform(*c.T)))
+
+    features = json.loads(out.read_text())["features"]
+    swaths = [
+        utm(shapely.geometry.shape(f["geometry"])).buffer(5.0, cap_style="flat")
+        for f in features
+        if f["properties"].get("role") == "transect"
+    ]
+    field = utm(original)
+    assert field.difference(shapely.union_all(swaths)).area < 1e-6 * field.area

@@ -26,6 +26,7 @@ __all__ = [
     "Projection",
     "check_lonlat",
     "parse_crs",
+    "plan_frame",
     "proj_errors",
     "projection_for",
     "utm_crs",
@@ -341,15 +342,41 @@ def projection_for(ring: ArrayLike, crs: str | None, where: str = "area") -> Pro
         InvalidParameterError: an unknown CRS, or any error of PROJ (one line).
         InvalidPolygonError: coordinates outside the CRS's range or area of use.
     """
+    proj, ring_plan = plan_frame(ring, crs, where)
+    if proj.planar:
+        return proj
+    with proj_errors(proj.source_crs):
+        proj.measure_scale(ring_plan)
+    if proj.scale_max / proj.scale_min - 1 > 1e-3:
+        log.warning(
+            "the map scale varies by %.2g%% over the area (%s): the ground spacing will be up "
+            "to that much smaller than asked",
+            100 * (proj.scale_max / proj.scale_min - 1),
+            proj.plan_crs,
+        )
+    return proj
+
+
+def plan_frame(
+    ring: ArrayLike, crs: str | None, where: str = "area"
+) -> tuple[Projection, NDArray[np.float64]]:
+    """The projection of :func:`projection_for` before its scale is measured (nothing logged),
+    and ``ring`` in its plan frame.
+
+    Raises:
+        as :func:`projection_for`.
+    """
     crs = parse_crs(crs)
     with proj_errors(crs):
-        return _projection_for(ring, crs, where)
+        return _plan_frame(ring, crs, where)
 
 
-def _projection_for(ring: ArrayLike, crs: str | None, where: str) -> Projection:
+def _plan_frame(
+    ring: ArrayLike, crs: str | None, where: str
+) -> tuple[Projection, NDArray[np.float64]]:
     pts = np.asarray(ring, dtype=np.float64)
     if crs is None:
-        return Projection(None, None)
+        return Projection(None, None), pts.copy()
     if _is_geographic(crs):
         lonlat = pts
         if crs != LONLAT:
@@ -367,12 +394,4 @@ def _projection_for(ring: ArrayLike, crs: str | None, where: str) -> Projection:
         raise InvalidPolygonError(
             f"{where}: the coordinates cannot be projected from {crs} (outside its area of use?)"
         )
-    proj.measure_scale(ring_plan)
-    if proj.scale_max / proj.scale_min - 1 > 1e-3:
-        log.warning(
-            "the map scale varies by %.2g%% over the area (%s): the ground spacing will be up "
-            "to that much smaller than asked",
-            100 * (proj.scale_max / proj.scale_min - 1),
-            proj.plan_crs,
-        )
-    return proj
+    return proj, ring_plan
