@@ -5,6 +5,7 @@ Reeds-Shepp, radii from 0.2 to 3 spacings), and the certificate they give on tes
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 
 import numpy as np
@@ -16,9 +17,10 @@ from boustro.io import embedded_field
 from boustro.mission import plan_area
 from boustro.optimize.cover import CoverCost
 from boustro.optimize.cover.search import CoverSearch
-from boustro.optimize.cover.u_turns import UTurns, u_turn_moves
+from boustro.optimize.cover.u_turns import CONVEX_MAX_LINES, UTurns, u_turn_moves
 from boustro.plan import build_plan, vehicle_stats
 from boustro.vehicle import Vehicle, dubins_paths, reeds_shepp_paths
+from boustro.vehicle.turns import skip_order
 
 from .conftest import random_polygons
 from .plan_samples import SPACING, bounds_and_plans, sample_boxes
@@ -52,15 +54,26 @@ def test_floor_below_every_u_turn_and_equal_to_the_half_circle(reverse):
 
 
 def test_least_floor_over_the_lines():
-    """``least`` is the least floor over lanes one or more lines apart (a brute force)."""
+    """``least`` is the least floor over lanes one or more lines apart, or at most
+    ``max_lines`` (a brute force)."""
     for reverse in (False, True):
         for r in np.linspace(0.1, 40.0, 97):
-            turns = UTurns(float(r), reverse)
-            brute = min(turns.floor(j * SPACING) for j in range(1, 40))
-            assert turns.least(SPACING) == pytest.approx(brute, rel=1e-12)
+            for most in (None, 1, 2, 3):
+                turns = UTurns(float(r), reverse, most)
+                brute = min(turns.floor(j * SPACING) for j in range(1, (most or 40) + 1))
+                assert turns.least(SPACING) == pytest.approx(brute, rel=1e-12)
     moves = u_turn_moves(UTurns(8.0), np.array([0, 3]), np.array([0.0, 90.0]), 10.0)
     assert moves[0] == 0.0
     assert moves[1] == pytest.approx(90.0 + 3 * (math.pi - 2) * 8.0, rel=1e-8)
+
+
+@pytest.mark.parametrize("n", range(1, 12))
+def test_convex_orders_cross_at_most_two_lines(n):
+    """The premise of :data:`CONVEX_MAX_LINES`: :func:`lane_order`'s candidates (the
+    boustrophedon, every other lane) never join lanes more than two lines apart."""
+    for order in (list(range(n)), skip_order(n)):
+        assert sorted(order) == list(range(n))
+        assert all(abs(b - a) <= CONVEX_MAX_LINES for a, b in itertools.pairwise(order))
 
 
 def _convex_cost(poly: Polygon, vehicle: Vehicle):
@@ -95,7 +108,7 @@ def test_box_bounds_and_point_values_below_convex_plans_with_a_turn_radius(radiu
     floors raise the bound from a radius of one spacing on."""
     r = radius * SPACING
     vehicle = Vehicle(turn_radius=r, reverse=reverse)
-    cost = dataclasses.replace(COST, u_turns=UTurns(r, reverse))
+    cost = dataclasses.replace(COST, u_turns=UTurns(r, reverse, CONVEX_MAX_LINES))
     rng = np.random.default_rng(int(radius * 10) + 2 * reverse)
     raised = 0
     for poly in _areas():

@@ -14,7 +14,7 @@ from ..geometry.region import Region
 from ..objectives import FewestTransects, MissionTime
 from ..optimize import OptimizeResult
 from ..optimize.cover import CoverCost, cover_optimum
-from ..optimize.cover.u_turns import UTurns
+from ..optimize.cover.u_turns import CONVEX_MAX_LINES, UTurns
 from ..plan import Plan, build_plan, coverage
 from ..plan.region import BLOCKED_NOTE, OUTSIDE_NOTE, plan_region
 from ..plan.region_floor import plan_floor
@@ -210,7 +210,9 @@ def plan_cover(
         passes = finish(planner(0.0, 0.0)).stats.headland_length * frame.proj.scale
         bound_cost = dataclasses.replace(cost, fixed=cost.fixed + cost.per_length * passes)
     if u_turns is not None and frame.region is None and not keep_inside:
-        turns = dataclasses.replace(u_turns, radius=u_turns.radius * frame.proj.scale)
+        turns = dataclasses.replace(
+            u_turns, radius=u_turns.radius * frame.proj.scale, max_lines=CONVEX_MAX_LINES
+        )
         bound_cost = dataclasses.replace(bound_cost, u_turns=turns)
     if boustrophedon is None:
         boustrophedon = frame.region is None

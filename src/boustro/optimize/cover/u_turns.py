@@ -22,8 +22,9 @@ sqrt(a^2 + w^2)``:
 
 The plans of the convex planner with a vehicle (:func:`boustro.vehicle.lane_order`: the
 boustrophedon or every other lane, each lane flown against the one before) have one lane per
-line and every move is such a U-turn between lanes ``j >= 1`` lines apart: its lateral offset
-is exactly ``j * spacing`` (the ends lie on their lines). :func:`u_turn_moves` bounds the sum of
+line and every move is such a U-turn between lanes ``1 <= j <= 2`` lines apart
+(:data:`CONVEX_MAX_LINES`): its lateral offset is exactly ``j * spacing`` (the ends lie on
+their lines). :func:`u_turn_moves` bounds the sum of
 ``M`` such moves from below by the larger of ``M * min_j f(j)`` and ``span + M (pi - 2) R``
 (``f(j)`` the larger of the floors above at ``w = j spacing``, ``span`` the lateral distance
 the moves must cover). A move of the plan that is not flown as a turn (a turn that would leave
@@ -42,7 +43,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["UTurns", "u_turn_moves"]
+__all__ = ["CONVEX_MAX_LINES", "UTurns", "u_turn_moves"]
+
+#: The most lines a move of the convex planner's plans crosses: its lanes lie on consecutive
+#: lines (a convex area meets an interval of them) flown in :func:`boustro.vehicle.lane_order`'s
+#: boustrophedon (1 line a move) or every other lane (2 lines, and one move of 1).
+CONVEX_MAX_LINES = 2
 
 #: The floors are shaved by this share: a plan's turn is a closed form evaluated in floats
 #: (a half circle ``pi R`` by an arccosine), equal to a floor in exact arithmetic.
@@ -52,10 +58,13 @@ SHAVE = 1e-9
 @dataclass(frozen=True)
 class UTurns:
     """A vehicle's turns between lanes flown in opposite directions: ``radius`` (plan units,
-    > 0) and whether it may ``reverse`` (Reeds-Shepp; else Dubins, forward only)."""
+    > 0), whether it may ``reverse`` (Reeds-Shepp; else Dubins, forward only) and, where known,
+    the most lines a move crosses (``max_lines``: 2 for the convex planner's orders,
+    :data:`CONVEX_MAX_LINES`; ``None``: any)."""
 
     radius: float
     reverse: bool = False
+    max_lines: int | None = None
 
     def floor(self, lateral: float) -> float:
         """The least length of a U-turn whose ends lie ``lateral`` apart across the lanes."""
@@ -66,9 +75,14 @@ class UTurns:
         return out
 
     def least(self, spacing: float) -> float:
-        """The least :meth:`floor` over lanes ``j >= 1`` lines apart (``j spacing``): the
-        floors are convex in ``j`` and nondecreasing once ``j spacing >= 2 radius``."""
+        """The least :meth:`floor` over lanes ``j`` lines apart (``j spacing``), ``1 <= j <=
+        max_lines``: the floors are convex in ``j`` and nondecreasing once ``j spacing >= 2
+        radius``."""
         j = max(1, math.floor(2.0 * self.radius / spacing))
+        if self.max_lines is not None:
+            j = min(j, self.max_lines)
+            if j == self.max_lines:
+                return self.floor(j * spacing)
         return min(self.floor(j * spacing), self.floor((j + 1) * spacing))
 
 
