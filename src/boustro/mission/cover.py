@@ -14,6 +14,7 @@ from ..geometry.region import Region
 from ..objectives import FewestTransects, MissionTime
 from ..optimize import OptimizeResult
 from ..optimize.cover import CoverCost, cover_optimum
+from ..optimize.cover.u_turns import CONVEX_MAX_LINES, UTurns
 from ..plan import Plan, build_plan, coverage
 from ..plan.region import BLOCKED_NOTE, OUTSIDE_NOTE, plan_region
 from ..plan.region_floor import plan_floor
@@ -182,6 +183,7 @@ def plan_cover(
     finish: Callable[[Plan], Plan] | None = None,
     boustrophedon: bool | None = None,
     keep_inside: bool = False,
+    u_turns: UTurns | None = None,
 ) -> Planned:
     """The plan of the layout with the least ``cost``, certified by
     :func:`~boustro.optimize.cover.cover_optimum` (over every angle, or at ``angle``).
@@ -191,7 +193,10 @@ def plan_cover(
     shorter than the straight move it replaces) and no turns; the headland passes' length, the
     same for every layout, joins the bound as a fixed cost. ``boustrophedon=False`` drops the
     bound's boustrophedon moves (a vehicle may fly every other lane); the plan returned is not
-    finished."""
+    finished. ``u_turns`` (ground units): ``finish`` flies every move of the convex planner's
+    plans as the vehicle's U-turn (no headland passes, no field the turns must keep inside); the
+    bound then charges those turns' floors (:mod:`~boustro.optimize.cover.u_turns`), for the
+    convex planner only (a region plan's moves are not all U-turns)."""
     options = _path_options(frame, turnaround, speed, turn_time)
     planner = _planner(frame, layout, options, keep_inside)
 
@@ -204,6 +209,11 @@ def plan_cover(
     if finish is not None:
         passes = finish(planner(0.0, 0.0)).stats.headland_length * frame.proj.scale
         bound_cost = dataclasses.replace(cost, fixed=cost.fixed + cost.per_length * passes)
+    if u_turns is not None and frame.region is None and not keep_inside:
+        turns = dataclasses.replace(
+            u_turns, radius=u_turns.radius * frame.proj.scale, max_lines=CONVEX_MAX_LINES
+        )
+        bound_cost = dataclasses.replace(bound_cost, u_turns=turns)
     if boustrophedon is None:
         boustrophedon = frame.region is None
     optimum = cover_optimum(

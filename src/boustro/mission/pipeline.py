@@ -17,6 +17,7 @@ from ..io.read import Area
 from ..objectives.smith import SmithFitness
 from ..objectives.time import MissionTime
 from ..optimize.cover import CoverCost
+from ..optimize.cover.u_turns import UTurns
 from ..optimize.methods import resolve_method
 from ..plan import (
     Plan,
@@ -278,8 +279,11 @@ def _plan_and_drive(
                 return dataclasses.replace(plan, stats=vehicle_stats(plan, vehicle))
 
         skips = vehicle is not None and vehicle.turn_radius > 0  # every other lane possible
+        u_turns = None  # every move a U-turn flown (no headland, no field to keep turns in)
+        if vehicle is not None and skips and field is None and turns_in is None:
+            u_turns = UTurns(vehicle.turn_radius, vehicle.reverse)
         planned = _plan_for_cost(
-            frame, cost, decompose, sweep, settings, finish, skips, cell_finish, passes
+            frame, cost, decompose, sweep, settings, finish, skips, cell_finish, passes, u_turns
         )
     elif frame.region is None:
         planned = plan_convex(frame, **settings)
@@ -298,12 +302,14 @@ def _plan_for_cost(
     skips: bool = False,
     cell_finish: Callable[[Plan], Plan] | None = None,
     headland: int = 0,
+    u_turns: UTurns | None = None,
 ) -> Planned:
     """A plan-level objective: the certified one-grid plan (:func:`plan_cover`); for a concave
     area or one with holes also the decomposed plan (:func:`plan_decomposed`: every cell
     certified for the same cost, the order of the passes solved), kept only if it costs less
     (always with ``decompose=True``, never with ``False``). Costs are of ``finish(plan)``
-    (headland passes and the vehicle's turns added) where given; both costs are in the kept
+    (headland passes and the vehicle's turns added) where given (``u_turns``: the one grid's
+    bound charges the vehicle's U-turns, :func:`plan_cover`); both costs are in the kept
     plan's ``optimum.info`` (``one_grid``, ``decomposed``). A cell's search costs its own plan
     with the vehicle's turns (``cell_finish``), never the headland passes (they go around the
     whole field: a note says so). With ``decompose=True`` and no candidate decomposition (more
@@ -315,7 +321,11 @@ def _plan_for_cost(
             f"plan (method 'certified-cover'), not by {settings['method']!r}: leave --method out"
         )
     keys = ("layout", "turnaround", "speed", "turn_time", "check_coverage", "angle", "keep_inside")
-    extra: dict[str, Any] = {"finish": finish, "boustrophedon": False if skips else None}
+    extra: dict[str, Any] = {
+        "finish": finish,
+        "boustrophedon": False if skips else None,
+        "u_turns": u_turns,
+    }
     if frame.region is None or decompose is False or settings["angle"] is not None:
         return plan_cover(frame, cost, **extra, **{k: settings[k] for k in keys})
     given = {k: settings[k] for k in keys}

@@ -11,6 +11,7 @@ from .ends import HoleBoxes, lane_end_bound
 from .one_tree import Multipliers, one_tree_bound
 from .piece_ends import piece_end_bound
 from .sandwich import Level
+from .u_turns import u_turn_moves
 
 __all__ = ["lower_bounds"]
 
@@ -83,9 +84,11 @@ def lower_bounds(
     below ``tour_below`` but not below ``tour_keep`` are marked in ``tour_skipped`` (an output,
     filled when given with ``tour_keep``; ``multipliers``: the 1-tree's starts, kept;
     ``tour_steps``: its subgradient steps, default :data:`~.one_tree.ONE_TREE_STEPS`).
-    ``runins=False`` (an
-    area with holes: the planner cuts a run-in or run-out that would enter a hole) counts no
-    run-ins or run-outs in the lanes' length.
+    With ``cost.u_turns`` (the convex planner's plans with a vehicle, whose every move is a
+    U-turn; the caller's premise) the moves are at least :func:`~.u_turns.u_turn_moves` of one
+    move fewer than the lines with lanes, across the span. ``runins=False`` (an area with
+    holes: the planner cuts a run-in or run-out that would enter a hole) counts no run-ins or
+    run-outs in the lanes' length.
     """
     n_lanes = st.count.sum(axis=1)
     holes = level.hole_perimeter.shape[0]
@@ -106,6 +109,8 @@ def lower_bounds(
     if boustrophedon:
         exact = _boustrophedon_moves(st, spacing)
         moves = np.where(np.isfinite(exact), np.maximum(moves, exact), moves)
+    if cost.u_turns is not None:  # every move a U-turn across lines (the convex planner's)
+        moves = np.maximum(moves, u_turn_moves(cost.u_turns, used.sum(axis=1) - 1, moves, spacing))
     turns = np.maximum(n_lanes + n_passes - 1, 0)
     runs = 2.0 * cost.turnaround * n_lanes if runins else 0.0
     if ends is not None:  # the larger of the two bounds on the moves (and extra lanes)

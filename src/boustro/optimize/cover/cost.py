@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 from ...errors import InvalidParameterError
+from .u_turns import UTurns
 
 __all__ = ["COVER_OBJECTIVES", "CoverCost"]
 
@@ -22,7 +23,10 @@ class CoverCost:
     (lanes or hole passes): ``passes - 1``. Mission time is ``per_length = 1 / (speed *
     ground_scale)`` seconds per plan unit and ``per_turn`` = the time of a turn;
     ``turnaround`` is the run-in and run-out beyond each lane end (plan units); ``fixed`` a cost
-    every plan pays whatever its layout (e.g. headland passes), part of the lower bounds.
+    every plan pays whatever its layout (e.g. headland passes), part of the lower bounds;
+    ``u_turns`` (a vehicle's turn radius, plan units) where every move of every plan is a
+    vehicle's U-turn between lanes on distinct lines (the convex planner's plans with a vehicle,
+    :mod:`~.u_turns`): the bounds' moves are then at least those turns' floors.
 
     >>> c = CoverCost.time(speed=5.0, turn_time=10.0)
     >>> c.per_length, c.per_turn, c.name
@@ -34,6 +38,7 @@ class CoverCost:
     turnaround: float = 0.0
     name: str = "time"
     fixed: float = 0.0
+    u_turns: UTurns | None = None
 
     def __post_init__(self) -> None:
         for label, value in (
