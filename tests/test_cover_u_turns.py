@@ -179,5 +179,9 @@ def test_u_turns_charged_only_where_every_move_is_a_flown_u_turn(monkeypatch, ca
     if case == "holes":
         area = [(0, 0), (120, 0), (120, 80), (0, 80)]
         kw = {"crs": "EPSG:32632", "holes": [[(40, 30), (70, 30), (60, 50)]]}
-    plan_area(area, 10.0, speed=5.0, turn_time=10.0, vehicle=Vehicle(turn_radius=8.0), **kw)
+    m = plan_area(area, 10.0, speed=5.0, turn_time=10.0, vehicle=Vehicle(turn_radius=8.0), **kw)
     assert bool(calls) == charged
+    if charged:  # the radius in plan units (test.json's UTM scale is not 1), two lines at most
+        turns = calls[0][0]
+        assert turns.radius == pytest.approx(8.0 * m.plan.ground_scale, rel=1e-12)
+        assert turns.max_lines == CONVEX_MAX_LINES and not turns.reverse
