@@ -19,7 +19,7 @@ from boustro.optimize.cover import CoverCost
 from boustro.optimize.cover.search import CoverSearch
 from boustro.optimize.cover.u_turns import CONVEX_MAX_LINES, UTurns, u_turn_moves
 from boustro.plan import build_plan, vehicle_stats
-from boustro.vehicle import Vehicle, dubins_paths, reeds_shepp_paths
+from boustro.vehicle import Vehicle, dubins_paths, reeds_shepp_paths, turn_length
 from boustro.vehicle.turns import skip_order
 
 from .conftest import random_polygons
@@ -51,6 +51,20 @@ def test_floor_below_every_u_turn_and_equal_to_the_half_circle(reverse):
         assert aligned[0].length == pytest.approx(turns.floor(2 * r), rel=1e-9)
         if not reverse:
             assert aligned[1].length == pytest.approx(turns.floor(5 * r), rel=1e-9)
+
+
+def test_dubins_floor_above_the_half_circle_closer_than_two_radii():
+    """Forward only, lanes closer than ``2R``: the floor is ``pi R + 2R - w``, above the half
+    circle (the turning circles' centres must move ``2R - w`` apart), and below the shortest
+    Dubins U-turn over every along-offset; a floor that stops at the half circle there (the
+    certificate of a Dubins vehicle whose turns are bulbs) fails here."""
+    for r in (3.0, 8.0):
+        turns = UTurns(r)
+        along = np.linspace(-4 * r, 4 * r, 801)
+        for w in np.linspace(0.0, 2 * r, 9)[:-1]:
+            assert turns.floor(w) == pytest.approx(math.pi * r + 2 * r - w, rel=1e-12)
+            shortest = float(np.min(turn_length(Vehicle(turn_radius=r), w, along)))
+            assert turns.floor(w) <= shortest * (1 + 1e-9)
 
 
 def test_least_floor_over_the_lines():
@@ -159,10 +173,15 @@ def test_u_turns_charged_only_where_every_move_is_a_flown_u_turn(monkeypatch, ca
     monkeypatch.setattr(bounds, "u_turn_moves", spy)
     area: object = embedded_field()
     kw: dict = {"keep_inside": True} if case == "keep_inside" else {}
-    if case == "headland":
-        kw = {"headland": 1}
+    if case == "headland":  # a rectangle: its inner field is convex (the convex planner's)
+        area = [(0, 0), (120, 0), (120, 80), (0, 80)]
+        kw = {"crs": None, "headland": 1}
     if case == "holes":
         area = [(0, 0), (120, 0), (120, 80), (0, 80)]
         kw = {"crs": "EPSG:32632", "holes": [[(40, 30), (70, 30), (60, 50)]]}
-    plan_area(area, 10.0, speed=5.0, turn_time=10.0, vehicle=Vehicle(turn_radius=8.0), **kw)
+    m = plan_area(area, 10.0, speed=5.0, turn_time=10.0, vehicle=Vehicle(turn_radius=8.0), **kw)
     assert bool(calls) == charged
+    if charged:  # the radius in plan units (test.json's UTM scale is not 1), two lines at most
+        turns = calls[0][0]
+        assert turns.radius == pytest.approx(8.0 * m.plan.ground_scale, rel=1e-12)
+        assert turns.max_lines == CONVEX_MAX_LINES and not turns.reverse
