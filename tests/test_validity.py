@@ -292,6 +292,19 @@ def test_coordinates_near_the_float_limit_give_one_line_and_no_warning(tmp_path)
     assert "within +-1e+100" in run.stderr and "Warning" not in run.stderr
 
 
+def _covered_share_left(features, shell, holes, half: float) -> float:
+    """The share of the file's area (shell less holes) no exported lane covers (shapely, flat
+    ends, lanes ``2 half`` wide)."""
+    lanes = [
+        shapely.geometry.shape(f["geometry"]).buffer(half, cap_style="flat")
+        for f in features
+        if "transect" in f["properties"]
+    ]
+    original = shapely.Polygon(shell, holes)
+    assert lanes
+    return original.difference(shapely.union_all(lanes)).area / original.area
+
+
 def test_a_hole_touching_the_shell_at_a_point_is_planned_with_full_coverage(tmp_path, capsys):
     """QA round 13: a hole touching the shell at one point (valid for GEOS) was refused. It is
     now cut back from the shell (the area planned contains the file's), and the lanes cover
@@ -305,13 +318,7 @@ def test_a_hole_touching_the_shell_at_a_point_is_planned_with_full_coverage(tmp_
     code, _, err = run_cli(capsys, *argv)
     assert code == 0 and "hole 0 at [50.0, 0.0] touches the shell" in err
     features = json.loads(out.read_text())["features"]
-    lanes = [
-        shapely.geometry.shape(f["geometry"]).buffer(5.0, cap_style="flat")
-        for f in features
-        if "transect" in f["properties"]
-    ]
-    original = shapely.Polygon(shell, [hole])
-    assert lanes and original.difference(shapely.union_all(lanes)).area < 1e-9 * original.area
+    assert _covered_share_left(features, shell, [hole], 5.0) < 1e-9
 
 
 @pytest.mark.parametrize("keep_inside", [False, True])
@@ -376,21 +383,28 @@ def test_detach_holes_cuts_exactly_the_holes_the_region_refuses(scale):
             assert planned is area
 
 
-def test_a_touching_hole_refused_for_another_reason_is_not_said_to_be_planned(tmp_path, capsys):
-    """Review of round 14: a hole touching the shell at a point and another hole at a point (the
-    holes must be disjoint) is refused; stderr said first that it was "planned with the hole cut
-    back", then refused it. Now the refusal alone, and nothing written."""
+@pytest.mark.parametrize("on_shell", [True, False])
+def test_holes_touching_each_other_at_a_point_are_planned_with_full_coverage(
+    on_shell, tmp_path, capsys
+):
+    """QA round 16: two holes touching at a point (valid for GEOS, e.g. a trace made valid by
+    QGIS) were refused ("holes 0 and 1 touch"), also with --repair. The later hole is now cut
+    back from the earlier one as a hole touching the shell is from the shell: planned, the note
+    names both touches, and the lanes cover the file's own area (shapely)."""
     shell = [[0, 0], [100, 0], [100, 100], [0, 100], [0, 0]]
-    first = [[50, 0], [60, 20], [40, 20], [50, 0]]
+    first = [[50, 0], [60, 20], [40, 20], [50, 0]] if on_shell else [[50, 5], [60, 20], [40, 20]]
     second = [[60, 20], [70, 40], [60, 40], [60, 20]]
     path = tmp_path / "chain.geojson"
     path.write_text(json.dumps({"type": "Polygon", "coordinates": [shell, first, second]}))
     out = tmp_path / "m.geojson"
     argv = ["plan", path, "--crs", "planar", "--spacing", "10", "--out", out]
     code, _, err = run_cli(capsys, *argv)
-    assert code == 2 and not out.exists()
-    assert err.strip().splitlines() == [err.strip()] and "holes 0 and 1 touch" in err, err
-    assert "planned" not in err
+    assert code == 0 and out.exists(), err
+    assert "hole 1 touches hole 0 at [60.0, 20.0]" in err
+    assert ("hole 0 at [50.0, 0.0] touches the shell" in err) == on_shell
+    assert "planned with each hole cut back" in err if on_shell else "the hole cut back" in err
+    features = json.loads(out.read_text())["features"]
+    assert _covered_share_left(features, shell, [first, second], 5.0) < 1e-9
 
 
 @pytest.mark.parametrize(
@@ -405,7 +419,8 @@ def test_a_touching_hole_refused_for_another_reason_is_not_said_to_be_planned(tm
 )
 def test_detach_holes_only_shrinks_the_holes_that_touch(holes):
     """Review of round 14: the area planned contains the file's (the coverage argument of
-    detach_holes), is a valid Region, and differs from it only within the gap of the shell; a
+    detach_holes), is a valid Region, and differs from it only within the gap of the shell or
+    of another hole (QA round 16: two holes at one point are cut back from each other); a
     hole along the shell's edge (invalid for GEOS) is left to be refused."""
     shell = np.array([(0, 0), (100, 0), (100, 100), (0, 100)], dtype=float)
     area = Area(shell, None, "x", "f.json", tuple(np.array(h, dtype=float) for h in holes))
@@ -416,7 +431,8 @@ def test_detach_holes_only_shrinks_the_holes_that_touch(holes):
     after = shapely.Polygon(planned.ring, list(planned.holes))
     assert original.difference(after).area < 1e-12 * original.area  # contains it, to rounding
     gap = 100 * 1e-4  # DETACH_GAP of the side
-    band = shapely.LinearRing(shell).buffer(1.01 * gap)
+    rings = [shapely.LinearRing(r) for r in (shell, *holes)]
+    band = shapely.union_all(rings).buffer(1.01 * gap)  # the shell's or another hole's gap
     assert after.difference(original).difference(band).area < 1e-12 * original.area
     edge = Area(shell, None, "x", "f.json", (np.array([(40, 0), (60, 0), (50, 20)], float),))
     assert detach_holes(edge) == (edge, None)

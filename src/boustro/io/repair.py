@@ -34,6 +34,9 @@ NEGLIGIBLE = 1e-3
 #: shell's largest extent (1 cm on a 100 m field).
 DETACH_GAP = 1e-4
 
+#: How many touching holes (and pairs of holes) :func:`detach_holes`' note names; the rest counted.
+NAMED = 5
+
 
 def _shapely_area(area: Area):
     import shapely
@@ -96,60 +99,78 @@ def _finite(area: Area) -> bool:
 
 
 def detach_holes(area: Area) -> tuple[Area, str | None]:
-    """``area`` with every hole that touches the shell (GEOS allows one point in common; the
-    planner needs holes strictly inside, :class:`~boustro.geometry.Region`: farther than
-    :data:`~boustro.geometry.region.TOUCH_TOLERANCE` times the shell's diameter, the rule applied
-    here too, in the file's coordinates and in the plan frame as the Region is checked in
-    both, so that a hole the Region accepts is left as it is) cut back from the
-    shell by :data:`DETACH_GAP` of the shell's extent, and a line saying so (None when no hole
-    touches it, or the area is invalid for GEOS: :func:`check_area` says why).
+    """``area`` with every hole that touches the shell or an earlier hole (GEOS allows one point
+    in common; the planner needs disjoint holes strictly inside, :class:`~boustro.geometry.Region`:
+    farther than :data:`~boustro.geometry.region.TOUCH_TOLERANCE` times the shell's diameter, the
+    rule applied here too, in the file's coordinates and in the plan frame as the Region is
+    checked in both, so that a hole the Region accepts is left as it is) cut back from what it
+    touches by :data:`DETACH_GAP` of the shell's extent, and a line saying so (None when no hole
+    touches anything, or the area is invalid for GEOS: :func:`check_area` says why).
 
     The cut only shrinks holes, so the area planned contains the file's area: lanes that cover
-    it cover the file's area too. The path may run through the cut-off part of the hole: at
-    most the gap deep, but as long as the gap divided by the sine of the angle between the
-    hole's edge and the shell's (2026-11-28, 100 m square, ``--keep-inside``: 4 mm of path for
-    a hole edge at 63 degrees, 4 m at 0.14 degrees). The returned area keeps the holes as read
-    (``Area.cut_holes``), against which the plan's ``outside_length_m`` is measured, so that
-    length is counted.
+    it cover the file's area too. A hole is cut back from the rings of the file (the shell, an
+    earlier hole as read), and every hole only shrinks, so two cut holes are at least the gap
+    apart. The path may run through the cut-off part of a hole: at most the gap deep, but as
+    long as the gap divided by the sine of the angle between the two edges (2026-11-28, 100 m
+    square, ``--keep-inside``: 4 mm of path for a hole edge at 63 degrees, 4 m at 0.14 degrees).
+    The returned area keeps the holes as read (``Area.cut_holes``), against which the plan's
+    ``outside_length_m`` is measured, so that length is counted.
     """
     import shapely
 
     if not area.holes or area_problem(area) is not None:
         return area, None
-    try:  # the Region's own rule for a hole touching the shell: no other hole is changed
-        touching = [
-            _touching(shell, holes, TOUCH_TOLERANCE * Polygon(shell).diameter)
-            for shell, holes in _frames(area)
-        ]
+    try:  # the Region's own rules: a hole touching the shell, two holes touching
+        frames = _frames(area)
+        tols = [TOUCH_TOLERANCE * Polygon(shell).diameter for shell, _ in frames]
     except (InvalidPolygonError, InvalidParameterError):  # check_area or the plan says why
         return area, None
-    shell = shapely.linearrings(area.ring)
+    rings = [shapely.linearrings(area.ring)] + [shapely.linearrings(h) for h in area.holes]
     gap = DETACH_GAP * float(np.max(np.ptp(area.ring, axis=0)))
     holes: list[np.ndarray] = []
-    touched: list[str] = []
+    on_shell: list[str] = []  # "hole i at [x, y]"
+    on_holes: list[str] = []  # "hole i touches hole j at [x, y]"
     for i, h in enumerate(area.holes):
-        ring = shapely.linearrings(h)
-        if not any(t[i] for t in touching):
+        # what hole i touches in any frame: the shell (0) or an earlier hole (j + 1)
+        near = [
+            k
+            for k in range(i + 1)
+            if any(_within(f, k, i, tol) for f, tol in zip(frames, tols, strict=True))
+        ]
+        if not near:
             holes.append(h)
             continue
-        at = shapely.get_coordinates(shapely.shortest_line(ring, shell))[0].tolist()
-        touched.append(f"hole {i} at {at}")
-        cut = shapely.Polygon(h).difference(shell.buffer(gap))
+        for k in near:
+            at = shapely.get_coordinates(shapely.shortest_line(rings[i + 1], rings[k]))[0]
+            if k == 0:
+                on_shell.append(f"hole {i} at {at.tolist()}")
+            else:
+                on_holes.append(f"hole {i} touches hole {k - 1} at {at.tolist()}")
+        cut = shapely.Polygon(h).difference(shapely.union_all([rings[k] for k in near]).buffer(gap))
         holes += [
             np.asarray(p.exterior.coords, dtype=np.float64)[:-1]
             for p in shapely.get_parts(cut)
             if p.geom_type == "Polygon" and not p.is_empty
         ]
-    if not touched:
+    if not on_shell and not on_holes:
         return area, None
     before = _shapely_area(area).area
     after = replace(area, holes=tuple(holes), cut_holes=area.holes)
-    many = len(touched) > 1
-    which = ", ".join(touched[:-1]) + " and " + touched[-1] if many else touched[0]
+    said = on_holes[:NAMED] + (
+        [f"{len(on_holes) - NAMED} more pairs"] if len(on_holes) > NAMED else []
+    )
+    if on_shell:
+        many = len(on_shell) > 1
+        named = on_shell[:NAMED] + (
+            [f"{len(on_shell) - NAMED} more holes"] if len(on_shell) > NAMED else []
+        )
+        which = ", ".join(named[:-1]) + " and " + named[-1] if many else named[0]
+        said.insert(0, f"{which} {'touch' if many else 'touches'} the shell")
+    cuts = len(set(t.split()[1] for t in on_shell + on_holes))
     note = (
-        f"{area.source or 'the area'}: {which} {'touch' if many else 'touches'} the shell; "
-        f"planned with {'each' if many else 'the'} hole cut back {gap:.3g} (file units) from "
-        f"the shell, area {before:.6g} -> "
+        f"{area.source or 'the area'}: {'; '.join(said)}; planned with "
+        f"{'each' if cuts > 1 else 'the'} hole cut back {gap:.3g} (file units) from "
+        f"{'what it touches' if on_holes else 'the shell'}, area {before:.6g} -> "
         f"{_shapely_area(after).area:.6g} (coverage of the file's area is kept: it lies "
         "inside the area planned; the path's length outside is measured on the file's holes)"
     )
@@ -167,12 +188,14 @@ def _frames(area: Area) -> list[tuple[np.ndarray, tuple[np.ndarray, ...]]]:
     return [files, (ring, tuple(proj.to_plan(h) for h in area.holes))]
 
 
-def _touching(shell: np.ndarray, holes: tuple[np.ndarray, ...], tol: float) -> list[bool]:
-    """Whether each hole comes within ``tol`` of ``shell``."""
+def _within(frame: tuple[np.ndarray, tuple[np.ndarray, ...]], k: int, i: int, tol: float) -> bool:
+    """Whether hole ``i`` of ``frame`` comes within ``tol`` of its shell (``k = 0``) or of its
+    hole ``k - 1``."""
     import shapely
 
-    ring = shapely.linearrings(shell)
-    return [bool(shapely.dwithin(ring, shapely.linearrings(h), tol)) for h in holes]
+    shell, holes = frame
+    other = shell if k == 0 else holes[k - 1]
+    return bool(shapely.dwithin(shapely.linearrings(other), shapely.linearrings(holes[i]), tol))
 
 
 def repair_area(area: Area) -> tuple[Area, str | None]:
