@@ -3,6 +3,7 @@ chains it starts from, the same lanes driven, full coverage, the compiled kernel
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 
@@ -11,10 +12,10 @@ import pytest
 import shapely
 
 import boustro.plan.region as region_mod
-from boustro.geometry.region import Region
-from boustro.plan import coverage
+from boustro.geometry.region import Region, random_region
+from boustro.plan import coverage, lane_tour
 from boustro.plan.lane_tour import _flown, refine_tour, refinement
-from boustro.plan.order_kernel import _lane_search, improve_lanes
+from boustro.plan.order_kernel import OR_OPT_UNITS, _lane_search, improve_lanes
 from boustro.plan.region import plan_region
 from boustro.plan.routing import Router
 from boustro.plan.tour_exact import EXACT_TOUR_PASSES
@@ -121,7 +122,7 @@ def test_lane_search_is_a_local_optimum_the_compiled_one_the_same():
         assert sorted(seq.tolist()) == list(range(n))
         c = _cost(dist, seq, flip)
         assert _brute(dist, n) - 1e-9 <= c <= _cost(dist, seq0, flip0) + 1e-9
-        py_seq, py_flip = _lane_search(seq0.copy(), flip0.copy(), 0, dist, 10**6)
+        py_seq, py_flip = _lane_search(seq0.copy(), flip0.copy(), 0, dist, 10**6, OR_OPT_UNITS)
         assert py_seq.tolist() == seq.tolist() and py_flip.tolist() == flip.tolist()
         # no single 2-opt or or-opt move improves it: every reversal and every move of 1-3
         for i, j in itertools.combinations_with_replacement(range(n), 2):
@@ -207,3 +208,68 @@ def test_no_refinement_where_a_vehicle_drives_the_order_or_a_headland_joins_it(c
     enabled.clear()
     plan_area(field, 10.0, crs=None)
     assert enabled and all(enabled)
+
+
+def _benchmark_area(index: int) -> Region:
+    """``benchmarks/mission_time.py``'s random area ``index`` (seed 0, about 300 m across)."""
+    rng = np.random.default_rng(0)
+    for _ in range(index + 1):
+        r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
+    k = 300.0 / r.diameter
+    return Region(r.shell.vertices * k, [h.vertices * k for h in r.holes])
+
+
+def _best_or_opt(dist: np.ndarray, seq: np.ndarray, flip: np.ndarray, fixed: int) -> float:
+    """The shortest tour one move of 1 to OR_OPT_UNITS consecutive units (after the first
+    ``fixed``) elsewhere, either way round, makes of ``seq``/``flip`` (brute force)."""
+    n, best = len(seq), _cost(dist, seq, flip)
+    for size in range(1, min(OR_OPT_UNITS, n - 1) + 1):
+        for i in range(fixed, n - size + 1):
+            part, rest = np.arange(i, i + size), np.r_[0:i, i + size : n]
+            for k in range(fixed, len(rest) + 1):
+                for rev in (False, True):
+                    pos = np.r_[rest[:k], part[::-1] if rev else part, rest[k:]]
+                    f = flip[pos].copy()
+                    if rev:
+                        f[k : k + size] = 1 - f[k : k + size]
+                    best = min(best, _cost(dist, seq[pos], f))
+    return best
+
+
+def test_longer_or_opt_moves_shorten_a_plan_timed_from_its_waypoints(monkeypatch):
+    """Random area 20 of the mission-time benchmark at 0 degrees (its search's options: 10 m
+    spacing, 5 m reach, 5 m/s, 10 s a turn): or-opt of 1-3 units left the refined tour a local
+    optimum 27 m longer than moving up to :data:`OR_OPT_UNITS` units at once finds. The plan
+    is shorter, drives the same lanes with the same turns, covers the area (shapely) and its
+    time is the one recomputed from its waypoints; the tour the search returns is a local
+    optimum of every such move (brute force), the 1-3 units' is not."""
+    region = _benchmark_area(20)
+    kw = dict(angle=0.0, offset=9.54726967112316, reach=5.0, speed=5.0, turn_time=10.0)
+    kw.update(decompose_area=False, layout="guaranteed")
+    seen = []
+
+    def spy(seq, flip, fixed, dist, budget, units=OR_OPT_UNITS):
+        out = improve_lanes(seq, flip, fixed, dist, budget, units=units)
+        seen.append((dist.copy(), fixed, units, *out))
+        return out
+
+    monkeypatch.setattr(lane_tour, "improve_lanes", spy)
+    new = plan_region(region, 10.0, **kw)
+    with monkeypatch.context() as m:
+        m.setattr(lane_tour, "improve_lanes", functools.partial(spy, units=3))
+        old = plan_region(region, 10.0, **kw)
+    assert new.stats.duration < old.stats.duration - 5.0  # 1754.9 s against 1760.3 s
+    assert new.stats.n_turns == old.stats.n_turns
+    assert _lanes(new) == _lanes(old)
+    assert coverage(new).covered_share >= 1 - 1e-9  # shapely, exact
+    flown = float(np.linalg.norm(np.diff(new.waypoints, axis=0), axis=1).sum())
+    turns = list(new.kinds).count("start") - 1  # a turn between two passes (lanes, holes)
+    assert turns == new.stats.n_turns
+    assert new.stats.duration == pytest.approx(flown / 5.0 + 10.0 * turns, rel=1e-12)
+    assert [units for _, _, units, _, _ in seen] == [OR_OPT_UNITS, 3]
+    for dist, fixed, units, seq, flip in seen:
+        c = _cost(dist, seq, flip)
+        if units == OR_OPT_UNITS:
+            assert _best_or_opt(dist, seq, flip, fixed) >= c - 1e-6
+        else:
+            assert _best_or_opt(dist, seq, flip, fixed) < c - 1.0

@@ -6,12 +6,13 @@ together even where the tour would do better to leave one and come back for the 
 that a hole ends, two chains side by side on either side of a hole). :func:`refine_tour` takes
 that tour, splits every chain into its lanes, and improves the sequence of lanes and other
 passes (each a unit driven either way) by 2-opt (a stretch of the tour driven in reverse, a
-unit turned round) and or-opt (one to three units moved elsewhere, either way round) on the
-moves between them (:func:`~boustro.plan.order_kernel.improve_lanes`, compiled). The tour it
-returns is never longer than the one it was given: the given one is kept unless the new one is
-shorter by the router's distances and by the moves the two tours do not share, flown as the
-driver flies them (:meth:`~boustro.plan.routing.Router.paths`, in their directions). Not where
-a vehicle's turns or headland passes are added to the order afterwards (:func:`refinement`).
+unit turned round) and or-opt (one to :data:`~.order_kernel.OR_OPT_UNITS` consecutive units
+moved elsewhere, either way round) on the moves between them
+(:func:`~boustro.plan.order_kernel.improve_lanes`, compiled). The tour it returns is never
+longer than the one it was given: the given one is kept unless the new one is shorter by the
+router's distances and by the moves the two tours do not share, flown as the driver flies them
+(:meth:`~boustro.plan.routing.Router.paths`, in their directions). Not where a vehicle's turns
+or headland passes are added to the order afterwards (:func:`refinement`).
 
 A local search's result depends on where it starts: refined, the exact order of a few passes
 was sometimes longer than the greedy 2-opt order refined. :func:`refine_best` refines both and

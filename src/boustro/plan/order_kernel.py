@@ -19,7 +19,15 @@ from numpy.typing import NDArray
 
 from .._jit import compiled
 
-__all__ = ["improve_lanes", "improve_order"]
+__all__ = ["OR_OPT_UNITS", "improve_lanes", "improve_order"]
+
+#: The most consecutive units (lanes, hole and boundary passes) one or-opt move of
+#: :func:`improve_lanes` takes elsewhere by default. It was 3 before the sixteenth round: the
+#: refined tour, from the planner's chain by chain, was then often a local optimum whose
+#: moves were tens of metres longer than those of tours found over the same lanes from random
+#: starts; moving up to a chain's worth of lanes at once reaches some of those tours
+#: (docs/mission_time.md). A sweep costs ``O(units n^2)`` evaluations.
+OR_OPT_UNITS = 16
 
 
 def _cost(order, start, dist, entry, exit_, internal, n_opt):
@@ -157,11 +165,11 @@ def _two_opt_lanes(seq, flip, fixed, dist, left):
     return -left - 1
 
 
-def _or_opt_lanes(seq, flip, fixed, dist, left):
-    """One first-improvement or-opt move: 1-3 consecutive units moved elsewhere, either way
-    round; the evaluations left as :func:`_two_opt_lanes`."""
+def _or_opt_lanes(seq, flip, fixed, dist, left, units):
+    """One first-improvement or-opt move: 1 to ``units`` consecutive units (the fewest first)
+    moved elsewhere, either way round; the evaluations left as :func:`_two_opt_lanes`."""
     n = seq.shape[0]
-    for size in range(1, 4):
+    for size in range(1, min(units, n - 1) + 1):
         for i in range(fixed, n - size + 1):
             j = i + size - 1
             p, q = _ex(seq, flip, i - 1), _en(seq, flip, j + 1)
@@ -204,7 +212,7 @@ def _move(seq, flip, i, j, k, reverse):
         flip[k + 1 : k + 1 + size] = f
 
 
-def _lane_search(seq, flip, fixed, dist, budget):
+def _lane_search(seq, flip, fixed, dist, budget, units):
     """2-opt and or-opt moves until neither improves or ``budget`` evaluations are spent."""
     left = budget
     while left > 0:
@@ -214,7 +222,7 @@ def _lane_search(seq, flip, fixed, dist, budget):
         left = -left - 1
         if left <= 0:
             break
-        left = _or_opt_lanes(seq, flip, fixed, dist, left)
+        left = _or_opt_lanes(seq, flip, fixed, dist, left, units)
         if left < 0:
             break
     return seq, flip
@@ -232,15 +240,17 @@ def improve_lanes(
     fixed: int,
     dist: NDArray[np.float64],
     budget: int,
+    units: int = OR_OPT_UNITS,
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Units (lanes, hole and boundary passes) in the order ``seq``, each driven forwards
     (``flip`` 0: entered at point ``1 + 2 u``, left at ``2 + 2 u`` of ``dist``) or backwards,
-    improved by 2-opt (segments reversed, units turned round) and or-opt (1-3 units moved,
-    either way round) until neither improves or ``budget`` moves were evaluated; the first
-    ``fixed`` positions stay. ``dist[0]``: the moves from the start (zeros: a free start). The
-    deltas assume symmetric moves (:meth:`~boustro.plan.routing.Router.distances`)."""
+    improved by 2-opt (segments reversed, units turned round) and or-opt (1 to
+    ``units`` consecutive units moved, either way round) until neither improves or
+    ``budget`` moves were evaluated; the first ``fixed`` positions stay. ``dist[0]``: the moves
+    from the start (zeros: a free start). The deltas assume symmetric moves
+    (:meth:`~boustro.plan.routing.Router.distances`)."""
     seq, flip = _compiled_lanes()(
         np.array(seq, dtype=np.int64), np.array(flip, dtype=np.int64), int(fixed),
-        np.ascontiguousarray(dist, dtype=np.float64), int(budget),
+        np.ascontiguousarray(dist, dtype=np.float64), int(budget), int(units),
     )  # fmt: skip
     return seq, flip
