@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from boustro.geometry import Polygon
-from boustro.geometry.region import Region
+from boustro.geometry.region import Region, random_region
 from boustro.optimize.cover import CoverCost, band_stats
 from boustro.optimize.cover.bands import BandStats, RigidBoxes
 from boustro.optimize.cover.boxes import Boxes, box_radius
@@ -24,6 +24,7 @@ from boustro.vehicle import Vehicle
 
 __all__ = [
     "SPACING",
+    "benchmark_area",
     "bounds_and_plans",
     "inside_areas",
     "plan_cost",
@@ -42,6 +43,14 @@ def scaled(region: Region, size: float) -> Region:
     return Region(
         Polygon(region.shell.vertices * k), [Polygon(h.vertices * k) for h in region.holes]
     )
+
+
+def benchmark_area(index: int) -> Region:
+    """``benchmarks/mission_time.py``'s random area ``index`` (seed 0, 300 m across)."""
+    rng = np.random.default_rng(0)
+    for _ in range(index + 1):
+        r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
+    return scaled(r, 300.0)
 
 
 def inside_areas(seed: int, count: int) -> list[Region]:

@@ -11,7 +11,7 @@ import pytest
 import boustro.optimize.cover.bounds as bounds_module
 import boustro.optimize.cover.branch as branch_module
 import boustro.optimize.cover.search as search_module
-from boustro.geometry.region import Region, random_region
+from boustro.geometry.region import Region
 from boustro.mission import plan_area
 from boustro.optimize.cover import CoverCost, centred_offsets, cover_optimum
 from boustro.optimize.cover.centred import centred_boxes
@@ -19,17 +19,9 @@ from boustro.optimize.cover.search import CoverSearch
 from boustro.plan.region import plan_region
 
 from .conftest import random_regions
+from .plan_samples import benchmark_area
 
 SPEED, TURN_TIME, SPACING = 5.0, 10.0, 10.0
-
-
-def _benchmark_field(index: int) -> Region:
-    """Random field ``index`` of ``benchmarks/mission_time.py`` (seed 0, ~300 m across)."""
-    rng = np.random.default_rng(0)
-    for _ in range(index + 1):
-        r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
-    k = 300.0 / r.diameter
-    return Region(r.shell.vertices * k, [h.vertices * k for h in r.holes])
 
 
 def _plan_time(region: Region, angle: float, offset: float) -> float:
@@ -43,7 +35,7 @@ def _plan_time(region: Region, angle: float, offset: float) -> float:
 def test_time_plan_is_never_longer_than_the_one_degree_brute_force():
     # random field 15 of the benchmark: at fff0927 the search's plan took 1340.33 s where the
     # brute force's 135-degree layout flies 1340.26 s (its box was retired, never planned)
-    region = _benchmark_field(15)
+    region = benchmark_area(15)
     angles = np.radians(np.arange(180.0))
     offsets = centred_offsets(region, angles, SPACING, SPACING / 2)
     brute = min(_plan_time(region, a, d) for a, d in zip(angles, offsets, strict=True))

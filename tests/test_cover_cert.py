@@ -13,14 +13,21 @@ import boustro.optimize.cover.bounds as bounds_module
 import boustro.optimize.cover.branch as branch_module
 import boustro.optimize.cover.search as search_module
 from boustro.geometry import Polygon
-from boustro.geometry.region import Region, random_region
+from boustro.geometry.region import Region
 from boustro.optimize.cover import CoverCost, cover_optimum
 from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.branch import Limits, retire_at
 from boustro.optimize.cover.search import CoverSearch
 
 from .conftest import random_regions
-from .plan_samples import SPACING, plan_cost, plans_in_boxes, sample_boxes, scaled
+from .plan_samples import (
+    SPACING,
+    benchmark_area,
+    plan_cost,
+    plans_in_boxes,
+    sample_boxes,
+    scaled,
+)
 
 #: A field whose one side is notched (long moves between the lanes' ends beside the notch).
 NOTCHED = Region(
@@ -107,18 +114,10 @@ def test_boxes_are_not_retired_below_the_discard_value_where_the_certificate_is_
     assert far == pytest.approx(np.full(3, 980.0 - share * 20.0 - 1.0))
 
 
-def _benchmark_area(i: int) -> Region:
-    """benchmarks/mission_time.py's random area ``i`` (seed 0, 300 m across)."""
-    rng = np.random.default_rng(0)
-    for _ in range(i + 1):
-        r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
-    return scaled(r, 300.0)
-
-
 def _with_and_without(monkeypatch, i: int, flag: str, off: object):
     """The benchmark's random area ``i`` searched as is and with ``branch.<flag>`` at ``off``;
     its ``evaluate``."""
-    region = _benchmark_area(i)
+    region = benchmark_area(i)
     cost = CoverCost.time(5.0, 10.0)
     evaluate = plan_cost(region, cost, spacing=10.0)
     got = cover_optimum(region, 10.0, cost, evaluate)
@@ -195,7 +194,7 @@ def test_boxes_set_aside_for_reopening_stay_in_the_floor_where_the_search_never_
     floor that forgot them certified the plan (review, thirteenth round). Area 3 served until
     its plan certified (fifteenth round: moves in the grown shell); on area 2 the mutant
     returning the floor without the set-aside boxes certifies (seen 2026-11-28)."""
-    region = _benchmark_area(2)
+    region = benchmark_area(2)
     cost = CoverCost.time(5.0, 10.0)
     evaluate = plan_cost(region, cost, spacing=10.0)
     got = cover_optimum(region, 10.0, cost, evaluate)

@@ -12,7 +12,7 @@ import pytest
 import shapely
 
 import boustro.plan.region as region_mod
-from boustro.geometry.region import Region, random_region
+from boustro.geometry.region import Region
 from boustro.plan import coverage, lane_tour
 from boustro.plan.lane_tour import _flown, refine_tour, refinement
 from boustro.plan.order_kernel import OR_OPT_UNITS, _lane_search, improve_lanes
@@ -21,6 +21,7 @@ from boustro.plan.routing import Router
 from boustro.plan.tour_exact import EXACT_TOUR_PASSES
 
 from .conftest import random_regions
+from .plan_samples import benchmark_area
 
 
 def _no_refine(passes, order, choice, *args, **kwargs):
@@ -210,15 +211,6 @@ def test_no_refinement_where_a_vehicle_drives_the_order_or_a_headland_joins_it(c
     assert enabled and all(enabled)
 
 
-def _benchmark_area(index: int) -> Region:
-    """``benchmarks/mission_time.py``'s random area ``index`` (seed 0, about 300 m across)."""
-    rng = np.random.default_rng(0)
-    for _ in range(index + 1):
-        r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
-    k = 300.0 / r.diameter
-    return Region(r.shell.vertices * k, [h.vertices * k for h in r.holes])
-
-
 def _best_or_opt(dist: np.ndarray, seq: np.ndarray, flip: np.ndarray, fixed: int) -> float:
     """The shortest tour one move of 1 to OR_OPT_UNITS consecutive units (after the first
     ``fixed``) elsewhere, either way round, makes of ``seq``/``flip`` (brute force)."""
@@ -243,7 +235,7 @@ def test_longer_or_opt_moves_shorten_a_plan_timed_from_its_waypoints(monkeypatch
     is shorter, drives the same lanes with the same turns, covers the area (shapely) and its
     time is the one recomputed from its waypoints; the tour the search returns is a local
     optimum of every such move (brute force), the 1-3 units' is not."""
-    region = _benchmark_area(20)
+    region = benchmark_area(20)
     kw = dict(angle=0.0, offset=9.54726967112316, reach=5.0, speed=5.0, turn_time=10.0)
     kw.update(decompose_area=False, layout="guaranteed")
     seen = []

@@ -5,9 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from boustro.geometry.region import Region, random_region
+from boustro.geometry.region import Region
 from boustro.mission import decomposed, plan_area
 from boustro.mission.slivers import cut_slivers, cut_spikes
+
+from .plan_samples import benchmark_area
 
 
 def _area(ring: np.ndarray) -> float:
@@ -60,12 +62,8 @@ def test_hole_spike_cut_and_region_valid():
 
 
 def _random37():
-    rng = np.random.default_rng(0)
-    for _ in range(37):  # the benchmark's random areas 0..36 (mission_time._fields)
-        random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
-    r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
-    k = 300.0 / r.diameter
-    return r.shell.vertices * k, [h.vertices * k for h in r.holes]
+    r = benchmark_area(37)  # the benchmark's random area 37 (mission_time._fields)
+    return r.shell.vertices, [h.vertices for h in r.holes]
 
 
 def test_random37_cells_have_no_spike_and_their_searches_converge(monkeypatch):
