@@ -10,7 +10,11 @@ module) with the pipeline its tutorials document, and boustro on the same planar
   the next swath's start (Dubins and Reeds-Shepp off, as boustro's plans here). The variants
   ``OBJ_SwathLength`` (the other tutorial objective) and ``RP_Snake`` (the complete-flow
   tutorial's route) are also flown, and the shortest of the four missions is reported as
-  ``f2c best``. OR-tools' route (``RP_RoutePlannerBase``) is not run (see below).
+  ``f2c best``. ``f2c lengthened``: the first pipeline's swaths each lengthened along its line
+  to the ends of the part of its strip in the area it lies in (what a flat-ended footprint must
+  reach where the boundary is slanted to the swaths), the same order: how much of boustro's
+  longer missions is the price of covering the swath ends. OR-tools' route
+  (``RP_RoutePlannerBase``) is not run (see below).
 * ``boustro``: ``plan_area(ring, 10, crs=None, holes=..., speed=5, turn_time=10)`` (the time
   objective), and the same with ``keep_inside=True``; with ``--eq1`` also with
   ``fitness=SmithFitness()`` (Eq. 1, boustro's default objective when no speed is given).
@@ -177,6 +181,31 @@ def _f2c_plan(f2c: Any, cell: Any, objective: str, route: str) -> tuple[list[np.
     return [_xy(swaths[i].getPath()) for i in range(swaths.size())], cpu
 
 
+def _extended(lines: list[np.ndarray], area: Any) -> list[np.ndarray]:
+    """Fields2Cover's swaths each lengthened along its line, in its direction, to the ends of
+    the part of its strip (the band of the coverage width about the line) in the area that the
+    swath lies in: what its flat-ended footprint must reach to cover that part whole, where the
+    boundary is slanted to the swaths. The slivers beside the outermost swaths stay uncovered;
+    on a line cut by a hole the lengthened swaths of both sides may overlap (not merged)."""
+    import shapely
+
+    out = []
+    for x in lines:
+        p, q = x[0], x[-1]
+        u = (q - p) / np.linalg.norm(q - p)
+        n = np.array([-u[1], u[0]])
+        far = 10.0 * (area.length + np.linalg.norm(q - p))
+        corners = [p - far * u + n * SPACING / 2, q + far * u + n * SPACING / 2]
+        corners += [q + far * u - n * SPACING / 2, p - far * u - n * SPACING / 2]
+        strip = shapely.intersection(area, shapely.Polygon(corners))
+        swath = shapely.LineString(x).buffer(1e-6)
+        parts = [g for g in getattr(strip, "geoms", [strip]) if g.intersects(swath)]
+        pts = np.concatenate([np.asarray(g.exterior.coords) for g in parts if not g.is_empty])
+        s = (pts - p) @ u
+        out.append(np.array([p + min(s.min(), 0.0) * u, p + max(s.max(), (q - p) @ u) * u]))
+    return out
+
+
 def _f2c_row(lines: list[np.ndarray], area: Any) -> dict[str, float]:
     import shapely
 
@@ -223,6 +252,8 @@ def _run_field(
             row["cpu"] = cpu
             f2c_rows[(objective, route)] = row
     main = f2c_rows[("nswath", "boustrophedon")]
+    full = _f2c_row(_extended(_f2c_plan(f2c, cell, "nswath", "boustrophedon")[0], area), area)
+    full["cpu"] = float("nan")
     best_key = min(f2c_rows, key=lambda k: f2c_rows[k]["time"])
     timed = _boustro_row(ring, holes, area)
     inside = _boustro_row(ring, holes, area, keep_inside=True)
@@ -230,9 +261,11 @@ def _run_field(
     print(f"{name}: {area.area / 1e4:.2f} ha, {len(holes)} holes", flush=True)
     print(_line("f2c nswath+boustr", main))
     print(_line("f2c best of 4", f2c_rows[best_key]) + f" ({best_key[0]}, {best_key[1]})")
+    print(_line("f2c lengthened", full))
     print(_line("boustro time", timed) + f" (own {timed['own_time']:.1f} s)")
     print(_line("boustro inside", inside) + f" (own {inside['own_time']:.1f} s)", flush=True)
-    row = {"name": name, "f2c": main, "best": f2c_rows[best_key], "time": timed, "inside": inside}
+    row = {"name": name, "f2c": main, "best": f2c_rows[best_key], "full": full}
+    row.update(time=timed, inside=inside)
     if eq1 is not None:
         print(_line("boustro eq1", eq1) + f" (own {eq1['own_time']:.1f} s)", flush=True)
         row["eq1"] = eq1
@@ -245,7 +278,7 @@ def _summary(rows: list[dict]) -> None:
         if not sel:
             continue
         print(f"\n{label}: {len(sel)} areas")
-        for key in ("f2c", "best"):
+        for key in ("f2c", "best", "full"):
             print(
                 f"  F2C {key:4s}: {_spread(sel, key)}, fewer lanes than boustro time on "
                 f"{sum(r[key]['lanes'] < r['time']['lanes'] for r in sel)}/{len(sel)}"
