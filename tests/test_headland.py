@@ -227,6 +227,9 @@ def test_headland_errors():
         plan_area(SQUARE, 10.0, crs=None, headland=1.5)
     with pytest.raises(InvalidParameterError, match="between 0 and"):
         plan_area(SQUARE, 10.0, crs=None, headland=-1)
+    # A JSON ``true`` (the page's API) is not one pass: refused as ``turn_radius: true`` is.
+    with pytest.raises(InvalidParameterError, match="whole number"):
+        plan_area(SQUARE, 10.0, crs=None, headland=True)
     # A nadir gap: the passes would not cover their own blind strip (and the lanes, reaching
     # farther than half a spacing, left a plain rectangle's field by 358 m): refused.
     with pytest.raises(InvalidParameterError, match="nadir gap"):

@@ -341,6 +341,16 @@ def test_cli_turn_radius_and_reverse(tmp_path, capsys):
     assert exc.value.code == 2
 
 
+def test_a_turn_radius_beyond_the_projection_is_refused_in_one_line(tmp_path, capsys):
+    # 1e8 m turns run 270,000 km from the field, where UTM maps back to inf: refused before
+    # anything is written, naming the distance (it failed at the export, naming an array).
+    out = tmp_path / "m.geojson"
+    assert main(["-q", "plan", "--turn-radius", "1e8", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot be mapped back" in err[0] and "km from the area" in err[0]
+    assert not out.exists()
+
+
 def test_turns_never_enter_a_hole():
     import shapely
 

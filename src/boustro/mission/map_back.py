@@ -48,6 +48,22 @@ def angle_for_bearing(frame: Frame, bearing: float) -> float:
     return angle
 
 
+def _check_mapped(frame: Frame, plan: Plan, mapped: np.ndarray) -> None:
+    """Refuse a path that the projection cannot map back (its points ``inf``/``nan``): a turn
+    radius or turnaround so large that the path runs far beyond the area, where the plan's CRS
+    is not defined; nothing else would say so before an export refuses the numbers."""
+    if np.isfinite(mapped).all():
+        return
+    lo, hi = frame.ring.min(axis=0), frame.ring.max(axis=0)
+    beyond = np.maximum(np.maximum(lo - plan.waypoints, plan.waypoints - hi), 0.0)
+    far = float(np.linalg.norm(beyond, axis=1).max())
+    raise InvalidParameterError(
+        f"the path reaches {far / frame.proj.scale_min / 1000:.0f} km from the area, where its "
+        "coordinates cannot be mapped back to the area's CRS; is the turn radius or the "
+        "turnaround far larger than the area?"
+    )
+
+
 def map_back(
     frame: Frame, planned: Planned, *, altitude: float | None, turnaround: float
 ) -> Mission:
@@ -64,6 +80,9 @@ def map_back(
             )
     home_plan = frame.start if frame.given_start else plan.waypoints[0]
     lonlat = None if proj.planar else proj.to_lonlat
+    waypoints = proj.to_source(plan.waypoints)
+    waypoints_lonlat = None if lonlat is None else lonlat(plan.waypoints)
+    _check_mapped(frame, plan, waypoints if waypoints_lonlat is None else waypoints_lonlat)
     return Mission(
         name=frame.area.name,
         area=frame.area,
@@ -78,9 +97,9 @@ def map_back(
         altitude=None if altitude is None else float(altitude),
         coverage=planned.coverage,
         sensor=sensor.text,
-        waypoints=proj.to_source(plan.waypoints),
+        waypoints=waypoints,
         transects=proj.to_source(plan.transects),
-        waypoints_lonlat=None if lonlat is None else lonlat(plan.waypoints),
+        waypoints_lonlat=waypoints_lonlat,
         transects_lonlat=None if lonlat is None else lonlat(plan.transects),
         area_lonlat=None if lonlat is None else lonlat(frame.ring),
         bearing=bearing,

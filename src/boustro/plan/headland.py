@@ -81,7 +81,9 @@ _ROUNDS = 6
 
 def check_headland(passes: object) -> int:
     """``passes`` as an int in ``[0, MAX_HEADLAND]``, or :class:`InvalidParameterError`."""
-    if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)):
+    if isinstance(passes, bool):
+        raise InvalidParameterError(f"headland must be a whole number of passes, got {passes!r}")
+    if not isinstance(passes, (int, np.integer)):
         try:
             value = float(passes)  # type: ignore[arg-type]
         except (TypeError, ValueError):
