@@ -167,20 +167,21 @@ def _line(points: np.ndarray, srs_id: int) -> bytes | None:
     return gpkg_geometry(shapely.to_wkb(line), line.bounds, srs_id)
 
 
-def _lanes(transects: np.ndarray, srs_id: int) -> list[tuple[bytes | None, float]]:
-    """``(geometry blob, length)`` of each lane ``(a, b)``, made in one call (as
-    :func:`_line` makes each)."""
+def _lanes(mission: Mission, srs_id: int) -> list[tuple[bytes | None, float, str]]:
+    """``(geometry blob, ground length, pass)`` of each transect ``(a, b)`` of ``mission``
+    (a lane, or an edge of a pass around a hole or the boundary: ``Plan.role``), made in one
+    call (as :func:`_line` makes each). The length is on the ground, as the GeoJSON export's
+    (``Plan.transect_lengths``), not in the output CRS's units (degrees for lon/lat)."""
     import shapely
 
-    t = np.asarray(transects, dtype=np.float64).reshape(-1, 2, 2)
+    t = np.asarray(mission.transects, dtype=np.float64).reshape(-1, 2, 2)
     blobs = shapely.to_wkb(shapely.linestrings(t))
     lo, hi = t.min(axis=1), t.max(axis=1)
-    d = t[:, 1] - t[:, 0]
-    lengths = np.hypot(d[:, 0], d[:, 1]).tolist()
+    lengths = mission.plan.transect_lengths().tolist()
     return [
-        (gpkg_geometry(blob, (x0, y0, x1, y1), srs_id), length)
-        for blob, (x0, y0), (x1, y1), length in zip(
-            blobs, lo.tolist(), hi.tolist(), lengths, strict=True
+        (gpkg_geometry(blob, (x0, y0, x1, y1), srs_id), length, role)
+        for blob, (x0, y0), (x1, y1), length, role in zip(
+            blobs, lo.tolist(), hi.tolist(), lengths, mission.plan.role(), strict=True
         )
     ]
 
@@ -236,8 +237,8 @@ def _result(
     lanes, paths, files = [], [], []
     missions = [m for m, _ in planned]
     for part, mission in enumerate(missions, start=1):
-        for k, (blob, length) in enumerate(_lanes(mission.transects, job.srs_id), start=1):
-            lanes.append((blob, feature.field_id, feature.name, part, k, length))
+        for k, (blob, length, role) in enumerate(_lanes(mission, job.srs_id), start=1):
+            lanes.append((blob, feature.field_id, feature.name, part, k, length, role))
         paths.append((_line(mission.waypoints, job.srs_id), feature.field_id, feature.name,
                       part, mission.stats.path_length))  # fmt: skip
         if job.mission_format is not None:
