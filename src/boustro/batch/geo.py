@@ -78,9 +78,9 @@ class GeoPlan:
     @property
     def __geo_interface__(self) -> dict[str, Any]:
         """A GeoJSON FeatureCollection: each transect (``kind: "lane"``, ``part``, ``lane``,
-        ``pass``: ``"lane"``, or ``"hole"``/``"boundary"`` for an edge of a pass around a hole
-        or the boundary, as in the GeoJSON export) and each part's path (``kind: "path"``,
-        ``part`` and the part's summary)."""
+        ``pass``: ``"lane"``, or ``"hole"``, ``"boundary"``, ``"headland"`` for an edge of a
+        pass, as in the GeoJSON export) and each part's path (``kind: "path"``, ``part`` and
+        the part's summary)."""
         features = []
         for part, m in enumerate(self.missions, start=1):
             for k, (t, role) in enumerate(zip(m.transects, m.plan.role(), strict=True), start=1):

@@ -169,9 +169,10 @@ def _line(points: np.ndarray, srs_id: int) -> bytes | None:
 
 def _lanes(mission: Mission, srs_id: int) -> list[tuple[bytes | None, float, str]]:
     """``(geometry blob, ground length, pass)`` of each transect ``(a, b)`` of ``mission``
-    (a lane, or an edge of a pass around a hole or the boundary: ``Plan.role``), made in one
-    call (as :func:`_line` makes each). The length is on the ground, as the GeoJSON export's
-    (``Plan.transect_lengths``), not in the output CRS's units (degrees for lon/lat)."""
+    (a lane, or an edge of a pass around a hole, the boundary or a headland pass:
+    ``Plan.role``), made in one call (as :func:`_line` makes each). The length is on the
+    ground, as the GeoJSON export's (``Plan.transect_lengths``), not in the output CRS's units
+    (degrees for lon/lat)."""
     import shapely
 
     t = np.asarray(mission.transects, dtype=np.float64).reshape(-1, 2, 2)
