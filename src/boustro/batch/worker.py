@@ -16,6 +16,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
+import os
 import threading
 import time
 from dataclasses import dataclass, field
@@ -75,13 +76,31 @@ class FieldResult:
     files: list[tuple[str, str | bytes]] = field(default_factory=list)
 
 
-def start_worker() -> None:
-    """Initialise a worker process: one torch thread (the processes are the parallelism), and
-    Ctrl-C left to the parent (which commits what is done and stops the pool)."""
+def start_worker(parent: int | None = None) -> None:
+    """Initialise a worker process: one torch thread (the processes are the parallelism),
+    Ctrl-C left to the parent (which commits what is done and stops the pool), and, given the
+    batch's process id ``parent``, an exit as soon as that process is gone (:func:`exit_with`)."""
     import signal
 
     set_threads(1)  # when torch is imported: a plan that needs it (most need none)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if parent is not None and os.name == "posix":  # os.kill(pid, 0) terminates on Windows
+        threading.Thread(target=exit_with, args=(parent,), daemon=True).start()
+
+
+def exit_with(parent: int, every: float = 1.0) -> None:
+    """End this process when the process ``parent`` no longer exists (checked every ``every``
+    seconds). A batch killed outright (SIGKILL, out of memory) cannot stop its pool, and the
+    pool's workers would wait forever (each holds both ends of its task queue, so it never sees
+    an end of file), holding their memory; the fork server waits for them."""
+    while True:
+        time.sleep(every)
+        try:
+            os.kill(parent, 0)
+        except ProcessLookupError:
+            os._exit(1)
+        except PermissionError:  # alive, another user's: the id was reused, so ours is gone
+            os._exit(1)
 
 
 def plan_chunk(features: list[Feature], job: Job) -> list[FieldResult]:
