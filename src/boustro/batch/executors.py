@@ -13,6 +13,7 @@ the ``if __name__ == "__main__":`` guard (its main module is imported in the wor
 from __future__ import annotations
 
 import multiprocessing
+import os
 from collections.abc import Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -70,6 +71,13 @@ def _context() -> Any:
     return context
 
 
+def _pool(workers: int, context: Any) -> ProcessPoolExecutor:
+    """A pool whose workers end when this process does, even killed outright."""
+    return ProcessPoolExecutor(
+        workers, mp_context=context, initializer=start_worker, initargs=(os.getpid(),)
+    )
+
+
 def run_local(
     chunks: Iterable[list[Feature]], job: Job, workers: int, rounds: int = 3
 ) -> Iterator[Outcome]:
@@ -80,14 +88,14 @@ def run_local(
     context = _context()
     in_flight = 2 * workers if rounds > 1 else 1
     retry: list[list[Feature]] = []
-    pools = [ProcessPoolExecutor(workers, mp_context=context, initializer=start_worker)]
+    pools = [_pool(workers, context)]
 
     def submit(chunk: list[Feature]) -> Future:
         try:
             return pools[-1].submit(plan_chunk, chunk, job)
         except BrokenProcessPool:  # a worker died: a new pool for the chunks still to come
             pools[-1].shutdown(wait=False, cancel_futures=True)
-            pools.append(ProcessPoolExecutor(workers, mp_context=context, initializer=start_worker))
+            pools.append(_pool(workers, context))
             return pools[-1].submit(plan_chunk, chunk, job)
 
     try:

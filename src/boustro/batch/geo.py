@@ -77,13 +77,15 @@ class GeoPlan:
 
     @property
     def __geo_interface__(self) -> dict[str, Any]:
-        """A GeoJSON FeatureCollection: each lane (``kind: "lane"``, ``part``, ``lane``) and
-        each part's path (``kind: "path"``, ``part`` and the part's summary)."""
+        """A GeoJSON FeatureCollection: each transect (``kind: "lane"``, ``part``, ``lane``,
+        ``pass``: ``"lane"``, or ``"hole"``, ``"boundary"``, ``"headland"`` for an edge of a
+        pass, as in the GeoJSON export) and each part's path (``kind: "path"``, ``part`` and
+        the part's summary)."""
         features = []
         for part, m in enumerate(self.missions, start=1):
-            for k, t in enumerate(m.transects, start=1):
-                features.append(_feature("LineString", t.tolist(),
-                                         {"kind": "lane", "part": part, "lane": k}))  # fmt: skip
+            for k, (t, role) in enumerate(zip(m.transects, m.plan.role(), strict=True), start=1):
+                props = {"kind": "lane", "part": part, "lane": k, "pass": role}
+                features.append(_feature("LineString", t.tolist(), props))
             props = {"kind": "path", "part": part, **_flat(m.summary())}
             features.append(_feature("LineString", m.waypoints.tolist(), props))
         return {"type": "FeatureCollection", "features": features}

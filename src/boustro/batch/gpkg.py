@@ -46,7 +46,7 @@ LAYERS = (
         "lanes",
         "LINESTRING",
         (("field_id", "INTEGER"), ("name", "TEXT"), ("part", "INTEGER"), ("lane", "INTEGER"),
-         ("length_m", "REAL")),
+         ("length_m", "REAL"), ("pass", "TEXT")),
     ),
     Layer(
         "paths",
@@ -216,6 +216,15 @@ class Store:
                 f"--out {self.label}: exists and is not the output of a boustro batch; give "
                 "another file name (or delete it)"
             ) from None
+        for table in LAYERS:
+            have = {r[1] for r in self.db.execute(f'PRAGMA table_info("{table.name}")')}
+            missing = [c for c, _ in table.columns if c not in have]
+            if missing:
+                raise InvalidParameterError(
+                    f"--out {self.label}: was made by another version of boustro (its "
+                    f"{table.name} layer has no {', '.join(missing)} column); give another "
+                    "file name"
+                )
         if found != settings:
             old, new = json.loads(found), json.loads(settings)
             diff = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))

@@ -16,6 +16,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
+import os
 import threading
 import time
 from dataclasses import dataclass, field
@@ -75,13 +76,31 @@ class FieldResult:
     files: list[tuple[str, str | bytes]] = field(default_factory=list)
 
 
-def start_worker() -> None:
-    """Initialise a worker process: one torch thread (the processes are the parallelism), and
-    Ctrl-C left to the parent (which commits what is done and stops the pool)."""
+def start_worker(parent: int | None = None) -> None:
+    """Initialise a worker process: one torch thread (the processes are the parallelism),
+    Ctrl-C left to the parent (which commits what is done and stops the pool), and, given the
+    batch's process id ``parent``, an exit as soon as that process is gone (:func:`exit_with`)."""
     import signal
 
     set_threads(1)  # when torch is imported: a plan that needs it (most need none)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if parent is not None and os.name == "posix":  # os.kill(pid, 0) terminates on Windows
+        threading.Thread(target=exit_with, args=(parent,), daemon=True).start()
+
+
+def exit_with(parent: int, every: float = 1.0) -> None:
+    """End this process when the process ``parent`` no longer exists (checked every ``every``
+    seconds). A batch killed outright (SIGKILL, out of memory) cannot stop its pool, and the
+    pool's workers would wait forever (each holds both ends of its task queue, so it never sees
+    an end of file), holding their memory; the fork server waits for them."""
+    while True:
+        time.sleep(every)
+        try:
+            os.kill(parent, 0)
+        except ProcessLookupError:
+            os._exit(1)
+        except PermissionError:  # alive, another user's: the id was reused, so ours is gone
+            os._exit(1)
 
 
 def plan_chunk(features: list[Feature], job: Job) -> list[FieldResult]:
@@ -167,20 +186,22 @@ def _line(points: np.ndarray, srs_id: int) -> bytes | None:
     return gpkg_geometry(shapely.to_wkb(line), line.bounds, srs_id)
 
 
-def _lanes(transects: np.ndarray, srs_id: int) -> list[tuple[bytes | None, float]]:
-    """``(geometry blob, length)`` of each lane ``(a, b)``, made in one call (as
-    :func:`_line` makes each)."""
+def _lanes(mission: Mission, srs_id: int) -> list[tuple[bytes | None, float, str]]:
+    """``(geometry blob, ground length, pass)`` of each transect ``(a, b)`` of ``mission``
+    (a lane, or an edge of a pass around a hole, the boundary or a headland pass:
+    ``Plan.role``), made in one call (as :func:`_line` makes each). The length is on the
+    ground, as the GeoJSON export's (``Plan.transect_lengths``), not in the output CRS's units
+    (degrees for lon/lat)."""
     import shapely
 
-    t = np.asarray(transects, dtype=np.float64).reshape(-1, 2, 2)
+    t = np.asarray(mission.transects, dtype=np.float64).reshape(-1, 2, 2)
     blobs = shapely.to_wkb(shapely.linestrings(t))
     lo, hi = t.min(axis=1), t.max(axis=1)
-    d = t[:, 1] - t[:, 0]
-    lengths = np.hypot(d[:, 0], d[:, 1]).tolist()
+    lengths = mission.plan.transect_lengths().tolist()
     return [
-        (gpkg_geometry(blob, (x0, y0, x1, y1), srs_id), length)
-        for blob, (x0, y0), (x1, y1), length in zip(
-            blobs, lo.tolist(), hi.tolist(), lengths, strict=True
+        (gpkg_geometry(blob, (x0, y0, x1, y1), srs_id), length, role)
+        for blob, (x0, y0), (x1, y1), length, role in zip(
+            blobs, lo.tolist(), hi.tolist(), lengths, mission.plan.role(), strict=True
         )
     ]
 
@@ -236,8 +257,8 @@ def _result(
     lanes, paths, files = [], [], []
     missions = [m for m, _ in planned]
     for part, mission in enumerate(missions, start=1):
-        for k, (blob, length) in enumerate(_lanes(mission.transects, job.srs_id), start=1):
-            lanes.append((blob, feature.field_id, feature.name, part, k, length))
+        for k, (blob, length, role) in enumerate(_lanes(mission, job.srs_id), start=1):
+            lanes.append((blob, feature.field_id, feature.name, part, k, length, role))
         paths.append((_line(mission.waypoints, job.srs_id), feature.field_id, feature.name,
                       part, mission.stats.path_length))  # fmt: skip
         if job.mission_format is not None:

@@ -188,6 +188,11 @@ class Plan:
             return np.full(len(self.transects), self.angle)
         return self.transect_angles
 
+    def transect_lengths(self) -> NDArray[np.float64]:
+        """``(T,)`` the ground length of every transect (its plan length / ``ground_scale``)."""
+        d = self.transects[:, 1] - self.transects[:, 0]
+        return np.hypot(d[:, 0], d[:, 1]) / self.ground_scale
+
     def role(self) -> tuple[str, ...]:
         """What each transect is: ``"lane"`` (a survey lane), ``"hole"`` (an edge of a pass
         around a hole) or ``"boundary"`` (an edge of a boundary pass)."""

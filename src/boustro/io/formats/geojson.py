@@ -36,7 +36,7 @@ def _feature(properties: dict[str, Any], kind: str, coordinates: Any) -> dict[st
 
 def _transect_features(mission: Mission) -> list[dict[str, Any]]:
     plan = mission.plan
-    lengths = np.linalg.norm(plan.transects[:, 1] - plan.transects[:, 0], axis=1)
+    lengths = plan.transect_lengths()
     roles = plan.role()
     return [
         _feature(
@@ -44,7 +44,7 @@ def _transect_features(mission: Mission) -> list[dict[str, Any]]:
                 "role": "transect",
                 "transect": i,
                 "pass": roles[i],
-                "length_m": float(lengths[i] / plan.ground_scale),
+                "length_m": float(lengths[i]),
             },
             "LineString",
             seg.tolist(),
