@@ -20,6 +20,7 @@ from ..geometry.polygon import _cross
 from ..geometry.region import Region, as_region
 from .domain_moves import coarse_path, pull, to_domains
 from .edge_index import EdgeIndex
+from .min_plus import min_plus
 from .nearest_edge import DENSE_ANCHOR, index_feet, nearest_feet
 from .route_cache import remembered_rows
 from .route_distances import coarse_distances, distances
@@ -222,11 +223,9 @@ class Router:
         return self._rows("via", p, self._via_nodes_now)
 
     def _via_nodes_now(self, p: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-        """:meth:`_via_nodes`, computed (in blocks of rows: memory ``O(64 N^2)``)."""
+        """:meth:`_via_nodes`, computed (:func:`~boustro.plan.min_plus.min_plus`)."""
         v = self._to_nodes(p)
-        d = self._dist[None]
-        w = [np.min(v[r : r + 64, :, None] + d, axis=1) for r in range(0, len(p), 64)]
-        return v, np.concatenate(w)
+        return v, min_plus(v, self._dist)
 
     def _to_nodes_now(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
         """:meth:`_to_nodes`, computed."""
