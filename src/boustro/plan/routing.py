@@ -258,7 +258,9 @@ class Router:
         return route
 
     def paths(self, p: ArrayLike, q: ArrayLike) -> list[Route]:
-        """``[path(p[i], q[i]) ...]``, the straight moves tested all at once."""
+        """``[path(p[i], q[i]) ...]``, the straight moves tested all at once, then the detours'
+        ends anchored, their straight moves tested and (traced boundaries) their moves through
+        the inner domains routed all at once (:func:`~.domain_moves.through_domains`)."""
         p = np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 2)
         q = np.ascontiguousarray(q, dtype=np.float64).reshape(-1, 2)
         keys = [a.tobytes() + b.tobytes() for a, b in zip(p, q, strict=True)]
