@@ -175,3 +175,33 @@ def test_distances_of_points_given_twice_equal_point_by_point(reach):
         got = router.distances(pts)
         assert np.array_equal(got, _distances_point_by_point(Router(region, reach), pts))
         assert np.isfinite(got).all() and (got > 0).sum() > len(pts) ** 2 // 2
+
+
+def _same_route(x, y):
+    assert np.array_equal(x.points, y.points)
+    assert (x.length, x.outside, x.straight, x.found) == (y.length, y.outside, y.straight, y.found)
+
+
+@pytest.mark.parametrize("reach", [0.0, 5.0])
+def test_detours_of_a_batch_equal_one_by_one(field, reach):
+    """``Router.paths`` anchors the ends of all its detours and tests their straight moves at
+    once: every route equals ``Router.path``'s on a fresh router, one move at a time (on the
+    traced field's inner domains and on a random area's visibility graph)."""
+    from boustro.geometry.region import random_region
+
+    small = random_region(np.random.default_rng(5), 12, 2)
+    small = type(small)(
+        small.shell.vertices * (300.0 / small.diameter),
+        [h.vertices * (300.0 / small.diameter) for h in small.holes],
+    )
+    for region, n in ((field, 50), (small, 25)):
+        pts = _points(region, n, 4)
+        rng = np.random.default_rng(6)
+        p, q = pts[rng.permutation(len(pts))], pts[rng.permutation(len(pts))]
+        batch = Router(region, reach).paths(p, q)
+        fresh = Router(region, reach)
+        one = [fresh.path(a, b) for a, b in zip(p, q, strict=True)]
+        assert sum(not r.straight for r in one) > 20  # detours, and straight moves between
+        assert sum(r.straight for r in one) > 5
+        for x, y in zip(batch, one, strict=True):
+            _same_route(x, y)

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from .nearest_edge import pair_feet
 from .route_domain import nearest_in
 
-__all__ = ["coarse_path", "pull", "to_domains", "walk_to_domain"]
+__all__ = ["coarse_path", "pull", "through_domains", "to_domains", "walk_to_domain"]
 
 #: Domain vertices tried at a time from a point whose nearest domain point is hidden.
 _NEAREST = 16
@@ -170,6 +170,21 @@ def coarse_path(
             assert walk is not None
             lead[k] = walk[0][:-1]
     return pull(router, np.concatenate([lead[0], sub.points, lead[1][::-1]]))
+
+
+def through_domains(router: Any, pa: NDArray[np.float64], qa: NDArray[np.float64]) -> None:
+    """Route at once, in each inner domain's router, the moves that :func:`coarse_path` asks
+    it for between anchored points ``pa[i]``, ``qa[i]`` whose legs reach the same domain
+    (their domain points, :meth:`~boustro.plan.routing.Router._to_domains`): the domain's
+    router remembers each, and :meth:`~boustro.plan.routing.Router.paths` routes a batch as
+    its ``path`` routes each move alone (tested), so ``coarse_path`` then finds what it would
+    have routed. Moves whose ends reach different domains (a walk) are left to it."""
+    m = len(pa)
+    pd, which, _ = router._to_domains(np.concatenate([pa, qa]))
+    for k, sub in enumerate(router._coarse):
+        idx = np.flatnonzero((which[:m] == k) & (which[m:] == k))
+        if len(idx):
+            sub.paths(pd[:m][idx], pd[m:][idx])
 
 
 def pull(router: Any, pts: NDArray[np.float64]) -> NDArray[np.float64]:

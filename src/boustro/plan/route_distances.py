@@ -28,6 +28,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .min_plus import min_plus
+
 __all__ = ["coarse_distances", "distances"]
 
 
@@ -62,10 +64,7 @@ def distances(router: Any, points: Any, nearest: int = 24) -> NDArray[np.float64
         direct = np.minimum(direct, coarse_distances(router, pa))
     elif len(router.nodes):
         v, w = router._via_nodes(pa_u)  # (U, N) each
-        u = len(pa_u)
-        via = np.empty((u, u))
-        for r0 in range(0, u, 64):  # (U, U) in blocks of rows: memory O(64 U N)
-            via[r0 : r0 + 64] = np.min(w[r0 : r0 + 64, None, :] + v[None, :, :], axis=-1)
+        via = min_plus(v, w.T).T  # via[i, j] = min_n w[i, n] + v[j, n] (v: mostly inf)
         direct = np.minimum(direct, via[np.ix_(back, back)])
     else:  # a convex shell without holes: every straight move stays inside
         direct = euclid

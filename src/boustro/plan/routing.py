@@ -18,8 +18,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..geometry.polygon import _cross
 from ..geometry.region import Region, as_region
-from .domain_moves import coarse_path, pull, to_domains
+from .domain_moves import coarse_path, pull, through_domains, to_domains
 from .edge_index import EdgeIndex
+from .min_plus import min_plus
 from .nearest_edge import DENSE_ANCHOR, index_feet, nearest_feet
 from .route_cache import remembered_rows
 from .route_distances import coarse_distances, distances
@@ -35,6 +36,9 @@ _ROUTES = 1 << 16
 
 #: Points whose rows (:meth:`Router._rows`) a :class:`Router` remembers, per computation.
 _ROWS = 1 << 14
+
+#: A detour's anchored ends and whether the straight move between them stays in the area.
+_Ends = tuple[NDArray[np.float64], NDArray[np.float64], bool]
 
 
 class Route(NamedTuple):
@@ -222,11 +226,9 @@ class Router:
         return self._rows("via", p, self._via_nodes_now)
 
     def _via_nodes_now(self, p: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-        """:meth:`_via_nodes`, computed (in blocks of rows: memory ``O(64 N^2)``)."""
+        """:meth:`_via_nodes`, computed (:func:`~boustro.plan.min_plus.min_plus`)."""
         v = self._to_nodes(p)
-        d = self._dist[None]
-        w = [np.min(v[r : r + 64, :, None] + d, axis=1) for r in range(0, len(p), 64)]
-        return v, np.concatenate(w)
+        return v, min_plus(v, self._dist)
 
     def _to_nodes_now(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
         """:meth:`_to_nodes`, computed."""
@@ -256,7 +258,9 @@ class Router:
         return route
 
     def paths(self, p: ArrayLike, q: ArrayLike) -> list[Route]:
-        """``[path(p[i], q[i]) ...]``, the straight moves tested all at once."""
+        """``[path(p[i], q[i]) ...]``, the straight moves tested all at once, then the detours'
+        ends anchored, their straight moves tested and (traced boundaries) their moves through
+        the inner domains routed all at once (:func:`~.domain_moves.through_domains`)."""
         p = np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 2)
         q = np.ascontiguousarray(q, dtype=np.float64).reshape(-1, 2)
         keys = [a.tobytes() + b.tobytes() for a, b in zip(p, q, strict=True)]
@@ -266,11 +270,22 @@ class Router:
         if new:
             pn, qn = p[new], q[new]
             ok, outside = self._straight_many(pn, qn)
+            # the detours' ends anchored and their straight moves tested all at once (each
+            # answer depends on its own points only: the same as one by one)
+            bad = np.flatnonzero(~ok)
+            if len(bad):
+                ends = self.anchor(np.concatenate([pn[bad], qn[bad]]))
+                pa, qa = ends[: len(bad)], ends[len(bad) :]
+                seen = self._visible_many(pa, qa)
+                if self._coarse is not None and not seen.all():
+                    through_domains(self, pa[~seen], qa[~seen])
+            k = 0  # the detours' position in bad
             for i, a, b, good, o in zip(new, pn, qn, ok, outside, strict=True):
                 if good:
                     route = Route(np.stack([a, b]), float(np.linalg.norm(b - a)), float(o), True)
                 else:
-                    route = self._detour(a, b)
+                    route = self._detour(a, b, (pa[k], qa[k], bool(seen[k])))
+                    k += 1
                 self._keep(keys[i], route)
                 out[i] = route
         return [r for r in out if r is not None]
@@ -282,10 +297,13 @@ class Router:
         route.points.flags.writeable = False
         self._routes[key] = route
 
-    def _detour(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> Route:
+    def _detour(
+        self, p: NDArray[np.float64], q: NDArray[np.float64], ends: _Ends | None = None
+    ) -> Route:
         """The move from ``p`` to ``q`` where the straight one is not allowed: inside the
-        area, or in the grown domain where that is shorter (:meth:`_grown_detour`)."""
-        route = self._inside_detour(p, q)
+        area, or in the grown domain where that is shorter (:meth:`_grown_detour`); ``ends``:
+        :meth:`_inside_detour`'s anchored ends and their straight test, if computed."""
+        route = self._inside_detour(p, q, ends)
         if self._grown is not None:
             grown = self._grown_detour(p, q)
             if grown is not None and (grown.length < route.length or not route.found):
@@ -327,11 +345,18 @@ class Router:
             )
         return ok
 
-    def _inside_detour(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> Route:
-        """The move from ``p`` to ``q`` inside the area (its legs to it excepted)."""
-        pa, qa = self.anchor(np.stack([p, q]))
+    def _inside_detour(
+        self, p: NDArray[np.float64], q: NDArray[np.float64], ends: _Ends | None = None
+    ) -> Route:
+        """The move from ``p`` to ``q`` inside the area (its legs to it excepted); ``ends``:
+        ``(anchor(p), anchor(q), whether the straight move between them stays in the area)``,
+        if computed (:meth:`paths`: the same answers for many moves at once)."""
+        if ends is None:
+            pa, qa = self.anchor(np.stack([p, q]))
+            ends = (pa, qa, bool(self._visible_many(pa[None], qa[None])[0]))
+        pa, qa, seen = ends
         legs = float(np.linalg.norm(pa - p) + np.linalg.norm(qa - q))
-        if self._visible_many(pa[None], qa[None])[0]:
+        if seen:
             middle = [pa, qa]
         elif self._coarse is not None:
             through = self._coarse_path(pa, qa)
