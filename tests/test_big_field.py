@@ -37,8 +37,11 @@ STORED = {
     # (1349, 29290.67154001922 m); then 29416.52894364059 m since a lane end whose nearest
     # domain point is hidden walks along the boundary when that is shorter than the leg to a
     # visible domain vertex (plan/domain_moves.py, thirteenth round): 126 m longer here, 4-24%
-    # shorter on 2000-5000-vertex traced keep-inside fields (docs/scale.md)
-    "t400in": (1352, 29416.52894364059, 459715.49070069677, 38902005.212474786),
+    # shorter on 2000-5000-vertex traced keep-inside fields (docs/scale.md); then
+    # 29294.2575448493 m (1360 waypoints; 122 m shorter, coverage 1) since the lane tour's
+    # iterated local search and its closed boundary passes entered where their moves are
+    # shortest (plan/lane_tour.py, seventeenth round)
+    "t400in": (1360, 29294.2575448493, 461480.0708403765, -63026327.33837047),
 }
 CASES = {
     "t300": (traced_field(300, 4), {}),

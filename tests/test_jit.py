@@ -80,7 +80,7 @@ def test_every_kernel_module_compiles_through_the_one_helper():
         region_kernel._compiled: ("_bounds", "_values"),
         edge_grid._compiled: ("_grid_crossings", "_grid_near"),
         order_kernel._compiled: ("_two_opt",),
-        order_kernel._compiled_lanes: ("_lane_search",),
+        order_kernel._compiled_lanes: ("_lane_search", "_kick"),
         straight_moves._compiled: ("_edge_tests",),
         tour_exact._compiled: ("_held_karp",),
         visibility_kernel._compiled: ("_crossings", "_near"),

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from .._jit import compiled
 
-__all__ = ["OR_OPT_UNITS", "improve_lanes", "improve_order"]
+__all__ = ["OR_OPT_UNITS", "improve_lanes", "improve_order", "kick_lanes"]
 
 #: The most consecutive units (lanes, hole and boundary passes) one or-opt move of
 #: :func:`improve_lanes` takes elsewhere by default. It was 3 before the sixteenth round: the
@@ -114,7 +114,8 @@ def improve_order(
     return [int(k) for k in out]
 
 
-# -- lanes as units: 2-opt and or-opt with directions (:mod:`boustro.plan.lane_tour`) ---------
+# -- lanes as units: 2-opt and or-opt with directions, and the iterated local search's kicks
+# (:mod:`boustro.plan.lane_tour`) ------------------------------------------------------------
 def _en(seq, flip, k):
     """The point (index into the distances) where the unit at position ``k`` is entered; the
     start (0) before the first position, -1 (no move) past the last."""
@@ -212,8 +213,9 @@ def _move(seq, flip, i, j, k, reverse):
         flip[k + 1 : k + 1 + size] = f
 
 
-def _lane_search(seq, flip, fixed, dist, budget, units):
-    """2-opt and or-opt moves until neither improves or ``budget`` evaluations are spent."""
+def _search(seq, flip, fixed, dist, budget, units):
+    """2-opt and or-opt moves until neither improves or ``budget`` evaluations are spent; the
+    evaluations left (``seq``, ``flip`` changed in place)."""
     left = budget
     while left > 0:
         left = _two_opt_lanes(seq, flip, fixed, dist, left)
@@ -224,14 +226,65 @@ def _lane_search(seq, flip, fixed, dist, budget, units):
             break
         left = _or_opt_lanes(seq, flip, fixed, dist, left, units)
         if left < 0:
-            break
+            return -left - 1  # a local optimum (0: the budget spent)
+    return max(left, 0)
+
+
+def _lane_search(seq, flip, fixed, dist, budget, units):
+    """2-opt and or-opt moves until neither improves or ``budget`` evaluations are spent."""
+    _search(seq, flip, fixed, dist, budget, units)
     return seq, flip
+
+
+def _tour_moves(seq, flip, dist):
+    """The tour's moves by ``dist`` (the approach from the start ``dist[0]`` counted)."""
+    total = dist[0, 1 + 2 * seq[0] + flip[0]]
+    for k in range(1, seq.shape[0]):
+        total += dist[2 + 2 * seq[k - 1] - flip[k - 1], 1 + 2 * seq[k] + flip[k]]
+    return total
+
+
+def _draw(state, low, high):
+    """A deterministic draw in ``[low, high)`` and the generator's next state (a linear
+    congruential generator: the same numbers compiled and in plain Python)."""
+    state = (state * 1103515245 + 12345) % 2147483648
+    return low + (state >> 8) % (high - low), state
+
+
+def _kick(seq, flip, fixed, dist, budget, units, state):
+    """One kick of the iterated local search: a double bridge of the positions from
+    ``fixed`` (the tour ``A B C D`` driven ``A C B D``, three cuts drawn from ``state``), then
+    :func:`_search`. ``(seq, flip, its moves by dist, evaluations left, next state)``; the
+    given arrays are not changed."""
+    n = seq.shape[0]
+    s, f = seq.copy(), flip.copy()
+    a, state = _draw(state, fixed + 1, n - 1)
+    b, state = _draw(state, fixed + 1, n - 1)
+    c, state = _draw(state, fixed + 1, n - 1)
+    lo, mid, hi = min(a, b, c), a + b + c - min(a, b, c) - max(a, b, c), max(a, b, c)
+    if lo < mid < hi:
+        m = hi - mid  # C = mid..hi-1 first, then B = lo..mid-1
+        s[lo : lo + m] = seq[mid:hi]
+        f[lo : lo + m] = flip[mid:hi]
+        s[lo + m : hi] = seq[lo:mid]
+        f[lo + m : hi] = flip[lo:mid]
+    left = _search(s, f, fixed, dist, budget, units)
+    return s, f, _tour_moves(s, f, dist), left, state
 
 
 @cache
 def _compiled_lanes() -> Any:
-    helpers = ("_en", "_ex", "_d", "_reverse", "_two_opt_lanes", "_or_opt_lanes", "_move")
-    return compiled(globals(), "_lane_search", helpers)
+    helpers = (
+        "_en",
+        "_ex",
+        "_d",
+        "_reverse",
+        "_two_opt_lanes",
+        "_or_opt_lanes",
+        "_move",
+        "_search",
+    )
+    return compiled(globals(), ("_lane_search", "_kick"), (*helpers, "_tour_moves", "_draw"))
 
 
 def improve_lanes(
@@ -249,8 +302,31 @@ def improve_lanes(
     ``budget`` moves were evaluated; the first ``fixed`` positions stay. ``dist[0]``: the moves
     from the start (zeros: a free start). The deltas assume symmetric moves
     (:meth:`~boustro.plan.routing.Router.distances`)."""
-    seq, flip = _compiled_lanes()(
+    seq, flip = _compiled_lanes()[0](
         np.array(seq, dtype=np.int64), np.array(flip, dtype=np.int64), int(fixed),
         np.ascontiguousarray(dist, dtype=np.float64), int(budget), int(units),
     )  # fmt: skip
     return seq, flip
+
+
+def kick_lanes(
+    seq: NDArray[np.int64],
+    flip: NDArray[np.int64],
+    fixed: int,
+    dist: NDArray[np.float64],
+    budget: int,
+    state: int,
+    units: int = OR_OPT_UNITS,
+) -> tuple[NDArray[np.int64], NDArray[np.int64], float, int, int]:
+    """One kick of an iterated local search from the tour ``seq``/``flip`` (as
+    :func:`improve_lanes`'s): a double bridge on the units from position ``fixed + 1`` (three
+    cut points drawn from the generator's ``state``: the same state, the same kick), then 2-opt
+    and or-opt within ``budget`` evaluations. ``(seq, flip, moves, budget left, next state)``,
+    ``moves`` by ``dist`` with ``dist[0]`` counted; at least 4 units after ``fixed``."""
+    if seq.shape[0] - fixed < 4:
+        raise ValueError("a double bridge needs 4 units after the fixed ones")
+    s, f, moves, left, state = _compiled_lanes()[1](
+        np.array(seq, dtype=np.int64), np.array(flip, dtype=np.int64), int(fixed),
+        np.ascontiguousarray(dist, dtype=np.float64), int(budget), int(units), int(state),
+    )  # fmt: skip
+    return s, f, float(moves), int(left), int(state)
