@@ -47,7 +47,7 @@ from ..._jit import jit_globals
 __all__ = ["BRANCH_NODES", "BRANCH_STEPS", "swap"]
 
 #: Held-Karp problems solved per branched layout (the root excluded).
-BRANCH_NODES = 24
+BRANCH_NODES = 12
 #: Subgradient steps per child (warm-started from its parent's best multipliers).
 BRANCH_STEPS = 40
 #: The dummy as an end's non-lane partner (in ``fp``, the forced partner of each end).

@@ -104,8 +104,8 @@ BRANCH_TOUR = True
 #: ... only where those boxes' bounds are within this share of the best plan below the discard
 #: value, and a layout's 1-tree is branched only where it is within as much of its target.
 BRANCH_RTOL = 3e-3
-#: ... halving the boxes still below it at most this many times, :data:`BRANCH_CHUNK` of the
-#: retired boxes at a time (the lowest first).
+#: ... halving the boxes still below it at most this many times, the :data:`BRANCH_CHUNK`
+#: lowest retired boxes first (if they stay below it the others are left as they are).
 BRANCH_LEVELS = 4
 BRANCH_CHUNK = 32
 #: Offset boxes at the first round of a fixed-angle search.
@@ -441,10 +441,10 @@ class CoverSearch:
     def settle_branched(self, lower: float, value: float, rtol: float) -> float:
         """The certificate's lower bound ``lower`` raised by a last pass (:data:`BRANCH_TOUR`)
         over the boxes the branch and bound retired below the discard value of the best plan
-        ``value``, lowest first, :data:`BRANCH_CHUNK` at a time: their bounds with the 1-tree
-        branched (:mod:`~.one_tree_branch`), the boxes still below it halved (each half keeps
-        its box's bound where higher: it holds fewer layouts), :data:`BRANCH_LEVELS` times at
-        most; the pass stops at the first chunk left below it (it cannot certify). Only where
+        ``value``, the :data:`BRANCH_CHUNK` lowest first, then the others: their bounds with
+        the 1-tree branched (:mod:`~.one_tree_branch`), the boxes still below it halved (each
+        half keeps its box's bound where higher: it holds fewer layouts), :data:`BRANCH_LEVELS`
+        times at most; the others are left as they are where the lowest stay below it. Only where
         it can decide: no box deferred, the rest of the floor at or above the discard value,
         every retired box within :data:`BRANCH_RTOL` of the best plan below it. Plans only
         before, so the same plans; each box's bound only rises, so the floor too."""
@@ -472,14 +472,17 @@ class CoverSearch:
         floor = min(self.rest_floor, value, above)
         work, evaluations = self.work, self.bound_evaluations  # not the search's work
         self.branch = (BRANCH_NODES, window)
-        for start in range(0, len(order), BRANCH_CHUNK):
-            pick = order[start : start + BRANCH_CHUNK]
+        for start in (0, BRANCH_CHUNK):  # the lowest first: the pass stops if they stay low
+            stop = BRANCH_CHUNK if start == 0 else len(order)
+            pick = order[start:stop]
+            if not len(pick):
+                break
             got = self._branched_boxes(
                 boxes.take(pick), bounds[pick], take_multipliers(mult, pick), target
             )
             floor = min(floor, got)
             if got < target:  # the chunks after it keep their bounds
-                rest = order[start + BRANCH_CHUNK :]
+                rest = order[stop:]
                 floor = min(floor, float(bounds[rest].min(initial=math.inf)))
                 break
         self.branch = None
@@ -656,7 +659,7 @@ def cover_optimum(
         raise InvalidParameterError("no layout of this spacing has a lane over the area")
     # cut off: the floor counts the deferred boxes' bounds (without their 1-trees)
     lower = min(floor, value) if cut_off else search.settle_deferred(min(floor, value))
-    if not cut_off:
+    if not cut_off and centred:  # not a decomposition's cells (their floors screen plans)
         lower = search.settle_branched(lower, value, rtol)
     gap = max(0.0, value - lower)
     angle, offset = canonical(theta, d, s)
