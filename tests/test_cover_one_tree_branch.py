@@ -190,3 +190,42 @@ def test_the_last_pass_certifies_with_the_same_plan_below_a_sweep(monkeypatch):
     rng = np.random.default_rng(4)
     for a in np.radians(np.arange(0.0, 180.0, 3.0)):
         assert lower <= evaluate(float(a), float(rng.uniform(0, 10.0))) + 1e-9
+
+
+def _admits(n, forced=(), forbidden=()):
+    """Whether the constraints (pairs of ends; ``DUMMY`` the dummy) admit a cycle
+    (``_apply``'s checks), on ``n`` lanes at points along one line each."""
+    one_tree_module._compiled()
+    m = 2 * n
+    dist = np.abs(np.subtract.outer(np.arange(m), np.arange(m))).astype(np.float64)
+    ops = np.array(
+        [(2, e, x) for e, x in forced] + [(1, e, x) for e, x in forbidden], dtype=np.int64
+    ).reshape(-1, 3)
+    parent = np.array([-1, 0], dtype=np.int64)
+    op0, op1 = np.zeros(2, dtype=np.int64), np.array([0, len(ops)], dtype=np.int64)
+    cd, fp, dstate = np.empty((m, m)), np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64)
+    return branch_module._apply(dist, n, 1, parent, op0, op1, ops, cd, fp, dstate, -1)
+
+
+def test_the_constraints_rule_out_exactly_the_children_without_a_cycle():
+    """Two forced dummy edges are a path's two free ends, three are no cycle; forced edges
+    closing a cycle of lanes without the dummy, two forced non-lane edges at one end, and an
+    end whose every non-lane edge is forbidden admit none; a forced edge is itself allowed."""
+    dummy = branch_module.DUMMY
+    assert _admits(3, forced=[(0, dummy), (5, dummy)])
+    assert not _admits(3, forced=[(0, dummy), (5, dummy), (2, dummy)])
+    assert _admits(3, forced=[(1, 2), (3, 4)])
+    assert not _admits(3, forced=[(1, 2), (3, 4), (5, 0)])
+    assert not _admits(3, forced=[(1, 2), (1, 4)])
+    assert not _admits(3, forced=[(1, 2)], forbidden=[(1, 2)])
+    everything = [(0, b) for b in range(2, 6)] + [(0, dummy)]
+    assert not _admits(3, forbidden=everything)
+    assert _admits(3, forbidden=everything[:-1])
+    one_tree_module._compiled()
+    m = 6
+    dist = np.abs(np.subtract.outer(np.arange(m), np.arange(m))).astype(np.float64)
+    ops = np.array([(2, 1, 2)], dtype=np.int64)
+    cd, fp, dstate = np.empty((m, m)), np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64)
+    parent, op0 = np.array([-1, 0], dtype=np.int64), np.zeros(2, dtype=np.int64)
+    branch_module._apply(dist, 3, 1, parent, op0, np.array([0, 1]), ops, cd, fp, dstate, -1)
+    assert cd[1, 2] == dist[1, 2] and cd[1, 4] == math.inf and dstate[1] == 1
