@@ -107,7 +107,7 @@ BRANCH_RTOL = 3e-3
 #: ... halving the boxes still below it at most this many times, the :data:`BRANCH_CHUNK`
 #: lowest retired boxes first (if they stay below it the others are left as they are).
 BRANCH_LEVELS = 4
-BRANCH_CHUNK = 32
+BRANCH_CHUNK = 4
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 
