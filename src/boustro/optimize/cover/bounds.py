@@ -59,6 +59,7 @@ def lower_bounds(
     tour_skipped: NDArray[np.bool_] | None = None,
     multipliers: Multipliers | None = None,
     tour_steps: int | None = None,
+    tour_branch: tuple[int, float] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound on the cost of every plan of the layouts' grids over any area
     between ``level``'s inner and outer sets.
@@ -83,7 +84,8 @@ def lower_bounds(
     ``walls``; its steps stop once the layout's bound reaches ``tour_below``); the layouts
     below ``tour_below`` but not below ``tour_keep`` are marked in ``tour_skipped`` (an output,
     filled when given with ``tour_keep``; ``multipliers``: the 1-tree's starts, kept;
-    ``tour_steps``: its subgradient steps, default :data:`~.one_tree.ONE_TREE_STEPS`).
+    ``tour_steps``: its subgradient steps, default :data:`~.one_tree.ONE_TREE_STEPS`;
+    ``tour_branch``: its branching, :func:`~.one_tree.one_tree_bound`'s ``branch``).
     With ``cost.u_turns`` (the convex planner's plans with a vehicle, whose every move is a
     U-turn; the caller's premise) the moves are at least :func:`~.u_turns.u_turn_moves` of one
     move fewer than the lines with lanes, across the span. ``runins=False`` (an area with
@@ -127,7 +129,7 @@ def lower_bounds(
                 todo &= out < tour_keep
             tree = one_tree_bound(
                 st, spacing, cost, todo=todo, walls=walls, enough=enough,
-                multipliers=multipliers, steps=tour_steps,
+                multipliers=multipliers, steps=tour_steps, branch=tour_branch,
             )  # fmt: skip
             out = out + np.maximum(tree - move_cost, 0.0)
         return out

@@ -278,4 +278,6 @@ def branch_and_bound(
         if mult is not None:  # the halves start from their box's multipliers
             mult = take_multipliers(mult, split_parents(boxes, search.radius))
         boxes = split_boxes(boxes, search.radius)
+    # the floor's parts for a last pass (search.settle_branched): the retired boxes, the rest
+    search.retired, search.rest_floor = retired, certified
     return min([certified, *(float(r[2].min()) for r in retired)]), rounds, stopped

@@ -45,7 +45,8 @@ plus two edges of the dummy); with multipliers ``pi`` on the ends, ``L(pi) = min
 costs c_ij + pi_i + pi_j - 2 sum(pi)`` is at most the cycle's cost for every ``pi`` (Held and
 Karp 1970). The spanning tree that must hold the lanes is the lanes plus a minimum spanning tree
 of the lanes contracted (Prim, the cost between two lanes the least over their four pairs of
-ends). ``pi`` is improved by subgradient steps; the best ``L`` is kept.
+ends). ``pi`` is improved by subgradient steps; the best ``L`` is kept. Where it stays a few
+metres short of a target, :mod:`~.one_tree_branch` branches on the 1-tree (``branch``).
 """
 
 from __future__ import annotations
@@ -58,9 +59,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._jit import compiled
+from . import one_tree_branch
 from .bands import BandStats
 from .cost import CoverCost
 from .extremes import line_extremes
+from .one_tree_branch import BRANCH_STEPS, _branch
 
 __all__ = ["MAX_LANES", "ONE_TREE_STEPS", "POINT_TREE_STEPS", "Multipliers", "one_tree_bound"]
 
@@ -272,9 +275,12 @@ def _bounds(
     pi0,
     warm,
     kofs,
+    nodes,
+    window,
 ):
     """Per layout (where ``todo``): the best 1-tree bound on the moves, in plan units (the
-    steps stop once it reaches ``enough``)."""
+    steps stop once it reaches ``enough``); where it stays below ``enough`` by at most
+    ``window``, branched (:mod:`~.one_tree_branch`, at most ``nodes`` children)."""
     n_layouts = count.shape[0]
     big = 0
     for la in range(n_layouts):
@@ -320,6 +326,8 @@ def _bounds(
             step = lam * 0.2 * max(best, s) / norm
             for e in range(2 * n):
                 pi[e] += step * (deg[e] - 2)
+        if nodes > 0 and best < enough[la] <= best + window:
+            best = _branch(dist, n, best_pi, best, enough[la], s, nodes, BRANCH_STEPS)
         out[la] = max(best, 0.0)
         _store(pi0[la], n, lk, ls, kofs, best_pi)  # the best 1-tree's, for the next boxes
     return out
@@ -341,8 +349,8 @@ class Multipliers(NamedTuple):
 def _compiled() -> Any:
     """The loop compiled by numba (cached on disk), or the plain Python one without numba."""
     helpers = ("_orient", "_crosses", "_to_range", "_detour", "_lane_ends", "_distances",
-               "_one_tree", "_load", "_store")  # fmt: skip
-    return compiled(globals(), "_bounds", helpers)
+               "_one_tree", "_load", "_store", "_branch")  # fmt: skip
+    return compiled(globals(), "_bounds", helpers, before=(one_tree_branch.swap,))
 
 
 def one_tree_bound(
@@ -354,13 +362,17 @@ def one_tree_bound(
     walls: NDArray[np.float64] | None = None,
     enough: NDArray[np.float64] | None = None,
     multipliers: Multipliers | None = None,
+    branch: tuple[int, float] | None = None,
 ) -> NDArray[np.float64]:
     """``(L,)`` a lower bound, in cost units, on ``per_length`` times the connecting moves plus
     the extra lanes' flown length of every plan of each layout's sandwich (module docstring);
     0 where not ``todo`` or with more than :data:`MAX_LANES` counted lanes. ``walls`` ``(L, W,
     4)``: segments no move crosses, in each layout's frame (:func:`~.walls.walls_in_frames`);
     ``enough`` ``(L,)`` (cost units): a layout's steps stop once its bound reaches it;
-    ``multipliers``: where to start the steps and where to keep their best (read, written)."""
+    ``multipliers``: where to start the steps and where to keep their best (read, written);
+    ``branch`` ``(nodes, window)``: where a layout's 1-tree stays below ``enough`` by at most
+    ``window`` (cost units), branch on it with at most ``nodes`` children
+    (:mod:`~.one_tree_branch`; the multipliers kept are the root's)."""
     n_layouts = st.count.shape[0]
     lanes = st.count.sum(axis=1)
     ok = lanes <= MAX_LANES if todo is None else todo & (lanes <= MAX_LANES)
@@ -388,6 +400,8 @@ def one_tree_bound(
         int(st.k0 + c0), float(spacing), float(cost.turnaround),
         int(ONE_TREE_STEPS if steps is None else steps), pi0,
         np.ascontiguousarray(warm), kofs,
+        0 if branch is None else int(branch[0]),
+        0.0 if branch is None else float(branch[1]) / cost.per_length,
     )  # fmt: skip
     if multipliers is not None:
         multipliers.warm[ok] = True

@@ -19,13 +19,14 @@ from ..result import OptimizeResult, canonical
 from .bands import RigidBoxes, band_stats
 from .bounds import lower_bounds
 from .boxes import Boxes as _Boxes
-from .boxes import box_radius, initial_boxes, level_radius
+from .boxes import box_radius, initial_boxes, level_radius, split_boxes, split_parents
 from .branch import CUT_OFF, Limits, branch_and_bound, take_multipliers
 from .centred import CENTRED_SEEDS, try_centred
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
 from .inside_bound import contour_edges, inside_box_bounds, path_floor
 from .one_tree import MAX_LANES, POINT_TREE_STEPS, Multipliers
+from .one_tree_branch import BRANCH_NODES
 from .plans import polish, refine_offsets, try_edges
 from .rigid import split_rings
 from .sandwich import Level, Sandwich
@@ -96,6 +97,17 @@ SPLIT_GAPS = True
 MOVES_DECIDE = "certificate"
 #: The values :data:`MOVES_DECIDE` may take.
 MOVES_DECIDE_VALUES = ("certificate", "boxes", "all")
+#: Whether an uncertified search's last pass branches on the 1-trees of the boxes it retired
+#: below the discard value (:meth:`CoverSearch.settle_branched`, :mod:`~.one_tree_branch`):
+#: after every plan, so the same plans; the certificate's floor can only rise.
+BRANCH_TOUR = True
+#: ... only where those boxes' bounds are within this share of the best plan below the discard
+#: value, and a layout's 1-tree is branched only where it is within as much of its target.
+BRANCH_RTOL = 3e-3
+#: ... halving the boxes still below it at most this many times, the :data:`BRANCH_CHUNK`
+#: lowest retired boxes first (if they stay below it the others are left as they are).
+BRANCH_LEVELS = 4
+BRANCH_CHUNK = 4
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 
@@ -166,6 +178,11 @@ class CoverSearch:
         self.moves_on_passes = True
         # boxes taken out before their 1-tree, their bounds and multipliers (settle_deferred)
         self.deferred: list[tuple[_Boxes, NDArray[np.float64], Multipliers | None]] = []
+        # the 1-tree's branching (nodes, window in cost units), where on (settle_branched)
+        self.branch: tuple[int, float] | None = None
+        # the boxes retired below the discard value and the rest of the floor (branch.py)
+        self.retired: list[Any] = []
+        self.rest_floor = math.inf
         self.top_eps = 0.0
         self.best = (math.inf, 0.0, 0.0)
         self.plans = 0
@@ -292,7 +309,7 @@ class CoverSearch:
                 multipliers=None if multipliers is None else Multipliers(
                     multipliers.values.copy(), multipliers.warm.copy(), multipliers.k0
                 ),
-                tour_steps=POINT_TREE_STEPS,
+                tour_steps=POINT_TREE_STEPS, tour_branch=self.branch,
             )  # fmt: skip
             if self.evaluate is None:  # the model is the plan
                 self.ranks = out
@@ -370,7 +387,7 @@ class CoverSearch:
                 runins=self.n_holes == 0, tour_below=stop,
                 walls=self._walls(lv, boxes.theta[sel], boxes.d[sel], float(r)),
                 tour_keep=None if keep_at is None or early else keep_at[sel],
-                tour_skipped=skipped, multipliers=mult,
+                tour_skipped=skipped, multipliers=mult, tour_branch=self.branch,
             )  # fmt: skip
             self.skipped[sel] = skipped
             if multipliers is not None and mult is not None:
@@ -420,6 +437,80 @@ class CoverSearch:
         bounds = self.box_bounds(boxes.take(sel), tour_below=lower, multipliers=mult)
         self.work, self.bound_evaluations = work, evaluations
         return min(lower, float(bounds.min()))
+
+    def settle_branched(self, lower: float, value: float, rtol: float) -> float:
+        """The certificate's lower bound ``lower`` raised by a last pass (:data:`BRANCH_TOUR`)
+        over the boxes the branch and bound retired below the discard value of the best plan
+        ``value``, the :data:`BRANCH_CHUNK` lowest first, then the others: their bounds with
+        the 1-tree branched (:mod:`~.one_tree_branch`), the boxes still below it halved (each
+        half keeps its box's bound where higher: it holds fewer layouts), :data:`BRANCH_LEVELS`
+        times at most; the others are left as they are where the lowest stay below it. Only where
+        it can decide: no box deferred, the rest of the floor at or above the discard value,
+        every retired box within :data:`BRANCH_RTOL` of the best plan below it. Plans only
+        before, so the same plans; each box's bound only rises, so the floor too."""
+        target = value - rtol * abs(value)
+        retired, self.retired = self.retired, []
+        if not (BRANCH_TOUR and self.ends and self.tour) or lower >= target or self.deferred:
+            return lower
+        if min(self.rest_floor, value) < target or not retired:
+            return lower
+        window = BRANCH_RTOL * abs(value)
+        boxes = _Boxes(*(np.concatenate([p[0][f] for p in retired]) for f in range(4)))
+        bounds = np.concatenate([p[1] for p in retired])
+        if float(bounds.min()) < target - window:
+            return lower
+        mult = None
+        if all(p[3] is not None for p in retired):
+            mult = Multipliers(
+                np.concatenate([p[3].values for p in retired]),
+                np.concatenate([p[3].warm for p in retired]),
+                retired[0][3].k0,
+            )
+        order = np.argsort(bounds, kind="stable")
+        order = order[bounds[order] < target]
+        above = float(bounds[bounds >= target].min(initial=math.inf))  # kept as they are
+        floor = min(self.rest_floor, value, above)
+        work, evaluations = self.work, self.bound_evaluations  # not the search's work
+        self.branch = (BRANCH_NODES, window)
+        for start in (0, BRANCH_CHUNK):  # the lowest first: the pass stops if they stay low
+            stop = BRANCH_CHUNK if start == 0 else len(order)
+            pick = order[start:stop]
+            if not len(pick):
+                break
+            got = self._branched_boxes(
+                boxes.take(pick), bounds[pick], take_multipliers(mult, pick), target
+            )
+            floor = min(floor, got)
+            if got < target:  # the chunks after it keep their bounds
+                rest = order[stop:]
+                floor = min(floor, float(bounds[rest].min(initial=math.inf)))
+                break
+        self.branch = None
+        self.work, self.bound_evaluations = work, evaluations
+        return max(lower, floor)
+
+    def _branched_boxes(
+        self,
+        boxes: _Boxes,
+        bounds: NDArray[np.float64],
+        mult: Multipliers | None,
+        target: float,
+    ) -> float:
+        """The least bound over ``boxes`` (``bounds`` their bounds so far) with the 1-tree
+        branched, the boxes below ``target`` halved :data:`BRANCH_LEVELS` times at most."""
+        low_min = math.inf
+        for level in range(BRANCH_LEVELS + 1):
+            got = self.box_bounds(boxes, tour_below=target, multipliers=mult)
+            bounds = np.maximum(bounds, got)
+            low = bounds < target
+            low_min = min(low_min, float(bounds[~low].min(initial=math.inf)))
+            if not low.any() or level == BRANCH_LEVELS:
+                break
+            boxes, bounds, mult = boxes.take(low), bounds[low], take_multipliers(mult, low)
+            parents = split_parents(boxes, self.radius)
+            bounds, mult = bounds[parents], take_multipliers(mult, parents)
+            boxes = split_boxes(boxes, self.radius)
+        return min(low_min, float(bounds.min()))
 
     def _inside(self, lv: Any, st: Any, *args: Any, **kw: Any) -> NDArray[np.float64]:
         """The keep-inside bound (:func:`~.inside_bound.inside_box_bounds`)."""
@@ -568,6 +659,8 @@ def cover_optimum(
         raise InvalidParameterError("no layout of this spacing has a lane over the area")
     # cut off: the floor counts the deferred boxes' bounds (without their 1-trees)
     lower = min(floor, value) if cut_off else search.settle_deferred(min(floor, value))
+    if not cut_off and centred:  # not a decomposition's cells (their floors screen plans)
+        lower = search.settle_branched(lower, value, rtol)
     gap = max(0.0, value - lower)
     angle, offset = canonical(theta, d, s)
     return OptimizeResult(
