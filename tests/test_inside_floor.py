@@ -90,7 +90,10 @@ def test_the_layout_cache_returns_the_same_answer():
     first = inside.inside_layout(region, lanes, SPACING, SPACING / 2)
     assert len(inside._LAYOUTS) == 1
     again = inside.inside_layout(region, lanes, SPACING, SPACING / 2)
-    fresh = inside._inside_layout(region, lanes, SPACING, SPACING / 2)
+    inside._CUTS.clear()  # the cut lanes and their floors made again as well
+    inside._PASS_FLOORS.clear()
+    key = inside._layout_key(region, lanes, SPACING, SPACING / 2)
+    fresh = inside._inside_layout(region, lanes, SPACING, SPACING / 2, key)
     for got in (again, fresh):
         assert all(np.array_equal(a.t0, b.t0) for a, b in zip(got[0], first[0], strict=True))
         assert all(np.array_equal(a, b) for a, b in zip(got[1], first[1], strict=True))
@@ -128,7 +131,7 @@ def test_a_screen_above_the_best_plan_skips_it():
 
     res = cover_search.cover_optimum(
         region, SPACING, CoverCost.time(SPEED, TURN), evaluate,
-        keep_inside=True, screen=lambda a, d: 2000.0, max_work=2e5,
+        keep_inside=True, screen=lambda a, d, best: 2000.0, max_work=2e5,
     )  # fmt: skip
     assert len(made) == 1 == res.info["plans"]
     assert res.info["screened"] > 0

@@ -14,10 +14,11 @@ from ..geometry.region import Region
 from ..objectives import FewestTransects, MissionTime
 from ..optimize import OptimizeResult
 from ..optimize.cover import CoverCost, cover_optimum
+from ..optimize.cover.plans import rules_out
 from ..optimize.cover.u_turns import CONVEX_MAX_LINES, UTurns
 from ..plan import Plan, build_plan, coverage
 from ..plan.region import BLOCKED_NOTE, OUTSIDE_NOTE, plan_region
-from ..plan.region_floor import plan_floor
+from ..plan.region_floor import screen_floor
 from ..plan.types import Layout
 from .project import Frame
 from .steps import Planned, _path_options
@@ -92,19 +93,20 @@ def _region_call(
 
 def _screen(
     frame: Frame, layout: str, options: dict[str, Any], keep_inside: bool, cost: CoverCost
-) -> Callable[[float, float], float] | None:
+) -> Callable[..., float] | None:
     """A floor of :func:`flown_cost` of a ``keep_inside`` layout's plan (not finished),
-    cheaper than the plan (:func:`~boustro.plan.region_floor.plan_floor`: its lanes and
-    passes, a floor of its moves), for the search's screen; ``None`` without ``keep_inside``
-    or with the chords layout."""
+    cheaper than the plan (:func:`~boustro.plan.region_floor.screen_floor`: its lanes and
+    passes, a floor of its moves; the lanes alone where that already rules it out against
+    ``best``), for the search's screen; ``None`` without ``keep_inside`` or with the chords
+    layout."""
     if not keep_inside or layout == "chords":
         return None
     s_plan = frame.sensor.spacing * frame.proj.scale_min
     area, kw = _region_call(frame, layout, options, keep_inside)
 
-    def screen(angle: float, offset: float) -> float:
-        floor = plan_floor(area, s_plan, angle=angle, offset=offset, **kw)
-        return -math.inf if floor is None else cost.of(*floor)
+    def screen(angle: float, offset: float, best: float = math.inf) -> float:
+        beyond = lambda floor: rules_out(floor, best)  # noqa: E731
+        return screen_floor(area, s_plan, cost.of, beyond, angle=angle, offset=offset, **kw)
 
     return screen
 

@@ -44,7 +44,7 @@ from ..optimize.result import canonical
 from ..plan import Plan, coverage
 from ..plan.cells import Decomposition, decompose, slab_decomposition, trapezoids
 from ..plan.region import plan_region
-from ..plan.region_floor import plan_floor
+from ..plan.region_floor import screen_floor
 from ..plan.types import Layout
 from .cover import flown_cost
 from .project import Frame
@@ -134,16 +134,17 @@ class _Search:
         st = (plan if self.finish is None else self.finish(plan)).stats
         return self.cost.of(st.path_length * self.options["ground_scale"], st.n_turns)
 
-    def floor(self, cell: Region, angle: float, offset: float) -> float:
+    def floor(self, cell: Region, angle: float, offset: float, best: float = math.inf) -> float:
         """A floor of :meth:`value` (without ``finish``), cheaper than the plan: the cell's
-        ``keep_inside`` lanes and passes and a floor of its moves
-        (:func:`~boustro.plan.region_floor.plan_floor`), for the search's screen."""
+        ``keep_inside`` lanes and passes and a floor of its moves, or its lanes alone where
+        that already rules it out against ``best``
+        (:func:`~boustro.plan.region_floor.screen_floor`), for the search's screen."""
         lay: Layout = "chords" if self.layout == "chords" else "guaranteed"
-        floor = plan_floor(
-            cell, self.s, decompose_area=False, angle=angle, offset=offset, layout=lay,
+        return screen_floor(
+            cell, self.s, self.cost.of, lambda floor: rules_out(floor, best),
+            decompose_area=False, angle=angle, offset=offset, layout=lay,
             keep_inside=self.keep_inside, **self.options,
         )  # fmt: skip
-        return -math.inf if floor is None else self.cost.of(*floor)
 
     def model(self, cell: Region) -> tuple[float, float, float]:
         """The least modelled cost of the cell and its layout ``(cost, angle, offset)``: its
@@ -219,11 +220,11 @@ class _Search:
         self.cache[key] = opt
         return opt
 
-    def _screen(self, cell: Region) -> Callable[[float, float], float] | None:
+    def _screen(self, cell: Region) -> Callable[..., float] | None:
         """The search's screen (:meth:`floor`): ``keep_inside`` plans, not finished."""
         if not self.keep_inside or self.finish is not None or self.layout == "chords":
             return None
-        return lambda a, d: self.floor(cell, a, d)
+        return lambda a, d, best=math.inf: self.floor(cell, a, d, best)
 
     def _centred(self, cell: Region, opt: OptimizeResult) -> OptimizeResult:
         """The optimum, or a better plan among the lanes laid from the cell's edge (the first
@@ -237,7 +238,7 @@ class _Search:
         screen = self._screen(cell)
         for a, d in zip(angles, offsets, strict=True):
             try:
-                if screen is not None and rules_out(screen(float(a), float(d)), best[0]):
+                if screen is not None and rules_out(screen(float(a), float(d), best[0]), best[0]):
                     continue  # its floor is above the best plan: it cannot replace it
                 value = self.value(cell, float(a), float(d))
             except NoTransectError:

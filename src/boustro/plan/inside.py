@@ -49,6 +49,7 @@ __all__ = [
     "boundary_passes",
     "clip_lanes",
     "inside_layout",
+    "margin_floor",
 ]
 
 #: Patches (short passes over corners and thin parts) placed at most; more means the area has
@@ -494,6 +495,15 @@ def inside_layout(
     """:func:`_inside_layout`, from a cache of the last :data:`LAYOUT_CACHE` calls (keyed by
     every number it reads: the area's rings, the lanes' arrays, the spacing and the reach), the
     lists copied (the arrays are the same, never written)."""
+    key = _layout_key(area, lanes, spacing, reach)
+    make = lambda: _inside_layout(area, lanes, spacing, reach, key)  # noqa: E731
+    hit = remember(_LAYOUTS, key, LAYOUT_CACHE, make)
+    return list(hit[0]), list(hit[1]), hit[2]
+
+
+def _layout_key(area: Region, lanes: list[Lanes], spacing: float, reach: float) -> bytes:
+    """The bytes of every number :func:`_inside_layout` reads: the area's rings, the lanes'
+    arrays, the spacing and the reach."""
     rings = [area.shell.vertices, *(h.vertices for h in area.holes)]
     parts = [np.ascontiguousarray(v, dtype=np.float64).tobytes() for v in rings]
     for ls in lanes:
@@ -503,13 +513,56 @@ def inside_layout(
         k = np.asarray(ls.k, dtype=np.int64)
         parts += [head.tobytes(), k.tobytes(), *(x.tobytes() for x in cols), cut.tobytes()]
     parts.append(np.array([spacing, reach], dtype=np.float64).tobytes())
-    make = lambda: _inside_layout(area, lanes, spacing, reach)  # noqa: E731
-    hit = remember(_LAYOUTS, bytes_key(parts), LAYOUT_CACHE, make)
-    return list(hit[0]), list(hit[1]), hit[2]
+    return bytes_key(parts)
+
+
+#: Cut lanes (:func:`_cut`) and their passes' floors (:func:`margin_floor`) kept, per layout
+#: and margin: the search's cheap screen cuts a layout's lanes
+#: (:func:`~boustro.plan.region_floor.lanes_floor`) and, where that does not screen it out,
+#: :func:`inside_layout` cuts the same lanes again.
+CUT_CACHE = 8
+_CUTS: dict[bytes, list[Lanes]] = {}
+_PASS_FLOORS: dict[bytes, tuple[float, int]] = {}
+
+
+def margin_floor(
+    area: Region, lanes: list[Lanes], spacing: float, reach: float, margin: float
+) -> tuple[list[Lanes], float]:
+    """The lanes cut at ``margin`` (one of :data:`MARGINS`) as :func:`inside_layout` cuts them
+    (the same calls; kept, :data:`CUT_CACHE`) and a floor of the length of the passes
+    :func:`boundary_passes` adds to them, from the lanes' arrays alone: the contour stretches
+    their residual keeps (:meth:`_Geometry.stretch_floor`; each pass holds one whole, spurs
+    and patches only add) less what :func:`_dedupe` may drop (``2 tol`` a point), never below
+    0. Whichever margin :func:`inside_layout` keeps, its lanes and passes are at least that
+    margin's lanes and floor (the search's cheap screen,
+    :func:`~boustro.plan.region_floor.lanes_floor`)."""
+    key = _layout_key(area, lanes, spacing, reach)
+    cut = _cut(area, lanes, spacing, margin, key)
+    stretches, points = _pass_floor(area, cut, spacing, reach, margin, key)
+    return cut, max(stretches - 2 * 1e-9 * area.diameter * points, 0.0)
+
+
+def _cut(
+    area: Region, lanes: list[Lanes], spacing: float, margin: float, key: bytes
+) -> list[Lanes]:
+    """:func:`clip_lanes` of each of ``lanes`` at ``margin`` spacings inside ``area``, kept by
+    the layout's ``key`` (:func:`_layout_key`; the list and its lanes never written)."""
+    tol = 1e-9 * area.diameter
+    make = lambda: [clip_lanes(ls, area, tol, margin * spacing, spacing) for ls in lanes]  # noqa: E731
+    return remember(_CUTS, key + np.float64(margin).tobytes(), CUT_CACHE, make)
+
+
+def _pass_floor(
+    area: Region, cut: list[Lanes], spacing: float, reach: float, margin: float, key: bytes
+) -> tuple[float, int]:
+    """:meth:`_Geometry.stretch_floor` of the lanes ``cut`` at ``margin`` (:func:`_cut` of
+    the layout ``key``), kept."""
+    make = lambda: _geometry(area, spacing).stretch_floor(cut, reach)  # noqa: E731
+    return remember(_PASS_FLOORS, key + np.float64(margin).tobytes(), CUT_CACHE, make)
 
 
 def _inside_layout(
-    area: Region, lanes: list[Lanes], spacing: float, reach: float
+    area: Region, lanes: list[Lanes], spacing: float, reach: float, key: bytes
 ) -> tuple[list[Lanes], list[NDArray[np.float64]], float]:
     """The lanes cut inside ``area`` and the boundary passes that complete their coverage
     (:func:`boundary_passes`), for the margin of :data:`MARGINS` whose lanes and passes are the
@@ -523,14 +576,17 @@ def _inside_layout(
     of the stretches it keeps, from its lanes' arrays alone
     (:mod:`~boustro.plan.margin_floor`), screens it the same way (thirteenth round).
 
+    The cut lanes and margin 0's floor are kept by the layout's ``key`` (:func:`_cut`,
+    :func:`_pass_floor`: the search's cheap screen made them for most layouts).
+
     Returns:
         ``(lanes, passes, uncovered)``, as :func:`clip_lanes` and :func:`boundary_passes`.
     """
     tol = 1e-9 * area.diameter
-    half = [clip_lanes(ls, area, tol, MARGINS[1] * spacing, spacing) for ls in lanes]
+    half = list(_cut(area, lanes, spacing, MARGINS[1], key))
     passes_h, uncovered_h = boundary_passes(area, half, spacing, reach)
     length_h = _length(half, passes_h)
-    cut = [clip_lanes(ls, area, tol, MARGINS[0] * spacing, spacing) for ls in lanes]
+    cut = list(_cut(area, lanes, spacing, MARGINS[0], key))
 
     def loses(floor: float) -> bool:
         """Whether margin 1/2 wins against a margin 0 whose length is at least ``floor``, with
@@ -541,7 +597,7 @@ def _inside_layout(
     if loses(_length(cut, [])):
         return half, passes_h, uncovered_h
     # the stretches margin 0's residual keeps, bounded from below without it (margin_floor)
-    stretches, points = _geometry(area, spacing).stretch_floor(cut, reach)
+    stretches, points = _pass_floor(area, cut, spacing, reach, MARGINS[0], key)
     if stretches > 0 and loses(_length(cut, []) + stretches - 2 * tol * points):
         return half, passes_h, uncovered_h
     geo, residual = _residual(area, cut, spacing, reach)

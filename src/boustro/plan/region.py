@@ -345,7 +345,21 @@ def _plan_cells(r: Region, opts: PlanOptions, notes: list[str]) -> _Cells:
 
 # -- step 3: lanes ----------------------------------------------------------------------------
 def _plan_lanes(r: Region, cells: _Cells, opts: PlanOptions) -> _CellLanes:
-    """The lanes of every cell at its angle and offset (the optimum, or the given grid)."""
+    """The lanes of every cell at its angle and offset (the optimum, or the given grid); with
+    ``keep_inside`` (the guaranteed layout) cut inside the area, with its boundary passes."""
+    out = _laid_lanes(r, cells, opts)
+    if opts.keep_inside and opts.layout == "guaranteed":
+        cut, boundary, uncovered = inside_layout(r, out.lanes, opts.spacing, opts.reach)
+        counted = [
+            dataclasses.replace(c, n_transects=len(ls.k))
+            for c, ls in zip(out.cells, cut, strict=True)
+        ]
+        return _CellLanes(counted, cut, boundary, uncovered)
+    return out
+
+
+def _laid_lanes(r: Region, cells: _Cells, opts: PlanOptions) -> _CellLanes:
+    """The lanes of every cell at its angle and offset, as laid (not cut inside the area)."""
     out = _CellLanes([], [])
     for cell, opt in zip(cells.regions, cells.optima, strict=True):
         if opt is None:
@@ -359,13 +373,6 @@ def _plan_lanes(r: Region, cells: _Cells, opts: PlanOptions) -> _CellLanes:
         out.cells.append(PlanCell(cell, cell_angle, cell_offset, value, len(lanes.k), opt))
     if sum(len(lanes.k) for lanes in out.lanes) == 0:
         raise NoTransectError(f"no lane crosses the area at spacing {opts.spacing:g}")
-    if opts.keep_inside and opts.layout == "guaranteed":
-        cut, boundary, uncovered = inside_layout(r, out.lanes, opts.spacing, opts.reach)
-        counted = [
-            dataclasses.replace(c, n_transects=len(ls.k))
-            for c, ls in zip(out.cells, cut, strict=True)
-        ]
-        return _CellLanes(counted, cut, boundary, uncovered)
     return out
 
 

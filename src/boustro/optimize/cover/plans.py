@@ -162,12 +162,13 @@ def try_plans(
 
 def _screened_out(search: Any, theta: float, d: float) -> bool:
     """Whether the layout's floor (``search.screen``: a lower bound of its plan's cost,
-    cheaper than the plan) is above the best plan: then the plan cannot beat it and is not made;
+    cheaper than the plan, told the best plan's cost: it may stop at a cheaper floor already
+    above it) is above the best plan: then the plan cannot beat it and is not made;
     it still counts as tried, as a layout ruled out by its bound, so the search makes the same
     other plans and finds the same best one."""
     if search.screen is None or not math.isfinite(search.best[0]):
         return False
-    return rules_out(search.screen(theta, d), search.best[0])
+    return rules_out(search.screen(theta, d, search.best[0]), search.best[0])
 
 
 def rules_out(floor: float, best: float) -> bool:

@@ -136,7 +136,7 @@ class CoverSearch:
         evaluate: Callable[[float, float], float] | None,
         boustrophedon: bool,
         keep_inside: bool = False,
-        screen: Callable[[float, float], float] | None = None,
+        screen: Callable[[float, float, float], float] | None = None,
         outside: float | None = None,
     ) -> None:
         self.region, self.s, self.reach, self.cost = region, spacing, reach, cost
@@ -552,7 +552,7 @@ def cover_optimum(
     progress: Callable[[float], None] | None = None,
     centred: bool = True,
     cutoff: float | None = None,
-    screen: Callable[[float, float], float] | None = None,
+    screen: Callable[[float, float, float], float] | None = None,
     moves_on_passes: bool = True,
     outside: float | None = None,
 ) -> OptimizeResult:
@@ -593,11 +593,12 @@ def cover_optimum(
             box reached it): then ``info["stopped"]`` says so, ``info["cut_off"]`` is true, the
             plan is the best found so far and ``lower_bound`` is at least ``cutoff`` (a
             decomposition's cell whose candidate cannot beat the one grid any more).
-        screen: ``screen(angle, offset)``, a lower bound of ``evaluate(angle, offset)``
+        screen: ``screen(angle, offset, best)``, a lower bound of ``evaluate(angle, offset)``
             cheaper than it (a ``keep_inside`` plan's lanes and passes with a floor of its
-            moves, :func:`boustro.plan.region_floor.plan_floor`): a layout whose floor is above
-            the best plan is not planned but counts as tried (``info["screened"]``), so the
-            search finds the same plan.
+            moves, :func:`boustro.plan.region_floor.screen_floor`; given the best plan's
+            cost ``best``, it may return a cheaper floor already above it): a layout whose floor
+            is above the best plan is not planned but counts as tried (``info["screened"]``),
+            so the search finds the same plan.
         moves_on_passes: with ``keep_inside``, the certificate's floor counts the moves
             between lanes on top of the boundary passes (:mod:`~.inside_moves`; the search
             decides as without). ``False`` for a decomposition's cells, whose floor decides
