@@ -158,7 +158,7 @@ def _forced_plan(region: Region, angle: float, offset: float, cost: CoverCost) -
 
     real = inside._inside_layout
 
-    def margin0(area, lanes, spacing, reach):
+    def margin0(area, lanes, spacing, reach, key=None):
         tol = 1e-9 * area.diameter
         cut = [inside.clip_lanes(ls, area, tol, 0.0, spacing) for ls in lanes]
         passes, uncovered = inside.boundary_passes(area, cut, spacing, reach)
