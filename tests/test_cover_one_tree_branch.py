@@ -252,3 +252,29 @@ def test_the_last_pass_leaves_the_deferred_boxes_in_the_floor(monkeypatch):
     got = cover_optimum(region, 10.0, cost, evaluate)
     assert before.info["certified"]  # the pass raised the floor of the other boxes
     assert got.info["lower_bound"] <= low["bound"]
+
+
+def test_where_the_pass_cannot_certify_its_floor_keeps_the_boxes_left_as_they_are(monkeypatch):
+    """The benchmark's random area 5 (the lowest retired boxes stay below the discard value
+    whatever the branching): not certified, the floor at most the least bound of the retired
+    boxes after the first :data:`~.search.BRANCH_CHUNK` (kept as they are) and of the rest of
+    the floor, and at least the floor without the pass (a review: a pass that dropped the
+    branched boxes or the boxes left from the floor certified it)."""
+    region = benchmark_area(5)
+    cost = CoverCost.time(5.0, 10.0)
+    evaluate = plan_cost(region, cost, spacing=10.0)
+    seen = {}
+    settle = CoverSearch.settle_branched
+
+    def spy(self, lower, value, rtol):
+        seen["bounds"] = np.sort(np.concatenate([p[1] for p in self.retired]))
+        seen["rest"], seen["lower"] = self.rest_floor, lower
+        return settle(self, lower, value, rtol)
+
+    monkeypatch.setattr(CoverSearch, "settle_branched", spy)
+    got = cover_optimum(region, 10.0, cost, evaluate)
+    lower = got.info["lower_bound"]
+    assert not got.info["certified"]
+    assert lower < got.fitness - got.info["rtol"] * abs(got.fitness)
+    assert len(seen["bounds"]) > search_module.BRANCH_CHUNK
+    assert seen["lower"] <= lower <= min(seen["bounds"][search_module.BRANCH_CHUNK], seen["rest"])
