@@ -258,8 +258,9 @@ def test_where_the_pass_cannot_certify_its_floor_keeps_the_boxes_left_as_they_ar
     """The benchmark's random area 5 (the lowest retired boxes stay below the discard value
     whatever the branching): not certified, the floor at most the least bound of the retired
     boxes after the first :data:`~.search.BRANCH_CHUNK` (kept as they are) and of the rest of
-    the floor, and at least the floor without the pass (a review: a pass that dropped the
-    branched boxes or the boxes left from the floor certified it)."""
+    the floor, and at least the floor without the pass; not certified either with every retired
+    box in the first chunk (a review: a pass that dropped the branched boxes' or the boxes
+    left's bounds from its floor passed the other tests)."""
     region = benchmark_area(5)
     cost = CoverCost.time(5.0, 10.0)
     evaluate = plan_cost(region, cost, spacing=10.0)
@@ -278,3 +279,7 @@ def test_where_the_pass_cannot_certify_its_floor_keeps_the_boxes_left_as_they_ar
     assert lower < got.fitness - got.info["rtol"] * abs(got.fitness)
     assert len(seen["bounds"]) > search_module.BRANCH_CHUNK
     assert seen["lower"] <= lower <= min(seen["bounds"][search_module.BRANCH_CHUNK], seen["rest"])
+    # every retired box in the first chunk: the branched ones alone hold the floor down
+    monkeypatch.setattr(search_module, "BRANCH_CHUNK", 10**9)
+    got = cover_optimum(region, 10.0, cost, evaluate)
+    assert not got.info["certified"] and seen["lower"] <= got.info["lower_bound"]
