@@ -45,7 +45,8 @@ plus two edges of the dummy); with multipliers ``pi`` on the ends, ``L(pi) = min
 costs c_ij + pi_i + pi_j - 2 sum(pi)`` is at most the cycle's cost for every ``pi`` (Held and
 Karp 1970). The spanning tree that must hold the lanes is the lanes plus a minimum spanning tree
 of the lanes contracted (Prim, the cost between two lanes the least over their four pairs of
-ends). ``pi`` is improved by subgradient steps; the best ``L`` is kept.
+ends). ``pi`` is improved by subgradient steps; the best ``L`` is kept. Where it stays a few
+metres short of a target, :mod:`~.one_tree_branch` branches on the 1-tree (``branch``).
 """
 
 from __future__ import annotations
