@@ -283,3 +283,23 @@ def test_where_the_pass_cannot_certify_its_floor_keeps_the_boxes_left_as_they_ar
     monkeypatch.setattr(search_module, "BRANCH_CHUNK", 10**9)
     got = cover_optimum(region, 10.0, cost, evaluate)
     assert not got.info["certified"] and seen["lower"] <= got.info["lower_bound"]
+
+
+def test_the_last_pass_keeps_the_rest_of_the_floor(monkeypatch):
+    """Random area 22 (certified by the pass, its branched boxes above the discard value) with
+    the rest of the floor (the boxes not retired) put at the discard value itself: the pass
+    still runs, and the floor is at most that part (a review: a pass whose floor left it out
+    passed the other tests)."""
+    region = benchmark_area(22)
+    cost = CoverCost.time(5.0, 10.0)
+    evaluate = plan_cost(region, cost, spacing=10.0)
+    seen = {}
+    settle = CoverSearch.settle_branched
+
+    def at_the_discard_value(self, lower, value, rtol):
+        self.rest_floor = seen["rest"] = value - rtol * abs(value)
+        return settle(self, lower, value, rtol)
+
+    monkeypatch.setattr(CoverSearch, "settle_branched", at_the_discard_value)
+    got = cover_optimum(region, 10.0, cost, evaluate)
+    assert got.info["lower_bound"] <= seen["rest"]
