@@ -445,12 +445,13 @@ class CoverSearch:
         the 1-tree branched (:mod:`~.one_tree_branch`), the boxes still below it halved (each
         half keeps its box's bound where higher: it holds fewer layouts), :data:`BRANCH_LEVELS`
         times at most; the others are left as they are where the lowest stay below it. Only where
-        it can decide: no box deferred, the rest of the floor at or above the discard value,
-        every retired box within :data:`BRANCH_RTOL` of the best plan below it. Plans only
-        before, so the same plans; each box's bound only rises, so the floor too."""
+        it can decide: the rest of the floor at or above the discard value, every retired box
+        within :data:`BRANCH_RTOL` of the best plan below it. Plans only before, so the same
+        plans; each box's bound only rises, so the floor too. The floor of the boxes not
+        deferred: the deferred boxes join it after (:meth:`settle_deferred`)."""
         target = value - rtol * abs(value)
         retired, self.retired = self.retired, []
-        if not (BRANCH_TOUR and self.ends and self.tour) or lower >= target or self.deferred:
+        if not (BRANCH_TOUR and self.ends and self.tour) or lower >= target:
             return lower
         if min(self.rest_floor, value) < target or not retired:
             return lower
@@ -658,10 +659,13 @@ def cover_optimum(
     value, theta, d = search.best
     if not math.isfinite(value):
         raise InvalidParameterError("no layout of this spacing has a lane over the area")
-    # cut off: the floor counts the deferred boxes' bounds (without their 1-trees)
-    lower = min(floor, value) if cut_off else search.settle_deferred(min(floor, value))
+    lower = min(floor, value)
     if not cut_off and centred:  # not a decomposition's cells (their floors screen plans)
+        # before the deferred boxes join the floor (settle_deferred empties their list): the
+        # pass raises the other boxes' part of it only
         lower = search.settle_branched(lower, value, rtol)
+    if not cut_off:  # cut off: the floor counts the deferred boxes' bounds (without 1-trees)
+        lower = search.settle_deferred(lower)
     gap = max(0.0, value - lower)
     angle, offset = canonical(theta, d, s)
     return OptimizeResult(
