@@ -409,16 +409,17 @@ def test_ring_starts_never_lengthen_a_plan(monkeypatch):
 
 
 class _DetourRouter:
-    """Straight moves, except those to or from ``far`` (a detour 100 longer)."""
+    """Straight moves, except those to or from ``far`` (a detour 100 longer); with ``keep``,
+    those to or from every point but ``far``."""
 
-    def __init__(self, far):
-        self.far = np.asarray(far, dtype=np.float64)
+    def __init__(self, far, keep=False):
+        self.far, self.keep = np.asarray(far, dtype=np.float64), keep
 
     def paths(self, p, q):
         out = []
         for a, b in zip(p, q, strict=True):
             length = float(np.hypot(*(b - a)))
-            if np.array_equal(a, self.far) or np.array_equal(b, self.far):
+            if (np.array_equal(a, self.far) or np.array_equal(b, self.far)) != self.keep:
                 length += 100.0
             out.append(type("Route", (), {"length": length})())
         return out
@@ -438,3 +439,102 @@ def test_ring_start_by_the_moves_flown_not_the_straight_lines():
     )
     if got is not None:
         assert not np.array_equal(got[0], [45.0, 40.0])
+
+
+def test_ring_starts_routes_from_the_unit_before_to_the_unit_after(monkeypatch):
+    """:func:`lane_tour.ring_starts` asks for each closed pass the move from where the unit
+    before is LEFT (a lane's last point) and to where the unit after is ENTERED (its first),
+    and, first in a tour with a forced start, from the start (review of the seventeenth round:
+    the wrong end of a neighbour, or no start, passed the never-longer tests)."""
+    from boustro.plan.tour import _Pass
+
+    region = Region(
+        [(0, 0), (100, 0), (100, 100), (0, 100)], [[(40, 40), (60, 40), (60, 60), (40, 60)]]
+    )
+    ring = np.array([(60, 60), (40, 60), (40, 40), (60, 40), (60, 60)], dtype=np.float64)
+
+    def lane(a, b):
+        pts = np.array([a, b], dtype=np.float64)
+        return _Pass("chain", 0, 0.0, [(pts[0], pts[1], pts, 40.0)])
+
+    hole = _Pass("hole", -1, 0.0, [(ring[0], ring[-1], ring, 80.0)])
+    seen = []
+
+    def spy(r, before, after, router):
+        seen.append(
+            (None if before is None else tuple(before), None if after is None else tuple(after))
+        )
+
+    monkeypatch.setattr(lane_tour, "_ring_start", spy)
+    router, start = Router(region), np.array([1.0, 1.0])
+    passes = [lane((5, 30), (45, 30)), hole, lane((45, 70), (5, 70))]
+    lane_tour.ring_starts(passes, [0, 1, 2], [0, 0, 0], start, router, False)
+    assert seen == [((45.0, 30.0), (45.0, 70.0))]
+    seen.clear()
+    lane_tour.ring_starts([hole, *passes[::2]], [0, 1, 2], [0, 0, 0], start, router, True)
+    assert seen == [((1.0, 1.0), (5.0, 30.0))]
+    seen.clear()
+    lane_tour.ring_starts([hole, *passes[::2]], [0, 1, 2], [0, 0, 0], start, router, False)
+    assert seen == [(None, (5.0, 30.0))]
+
+
+class _StraightRouter:
+    """Straight moves (lengths only)."""
+
+    def paths(self, p, q):
+        return [
+            type("Route", (), {"length": float(np.hypot(*(b - a)))})()
+            for a, b in zip(p, q, strict=True)
+        ]
+
+
+def test_ring_start_counts_the_move_after_as_well_as_the_move_before():
+    """The start minimises the move from ``before`` PLUS the move to ``after``: (60, 40) (41.2
+    + 25.0 m), not (50, 40), whose move before alone is shorter (40.0 + 33.5 m)."""
+    ring = np.array([(40, 40), (60, 40), (60, 60), (40, 60), (40, 40)], dtype=np.float64)
+    before, after = np.array([50.0, 0.0]), np.array([80.0, 55.0])
+    got = lane_tour._ring_start(ring, before, after, _StraightRouter())
+    assert got is not None
+    np.testing.assert_array_equal(got[0], [60.0, 40.0])
+    np.testing.assert_array_equal(got[-1], [60.0, 40.0])
+    # every other point's moves flown 100 m longer (detours): the present start is kept
+    assert (
+        lane_tour._ring_start(ring, before, after, _DetourRouter((40.0, 40.0), keep=True)) is None
+    )
+
+
+def test_a_kick_shorter_by_the_distances_but_longer_flown_is_not_kept(monkeypatch):
+    """A kick's tour shorter by ``Router.distances`` but longer as flown (a detour the
+    distances do not see) leaves the tour as it was; the same kick flown straight is kept."""
+    pts = np.array([[0.0, 0.0]] + [[x, y] for x in range(8) for y in (0.0, 10.0)])
+    router = Router(Region([(-5, -5), (20, -5), (20, 20), (-5, 20)]))
+    dist = router.distances(pts)
+    seq, flip = np.arange(8, dtype=np.int64), np.zeros(8, dtype=np.int64)
+    good = improve_lanes(seq, flip, 0, dist, 10**6)
+    worse = (good[0].copy(), good[1].copy())
+    worse[1][3] ^= 1  # a lane in the middle turned round
+    assert lane_tour._moves(dist, *good) < lane_tour._moves(dist, *worse) - 1.0
+
+    def kick(seq, flip, fixed, dist, budget, state, units=OR_OPT_UNITS):
+        return *good, lane_tour._moves(dist, *good), budget - 1, state
+
+    monkeypatch.setattr(lane_tour, "kick_lanes", kick)
+    a, b = lane_tour._edges(*good)
+    new_moves = {(int(i), int(j)) for i, j in zip(a, b, strict=True)} - {
+        (int(i), int(j)) for i, j in zip(*lane_tour._edges(*worse), strict=True)
+    }
+
+    class Detour:
+        def paths(self, p, q):
+            out = []
+            for s, t in zip(p, q, strict=True):
+                length = float(np.hypot(*(t - s)))
+                i = int(np.flatnonzero((pts == s).all(axis=1))[0])
+                j = int(np.flatnonzero((pts == t).all(axis=1))[0])
+                out.append(type("Route", (), {"length": length + 1e3 * ((i, j) in new_moves)})())
+            return out
+
+    got = lane_tour._kicked(Detour(), pts, dist, worse, 0, 3, 100)
+    np.testing.assert_array_equal(np.stack(got), np.stack(worse))
+    got = lane_tour._kicked(_StraightRouter(), pts, dist, worse, 0, 3, 100)
+    np.testing.assert_array_equal(np.stack(got), np.stack(good))
