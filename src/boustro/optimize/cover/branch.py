@@ -30,6 +30,7 @@ __all__ = [
     "branch_and_bound",
     "certifying",
     "discard_at",
+    "joined_parts",
     "partial_round",
     "retire_at",
     "take_multipliers",
@@ -160,7 +161,7 @@ def retire_at(
 _Part = tuple[_Boxes, NDArray[np.float64], NDArray[np.float64], Multipliers | None]
 
 
-def _joined(parts: list[_Part]) -> _Part:
+def joined_parts(parts: list[_Part]) -> _Part:
     """Boxes, bounds, certificate's bounds and multipliers of several parts, concatenated."""
     boxes = _Boxes(*(np.concatenate([p[0][f] for p in parts]) for f in range(4)))
     bounds = np.concatenate([p[1] for p in parts])
@@ -229,7 +230,7 @@ def branch_and_bound(
         boxes, bounds, mult = boxes.take(keep), bounds[keep], take_multipliers(mult, keep)
         tight = tight[keep]
         if retired and certifying(best, model_min, lim):
-            boxes, bounds, tight, mult = _joined([(boxes, bounds, tight, mult), *retired])
+            boxes, bounds, tight, mult = joined_parts([(boxes, bounds, tight, mult), *retired])
             retired = []
         low = min(floor, search.deferred_min(), float(bounds.min()) if len(bounds) else math.inf)
         low = min([low, *(float(r[1].min()) for r in retired)])

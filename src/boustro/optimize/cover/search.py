@@ -20,7 +20,7 @@ from .bands import RigidBoxes, band_stats
 from .bounds import lower_bounds
 from .boxes import Boxes as _Boxes
 from .boxes import box_radius, initial_boxes, level_radius, split_boxes, split_parents
-from .branch import CUT_OFF, Limits, branch_and_bound, take_multipliers
+from .branch import CUT_OFF, Limits, branch_and_bound, joined_parts, take_multipliers
 from .centred import CENTRED_SEEDS, try_centred
 from .cost import CoverCost
 from .ends import HoleBoxes, hole_boxes
@@ -462,17 +462,9 @@ class CoverSearch:
         if min(self.rest_floor, value) < target or not retired:
             return lower
         window = BRANCH_RTOL * abs(value)
-        boxes = _Boxes(*(np.concatenate([p[0][f] for p in retired]) for f in range(4)))
-        bounds = np.concatenate([p[1] for p in retired])
+        boxes, bounds, _, mult = joined_parts(retired)
         if float(bounds.min()) < target - window:
             return lower
-        mult = None
-        if all(p[3] is not None for p in retired):
-            mult = Multipliers(
-                np.concatenate([p[3].values for p in retired]),
-                np.concatenate([p[3].warm for p in retired]),
-                retired[0][3].k0,
-            )
         order = np.argsort(bounds, kind="stable")
         order = order[bounds[order] < target]
         above = float(bounds[bounds >= target].min(initial=math.inf))  # kept as they are
