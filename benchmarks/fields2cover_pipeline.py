@@ -13,7 +13,13 @@ module) with the pipeline its tutorials document, and boustro on the same planar
   ``f2c best``. ``f2c lengthened``: the first pipeline's swaths each lengthened along its line
   to the ends of the part of its strip in the area it lies in (what a flat-ended footprint must
   reach where the boundary is slanted to the swaths), the same order: how much of boustro's
-  longer missions is the price of covering the swath ends. OR-tools' route
+  longer missions is the price of covering the swath ends. ``f2c completed``: each of the four
+  plans lengthened so, and a swath added on the next line of its own grid beyond each outermost
+  swath whose strip still meets the area there (the slivers beside it), flown against that
+  swath just before or after it (the shorter path); the shortest of the four: Fields2Cover's
+  plan made to cover the area as far as its angle and grid can (100% on fields without holes;
+  beside holes, parts of strips that hold no swath stay uncovered, so a plan covering those
+  too would be longer still). OR-tools' route
   (``RP_RoutePlannerBase``) is not run (see below).
 * ``boustro``: ``plan_area(ring, 10, crs=None, holes=..., speed=5, turn_time=10)`` (the time
   objective), and the same with ``keep_inside=True``; with ``--eq1`` also with
@@ -140,11 +146,14 @@ def _shapely_area(ring: np.ndarray, holes: list[np.ndarray]) -> Any:
     return shapely.Polygon(ring, holes)
 
 
+def _path_length(path: np.ndarray) -> float:
+    return float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+
+
 def _measure(path: np.ndarray, passes: int, lanes: int, area: Any) -> dict[str, float]:
     """Length, turns, mission time and length outside of a flown path (straight between its
     waypoints), the same for both tools."""
-    path = np.asarray(path, dtype=np.float64)
-    length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+    length = _path_length(np.asarray(path, dtype=np.float64))
     turns = max(passes - 1, 0)
     return {
         "lanes": lanes,
@@ -181,28 +190,66 @@ def _f2c_plan(f2c: Any, cell: Any, objective: str, route: str) -> tuple[list[np.
     return [_xy(swaths[i].getPath()) for i in range(swaths.size())], cpu
 
 
-def _extended(lines: list[np.ndarray], area: Any) -> list[np.ndarray]:
-    """Fields2Cover's swaths each lengthened along its line, in its direction, to the ends of
-    the part of its strip (the band of the coverage width about the line) in the area that the
-    swath lies in: what its flat-ended footprint must reach to cover that part whole, where the
-    boundary is slanted to the swaths. The slivers beside the outermost swaths stay uncovered;
-    on a line cut by a hole the lengthened swaths of both sides may overlap (not merged)."""
+def _lengthened(p: np.ndarray, q: np.ndarray, area: Any, whole: bool = False) -> np.ndarray:
+    """The swath ``p -> q`` lengthened along its line, in its direction, to the ends of the part
+    of its strip (the band of the coverage width about the line) in the area that it lies in
+    (``whole``: of every part of the strip in the area)."""
     import shapely
 
-    out = []
-    for x in lines:
-        p, q = x[0], x[-1]
-        u = (q - p) / np.linalg.norm(q - p)
-        n = np.array([-u[1], u[0]])
-        far = 10.0 * (area.length + np.linalg.norm(q - p))
-        corners = [p - far * u + n * SPACING / 2, q + far * u + n * SPACING / 2]
-        corners += [q + far * u - n * SPACING / 2, p - far * u - n * SPACING / 2]
-        strip = shapely.intersection(area, shapely.Polygon(corners))
-        swath = shapely.LineString(x).buffer(1e-6)
-        parts = [g for g in getattr(strip, "geoms", [strip]) if g.intersects(swath)]
-        pts = np.concatenate([np.asarray(g.exterior.coords) for g in parts if not g.is_empty])
-        s = (pts - p) @ u
-        out.append(np.array([p + min(s.min(), 0.0) * u, p + max(s.max(), (q - p) @ u) * u]))
+    u = (q - p) / np.linalg.norm(q - p)
+    n = np.array([-u[1], u[0]])
+    far = 10.0 * (area.length + np.linalg.norm(q - p))
+    corners = [p - far * u + n * SPACING / 2, q + far * u + n * SPACING / 2]
+    corners += [q + far * u - n * SPACING / 2, p - far * u - n * SPACING / 2]
+    strip = shapely.intersection(area, shapely.Polygon(corners))
+    swath = shapely.LineString([p, q]).buffer(1e-6)
+    parts = [g for g in getattr(strip, "geoms", [strip]) if not g.is_empty]
+    if not whole:
+        parts = [g for g in parts if g.intersects(swath)]
+    if not parts:
+        return np.array([p, q])
+    pts = np.concatenate([shapely.get_coordinates(g) for g in parts])
+    s = (pts - p) @ u
+    return np.array([p + min(s.min(), 0.0) * u, p + max(s.max(), (q - p) @ u) * u])
+
+
+def _extended(lines: list[np.ndarray], area: Any) -> list[np.ndarray]:
+    """Fields2Cover's swaths each lengthened (:func:`_lengthened`): what its flat-ended
+    footprint must reach to cover its strip's part whole where the boundary is slanted to the
+    swaths. The slivers beside the outermost swaths stay uncovered; on a line cut by a hole the
+    lengthened swaths of both sides may overlap (not merged)."""
+    return [_lengthened(x[0], x[-1], area) for x in lines]
+
+
+def _completed(lines: list[np.ndarray], area: Any) -> list[np.ndarray]:
+    """:func:`_extended`, and a swath on the next line of Fields2Cover's grid beyond each
+    outermost swath whose strip still meets the area there (the slivers), flown against that
+    swath just before or just after it (the shorter path): Fields2Cover's plan made to cover
+    the area as far as its angle and its own grid of lines can (each strip's parts whole)."""
+    import shapely
+
+    out = _extended(lines, area)
+    if len(out) < 2:
+        return out
+    u = (out[0][-1] - out[0][0]) / np.linalg.norm(out[0][-1] - out[0][0])
+    n = np.array([-u[1], u[0]])
+    covered = shapely.union_all(
+        [shapely.LineString(x).buffer(SPACING / 2, cap_style="flat") for x in out]
+    )
+    left = shapely.difference(area, covered)
+    across = [float(x[0] @ n) for x in out]
+    for side in (-1.0, 1.0):
+        i = int(np.argmin(across)) if side < 0 else int(np.argmax(across))
+        a = out[i]
+        p, q = a[-1] + side * SPACING * n, a[0] + side * SPACING * n  # flown against ``a``
+        extra = _lengthened(p, q, area, whole=True)
+        strip = shapely.LineString(extra).buffer(SPACING / 2, cap_style="flat")
+        if shapely.intersection(left, strip).area <= 1e-9 * area.area:
+            continue
+        before = [*out[:i], extra, *out[i:]]
+        after = [*out[: i + 1], extra, *out[i + 1 :]]
+        out = min(before, after, key=lambda x: _path_length(np.concatenate(x)))
+        across = [float(x[0] @ n) for x in out]
     return out
 
 
@@ -244,16 +291,20 @@ def _run_field(
 ) -> dict:
     area = _shapely_area(ring, holes)
     cell = _f2c_cell(f2c, ring, holes)
-    f2c_rows = {}
+    f2c_rows, completed = {}, {}
     for objective in ("nswath", "swath-length"):
         for route in ("boustrophedon", "snake"):
             lines, cpu = _f2c_plan(f2c, cell, objective, route)
             row = _f2c_row(lines, area)
             row["cpu"] = cpu
             f2c_rows[(objective, route)] = row
+            completed[(objective, route)] = _f2c_row(_completed(lines, area), area)
+            completed[(objective, route)]["cpu"] = float("nan")
     main = f2c_rows[("nswath", "boustrophedon")]
     full = _f2c_row(_extended(_f2c_plan(f2c, cell, "nswath", "boustrophedon")[0], area), area)
     full["cpu"] = float("nan")
+    whole_key = min(completed, key=lambda k: completed[k]["time"])
+    whole = completed[whole_key]
     best_key = min(f2c_rows, key=lambda k: f2c_rows[k]["time"])
     timed = _boustro_row(ring, holes, area)
     inside = _boustro_row(ring, holes, area, keep_inside=True)
@@ -262,9 +313,10 @@ def _run_field(
     print(_line("f2c nswath+boustr", main))
     print(_line("f2c best of 4", f2c_rows[best_key]) + f" ({best_key[0]}, {best_key[1]})")
     print(_line("f2c lengthened", full))
+    print(_line("f2c completed", whole) + f" (best of 4 completed: {whole_key[0]}, {whole_key[1]})")
     print(_line("boustro time", timed) + f" (own {timed['own_time']:.1f} s)")
     print(_line("boustro inside", inside) + f" (own {inside['own_time']:.1f} s)", flush=True)
-    row = {"name": name, "f2c": main, "best": f2c_rows[best_key], "full": full}
+    row = {"name": name, "f2c": main, "best": f2c_rows[best_key], "full": full, "whole": whole}
     row.update(time=timed, inside=inside)
     if eq1 is not None:
         print(_line("boustro eq1", eq1) + f" (own {eq1['own_time']:.1f} s)", flush=True)
@@ -278,7 +330,7 @@ def _summary(rows: list[dict]) -> None:
         if not sel:
             continue
         print(f"\n{label}: {len(sel)} areas")
-        for key in ("f2c", "best", "full"):
+        for key in ("f2c", "best", "full", "whole"):
             print(
                 f"  F2C {key:4s}: {_spread(sel, key)}, fewer lanes than boustro time on "
                 f"{sum(r[key]['lanes'] < r['time']['lanes'] for r in sel)}/{len(sel)}"
