@@ -48,7 +48,7 @@ def add_flight_options(p: argparse.ArgumentParser, point: Any) -> None:
         help="keep a constant height above ground (--altitude, or the camera's) over the "
         "terrain of this GeoTIFF DEM (rasterio: pip install 'boustro[terrain]'): waypoint "
         "altitudes above mean sea level, points added where the terrain bends; .plan and "
-        ".waypoints in MAV_FRAME_GLOBAL (AMSL)",
+        ".waypoints in MAV_FRAME_GLOBAL (AMSL), GPX's route with <ele> AMSL",
     )
     g.add_argument(
         "--terrain-tolerance",

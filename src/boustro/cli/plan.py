@@ -22,6 +22,7 @@ from ..plot.plan import plot_plan
 from ..vehicle import Vehicle
 from ._camera import add_trigger_options, camera_arg
 from ._common import (
+    check_not_input,
     check_output_path,
     check_plot_target,
     finite_float,
@@ -121,11 +122,13 @@ output formats (--out, by extension or --format):
   .kml            area, path, transects named 'Transect N', 'Hole pass N', 'Boundary pass N'
                   (WGS 84)
   .gpx            route of waypoints (<type> their kind) + transects as track segments, the
-                  boundary passes as a track of <type>boundary</type> (WGS 84)
+                  boundary passes as a track of <type>boundary</type> (WGS 84); <ele>: the
+                  altitude above take-off (with --dem: the route's, above mean sea level)
   .csv            one row per waypoint (with its kind; 'contour': a boundary pass)
   .plan           QGroundControl plan, MAV_CMD_NAV_WAYPOINT items (needs --altitude)
   .waypoints/.txt MAVLink 'QGC WPL 110' (needs --altitude)
-  Files are written atomically: an error never leaves a half-written file.
+  Files are written atomically: an error never leaves a half-written file, and AREA itself is
+  never overwritten (an output of the same name is refused).
 """
 
 
@@ -543,6 +546,7 @@ def run(args: argparse.Namespace) -> int:
     fmt = None
     if args.out is not None:
         check_output_path(args.out, "--out")
+        check_not_input(args.out, "--out", args.area)
         fmt = format_for(args.out, args.format)
         if fmt in ALTITUDE_FORMATS and args.camera is None:
             check_altitude(args.altitude, ALTITUDE_FORMATS[fmt])
@@ -570,6 +574,8 @@ def run(args: argparse.Namespace) -> int:
             lambda m: _plot_bytes(m, args.plot),
         )
         outputs += [(p, d, "plot", i) for p, d, i in plots]
+    for path, _, fmt_or_plot, _ in outputs:  # a field's own file name too
+        check_not_input(path, "--plot" if fmt_or_plot == "plot" else "--out", args.area)
     for path, data, _, _ in outputs:
         atomic_write(path, data)
     results = []
