@@ -354,6 +354,7 @@ def test_altitude_formats_are_those_that_need_one():
         (["--dem", "DIR/none.tif", "--altitude", "30"], "--dem DIR/none.tif"),
         (["--dem", "DIR/none.tif"], "--dem needs the height above ground"),
         (["--terrain-tolerance", "2"], "--terrain-tolerance needs --dem"),
+        (["--turn-time", "10"], "--turn-time needs --speed"),  # QA round 18: was ignored
     ],
 )
 def test_flight_option_errors_come_before_reading(capsys, tmp_path, extra, match):

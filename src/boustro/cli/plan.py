@@ -309,7 +309,11 @@ def _add_path(p: argparse.ArgumentParser) -> None:
     )
     path.add_argument("--speed", type=positive_float, metavar="M/S", help="ground speed, m/s")
     path.add_argument(
-        "--turn-time", type=_non_negative, default=0.0, metavar="S", help="seconds per turn"
+        "--turn-time",
+        type=_non_negative,
+        default=0.0,
+        metavar="S",
+        help="seconds per turn (with --speed)",
     )
     path.add_argument(
         "--turn-radius",
@@ -555,6 +559,10 @@ def run(args: argparse.Namespace) -> int:
     if args.format is not None and args.out is None:
         raise InvalidParameterError("--format needs --out FILE")
     check_flight(args)
+    if args.turn_time and args.speed is None:  # else ignored: no duration, no time objective
+        raise InvalidParameterError(
+            "--turn-time needs --speed (the duration is path / speed + turns x turn time)"
+        )
     areas = _load(args)
     _vehicle(args)  # --reverse without --turn-radius: one error before any work
     check_sweep(args)
