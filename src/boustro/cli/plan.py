@@ -83,8 +83,9 @@ several fields in one file:
   feature), KML a Folder per field, GPX a route and a track per field, CSV a 'field' column;
   other formats (.plan, .waypoints) and --plot write one file per field, FILE-<name>.ext (the
   name made filesystem-safe: runs of characters other than letters, digits, '.', '_', '-'
-  become '_'). All fields are planned before anything is written; if any fails, nothing is
-  written and one line names each failed field (exit status 2).
+  become '_'; over 100 bytes cut, with 8 hex digits of its SHA-1). All fields are planned
+  before anything is written; if any fails, nothing is written and one line names each
+  failed field (exit status 2).
 
 concave areas and holes:
   holes (GeoJSON interior rings, KML innerBoundaryIs, WKT inner rings) are obstacles: no path
