@@ -299,6 +299,34 @@ def test_unwritable_output_is_refused_before_reading(capsys, tmp_path, out, matc
     assert os.listdir(tmp_path) == []
 
 
+def test_the_area_file_is_never_overwritten_by_the_mission(capsys, tmp_path, monkeypatch):
+    """QA round 18: ``boustro plan field.geojson --out field.geojson`` replaced the user's
+    field boundary by the mission; a field's own file name (``FILE-<name>.ext``) too."""
+    monkeypatch.chdir(tmp_path)
+    area = tmp_path / "field.geojson"
+    ring = embedded_field().ring.tolist()
+    doc = {"type": "Polygon", "coordinates": [[*ring, ring[0]]]}
+    area.write_text(json.dumps(doc))
+    before = area.read_bytes()
+    for out in ("field.geojson", str(area), "./sub/../field.geojson"):
+        (tmp_path / "sub").mkdir(exist_ok=True)
+        code, _, err = run(capsys, "plan", "field.geojson", "--spacing", "10", "--out", out)
+        assert code == 2 and "is the area file itself" in err, err
+        assert area.read_bytes() == before
+    two = {"type": "FeatureCollection", "features": []}
+    for name in ("a", "b"):
+        two["features"].append({"type": "Feature", "properties": {"name": name}, "geometry": doc})
+    (tmp_path / "m-a.geojson").write_text(json.dumps(two))
+    # two fields a and b, each its own .plan file m-a.geojson and m-b.geojson: the first the input
+    argv = ["plan", "m-a.geojson", "--spacing", "10", "--altitude", "30", "--format", "plan"]
+    code, _, err = run(capsys, *argv, "--out", "m.geojson")
+    assert code == 2 and "--out m-a.geojson: is the area file itself" in err, err
+    assert json.loads((tmp_path / "m-a.geojson").read_text()) == two
+    assert not (tmp_path / "m-b.geojson").exists()  # nothing written
+    code, _, err = run(capsys, *argv, "--out", "n.geojson")
+    assert code == 0 and (tmp_path / "n-a.geojson").exists(), err
+
+
 def test_altitude_formats_are_those_that_need_one():
     """``ALTITUDE_FORMATS`` (checked before planning) is exactly the formats whose renderer
     refuses a mission without an altitude."""
@@ -326,6 +354,7 @@ def test_altitude_formats_are_those_that_need_one():
         (["--dem", "DIR/none.tif", "--altitude", "30"], "--dem DIR/none.tif"),
         (["--dem", "DIR/none.tif"], "--dem needs the height above ground"),
         (["--terrain-tolerance", "2"], "--terrain-tolerance needs --dem"),
+        (["--turn-time", "10"], "--turn-time needs --speed"),  # QA round 18: was ignored
     ],
 )
 def test_flight_option_errors_come_before_reading(capsys, tmp_path, extra, match):

@@ -322,6 +322,21 @@ def test_file_names_are_safe_and_distinct():
     taken: set[str] = set()
     assert field_path("out/m.plan", "a/b", taken) == "out/m-a_b.plan"
     assert field_path("out/m.plan", "a b", taken) == "out/m-a_b-2.plan"
+    # QA round 18: a 300-character name was "File name too long" after every field was planned
+    long = [safe_name(x * 300) for x in ("N", "畑")] + [safe_name("N" * 299 + "M")]
+    assert all(len(n.encode()) <= 109 for n in long) and len(set(long)) == 3
+    assert long[0].startswith("N" * 100 + "-") and long[1].startswith("畑" * 33 + "-")
+
+
+def test_a_field_with_a_long_name_is_written(tmp_path, capsys):
+    doc = {"type": "FeatureCollection", "features": []}
+    for name in ("N" * 300, "N" * 299 + "M"):
+        doc["features"].append(_feature({"name": name}, [NORTH]))
+    path = tmp_path / "long.geojson"
+    path.write_text(json.dumps(doc))
+    out = tmp_path / "m.plan"
+    assert main(["plan", str(path), "--spacing", "10", "--altitude", "30", "--out", str(out)]) == 0
+    assert len(list(tmp_path.glob("m-*.plan"))) == 2
 
 
 def test_fields_with_a_fixed_angle(collection, capsys):

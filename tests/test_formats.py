@@ -4,6 +4,7 @@ the documented QGroundControl Plan format, and pymavlink's waypoint loader."""
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import os
 
@@ -18,6 +19,7 @@ from boustro.formats import (
     MAV_FRAME_GLOBAL_RELATIVE_ALT,
     atomic_write,
     format_for,
+    render,
     write_mission,
 )
 from boustro.geo import plan_area
@@ -128,6 +130,18 @@ def test_gpx_read_by_gpxpy(tmp_path, mission):
     (track,) = gpx.tracks
     segs = np.array([[[p.longitude, p.latitude] for p in s.points] for s in track.segments])
     np.testing.assert_allclose(segs, mission.transects_lonlat, atol=1e-9, rtol=0)
+    # the altitude (above take-off, as the route's description says) on every point
+    assert {p.elevation for p in route.points} == {35.0}
+    assert {p.elevation for s in track.segments for p in s.points} == {35.0}
+    assert "35 m above take-off" in route.description
+
+
+def test_gpx_without_an_altitude_has_no_elevation(mission):
+    gpxpy = pytest.importorskip("gpxpy")
+    no_alt = dataclasses.replace(mission, altitude=None)
+    gpx = gpxpy.parse(render(no_alt, "gpx"))
+    assert {p.elevation for p in gpx.routes[0].points} == {None}
+    assert gpx.routes[0].description is None
 
 
 def test_csv_read_back(tmp_path, mission, rd_mission, planar_mission):

@@ -55,7 +55,7 @@ def test_each_sortie_within_its_limit_and_every_lane_once(mission, limit, value)
     ]
 
 
-def test_the_split_is_the_least_total_time_of_all_splits(mission):
+def test_the_split_is_the_fewest_sorties_then_the_least_total_time_of_all_splits(mission):
     plan = mission.plan
     path = plan.waypoints / plan.ground_scale
     units = lane_units(plan.kinds)[:10]
@@ -69,18 +69,36 @@ def test_the_split_is_the_least_total_time_of_all_splits(mission):
         length = np.hypot(*(path[a] - home)) + along[b] - along[a] + np.hypot(*(path[b] - home))
         return length / speed + (j - i) * turn
 
-    best = np.inf
     n = len(units)
-    for r in range(n):
-        for cuts in itertools.combinations(range(1, n), r):
-            bounds = [0, *cuts, n]
-            times = [cost(bounds[k], bounds[k + 1] - 1) for k in range(len(bounds) - 1)]
-            if max(times) <= limit:
-                best = min(best, sum(times))
-    found = plan_sorties(path, units, home, max_time=limit, speed=speed, turn_time=turn)
-    assert np.isfinite(best) and len(found) > 1
-    assert sum(t for *_, t in found) == pytest.approx(best, rel=1e-12)
-    assert all(t <= limit for *_, t in found)
+    for limit, turn in ((120.0, 5.0), (120.0, 60.0), (150.0, 60.0)):
+        best = (np.inf, np.inf)  # (sorties, total time), compared in that order
+        for r in range(n):
+            for cuts in itertools.combinations(range(1, n), r):
+                bounds = [0, *cuts, n]
+                times = [cost(bounds[k], bounds[k + 1] - 1) for k in range(len(bounds) - 1)]
+                if max(times) <= limit:
+                    best = min(best, (len(times), sum(times)))
+        found = plan_sorties(path, units, home, max_time=limit, speed=speed, turn_time=turn)
+        assert np.isfinite(best[1]) and len(found) > 1
+        assert len(found) == best[0]
+        assert sum(t for *_, t in found) == pytest.approx(best[1], rel=1e-12)
+        assert all(t <= limit for *_, t in found)
+
+
+def test_no_more_sorties_than_needed_even_when_more_would_be_faster():
+    """Home beside the lanes, a long turn: flying home between two lanes saves the turn, so
+    the least total time alone would split a mission that fits one sortie."""
+    lanes = 4
+    path = np.array([[10.0 * k, 100.0 * ((k + e) % 2)] for k in range(lanes) for e in (0, 1)])
+    units = [(2 * k, 2 * k + 1) for k in range(lanes)]
+    home = np.array([15.0, 50.0])
+    one = plan_sorties(path, units, home, max_time=1000.0, speed=10.0, turn_time=30.0)
+    assert [(i, j) for i, j, *_ in one] == [(0, lanes - 1)]
+    # had it split after the first lane: two more legs home (about 11 s) for one turn (30 s)
+    assert one[0][3] == pytest.approx((np.hypot(15, 50) * 2 + 400 + 30) / 10 + 3 * 30)
+    two = plan_sorties(path, units, home, max_time=80.0, speed=10.0, turn_time=30.0)
+    assert len(two) == 2  # the limit needs two; not four single lanes (each about 21 s)
+    assert all(t <= 80.0 for *_, t in two)
 
 
 def test_sorties_around_a_hole():

@@ -113,6 +113,20 @@ def test_mavlink_files_in_the_global_frame(tmp_path, mission):
     assert doc["mission"]["plannedHomePosition"][2] == pytest.approx(m.terrain.home_ground)
 
 
+def test_gpx_route_over_terrain_amsl(tmp_path, mission):
+    gpxpy = pytest.importorskip("gpxpy")
+    m = follow_terrain(mission, write_dem(tmp_path / "bump.tif", bump))
+    gpx = gpxpy.parse(render(m, "gpx"))
+    (route,) = gpx.routes
+    assert [p.type for p in route.points] == list(m.terrain.kinds)  # the added points too
+    got = np.array([[p.longitude, p.latitude] for p in route.points])
+    np.testing.assert_allclose(got, m.terrain.lonlat, atol=1e-9, rtol=0)
+    np.testing.assert_allclose([p.elevation for p in route.points], m.terrain.amsl, atol=1e-3)
+    assert "above mean sea level" in route.description
+    # no altitude above take-off mixed in: the track (lanes' ends) has no elevation
+    assert {p.elevation for s in gpx.tracks[0].segments for p in s.points} == {None}
+
+
 def test_a_dem_in_lonlat_works_too(tmp_path, mission):
     lon0, lat0 = 6.058, 51.516
     step = 2e-5

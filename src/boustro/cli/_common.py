@@ -17,6 +17,7 @@ from ..io import PAPER_PARALLELOGRAM, read_polygon
 
 __all__ = [
     "add_polygon_argument",
+    "check_not_input",
     "check_output_path",
     "check_plot_target",
     "concave_to_plan",
@@ -97,6 +98,21 @@ def check_output_path(path: str | os.PathLike[str], option: str) -> None:
         raise InvalidParameterError(f"{option} {name}: is a folder; give a file name")
     if not os.path.isdir(folder):
         raise InvalidParameterError(f"{option} {name}: no such folder {folder}")
+
+
+def check_not_input(path: str | os.PathLike[str], option: str, area: str | None) -> None:
+    """Fail before anything is written if ``path`` is the input file ``area`` itself (the
+    file's field boundaries would be replaced by the mission: ``plan f.geojson --out
+    f.geojson``)."""
+    if area is None or not os.path.exists(area):
+        return
+    name = os.fspath(path)
+    same = os.path.samefile(name, area) if os.path.exists(name) else False
+    if same or os.path.realpath(name) == os.path.realpath(area):
+        raise InvalidParameterError(
+            f"{option} {name}: is the area file itself; writing it would replace the area: "
+            "give another file name"
+        )
 
 
 def add_polygon_argument(parser: argparse.ArgumentParser) -> None:

@@ -32,9 +32,9 @@ def add_flight_options(p: argparse.ArgumentParser, point: Any) -> None:
         metavar="S",
         help="split the mission into sorties of at most S seconds each, from home and back "
         "(needs --speed; --turn-time counts): whole lanes in the mission's order, the cut "
-        "points chosen for the least total time. .plan and .waypoints: one file per sortie "
-        "(FILE-<name>.ext), each ending with a return to launch; GeoJSON, KML, GPX, CSV: one "
-        "file with every sortie",
+        "points chosen for the fewest sorties, then the least total time. .plan and "
+        ".waypoints: one file per sortie (FILE-<name>_sortie_N.ext), each ending with a return "
+        "to launch; GeoJSON, KML, GPX, CSV: one file with every sortie",
     )
     g.add_argument(
         "--max-distance",
@@ -48,7 +48,7 @@ def add_flight_options(p: argparse.ArgumentParser, point: Any) -> None:
         help="keep a constant height above ground (--altitude, or the camera's) over the "
         "terrain of this GeoTIFF DEM (rasterio: pip install 'boustro[terrain]'): waypoint "
         "altitudes above mean sea level, points added where the terrain bends; .plan and "
-        ".waypoints in MAV_FRAME_GLOBAL (AMSL)",
+        ".waypoints in MAV_FRAME_GLOBAL (AMSL), GPX's route with <ele> AMSL",
     )
     g.add_argument(
         "--terrain-tolerance",

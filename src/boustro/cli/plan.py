@@ -22,6 +22,7 @@ from ..plot.plan import plot_plan
 from ..vehicle import Vehicle
 from ._camera import add_trigger_options, camera_arg
 from ._common import (
+    check_not_input,
     check_output_path,
     check_plot_target,
     finite_float,
@@ -82,8 +83,9 @@ several fields in one file:
   feature), KML a Folder per field, GPX a route and a track per field, CSV a 'field' column;
   other formats (.plan, .waypoints) and --plot write one file per field, FILE-<name>.ext (the
   name made filesystem-safe: runs of characters other than letters, digits, '.', '_', '-'
-  become '_'). All fields are planned before anything is written; if any fails, nothing is
-  written and one line names each failed field (exit status 2).
+  become '_'; over 100 bytes cut, with 8 hex digits of its SHA-1). All fields are planned
+  before anything is written; if any fails, nothing is written and one line names each
+  failed field (exit status 2).
 
 concave areas and holes:
   holes (GeoJSON interior rings, KML innerBoundaryIs, WKT inner rings) are obstacles: no path
@@ -121,11 +123,13 @@ output formats (--out, by extension or --format):
   .kml            area, path, transects named 'Transect N', 'Hole pass N', 'Boundary pass N'
                   (WGS 84)
   .gpx            route of waypoints (<type> their kind) + transects as track segments, the
-                  boundary passes as a track of <type>boundary</type> (WGS 84)
+                  boundary passes as a track of <type>boundary</type> (WGS 84); <ele>: the
+                  altitude above take-off (with --dem: the route's, above mean sea level)
   .csv            one row per waypoint (with its kind; 'contour': a boundary pass)
   .plan           QGroundControl plan, MAV_CMD_NAV_WAYPOINT items (needs --altitude)
   .waypoints/.txt MAVLink 'QGC WPL 110' (needs --altitude)
-  Files are written atomically: an error never leaves a half-written file.
+  Files are written atomically: an error never leaves a half-written file, and AREA itself is
+  never overwritten (an output of the same name is refused).
 """
 
 
@@ -306,7 +310,11 @@ def _add_path(p: argparse.ArgumentParser) -> None:
     )
     path.add_argument("--speed", type=positive_float, metavar="M/S", help="ground speed, m/s")
     path.add_argument(
-        "--turn-time", type=_non_negative, default=0.0, metavar="S", help="seconds per turn"
+        "--turn-time",
+        type=_non_negative,
+        default=0.0,
+        metavar="S",
+        help="seconds per turn (with --speed)",
     )
     path.add_argument(
         "--turn-radius",
@@ -543,6 +551,7 @@ def run(args: argparse.Namespace) -> int:
     fmt = None
     if args.out is not None:
         check_output_path(args.out, "--out")
+        check_not_input(args.out, "--out", args.area)
         fmt = format_for(args.out, args.format)
         if fmt in ALTITUDE_FORMATS and args.camera is None:
             check_altitude(args.altitude, ALTITUDE_FORMATS[fmt])
@@ -551,6 +560,10 @@ def run(args: argparse.Namespace) -> int:
     if args.format is not None and args.out is None:
         raise InvalidParameterError("--format needs --out FILE")
     check_flight(args)
+    if args.turn_time and args.speed is None:  # else ignored: no duration, no time objective
+        raise InvalidParameterError(
+            "--turn-time needs --speed (the duration is path / speed + turns x turn time)"
+        )
     areas = _load(args)
     _vehicle(args)  # --reverse without --turn-radius: one error before any work
     check_sweep(args)
@@ -570,6 +583,8 @@ def run(args: argparse.Namespace) -> int:
             lambda m: _plot_bytes(m, args.plot),
         )
         outputs += [(p, d, "plot", i) for p, d, i in plots]
+    for path, _, fmt_or_plot, _ in outputs:  # a field's own file name too
+        check_not_input(path, "--plot" if fmt_or_plot == "plot" else "--out", args.area)
     for path, data, _, _ in outputs:
         atomic_write(path, data)
     results = []

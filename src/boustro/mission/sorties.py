@@ -6,8 +6,17 @@ never cut. Sortie ``i..j`` flies from home straight to lane ``i``'s first waypoi
 mission's path to lane ``j``'s last one, and straight back home. Its length is
 ``|home - first(i)| + path(i..j) + |last(j) - home|`` and its time ``length / speed`` plus the
 turn time of each turn between its lanes. An exact dynamic programme over the cut points
-(``O(n^2)`` for ``n`` lanes) finds the split of least total time (of least total length without
-a speed) with every sortie within the limits.
+(``O(n^2)`` for ``n`` lanes) finds, among the splits with every sortie within the limits, those
+of the fewest sorties and of them the one of least total time (of least total length without a
+speed).
+
+Fewest sorties first: each sortie is a landing, a battery swap and a take-off, which the time
+model does not count, and a sortie's legs from and to home carry no turns, so with a turn time
+splitting a mission further can be "faster" on paper (a turn between two lanes replaced by a
+flight home and back): four 100 m lanes 10 m apart, home 52 m from their ends, 10 m/s, 30 s a
+turn, fly in one sortie of 143.4 s or in four of 81.8 s in all (tested). The lexicographic
+order (count, time) is added sortie by sortie, so the programme stays exact: a best split of
+lanes ``0..j`` ends with a best split of ``0..i-1`` for its last cut ``i``.
 """
 
 from __future__ import annotations
@@ -69,7 +78,8 @@ def plan_sorties(
     speed: float | None = None,
     turn_time: float = 0.0,
 ) -> list[tuple[int, int, float, float | None]]:
-    """The split of least total time: ``(first lane, last lane, length, time)`` per sortie.
+    """The split of the fewest sorties, then of least total time (least total length without a
+    speed): ``(first lane, last lane, length, time)`` per sortie.
 
     ``path``: the waypoints in ground metres; ``units``: :func:`lane_units`; ``home``: ground
     metres, same frame. Raises :class:`InvalidParameterError` when a lane alone (home, the lane,
@@ -81,8 +91,10 @@ def plan_sorties(
     out_leg = np.hypot(*(path[first] - home).T)  # home to each lane's first waypoint
     back_leg = np.hypot(*(path[last] - home).T)
     n = len(units)
-    best = np.full(n + 1, np.inf)
+    best = np.full(n + 1, np.inf)  # least total cost of lanes 0..j-1 in fewest[j] sorties
     best[0] = 0.0
+    fewest = np.full(n + 1, np.inf)  # fewest sorties that fly lanes 0..j-1
+    fewest[0] = 0.0
     cut = np.zeros(n + 1, dtype=np.int64)
     for j in range(n):
         ii = np.arange(j + 1)  # sorties i..j
@@ -99,10 +111,11 @@ def plan_sorties(
                 f"lane {j + 1} alone takes {what} from home and back, over the sortie limit; "
                 "raise the limit or move --home nearer"
             )
+        count = np.where(ok, fewest[ii] + 1, np.inf)
         cost = best[ii] + (length if time is None else time)
-        cost[~ok] = np.inf
+        cost[count > count.min()] = np.inf  # fewest sorties first, then the cost
         k = int(np.argmin(cost))
-        best[j + 1], cut[j + 1] = cost[k], k
+        best[j + 1], fewest[j + 1], cut[j + 1] = cost[k], count[k], k
     sorties = []
     j = n
     while j > 0:

@@ -2,7 +2,9 @@
 arguments: the same choices as ``boustro plan``'s options, under the same names (snake case).
 
 Every value is checked here, once: unknown keys, wrong types and out-of-range numbers are one
-:class:`~boustro.errors.InvalidParameterError` line naming the option.
+:class:`~boustro.errors.InvalidParameterError` line naming the option. A number must be a JSON
+number: a numeric string (``"spacing": "10"``) is refused, as ``boustro plan`` refuses a
+non-number, so a client's mistake is never planned on a guess.
 """
 
 from __future__ import annotations
@@ -76,11 +78,19 @@ class PlanOptions:
     repair: bool = False
 
 
+def _json_number(key: str, value: Any) -> float:
+    """``value`` as a float if it is a JSON number; a string (``"10"``), a flag or anything else
+    is refused, as the command line refuses a non-number."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InvalidParameterError(f"options.{key} must be a number, got {value!r:.40}")
+    return as_number(f"options.{key}", value)
+
+
 def _number(options: dict[str, Any], key: str, low: float | None = None, strict: bool = False):
     value = options.get(key)
     if value is None:
         return None
-    x = as_number(f"options.{key}", value)
+    x = _json_number(key, value)
     if not math.isfinite(x):
         raise InvalidParameterError(f"options.{key} must be finite, got {value!r}")
     if low is not None and (x < low or (strict and x == low)):
@@ -95,7 +105,7 @@ def _numbers(options: dict[str, Any], key: str, count: int) -> list[float] | Non
         return None
     if not isinstance(value, (list, tuple)) or len(value) != count:
         raise InvalidParameterError(f"options.{key} must be a list of {count} numbers")
-    out = [as_number(f"options.{key}", v) for v in value]
+    out = [_json_number(key, v) for v in value]
     if not all(math.isfinite(v) for v in out):
         raise InvalidParameterError(f"options.{key} must be finite numbers, got {value!r}")
     return out
@@ -151,8 +161,11 @@ def _flag(options: dict[str, Any], key: str) -> bool | None:
 
 
 def _headland(options: dict[str, Any]) -> int:
+    value = options.get("headland")
+    if value is not None:
+        _json_number("headland", value)  # a JSON number; check_headland wants a whole one
     try:
-        return check_headland(0 if options.get("headland") is None else options["headland"])
+        return check_headland(0 if value is None else value)
     except InvalidParameterError as exc:
         raise InvalidParameterError(f"options.{exc}") from None
 

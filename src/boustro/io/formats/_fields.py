@@ -10,6 +10,7 @@ mission: :func:`field_path` names one file per field.
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import json
 import os
@@ -120,16 +121,30 @@ def render_fields(missions: Sequence[Mission], fmt: str) -> str | None:
     return None if combine is None else combine(missions)
 
 
+#: Longest safe name, UTF-8 bytes, before its digest: file systems take 255 bytes a name, and
+#: the output's own name, ``-2``, the extension and the temporary file's prefix come around it.
+SAFE_NAME_BYTES = 100
+
+
 def safe_name(name: str) -> str:
     """``name`` for a file name: runs of anything but letters, digits (of any script, NFC),
     ``.``, ``_``, ``-`` become ``_`` (no path separators, no leading dot); empty gives ``field``.
+    A name longer than :data:`SAFE_NAME_BYTES` is cut there and ends with ``-`` and 8 hex
+    digits of its SHA-1, so that two long names stay two files.
 
     >>> safe_name("Field 3/North: wheat")
     'Field_3_North_wheat'
     >>> safe_name("Feld Lärche ü")
     'Feld_Lärche_ü'
+    >>> len(safe_name("N" * 300))
+    109
     """
     text = re.sub(r"[^\w.-]+", "_", unicodedata.normalize("NFC", name)).strip("._")
+    raw = text.encode("utf-8")
+    if len(raw) > SAFE_NAME_BYTES:
+        digest = hashlib.sha1(raw).hexdigest()[:8]
+        text = raw[:SAFE_NAME_BYTES].decode("utf-8", errors="ignore").rstrip("._")
+        text = f"{text}-{digest}"
     return text or "field"
 
 
