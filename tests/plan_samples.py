@@ -26,6 +26,7 @@ __all__ = [
     "SPACING",
     "benchmark_area",
     "bounds_and_plans",
+    "count_pass_boxes",
     "inside_areas",
     "plan_cost",
     "plans_in_boxes",
@@ -152,3 +153,18 @@ def bounds_and_plans(
     points = search.point_values(boxes, exact=True)
     for i, plans in enumerate(plans_in_boxes(evaluate, boxes, rng)):
         yield float(box[i]), float(points[i]), plans
+
+
+def count_pass_boxes(monkeypatch: Any) -> list[int]:
+    """A list that gets the number of boxes of each :meth:`CoverSearch.box_bounds` call made by
+    a search's last pass (``branch`` set: :meth:`~CoverSearch.settle_branched`), from now on."""
+    bounded: list[int] = []
+    box_bounds = CoverSearch.box_bounds
+
+    def count(self: CoverSearch, boxes: Boxes, *args: Any, **kw: Any) -> Any:
+        if self.branch is not None:
+            bounded.append(len(boxes.theta))
+        return box_bounds(self, boxes, *args, **kw)
+
+    monkeypatch.setattr(CoverSearch, "box_bounds", count)
+    return bounded

@@ -113,6 +113,9 @@ BRANCH_CHUNK = 4
 #: ``benchmarks/mission_time.py`` are certified by the pass within 800-9,200; without a budget
 #: random 35 bounded 207,631 boxes (133 s of CPU, not certified) and random 77 51,314 (22 s).
 BRANCH_BUDGET = 12_000
+#: ... bounding a level's boxes this many at a time, lowest first, so that the last level
+#: stops once no box left can lower its least bound (:meth:`CoverSearch._level_bounds`).
+BRANCH_SLICE = 256
 #: Offset boxes at the first round of a fixed-angle search.
 FIXED_OFFSETS = 64
 
@@ -505,7 +508,9 @@ class CoverSearch:
             if len(bounds) > self.branch_left:  # over the budget: the bounds they have hold
                 break
             self.branch_left -= len(bounds)
-            got = self.box_bounds(boxes, tour_below=target, multipliers=mult)
+            got, last_min = self._level_bounds(boxes, bounds, mult, target, level, low_min)
+            if got is None:  # the pass's last level: its least bound is all that counts
+                return last_min
             bounds = np.maximum(bounds, got)
             low = bounds < target
             low_min = min(low_min, float(bounds[~low].min(initial=math.inf)))
@@ -516,6 +521,42 @@ class CoverSearch:
             bounds, mult = bounds[parents], take_multipliers(mult, parents)
             boxes = split_boxes(boxes, self.radius)
         return min(low_min, float(bounds.min()))
+
+    def _level_bounds(
+        self,
+        boxes: _Boxes,
+        bounds: NDArray[np.float64],
+        mult: Multipliers | None,
+        target: float,
+        level: int,
+        low_min: float,
+    ) -> tuple[NDArray[np.float64] | None, float]:
+        """One level of :meth:`_branched_boxes`: the boxes' bounds with the 1-tree branched
+        (``mult`` updated), bounded :data:`BRANCH_SLICE` at a time, lowest ``bounds`` first (a
+        box's bound does not depend on the others bounded with it). ``(None, least)`` once the
+        level is the pass's last (:data:`BRANCH_LEVELS`, or its boxes below ``target`` so far
+        would halve into more than the budget left) and no box left can lower ``least``, the
+        least of ``low_min`` and the bounds so far: each box left keeps at least its bound so
+        far, so ``least`` is the least bound the whole level would give, all that
+        :meth:`_branched_boxes` returns after its last level (docs/mission_time.md, "The
+        plans' CPU, eighteenth round"). Else ``(bounds, inf)``, every box bounded."""
+        order = np.argsort(bounds, kind="stable")
+        got = np.empty(len(bounds))
+        least, children = low_min, 0
+        for start in range(0, len(order), BRANCH_SLICE):
+            idx = order[start : start + BRANCH_SLICE]
+            last = level == BRANCH_LEVELS or children > self.branch_left
+            if last and not float(bounds[idx[0]]) < least:
+                return None, least
+            part = take_multipliers(mult, idx)
+            got[idx] = self.box_bounds(boxes.take(idx), tour_below=target, multipliers=part)
+            if mult is not None and part is not None:
+                mult.values[idx], mult.warm[idx] = part.values, part.warm
+            now = np.maximum(bounds[idx], got[idx])
+            least = min(least, float(now.min()))
+            low = idx[now < target]
+            children += len(split_parents(boxes.take(low), self.radius))
+        return got, math.inf
 
     def _inside(self, lv: Any, st: Any, *args: Any, **kw: Any) -> NDArray[np.float64]:
         """The keep-inside bound (:func:`~.inside_bound.inside_box_bounds`)."""
