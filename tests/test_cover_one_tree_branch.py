@@ -334,3 +334,55 @@ def test_the_last_pass_bounds_at_most_its_budget_of_boxes(monkeypatch):
     assert sum(bounded) <= 100 and not small.info["certified"]
     assert before.info["lower_bound"] <= small.info["lower_bound"] <= small.fitness
     assert small.fitness == got.fitness
+
+
+def test_the_last_pass_with_more_children_certifies_with_the_same_plan(monkeypatch):
+    """The benchmark's random area 28 (2.6 s short of a certificate after the pass with 12
+    children a layout, its lowest boxes left 0.5 s below the discard value; eighteenth round):
+    certified with :data:`~.one_tree_branch.BRANCH_NODES` (48), not with 12, with the same plan
+    and plans evaluated, a floor at least the one with 12 and below a 3-degree sweep of real
+    plans. The pass hands every retired box below the discard value to its levels exactly once,
+    in chunks of 4, 16, 64, ... (``BRANCH_GROWTH``), the lowest first."""
+    region = benchmark_area(28)
+    cost = CoverCost.time(5.0, 10.0)
+    evaluate = plan_cost(region, cost, spacing=10.0)
+    seen: dict[str, list] = {"picked": [], "sizes": []}
+    settle, levels = CoverSearch.settle_branched, CoverSearch._branched_boxes
+
+    def spy(self, lower, value, rtol):
+        if self.retired:
+            boxes, bounds = [p[0] for p in self.retired], [p[1] for p in self.retired]
+            low = np.concatenate(bounds) < value - rtol * abs(value)
+            keys = np.stack([np.concatenate([b.theta for b in boxes]),
+                             np.concatenate([b.d for b in boxes])], axis=1)  # fmt: skip
+            seen["low"] = keys[low]
+            seen["low_bounds"] = np.sort(np.concatenate(bounds)[low])
+        return settle(self, lower, value, rtol)
+
+    def chunk(self, boxes, bounds, mult, target):
+        seen["picked"].append(np.stack([boxes.theta, boxes.d], axis=1))
+        seen["sizes"].append(len(bounds))
+        seen.setdefault("first_bounds", []).append(np.sort(bounds))
+        return levels(self, boxes, bounds, mult, target)
+
+    monkeypatch.setattr(CoverSearch, "settle_branched", spy)
+    monkeypatch.setattr(CoverSearch, "_branched_boxes", chunk)
+    got = cover_optimum(region, 10.0, cost, evaluate)
+    picked = np.concatenate(seen["picked"])
+    assert len(picked) == len(seen["low"]) > 4
+    assert sorted(map(tuple, picked)) == sorted(map(tuple, seen["low"]))
+    sizes = seen["sizes"]
+    assert sizes[:-1] == [4 * 4**i for i in range(len(sizes) - 1)]
+    assert 0 < sizes[-1] <= 4 * 4 ** (len(sizes) - 1)
+    for a, b in zip(seen["first_bounds"], seen["first_bounds"][1:], strict=False):
+        assert a[-1] <= b[0]  # the lowest first
+    monkeypatch.setattr(search_module, "BRANCH_NODES", 12)
+    before = cover_optimum(region, 10.0, cost, evaluate)
+    assert got.info["certified"] and not before.info["certified"]
+    assert (got.fitness, got.angle, got.offset) == (before.fitness, before.angle, before.offset)
+    assert got.info["plans"] == before.info["plans"]
+    lower = got.info["lower_bound"]
+    assert before.info["lower_bound"] <= lower <= got.fitness
+    rng = np.random.default_rng(28)
+    for a in np.radians(np.arange(0.0, 180.0, 3.0)):
+        assert lower <= evaluate(float(a), float(rng.uniform(0, 10.0))) + 1e-9
