@@ -111,6 +111,43 @@ def test_cutoff_stops_the_search_with_a_true_bound():
     assert same.info["lower_bound"] == full.info["lower_bound"]
 
 
+def test_plans_left_for_later_give_the_same_result(monkeypatch):
+    """A cell's search with ``later`` (:func:`cover_optimum`): its lower bound final before the
+    plans after the branch and bound; the function left makes them (here polish finds a
+    cheaper plan: 854.2 -> 846.3 s) and returns the result of the search without ``later``.
+    The deferred boxes' bounds (:meth:`~.search.CoverSearch.settle_deferred`, none on this
+    area) are made to lower the floor by 1 s, once: it must be in the bound of both."""
+    settled: list[float] = []
+    settle = search_module.CoverSearch.settle_deferred
+
+    def lowered(self, lower):
+        settled.append(settle(self, lower) - 1.0)
+        return settled[-1]
+
+    monkeypatch.setattr(search_module.CoverSearch, "settle_deferred", lowered)
+    region = _region(8)
+    full = cover_optimum(region, SPACING, COST, _plans(region, []), centred=False)
+    later: list = []
+    counted: list[int] = []
+    first = cover_optimum(region, SPACING, COST, _plans(region, counted), centred=False,
+                          later=later)  # fmt: skip
+    assert len(later) == 1 and first.info["plans_later"] and "plans_later" not in full.info
+    assert first.info["lower_bound"] == full.info["lower_bound"] == settled[0] == settled[1]
+    assert first.fitness > full.fitness  # the plans left for later find the cheaper plan
+    assert len(counted) == first.info["plans"] < full.info["plans"]
+    done = later[0]()
+    assert (done.angle, done.offset, done.fitness) == (full.angle, full.offset, full.fitness)
+    keys = ("lower_bound", "gap", "certified", "plans", "ruled_out", "rounds", "cut_off")
+    assert {k: done.info[k] for k in keys} == {k: full.info[k] for k in keys}
+    assert done.evaluations == full.evaluations and "plans_later" not in done.info
+    assert len(settled) == 2  # once each
+    assert len(counted) == full.info["plans"]
+    # cut off: nothing left for later (its candidate is screened out)
+    cut = cover_optimum(region, SPACING, COST, _plans(region, []), centred=False,
+                        cutoff=0.98 * full.info["lower_bound"], later=later)  # fmt: skip
+    assert cut.info["cut_off"] and len(later) == 1 and "plans_later" not in cut.info
+
+
 def test_without_the_centred_sweep():
     region = _region(71)
     res = cover_optimum(region, SPACING, COST, _plans(region, []), centred=False)
@@ -164,6 +201,9 @@ def test_cells_get_the_cutoff_that_screens_their_candidate_out():
         def optimum(self, cell, cutoff=None):
             cutoffs.append(cutoff)
             return SimpleNamespace(info={"lower_bound": 10.0 * cell.area})
+
+        def finished(self, cell, opt):
+            return opt
 
     assert _cell_optima(Search(), cells, beat=None) is not None and cutoffs == [None] * 3
     cutoffs.clear()

@@ -116,6 +116,8 @@ class _Search:
         self.s = frame.sensor.spacing * frame.proj.scale_min
         self.reach = frame.sensor.reach * frame.proj.scale_min
         self.cache: dict[bytes, OptimizeResult | None] = {}
+        # the plans a cell's search left for later (cover_optimum's ``later``), by cell
+        self.later: dict[bytes, Callable[[], OptimizeResult]] = {}
         self.models: dict[bytes, tuple[float, float, float]] = {}
         self.searches = 0
         self.union_edges = 0
@@ -186,7 +188,10 @@ class _Search:
         return out
 
     def optimum(self, cell: Region, cutoff: float | None = None) -> OptimizeResult | None:
-        """The cell's certified optimum (``None`` past :data:`MAX_SEARCHES` or no lane).
+        """The cell's certified optimum (``None`` past :data:`MAX_SEARCHES` or no lane), or
+        its search's result before the plans after the branch and bound (``info["plans_later"]``:
+        its lower bound final, :meth:`finished` makes them; the floor of :func:`_cell_optima`
+        needs only the bound).
 
         ``cutoff``: the search may stop once no layout of the cell costs less
         (``info["cut_off"]``: then only its lower bound counts, the candidate is screened out);
@@ -201,23 +206,45 @@ class _Search:
         if self.searches >= MAX_SEARCHES:
             return None
         self.searches += 1
+        later: list[Callable[[], OptimizeResult]] = []
         try:
             opt = cover_optimum(
                 cell, self.s, self.cost, lambda a, d: self.value(cell, a, d),
                 reach=self.reach, boustrophedon=False, keep_inside=self.keep_inside,
                 centred=False, cutoff=cutoff, screen=self._screen(cell),
                 moves_on_passes=False,  # its floor decides (below): the decisions of bc75ccd
+                later=later,
             )  # fmt: skip
         except (NoTransectError, InvalidPolygonError, InvalidParameterError):
             if cutoff is None:  # a search cut off may have stopped before its first plan
                 self.cache[key] = None
             return None
-        if opt.info.get("cut_off"):  # its candidate is screened out: only the bound counts
-            self.cache[key] = opt
+        self.cache[key] = opt
+        if later:  # its plans after the branch and bound: once the candidate is planned
+            self.later[key] = later[0]
             return opt
+        if opt.info.get("cut_off"):  # its candidate is screened out: only the bound counts
+            return opt
+        return self._completed(cell, opt)
+
+    def finished(self, cell: Region, opt: OptimizeResult) -> OptimizeResult:
+        """The cell's optimum ``opt`` (:meth:`optimum`'s) with the plans its search left for
+        later made (:func:`~boustro.optimize.cover.cover_optimum`'s ``later``): the result
+        the search makes without leaving them."""
+        key = _key(cell)
+        if not opt.info.get("plans_later"):
+            return opt
+        hit = self.cache.get(key)
+        if hit is not None and not hit.info.get("plans_later"):
+            return hit
+        return self._completed(cell, self.later.pop(key)())
+
+    def _completed(self, cell: Region, opt: OptimizeResult) -> OptimizeResult:
+        """The search's result with the lanes laid from the cell's edges (:meth:`_centred`),
+        remembered."""
         opt = self._centred(cell, opt)
         opt = dataclasses.replace(opt, info={**opt.info, "keep_inside": self.keep_inside})
-        self.cache[key] = opt
+        self.cache[_key(cell)] = opt
         return opt
 
     def _screen(self, cell: Region) -> Callable[..., float] | None:
@@ -415,7 +442,7 @@ def _cell_optima(
         floor += max(float(opt.info.get("lower_bound") or 0.0), rest[i]) - rest[i]
     if beat is not None and floor >= beat:
         return None
-    return [found[k] for k in range(len(cells))]
+    return [search.finished(cells[k], found[k]) for k in range(len(cells))]
 
 
 def _uncertified_where_cut(optima: list[OptimizeResult], cand: _Candidate) -> list[OptimizeResult]:
