@@ -212,6 +212,47 @@ def test_cells_get_the_cutoff_that_screens_their_candidate_out():
     assert cutoffs == pytest.approx([70.0 * (1 + CUTOFF_MARGIN), 20.0 + 70.0 * CUTOFF_MARGIN])
 
 
+def _comb(teeth: int) -> Region:
+    """A 30 m deep bar with ``teeth`` teeth 10 m wide, 70 m long and 10 m apart: across the
+    teeth (sweep 0) one cell per tooth and the bar's."""
+    from boustro.geometry import Polygon
+
+    width = 20 * teeth - 10
+    pts = [(0.0, 0.0), (float(width), 0.0)]
+    for x in range(width, 0, -20):
+        pts += [(x, 100.0), (x - 10, 100.0), (x - 10, 30.0), (x - 20, 30.0)]
+    return Region(Polygon(pts[:-2]))
+
+
+@pytest.mark.parametrize("name", ["choset", "merged"])
+def test_decompositions_of_too_many_cells_are_not_traced(name, monkeypatch):
+    """A decomposition of more than MAX_CELLS cells (no candidate) raises before its cells are
+    traced; one of MAX_CELLS or fewer is traced as before (the same cells)."""
+    import boustro.plan.cells as cells_module
+    from boustro.errors import InvalidPolygonError
+    from boustro.mission.decomposed import MAX_CELLS, _decomposition
+
+    traced: list[int] = []
+    trace = cells_module.trace_region
+
+    def counted(*args, **kwargs):
+        traced.append(1)
+        return trace(*args, **kwargs)
+
+    monkeypatch.setattr(cells_module, "trace_region", counted)
+    many = _comb(MAX_CELLS + 1)  # Choset: 14 cells, merged 13
+    with pytest.raises(InvalidPolygonError):
+        _decomposition(many, 0.0, SPACING, name)
+    assert traced == []
+    few = _comb(MAX_CELLS - 2)
+    dec = _decomposition(few, 0.0, SPACING, name)
+    want = cells_module.decompose(few, 0.0, merge=name == "merged", min_width=2 * SPACING)
+    assert 2 < len(dec.cells) <= MAX_CELLS and len(traced) == 2 * len(dec.cells)
+    assert [c.shell.vertices.tobytes() for c in dec.cells] == [
+        c.shell.vertices.tobytes() for c in want.cells
+    ]
+
+
 def _traced() -> Region:
     """A traced field of 324 edges: searched with simplified sandwiches (> SIMPLIFY_EDGES)."""
     from boustro.geometry.traced import traced_field
