@@ -140,6 +140,7 @@ def test_plans_left_for_later_give_the_same_result(monkeypatch):
     keys = ("lower_bound", "gap", "certified", "plans", "ruled_out", "rounds", "cut_off")
     assert {k: done.info[k] for k in keys} == {k: full.info[k] for k in keys}
     assert done.evaluations == full.evaluations and "plans_later" not in done.info
+    assert first.seconds <= done.seconds  # the search's and the plans'
     assert len(settled) == 2  # once each
     assert len(counted) == full.info["plans"]
     # cut off: nothing left for later (its candidate is screened out)

@@ -22,6 +22,13 @@ loose bounds); both searches stop as soon as the floor of :func:`_cell_optima` (
 cells' lower bounds, a turn between cells, the length covering the cells not searched yet)
 reaches the one grid's cost, and a candidate the first search drops is not searched keeping
 inside. On Fields2Cover's fields (the one grid wins) that skips every keep-inside cell search.
+The floor needs the cells' lower bounds only, final once their searches' branch and bound ends:
+the plans a search makes after it (:func:`~boustro.optimize.cover.search.cover_optimum`'s
+``later``: polish, more offsets, the lanes from the cell's edges) are made only for the cells
+of a candidate that passes the floor (:meth:`_Search.finished`): the same optima where a
+candidate is planned, none of those plans where it is screened out (issue 21's 2000-vertex
+field: 0.7 s; docs/scale.md, eighteenth round). A decomposition of more than
+:data:`MAX_CELLS` cells is counted before its cells are traced.
 """
 
 from __future__ import annotations
@@ -96,7 +103,6 @@ class _Candidate(NamedTuple):
     cells: list[Region]  # planned: they cover the area
     models: list[tuple[float, float, float]]  # each cell's modelled (cost, angle, offset)
     estimate: float  # the cells' modelled costs and one turn between consecutive cells
-    searched: list[Region]  # the cells less their thin spikes (:mod:`.slivers`): searched
 
 
 class _Search:
@@ -414,9 +420,8 @@ def _candidates(region: Region, search: _Search, sweep: float | None) -> list[_C
         for label, cells, values in [(name, list(dec.cells), models)] + (
             [] if merged is None else [(f"{name}, merged", *merged)]
         ):
-            searched = [cut_slivers(c, SLIVER_WIDTH * search.s) for c in cells]
             estimate = sum(v[0] for v in values) + turn * (len(cells) - 1)
-            out.append(_Candidate(label, cells, values, estimate, searched))
+            out.append(_Candidate(label, cells, values, estimate))
     out.sort(key=lambda c: c.estimate)
     return out
 
@@ -451,15 +456,17 @@ def _cell_optima(
     return [search.finished(cells[k], found[k]) for k in range(len(cells))]
 
 
-def _uncertified_where_cut(optima: list[OptimizeResult], cand: _Candidate) -> list[OptimizeResult]:
+def _uncertified_where_cut(
+    optima: list[OptimizeResult], cand: _Candidate, searched: list[Region]
+) -> list[OptimizeResult]:
     """The optima, those of cells searched without a spike (:mod:`.slivers`) marked: their
     search's certificate is the cut cell's, the plan flies the whole cell (so that it covers the
     spike), hence no certificate there (``certified`` false, ``gap`` and ``lower_bound``
     ``None``, ``spikes_cut`` true)."""
     marks = {"certified": False, "gap": None, "lower_bound": None, "spikes_cut": True}
     return [
-        o if searched is cell else dataclasses.replace(o, info={**o.info, **marks})
-        for o, cell, searched in zip(optima, cand.cells, cand.searched, strict=True)
+        o if cut is cell else dataclasses.replace(o, info={**o.info, **marks})
+        for o, cell, cut in zip(optima, cand.cells, searched, strict=True)
     ]
 
 
@@ -523,11 +530,13 @@ def plan_decomposed(
         if key in seen:  # the same cells under another name: the same plans, not kept (a tie)
             continue
         seen.add(key)
+        # the cells less their thin spikes (:mod:`.slivers`): searched (of the planned only)
+        searched = [cut_slivers(c, SLIVER_WIDTH * searches[0].s) for c in cand.cells]
         for search in searches:
-            optima = _cell_optima(search, cand.searched, beat)
+            optima = _cell_optima(search, searched, beat)
             if optima is None:  # screened out (or no lane): the other search too
                 break
-            optima = _uncertified_where_cut(optima, cand)
+            optima = _uncertified_where_cut(optima, cand, searched)
             plan = plan_region(
                 region, search.s, layout=lay, cells=list(zip(cand.cells, optima, strict=True)),
                 order="auto", keep_inside=keep_inside,

@@ -668,7 +668,7 @@ def cover_optimum(
     if later is not None and improve and not centred:
         lower = search.settle_deferred(min(floor, search.best[0]))
         first = _result(search, lower, rounds, stopped, rtol, t0, plans_later=True)
-        later.append(lambda: _finished(search, floor, lower, rounds, stopped, rtol, t0))
+        later.append(lambda: _finished(search, floor, lower, rounds, stopped, rtol, first.seconds))
         return first
     if improve:
         polish(search)
@@ -695,15 +695,17 @@ def _finished(
     rounds: int,
     stopped: str,
     rtol: float,
-    t0: float,
+    seconds: float,
 ) -> OptimizeResult:
-    """The plans a search with ``later`` left (:func:`cover_optimum`), then its result:
+    """The plans a search with ``later`` left (:func:`cover_optimum`), then its result (its
+    ``seconds`` those of the search, ``seconds``, and of the plans):
     ``settled`` is ``search.settle_deferred(min(floor, best plan before them))``, the lower
     bound :func:`cover_optimum` takes, ``search.settle_deferred(min(floor, best plan))``,
     wherever the best plan after them is not below ``floor`` (the same argument, and the
     deferred boxes' bounds do not depend on the plans). A plan below ``floor`` (no layout's
     plan is: ``floor`` bounds them all) would lower it: then ``min(settled, plan)``, also a
     lower bound."""
+    t0 = time.perf_counter() - seconds
     before = min(floor, search.best[0])
     polish(search)
     refine_offsets(search)
