@@ -111,6 +111,44 @@ def test_cutoff_stops_the_search_with_a_true_bound():
     assert same.info["lower_bound"] == full.info["lower_bound"]
 
 
+def test_plans_left_for_later_give_the_same_result(monkeypatch):
+    """A cell's search with ``later`` (:func:`cover_optimum`): its lower bound final before the
+    plans after the branch and bound; the function left makes them (here polish finds a
+    cheaper plan: 854.2 -> 846.3 s) and returns the result of the search without ``later``.
+    The deferred boxes' bounds (:meth:`~.search.CoverSearch.settle_deferred`, none on this
+    area) are made to lower the floor by 1 s, once: it must be in the bound of both."""
+    settled: list[float] = []
+    settle = search_module.CoverSearch.settle_deferred
+
+    def lowered(self, lower):
+        settled.append(settle(self, lower) - 1.0)
+        return settled[-1]
+
+    monkeypatch.setattr(search_module.CoverSearch, "settle_deferred", lowered)
+    region = _region(8)
+    full = cover_optimum(region, SPACING, COST, _plans(region, []), centred=False)
+    later: list = []
+    counted: list[int] = []
+    first = cover_optimum(region, SPACING, COST, _plans(region, counted), centred=False,
+                          later=later)  # fmt: skip
+    assert len(later) == 1 and first.info["plans_later"] and "plans_later" not in full.info
+    assert first.info["lower_bound"] == full.info["lower_bound"] == settled[0] == settled[1]
+    assert first.fitness > full.fitness  # the plans left for later find the cheaper plan
+    assert len(counted) == first.info["plans"] < full.info["plans"]
+    done = later[0]()
+    assert (done.angle, done.offset, done.fitness) == (full.angle, full.offset, full.fitness)
+    keys = ("lower_bound", "gap", "certified", "plans", "ruled_out", "rounds", "cut_off")
+    assert {k: done.info[k] for k in keys} == {k: full.info[k] for k in keys}
+    assert done.evaluations == full.evaluations and "plans_later" not in done.info
+    assert first.seconds <= done.seconds  # the search's and the plans'
+    assert len(settled) == 2  # once each
+    assert len(counted) == full.info["plans"]
+    # cut off: nothing left for later (its candidate is screened out)
+    cut = cover_optimum(region, SPACING, COST, _plans(region, []), centred=False,
+                        cutoff=0.98 * full.info["lower_bound"], later=later)  # fmt: skip
+    assert cut.info["cut_off"] and len(later) == 1 and "plans_later" not in cut.info
+
+
 def test_without_the_centred_sweep():
     region = _region(71)
     res = cover_optimum(region, SPACING, COST, _plans(region, []), centred=False)
@@ -165,11 +203,55 @@ def test_cells_get_the_cutoff_that_screens_their_candidate_out():
             cutoffs.append(cutoff)
             return SimpleNamespace(info={"lower_bound": 10.0 * cell.area})
 
+        def finished(self, cell, opt):
+            return opt
+
     assert _cell_optima(Search(), cells, beat=None) is not None and cutoffs == [None] * 3
     cutoffs.clear()
     assert _cell_optima(Search(), cells, beat=70.0) is None
     # the first cell alone must reach 70, the second 70 - 50 (then 50 + 30 >= 70)
     assert cutoffs == pytest.approx([70.0 * (1 + CUTOFF_MARGIN), 20.0 + 70.0 * CUTOFF_MARGIN])
+
+
+def _comb(teeth: int) -> Region:
+    """A 30 m deep bar with ``teeth`` teeth 10 m wide, 70 m long and 10 m apart: across the
+    teeth (sweep 0) one cell per tooth and the bar's."""
+    from boustro.geometry import Polygon
+
+    width = 20 * teeth - 10
+    pts = [(0.0, 0.0), (float(width), 0.0)]
+    for x in range(width, 0, -20):
+        pts += [(x, 100.0), (x - 10, 100.0), (x - 10, 30.0), (x - 20, 30.0)]
+    return Region(Polygon(pts[:-2]))
+
+
+@pytest.mark.parametrize("name", ["choset", "merged"])
+def test_decompositions_of_too_many_cells_are_not_traced(name, monkeypatch):
+    """A decomposition of more than MAX_CELLS cells (no candidate) raises before its cells are
+    traced; one of MAX_CELLS or fewer is traced as before (the same cells)."""
+    import boustro.plan.cells as cells_module
+    from boustro.errors import InvalidPolygonError
+    from boustro.mission.decomposed import MAX_CELLS, _decomposition
+
+    traced: list[int] = []
+    trace = cells_module.trace_region
+
+    def counted(*args, **kwargs):
+        traced.append(1)
+        return trace(*args, **kwargs)
+
+    monkeypatch.setattr(cells_module, "trace_region", counted)
+    many = _comb(MAX_CELLS + 1)  # Choset: 14 cells, merged 13
+    with pytest.raises(InvalidPolygonError):
+        _decomposition(many, 0.0, SPACING, name)
+    assert traced == []
+    few = _comb(MAX_CELLS - 2)
+    dec = _decomposition(few, 0.0, SPACING, name)
+    want = cells_module.decompose(few, 0.0, merge=name == "merged", min_width=2 * SPACING)
+    assert 2 < len(dec.cells) <= MAX_CELLS and len(traced) == 2 * len(dec.cells)
+    assert [c.shell.vertices.tobytes() for c in dec.cells] == [
+        c.shell.vertices.tobytes() for c in want.cells
+    ]
 
 
 def _traced() -> Region:

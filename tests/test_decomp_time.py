@@ -376,12 +376,20 @@ def test_cells_searched_largest_first_and_stopped_once_their_bounds_reach_the_gr
             asked.append(cell.area)
             return SimpleNamespace(info={"lower_bound": 10.0 * cell.area})
 
+        def finished(self, cell, opt):  # the plans its search left for later
+            finished.append(cell.area)
+            return SimpleNamespace(info={**opt.info, "done": True})
+
+    finished: list[float] = []
     got = _cell_optima(Search(), cells, beat=None)
     assert asked == [5.0, 3.0, 1.0]
     assert [o.info["lower_bound"] for o in got] == [10.0, 50.0, 30.0]  # the cells' order
-    asked.clear()
+    assert finished == [1.0, 5.0, 3.0] and all(o.info["done"] for o in got)
+    asked.clear(), finished.clear()
     assert _cell_optima(Search(), cells, beat=70.0) is None  # 50 + 30 >= 70: no third search
-    assert asked == [5.0, 3.0]
+    assert asked == [5.0, 3.0] and finished == []  # screened out: nothing finished
+    assert _cell_optima(Search(), cells, beat=91.0) is not None  # 50 + 30 + 10 < 91
+    assert finished == [1.0, 5.0, 3.0]
 
 
 @pytest.mark.parametrize("seed", range(3))

@@ -22,6 +22,13 @@ loose bounds); both searches stop as soon as the floor of :func:`_cell_optima` (
 cells' lower bounds, a turn between cells, the length covering the cells not searched yet)
 reaches the one grid's cost, and a candidate the first search drops is not searched keeping
 inside. On Fields2Cover's fields (the one grid wins) that skips every keep-inside cell search.
+The floor needs the cells' lower bounds only, final once their searches' branch and bound ends:
+the plans a search makes after it (:func:`~boustro.optimize.cover.search.cover_optimum`'s
+``later``: polish, more offsets, the lanes from the cell's edges) are made only for the cells
+of a candidate that passes the floor (:meth:`_Search.finished`): the same optima where a
+candidate is planned, none of those plans where it is screened out (issue 21's 2000-vertex
+field: 0.7 s; docs/scale.md, eighteenth round). A decomposition of more than
+:data:`MAX_CELLS` cells is counted before its cells are traced.
 """
 
 from __future__ import annotations
@@ -96,7 +103,6 @@ class _Candidate(NamedTuple):
     cells: list[Region]  # planned: they cover the area
     models: list[tuple[float, float, float]]  # each cell's modelled (cost, angle, offset)
     estimate: float  # the cells' modelled costs and one turn between consecutive cells
-    searched: list[Region]  # the cells less their thin spikes (:mod:`.slivers`): searched
 
 
 class _Search:
@@ -116,6 +122,8 @@ class _Search:
         self.s = frame.sensor.spacing * frame.proj.scale_min
         self.reach = frame.sensor.reach * frame.proj.scale_min
         self.cache: dict[bytes, OptimizeResult | None] = {}
+        # the plans a cell's search left for later (cover_optimum's ``later``), by cell
+        self.later: dict[bytes, Callable[[], OptimizeResult]] = {}
         self.models: dict[bytes, tuple[float, float, float]] = {}
         self.searches = 0
         self.union_edges = 0
@@ -186,7 +194,10 @@ class _Search:
         return out
 
     def optimum(self, cell: Region, cutoff: float | None = None) -> OptimizeResult | None:
-        """The cell's certified optimum (``None`` past :data:`MAX_SEARCHES` or no lane).
+        """The cell's certified optimum (``None`` past :data:`MAX_SEARCHES` or no lane), or
+        its search's result before the plans after the branch and bound (``info["plans_later"]``:
+        its lower bound final, :meth:`finished` makes them; the floor of :func:`_cell_optima`
+        needs only the bound).
 
         ``cutoff``: the search may stop once no layout of the cell costs less
         (``info["cut_off"]``: then only its lower bound counts, the candidate is screened out);
@@ -201,23 +212,45 @@ class _Search:
         if self.searches >= MAX_SEARCHES:
             return None
         self.searches += 1
+        later: list[Callable[[], OptimizeResult]] = []
         try:
             opt = cover_optimum(
                 cell, self.s, self.cost, lambda a, d: self.value(cell, a, d),
                 reach=self.reach, boustrophedon=False, keep_inside=self.keep_inside,
                 centred=False, cutoff=cutoff, screen=self._screen(cell),
                 moves_on_passes=False,  # its floor decides (below): the decisions of bc75ccd
+                later=later,
             )  # fmt: skip
         except (NoTransectError, InvalidPolygonError, InvalidParameterError):
             if cutoff is None:  # a search cut off may have stopped before its first plan
                 self.cache[key] = None
             return None
-        if opt.info.get("cut_off"):  # its candidate is screened out: only the bound counts
-            self.cache[key] = opt
+        self.cache[key] = opt
+        if later:  # its plans after the branch and bound: once the candidate is planned
+            self.later[key] = later[0]
             return opt
+        if opt.info.get("cut_off"):  # its candidate is screened out: only the bound counts
+            return opt
+        return self._completed(cell, opt)
+
+    def finished(self, cell: Region, opt: OptimizeResult) -> OptimizeResult:
+        """The cell's optimum ``opt`` (:meth:`optimum`'s) with the plans its search left for
+        later made (:func:`~boustro.optimize.cover.cover_optimum`'s ``later``): the result
+        the search makes without leaving them."""
+        key = _key(cell)
+        if not opt.info.get("plans_later"):
+            return opt
+        hit = self.cache.get(key)
+        if hit is not None and not hit.info.get("plans_later"):
+            return hit
+        return self._completed(cell, self.later.pop(key)())
+
+    def _completed(self, cell: Region, opt: OptimizeResult) -> OptimizeResult:
+        """The search's result with the lanes laid from the cell's edges (:meth:`_centred`),
+        remembered."""
         opt = self._centred(cell, opt)
         opt = dataclasses.replace(opt, info={**opt.info, "keep_inside": self.keep_inside})
-        self.cache[key] = opt
+        self.cache[_key(cell)] = opt
         return opt
 
     def _screen(self, cell: Region) -> Callable[..., float] | None:
@@ -309,12 +342,18 @@ def _decompositions(
 
 
 def _decomposition(region: Region, sweep: float, s: float, name: str) -> Decomposition:
-    """Every trapezoid a cell, Choset's cells, or the merged cells of :func:`decompose`."""
+    """Every trapezoid a cell, Choset's cells, or the merged cells of :func:`decompose`; one of
+    more than :data:`MAX_CELLS` cells (no candidate) raises before its cells are traced (a
+    traced field's Choset cells: 13-23 of them, 0.2 s of tracing over 8 sweeps)."""
     if name == "trapezoids":
         if len(trapezoids(region, sweep).a) > MAX_CELLS:  # too many cells to search
             raise InvalidPolygonError("too many trapezoids")
         return slab_decomposition(region, sweep)
-    return decompose(region, sweep, merge=name == "merged", min_width=2 * s)
+    merge, min_width = name == "merged", 2 * s
+    counted = decompose(region, sweep, merge=merge, min_width=min_width, polygons=False)
+    if int(counted.membership.max(initial=-1)) + 1 > MAX_CELLS:
+        raise InvalidPolygonError("too many cells")
+    return decompose(region, sweep, merge=merge, min_width=min_width)
 
 
 def _merged(
@@ -381,9 +420,8 @@ def _candidates(region: Region, search: _Search, sweep: float | None) -> list[_C
         for label, cells, values in [(name, list(dec.cells), models)] + (
             [] if merged is None else [(f"{name}, merged", *merged)]
         ):
-            searched = [cut_slivers(c, SLIVER_WIDTH * search.s) for c in cells]
             estimate = sum(v[0] for v in values) + turn * (len(cells) - 1)
-            out.append(_Candidate(label, cells, values, estimate, searched))
+            out.append(_Candidate(label, cells, values, estimate))
     out.sort(key=lambda c: c.estimate)
     return out
 
@@ -415,18 +453,20 @@ def _cell_optima(
         floor += max(float(opt.info.get("lower_bound") or 0.0), rest[i]) - rest[i]
     if beat is not None and floor >= beat:
         return None
-    return [found[k] for k in range(len(cells))]
+    return [search.finished(cells[k], found[k]) for k in range(len(cells))]
 
 
-def _uncertified_where_cut(optima: list[OptimizeResult], cand: _Candidate) -> list[OptimizeResult]:
+def _uncertified_where_cut(
+    optima: list[OptimizeResult], cand: _Candidate, searched: list[Region]
+) -> list[OptimizeResult]:
     """The optima, those of cells searched without a spike (:mod:`.slivers`) marked: their
     search's certificate is the cut cell's, the plan flies the whole cell (so that it covers the
     spike), hence no certificate there (``certified`` false, ``gap`` and ``lower_bound``
     ``None``, ``spikes_cut`` true)."""
     marks = {"certified": False, "gap": None, "lower_bound": None, "spikes_cut": True}
     return [
-        o if searched is cell else dataclasses.replace(o, info={**o.info, **marks})
-        for o, cell, searched in zip(optima, cand.cells, cand.searched, strict=True)
+        o if cut is cell else dataclasses.replace(o, info={**o.info, **marks})
+        for o, cell, cut in zip(optima, cand.cells, searched, strict=True)
     ]
 
 
@@ -490,11 +530,13 @@ def plan_decomposed(
         if key in seen:  # the same cells under another name: the same plans, not kept (a tie)
             continue
         seen.add(key)
+        # the cells less their thin spikes (:mod:`.slivers`): searched (of the planned only)
+        searched = [cut_slivers(c, SLIVER_WIDTH * searches[0].s) for c in cand.cells]
         for search in searches:
-            optima = _cell_optima(search, cand.searched, beat)
+            optima = _cell_optima(search, searched, beat)
             if optima is None:  # screened out (or no lane): the other search too
                 break
-            optima = _uncertified_where_cut(optima, cand)
+            optima = _uncertified_where_cut(optima, cand, searched)
             plan = plan_region(
                 region, search.s, layout=lay, cells=list(zip(cand.cells, optima, strict=True)),
                 order="auto", keep_inside=keep_inside,

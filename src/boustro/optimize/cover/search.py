@@ -608,6 +608,7 @@ def cover_optimum(
     screen: Callable[[float, float, float], float] | None = None,
     moves_on_passes: bool = True,
     outside: float | None = None,
+    later: list[Callable[[], OptimizeResult]] | None = None,
 ) -> OptimizeResult:
     """The layout ``(angle, offset)`` whose plan has the least ``cost``, with a certificate.
 
@@ -664,6 +665,14 @@ def cover_optimum(
             1-tree's moves then also go round the shell's pockets farther than that from it
             (:func:`~.walls.shell_walls`; docs/mission_time.md, "Walls outside the shell").
             ``None``: not known (a vehicle's turns, a decomposition's cells), no such walls.
+        later: with ``centred=False`` (a decomposition's cells), a list: the plans made after
+            the branch and bound (:func:`~.plans.polish`, :func:`~.plans.refine_offsets`) are
+            left for later. The result returned is then the search's before them (its
+            ``lower_bound`` that of the result, ``info["plans_later"]`` true) and a function
+            that makes them and returns the result this call makes without ``later`` is
+            appended to the list (:func:`_finished`); nothing is appended where they would not
+            run (a search cut off, no plan). A decomposition's candidate whose cells' floor
+            rules it out never needs them.
 
     Returns:
         an :class:`OptimizeResult` with ``fitness`` = the best plan's cost (minimised),
@@ -703,12 +712,18 @@ def cover_optimum(
     floor, rounds, stopped = branch_and_bound(search, boxes, limits, progress)
     cut_off = stopped == CUT_OFF
     found = math.isfinite(search.best[0]) and not cut_off
-    if not boustrophedon and evaluate is not None and found:
+    improve = not boustrophedon and evaluate is not None and found
+    if later is not None and improve and not centred:
+        lower = search.settle_deferred(min(floor, search.best[0]))
+        first = _result(search, lower, rounds, stopped, rtol, t0, plans_later=True)
+        later.append(lambda: _finished(search, floor, lower, rounds, stopped, rtol, first.seconds))
+        return first
+    if improve:
         polish(search)
         refine_offsets(search)
     if centred and angle is None and evaluate is not None and not keep_inside and found:
         try_centred(search)
-    value, theta, d = search.best
+    value = search.best[0]
     if not math.isfinite(value):
         raise InvalidParameterError("no layout of this spacing has a lane over the area")
     lower = min(floor, value)
@@ -718,18 +733,59 @@ def cover_optimum(
         lower = search.settle_branched(lower, value, rtol)
     if not cut_off:  # cut off: the floor counts the deferred boxes' bounds (without 1-trees)
         lower = search.settle_deferred(lower)
+    return _result(search, lower, rounds, stopped, rtol, t0)
+
+
+def _finished(
+    search: CoverSearch,
+    floor: float,
+    settled: float,
+    rounds: int,
+    stopped: str,
+    rtol: float,
+    seconds: float,
+) -> OptimizeResult:
+    """The plans a search with ``later`` left (:func:`cover_optimum`), then its result (its
+    ``seconds`` those of the search, ``seconds``, and of the plans):
+    ``settled`` is ``search.settle_deferred(min(floor, best plan before them))``, the lower
+    bound :func:`cover_optimum` takes, ``search.settle_deferred(min(floor, best plan))``,
+    wherever the best plan after them is not below ``floor`` (the same argument, and the
+    deferred boxes' bounds do not depend on the plans). A plan below ``floor`` (no layout's
+    plan is: ``floor`` bounds them all) would lower it: then ``min(settled, plan)``, also a
+    lower bound."""
+    t0 = time.perf_counter() - seconds
+    before = min(floor, search.best[0])
+    polish(search)
+    refine_offsets(search)
+    value = search.best[0]
+    lower = settled if min(floor, value) == before else min(settled, value)
+    return _result(search, lower, rounds, stopped, rtol, t0)
+
+
+def _result(
+    search: CoverSearch,
+    lower: float,
+    rounds: int,
+    stopped: str,
+    rtol: float,
+    t0: float,
+    plans_later: bool = False,
+) -> OptimizeResult:
+    """:func:`cover_optimum`'s result: the search's best plan, the lower bound ``lower``."""
+    value, theta, d = search.best
+    cut_off = stopped == CUT_OFF
     gap = max(0.0, value - lower)
-    angle, offset = canonical(theta, d, s)
+    angle, offset = canonical(theta, d, search.s)
     return OptimizeResult(
         angle=angle,
         offset=offset,
         fitness=value,
-        spacing=s,
+        spacing=search.s,
         method="certified-cover",
         evaluations=search.bound_evaluations,
         seconds=time.perf_counter() - t0,
         info={
-            "objective": cost.name,
+            "objective": search.cost.name,
             "lower_bound": lower,
             "gap": gap,
             "certified": gap <= rtol * abs(value) + 1e-12,
@@ -739,5 +795,6 @@ def cover_optimum(
             "cut_off": cut_off,
             "converged": not stopped,
             **({"stopped": stopped} if stopped else {}),
+            **({"plans_later": True} if plans_later else {}),
         },
     )
