@@ -1,0 +1,100 @@
+"""The floor of a plan without ``keep_inside`` (eighteenth round,
+:func:`boustro.plan.region_floor.plan_floor` without it: its lanes and hole passes, a floor of
+its moves): below every plan with the plan's turns, near it, and the decomposed plan's cells
+screening their edge layouts by it (``_Search._centred``) make the same plan."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from boustro.geometry.region import Region
+from boustro.plan.cells import decompose
+from boustro.plan.region import plan_region
+from boustro.plan.region_floor import lanes_floor, plan_floor, screen_floor
+
+from .test_inside_floor import L_HOLES, SPACING, _areas
+from .test_keep_inside_screen import _centred_values
+from .test_lanes_floor import COSTS, _more_areas
+
+
+def _cells() -> list[Region]:
+    """The merged cells of two areas with holes (a decomposition's cells keep the holes they
+    surround: their plans fly hole passes)."""
+    out = []
+    for region in (L_HOLES, _areas()[1]):
+        out += list(decompose(region, 0.4, merge=True, min_width=2 * SPACING).cells)
+    return out
+
+
+def _regions() -> list[Region]:
+    return _areas() + _more_areas() + _cells()
+
+
+@pytest.mark.parametrize("turnaround", [0.0, 4.0])
+def test_the_open_floor_is_below_every_plan(turnaround):
+    """On 6 layouts of each area (holes, no hole, a decomposition's cells with a hole): the
+    floor's turns are the plan's, its length at most the plan's path and at least its lanes and
+    hole passes, and (without run-ins) near the plan on most layouts."""
+    rng = np.random.default_rng(7)
+    near = laid = with_holes = 0
+    for region in _regions():
+        for angle, offset in zip(
+            rng.uniform(0, math.pi, 6), rng.uniform(0, SPACING, 6), strict=True
+        ):
+            kw = dict(decompose_area=False, angle=angle, offset=offset, turnaround=turnaround)
+            plan = plan_region(region, SPACING, **kw)
+            length, turns = plan_floor(region, SPACING, **kw)
+            st = plan.stats
+            assert turns == st.n_turns
+            assert length <= st.path_length * (1 + 1e-12)
+            assert length >= st.transect_length + st.hole_pass_length - 1e-9
+            near += length > 0.95 * st.path_length
+            laid += 1
+            with_holes += st.hole_pass_length > 0
+    assert with_holes >= 6
+    assert near >= 0.8 * laid or turnaround > 0  # run-ins and run-outs are not in the floor
+
+
+def test_the_screen_without_keep_inside_is_the_plan_floor():
+    """Without ``keep_inside`` the screen returns the plan floor's cost (no cheap floor: the
+    margins are keep-inside's), whatever ``best``."""
+    kw = dict(decompose_area=False, angle=0.7, offset=3.0)
+    for cost in COSTS:
+        full = cost.of(*plan_floor(L_HOLES, SPACING, **kw))
+        assert lanes_floor(L_HOLES, SPACING, cost.of, **kw) is None
+        for t in (0.0, full, math.inf):
+            assert screen_floor(L_HOLES, SPACING, cost.of, lambda f, t=t: f > t, **kw) == full
+
+
+def test_no_hole_pass_no_ring():
+    """With hole passes off the plan flies no hole pass: neither does the floor."""
+    kw = dict(decompose_area=False, angle=0.2, offset=2.0, hole_passes=False)
+    plan = plan_region(L_HOLES, SPACING, **kw)
+    length, turns = plan_floor(L_HOLES, SPACING, **kw)
+    assert turns == plan.stats.n_turns
+    assert length <= plan.stats.path_length
+
+
+@pytest.mark.parametrize(
+    ("shape", "holes"),
+    [
+        ([(0, 0), (100, 0), (100, 30), (30, 30), (30, 100), (0, 100)], []),
+        (
+            [(0, 0), (120, 0), (120, 40), (40, 40), (40, 110), (0, 110)],
+            [[(60, 10), (80, 10), (80, 25), (60, 25)], [(12, 60), (25, 60), (25, 80), (12, 80)]],
+        ),
+    ],
+)
+def test_centred_layouts_screened_without_keep_inside_keep_the_same_plan(monkeypatch, shape, holes):
+    """The time objective without ``keep_inside``: the decomposed plan's cells plan their
+    edge layouts only where their floor is below the cell's best plan; the same plan and
+    optimum as planning every one, fewer cell plans."""
+    with_screen, fewer = _centred_values(monkeypatch, shape, holes, screen=True, inside=False)
+    without, every = _centred_values(monkeypatch, shape, holes, screen=False, inside=False)
+    assert np.array_equal(with_screen.waypoints, without.waypoints)
+    assert with_screen.optimum.fitness == without.optimum.fitness
+    assert with_screen.optimum.info["decomposed"] == without.optimum.info["decomposed"]
+    assert fewer < every
