@@ -6,11 +6,15 @@ screening their edge layouts by it (``_Search._centred``) make the same plan."""
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from boustro.geometry.region import Region
+from boustro.mission import decomposed
+from boustro.optimize import OptimizeResult
+from boustro.optimize.cover import CoverCost
 from boustro.plan.cells import decompose
 from boustro.plan.region import plan_region
 from boustro.plan.region_floor import lanes_floor, plan_floor, screen_floor
@@ -98,3 +102,41 @@ def test_centred_layouts_screened_without_keep_inside_keep_the_same_plan(monkeyp
     assert with_screen.optimum.fitness == without.optimum.fitness
     assert with_screen.optimum.info["decomposed"] == without.optimum.info["decomposed"]
     assert fewer < every
+
+
+def _open_search() -> decomposed._Search:
+    """A decomposition's cell search without ``keep_inside`` (the time objective, 10 m)."""
+    frame = SimpleNamespace(
+        sensor=SimpleNamespace(spacing=SPACING, reach=SPACING / 2),
+        proj=SimpleNamespace(scale_min=1.0),
+    )
+    options = dict(turnaround=0.0, reach=SPACING / 2, nadir_gap=0.0, ground_scale=1.0)
+    options.update(speed=5.0, turn_time=10.0, area=None)
+    return decomposed._Search(frame, CoverCost.time(5.0, 10.0), "guaranteed", options)
+
+
+def test_centred_keeps_the_best_edge_layout(monkeypatch):
+    """A 100 x 60 m rectangle: its lanes laid from an edge at 0 degrees (6 lanes) beat those at
+    90 (10 lanes). Told a best plan 1% above the 0-degree one, ``_centred`` plans it (its floor
+    is below) and keeps it, and does not plan the 90-degree one (its floor is above)."""
+    cell = Region(np.array([(0, 0), (100, 0), (100, 60), (0, 60)], dtype=float))
+    search = _open_search()
+    angles = decomposed._edge_angles(cell)
+    offsets = decomposed.centred_offsets(cell, angles, SPACING, SPACING / 2)
+    values = [search.value(cell, float(a), float(d)) for a, d in zip(angles, offsets, strict=True)]
+    assert len(values) == 2 and values[0] < 0.9 * values[1]
+    given = OptimizeResult(
+        angle=1.0, offset=0.0, fitness=1.01 * min(values), spacing=SPACING, method="cover",
+        evaluations=0, seconds=0.0, info={"lower_bound": 0.9 * min(values), "rtol": 1e-3},
+    )  # fmt: skip
+    planned = []
+    real = decomposed._Search.value
+
+    def value(self, cell, angle, offset):
+        planned.append(angle)
+        return real(self, cell, angle, offset)
+
+    monkeypatch.setattr(decomposed._Search, "value", value)
+    got = search._centred(cell, given)
+    assert got.fitness == min(values)
+    assert planned == [float(angles[int(np.argmin(values))])]
