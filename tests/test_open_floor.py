@@ -140,3 +140,16 @@ def test_centred_keeps_the_best_edge_layout(monkeypatch):
     got = search._centred(cell, given)
     assert got.fitness == min(values)
     assert planned == [float(angles[int(np.argmin(values))])]
+
+
+def test_a_cut_lane_and_its_hole_ring_by_hand():
+    """A 100 x 10 m strip, its one lane (y = 5) cut by a 20 x 4 m hole into 0-40 and 60-100:
+    the floor is the lanes (80 m) and the hole's whole closed ring (48 m, driven from a corner
+    round to it: its moves count 0) and the two cut ends' entries, 2 m each to the nearest
+    corner less the largest (2 m): 130 m, 2 turns (the plan flies 152 m)."""
+    strip = np.array([(0, 0), (100, 0), (100, 10), (0, 10)], dtype=float)
+    region = Region(strip, [np.array([(40, 3), (60, 3), (60, 7), (40, 7)], dtype=float)])
+    kw = dict(decompose_area=False, angle=0.0, offset=0.0)
+    length, turns = plan_floor(region, SPACING, **kw)
+    assert (length, turns) == (pytest.approx(130.0, abs=1e-9), 2)
+    assert plan_region(region, SPACING, **kw).stats.path_length >= length
