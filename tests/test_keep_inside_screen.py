@@ -89,8 +89,11 @@ def test_keep_inside_search_only_after_the_free_search_passes(monkeypatch, shape
     assert (m.optimum.method == "decomposed-cover") == (not screened)
 
 
-def _centred_values(monkeypatch, shape, holes, screen: bool) -> tuple[object, int]:
-    """The plan, and the cell plans ``_Search._centred`` made (its screen on or off)."""
+def _centred_values(
+    monkeypatch, shape, holes, screen: bool, inside: bool = True
+) -> tuple[object, int]:
+    """The plan (``keep_inside`` or not), and the cell plans ``_Search._centred`` made (its
+    screen on or off)."""
     made = [0]
     real_centred, real_value = decomposed._Search._centred, decomposed._Search.value
 
@@ -109,7 +112,7 @@ def _centred_values(monkeypatch, shape, holes, screen: bool) -> tuple[object, in
     monkeypatch.setattr(decomposed._Search, "value", value)
     if not screen:
         monkeypatch.setattr(decomposed, "rules_out", lambda floor, best: False)
-    kw = dict(crs=None, speed=SPEED, turn_time=TURN, keep_inside=True, holes=holes)
+    kw = dict(crs=None, speed=SPEED, turn_time=TURN, keep_inside=inside, holes=holes)
     m = plan_area(shape, 10.0, **kw)
     monkeypatch.undo()
     return m, made[0]

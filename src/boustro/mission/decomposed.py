@@ -145,7 +145,8 @@ class _Search:
     def floor(self, cell: Region, angle: float, offset: float, best: float = math.inf) -> float:
         """A floor of :meth:`value` (without ``finish``), cheaper than the plan: the cell's
         ``keep_inside`` lanes and passes and a floor of its moves, or its lanes alone where
-        that already rules it out against ``best``
+        that already rules it out against ``best`` (without ``keep_inside``: its lanes and a
+        floor of its moves)
         (:func:`~boustro.plan.region_floor.screen_floor`), for the search's screen."""
         lay: Layout = "chords" if self.layout == "chords" else "guaranteed"
         return screen_floor(
@@ -217,7 +218,8 @@ class _Search:
             opt = cover_optimum(
                 cell, self.s, self.cost, lambda a, d: self.value(cell, a, d),
                 reach=self.reach, boustrophedon=False, keep_inside=self.keep_inside,
-                centred=False, cutoff=cutoff, screen=self._screen(cell),
+                centred=False, cutoff=cutoff,
+                screen=self._screen(cell) if self.keep_inside else None,  # bound tight without
                 moves_on_passes=False,  # its floor decides (below): the decisions of bc75ccd
                 later=later,
             )  # fmt: skip
@@ -254,8 +256,11 @@ class _Search:
         return opt
 
     def _screen(self, cell: Region) -> Callable[..., float] | None:
-        """The search's screen (:meth:`floor`): ``keep_inside`` plans, not finished."""
-        if not self.keep_inside or self.finish is not None or self.layout == "chords":
+        """The screen (:meth:`floor`) of plans not finished, of the guaranteed layout: the
+        search's with ``keep_inside``, and :meth:`_centred`'s with and without it (without it
+        the search's own bound is within a few percent and rules out what the floor would:
+        docs/keep_inside.md, "Eighteenth round")."""
+        if self.finish is not None or self.layout == "chords":
             return None
         return lambda a, d, best=math.inf: self.floor(cell, a, d, best)
 

@@ -1,4 +1,5 @@
-"""A floor of a ``keep_inside`` plan's path, from its lanes and boundary passes alone.
+"""A floor of a ``keep_inside`` plan's path, from its lanes and boundary passes alone (and of a
+plan without it, from its lanes: :func:`_open_floor`).
 
 A search over layouts (:func:`boustro.optimize.cover.cover_optimum`) plans hundreds of
 ``keep_inside`` layouts of one area, most of them longer than its best plan. The lanes cut
@@ -40,17 +41,35 @@ _DEFAULTS = {
 
 def plan_floor(region: Any, spacing: float, **kw: Any) -> tuple[float, int] | None:
     """A lower bound ``(path length, turns)`` (plan units) of the plan
-    ``plan_region(region, spacing, **kw)``, from its cut lanes and boundary passes; ``None``
-    unless it is a ``keep_inside`` plan of the guaranteed layout over one cell
-    (``decompose_area=False``). Raises what ``plan_region`` raises for its lanes, not what its
-    tour stage raises (``order="exact"`` over too many passes: the mission's screen never sets
-    ``order``)."""
+    ``plan_region(region, spacing, **kw)``, from its cut lanes and boundary passes (without
+    ``keep_inside``: its lanes, :func:`_open_floor`); ``None`` unless it is a plan of the
+    guaranteed layout over one cell (``decompose_area=False``). Raises what ``plan_region``
+    raises for its lanes, not what its tour stage raises (``order="exact"`` over too many
+    passes: the mission's screen never sets ``order``)."""
     parsed = _parsed(region, spacing, kw)
     if parsed is None:
         return None
     r, opts = parsed
+    if not opts.keep_inside:
+        return _open_floor(r, opts)
     lanes = _plan_lanes(r, _plan_cells(r, opts, []), opts)
     return tour_floor(lanes.lanes, lanes.boundary or [])
+
+
+def _open_floor(r: Region, opts: Any) -> tuple[float, int]:
+    """:func:`plan_floor` of a plan without ``keep_inside``: :func:`tour_floor` of its lanes as
+    laid (the plan flies them as they are, :func:`~boustro.plan.region._plan_lanes`) and, with
+    hole passes on, the closed ring of every hole that cuts a lane (the hole pass the plan
+    flies, :func:`~boustro.plan.tour._hole_pass`: the hole's own ring, entered at one of its
+    corners). Why it is below the plan (docs/keep_inside.md, "Eighteenth round"): the path
+    drives every lane whole from one end to the other (a chain's lanes too; run-ins and
+    run-outs only lengthen the path between lane ends, never below the straight line) and every
+    hole pass round from a corner to it, so :func:`tour_floor`'s argument holds, and the plan's
+    turns are its lanes and hole passes less one (:func:`~boustro.plan.region._assemble`)."""
+    lanes = _laid_lanes(r, _plan_cells(r, opts, []), opts).lanes
+    cut = sorted(set().union(*(ls.cut for ls in lanes))) if opts.hole_passes else []
+    rings = [np.concatenate([r.holes[i].vertices, r.holes[i].vertices[:1]]) for i in cut]
+    return tour_floor(lanes, rings)
 
 
 def screen_floor(
@@ -87,12 +106,13 @@ def lanes_floor(
     **kw: Any,
 ) -> float | None:
     """A floor of ``cost_of(*plan_floor(region, spacing, **kw))`` (``None`` where that is
-    ``None``) from the lanes cut at each margin and a floor of their passes
-    (:func:`~boustro.plan.inside.margin_floor`), without their residual: the smallest over the
-    margins of ``min_p cost_of(L + P + max(M - H(p), 0), n + p - 1)``, ``L`` the cut lanes'
-    length, ``P`` the passes' floor, ``n`` the lanes, ``M`` the moves' floor of the lanes alone
-    (:func:`tour_floor`'s ``by_lanes`` without passes) and ``H(p)`` the ``2 p`` largest of the
-    lane ends' ``nn_lane / 2``, over the passes' count ``p`` (at least 1 where ``P > 0``).
+    ``None``, and for a plan without ``keep_inside``) from the lanes cut at each margin and a
+    floor of their passes (:func:`~boustro.plan.inside.margin_floor`), without their residual:
+    the smallest over the margins of ``min_p cost_of(L + P + max(M - H(p), 0), n + p - 1)``,
+    ``L`` the cut lanes' length, ``P`` the passes' floor, ``n`` the lanes, ``M`` the moves'
+    floor of the lanes alone (:func:`tour_floor`'s ``by_lanes`` without passes) and ``H(p)``
+    the ``2 p`` largest of the lane ends' ``nn_lane / 2``, over the passes' count ``p`` (at
+    least 1 where ``P > 0``).
 
     Why it is below the plan floor (docs/keep_inside.md, "Cheap screen"): the plan keeps one
     margin's lanes with ``p`` passes at least ``P`` long (some pass where ``P > 0``: its
@@ -108,7 +128,7 @@ def lanes_floor(
     ``beyond``: then it returns that margin's floor, not below the smallest but not
     ``beyond`` either."""
     parsed = _parsed(region, spacing, kw)
-    if parsed is None:
+    if parsed is None or not parsed[1].keep_inside:
         return None
     r, opts = parsed
     laid = _laid_lanes(r, _plan_cells(r, opts, []), opts).lanes
@@ -132,7 +152,7 @@ def lanes_floor(
 
 def _parsed(region: Any, spacing: float, kw: dict[str, Any]) -> tuple[Region, Any] | None:
     """The region and ``plan_region``'s checked options of :func:`plan_floor`'s call, ``None``
-    unless it is a ``keep_inside`` plan of the guaranteed layout over one cell."""
+    unless it is a plan of the guaranteed layout over one cell."""
     unknown = kw.keys() - _DEFAULTS.keys()
     if unknown:  # plan_region's own error
         _SIGNATURE.bind(region, spacing, **kw)
@@ -141,7 +161,7 @@ def _parsed(region: Any, spacing: float, kw: dict[str, Any]) -> tuple[Region, An
     del args["progress"]
     cells = args.pop("cells")
     opts = _check_options(r, spacing, cells=None if cells is None else tuple(cells), **args)
-    if not opts.keep_inside or opts.layout != "guaranteed" or opts.decompose_area is not False:
+    if opts.layout != "guaranteed" or opts.decompose_area is not False:
         return None
     return r, opts
 
