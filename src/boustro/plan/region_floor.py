@@ -229,7 +229,7 @@ def tour_floor(lanes: list[Lanes], passes: list[NDArray[np.float64]]) -> tuple[f
     """A lower bound ``(length, turns)`` of the path and turns of every tour of the cut
     ``lanes`` and boundary ``passes`` (:func:`inside_layout`), however ordered, routed and
     driven: the lanes' and passes' own length plus a floor of the moves between them, and the
-    turns (one fewer than the lanes and passes: a ``keep_inside`` plan's count,
+    turns (one fewer than the lanes and passes: a plan's count, with or without ``keep_inside``,
     :mod:`boustro.plan.region`).
 
     The path drives each *unit* (a lane, a pass) whole, from an entry to an exit: a lane or an
