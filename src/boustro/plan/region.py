@@ -421,8 +421,7 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
                 "more slivers than boundary patches allowed"
             )
     elif opts.layout == "guaranteed" and opts.hole_passes:
-        for hi in sorted(cut):
-            passes.append(_hole_pass(r.holes[hi]))
+        passes += [_hole_pass(r.holes[hi]) for hi in _flown_holes(cl.lanes, opts)]
     elif cut and opts.layout == "guaranteed":
         notes.append(
             f"{len(cut)} hole(s) cut lanes and hole passes are off: the area along their edges "
@@ -449,6 +448,16 @@ def _plan_tour(r: Region, cl: _CellLanes, opts: PlanOptions, notes: list[str]) -
     run = (opts.turnaround, opts.keep_inside)  # the lanes' run-ins and run-outs
     passes, order, choice = refine_best(passes, tours, start_pt, router, forced, *run, refine_tour)
     return _Tour(passes, order, choice, router, solver)
+
+
+def _flown_holes(lanes: Sequence[Lanes], opts: PlanOptions) -> list[int]:
+    """The holes (indices into the area's, ascending) whose pass a plan without ``keep_inside``
+    flies (:func:`_plan_tour`): every hole that cuts one of ``lanes``, with the guaranteed
+    layout and hole passes on; none otherwise. Also the rings of
+    :func:`~boustro.plan.region_floor.plan_floor`'s floor of such a plan."""
+    if opts.keep_inside or opts.layout != "guaranteed" or not opts.hole_passes:
+        return []
+    return sorted(set().union(*(ls.cut for ls in lanes)))
 
 
 # -- step 5: drive ----------------------------------------------------------------------------

@@ -25,7 +25,14 @@ from numpy.typing import NDArray
 from ..geometry.region import Region, as_region
 from .inside import MARGINS, margin_floor
 from .lanes import Lanes
-from .region import _check_options, _laid_lanes, _plan_cells, _plan_lanes, plan_region
+from .region import (
+    _check_options,
+    _flown_holes,
+    _laid_lanes,
+    _plan_cells,
+    _plan_lanes,
+    plan_region,
+)
 
 __all__ = ["CHEAP_ROOM", "lanes_floor", "plan_floor", "screen_floor", "tour_floor"]
 
@@ -67,8 +74,10 @@ def _open_floor(r: Region, opts: Any) -> tuple[float, int]:
     hole pass round from a corner to it, so :func:`tour_floor`'s argument holds, and the plan's
     turns are its lanes and hole passes less one (:func:`~boustro.plan.region._assemble`)."""
     lanes = _laid_lanes(r, _plan_cells(r, opts, []), opts).lanes
-    cut = sorted(set().union(*(ls.cut for ls in lanes))) if opts.hole_passes else []
-    rings = [np.concatenate([r.holes[i].vertices, r.holes[i].vertices[:1]]) for i in cut]
+    rings = [
+        np.concatenate([r.holes[i].vertices, r.holes[i].vertices[:1]])
+        for i in _flown_holes(lanes, opts)
+    ]
     return tour_floor(lanes, rings)
 
 
@@ -220,7 +229,7 @@ def tour_floor(lanes: list[Lanes], passes: list[NDArray[np.float64]]) -> tuple[f
     """A lower bound ``(length, turns)`` of the path and turns of every tour of the cut
     ``lanes`` and boundary ``passes`` (:func:`inside_layout`), however ordered, routed and
     driven: the lanes' and passes' own length plus a floor of the moves between them, and the
-    turns (one fewer than the lanes and passes: a ``keep_inside`` plan's count,
+    turns (one fewer than the lanes and passes: a plan's count, with or without ``keep_inside``,
     :mod:`boustro.plan.region`).
 
     The path drives each *unit* (a lane, a pass) whole, from an entry to an exit: a lane or an
