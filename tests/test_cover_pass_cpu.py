@@ -32,10 +32,12 @@ def _pass(monkeypatch, index, budget, levels, slice_):
     ("index", "budget", "levels", "fewer"),
     [
         (22, 12_000, 4, False),  # certified: no level is the last below the target
-        (22, 600, 4, True),  # the budget ends the pass (549 -> 36 boxes)
+        # the budget ends the pass: before the last chunk's first level (576 boxes either way),
+        # within it (785 -> 648 boxes; chunks of 4, 16, 64, 256, 209 with 48 children)
+        (22, 600, 4, False),
         (22, 800, 4, True),
-        (22, 12_000, 0, True),  # the levels end it (549 -> 20)
-        (22, 12_000, 1, True),
+        (22, 12_000, 0, False),  # the levels end it: chunks of 4 and 16, nothing left to cut
+        (22, 12_000, 1, True),  # 48 -> 44 boxes
         (5, 300, 4, False),  # the 4 lowest stay below: the others not bounded
     ],
 )
