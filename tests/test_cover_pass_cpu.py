@@ -11,6 +11,7 @@ import pytest
 
 import boustro.optimize.cover.search as search_module
 from boustro.optimize.cover import CoverCost, cover_optimum
+from boustro.optimize.cover.one_tree import Multipliers
 from boustro.optimize.cover.search import CoverSearch
 
 from .plan_samples import benchmark_area, count_pass_boxes, plan_cost
@@ -32,10 +33,12 @@ def _pass(monkeypatch, index, budget, levels, slice_):
     ("index", "budget", "levels", "fewer"),
     [
         (22, 12_000, 4, False),  # certified: no level is the last below the target
-        (22, 600, 4, True),  # the budget ends the pass (549 -> 36 boxes)
+        # the budget ends the pass: before the last chunk's first level (576 boxes either way),
+        # within it (785 -> 648 boxes; chunks of 4, 16, 64, 256, 209 with 48 children)
+        (22, 600, 4, False),
         (22, 800, 4, True),
-        (22, 12_000, 0, True),  # the levels end it (549 -> 20)
-        (22, 12_000, 1, True),
+        (22, 12_000, 0, False),  # the levels end it: chunks of 4 and 16, nothing left to cut
+        (22, 12_000, 1, True),  # 48 -> 44 boxes
         (5, 300, 4, False),  # the 4 lowest stay below: the others not bounded
     ],
 )
@@ -98,11 +101,12 @@ def test_a_boxs_bound_does_not_depend_on_the_boxes_bounded_with_it(monkeypatch):
         assert np.array_equal(whole.values, values)
 
 
-def _level(monkeypatch, bounds, got, level, left):
+def _level(monkeypatch, bounds, got, level, left, mult=None):
     """:meth:`CoverSearch._level_bounds` over boxes of 1 degree x 1 m (halved into 4 each at a
     radius of 57.3 m) whose bounds so far are ``bounds`` and whose bounds with the 1-tree would be
-    ``got`` (a stub of :meth:`~CoverSearch.box_bounds`), 2 at a time: its answer and the boxes
-    bounded."""
+    ``got`` (a stub of :meth:`~CoverSearch.box_bounds`, which writes each box's ``got`` into its
+    multipliers, warm, as the 1-tree writes its best ones back), 2 at a time: its answer and the
+    boxes bounded."""
     n = len(bounds)
     boxes = search_module._Boxes(
         np.linspace(0.0, 1.0, n), np.full(n, np.radians(1.0)), np.zeros(n), np.ones(n)
@@ -112,13 +116,16 @@ def _level(monkeypatch, bounds, got, level, left):
     def box_bounds(part, tour_below, multipliers):
         idx = np.searchsorted(boxes.theta, part.theta)
         asked.extend(idx.tolist())
+        if multipliers is not None:
+            multipliers.values[:] = np.asarray(got)[idx].reshape(-1, 1, 1, 1)
+            multipliers.warm[:] = True
         return np.asarray(got, dtype=np.float64)[idx]
 
     fake = SimpleNamespace(box_bounds=box_bounds, branch_left=left, radius=57.3)
     monkeypatch.setattr(search_module, "BRANCH_SLICE", 2)
     monkeypatch.setattr(search_module, "BRANCH_LEVELS", 4)
     out = CoverSearch._level_bounds(
-        fake, boxes, np.asarray(bounds, dtype=np.float64), None, 100.0, level, np.inf
+        fake, boxes, np.asarray(bounds, dtype=np.float64), mult, 100.0, level, np.inf
     )
     return out, sorted(asked)
 
@@ -144,3 +151,16 @@ def test_a_level_is_the_last_once_its_halves_pass_the_budget(monkeypatch):
     assert values is None and least == 2.0 and asked == [1, 3]
     (values, least), asked = _level(monkeypatch, bounds, got, 0, 8)
     assert values is not None and np.array_equal(values, got) and asked == list(range(6))
+
+
+def test_a_level_keeps_the_multipliers_of_each_slice(monkeypatch):
+    """A level bounded 2 boxes at a time writes each box's multipliers back where the box is
+    (its halves at the next level start from them): every box's, in the boxes' order, warm (a
+    review of the merged main: a level that dropped them passed every other test, both sides of
+    the sliced-against-whole comparison dropping them alike)."""
+    bounds = [5.0, 1.0, 6.0, 1.1, 7.0, 8.0]
+    got = [200.0, 2.0, 200.0, 3.0, 200.0, 201.0]
+    mult = Multipliers(np.zeros((6, 1, 3, 2)), np.zeros(6, dtype=bool), 0)
+    (values, _), asked = _level(monkeypatch, bounds, got, 0, 10**9, mult)
+    assert values is not None and asked == list(range(6))
+    assert np.array_equal(mult.values[:, 0, 0, 0], got) and mult.warm.all()
