@@ -31,7 +31,11 @@ def _fake_search(bounds: dict[float, float], calls: list[float]) -> SimpleNamesp
         return SimpleNamespace(info={"lower_bound": bounds[cell.area]})
 
     cost = SimpleNamespace(per_turn=TURN, per_length=1 / SPEED)
-    return SimpleNamespace(cost=cost, reach=5.0, optimum=optimum)
+
+    def finished(cell: Region, opt: SimpleNamespace) -> SimpleNamespace:
+        return opt  # no plans left for later
+
+    return SimpleNamespace(cost=cost, reach=5.0, optimum=optimum, finished=finished)
 
 
 def test_the_floor_drops_a_candidate_before_searching_its_cells():
