@@ -313,3 +313,73 @@ def test_simplified_area_rules_out_by_the_exact_bound_below_the_plan(monkeypatch
         if k < min(len(seen), 6):
             assert seen[k][2] == pytest.approx(exact, rel=1e-12, abs=1e-9)
             assert plan > seen[k][3]  # it could not have beaten the best plan then
+
+
+def _rectangle() -> Region:
+    return Region(np.array([(0, 0), (100, 0), (100, 60), (0, 60)], dtype=float))
+
+
+def test_a_cells_optimum_finished_is_the_search_without_later(monkeypatch):
+    """:meth:`_Search.finished` on a real cell: the optimum a search without ``later`` gives
+    (the plans after the branch and bound made, the lanes from the cell's edges tried, the
+    ``keep_inside`` flag), remembered in the cache (kills: ``finished`` not making the plans,
+    not trying the edges' lanes, not caching its result)."""
+    from .test_open_floor import _open_search
+
+    cell = _region(8)
+    search = _open_search()
+    opt = search.optimum(cell)
+    assert opt is not None and opt.info["plans_later"] and "keep_inside" not in opt.info
+    done = search.finished(cell, opt)
+    key = decomposed_module._key(cell)
+    assert done is not None and search.cache[key] is done and key not in search.later
+    assert done.info["plans"] > opt.info["plans"]  # the plans left for later were made
+    real = decomposed_module.cover_optimum
+
+    def without_later(*args, later=None, **kwargs):
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(decomposed_module, "cover_optimum", without_later)
+    full = _open_search().optimum(cell)
+    assert full is not None and "plans_later" not in full.info
+    assert (done.angle, done.offset, done.fitness) == (full.angle, full.offset, full.fitness)
+    keys = ("lower_bound", "gap", "certified", "plans", "keep_inside", "rounds")
+    assert {k: done.info[k] for k in keys} == {k: full.info[k] for k in keys}
+
+
+def test_plans_left_for_later_that_raise_drop_the_candidate(monkeypatch):
+    """A cell whose plans after the branch and bound raise (no lane at a layout planned, an
+    invalid plan): without ``later`` its search raised inside :meth:`_Search.optimum`, which
+    returned ``None`` (the candidate dropped; the cache ``None`` where no cutoff was asked, a
+    search with a cutoff asked again); with the plans left for later :meth:`_Search.finished`
+    does the same instead of letting the error out of the decomposed plan."""
+    from boustro.errors import NoTransectError
+
+    from .test_open_floor import _open_search
+
+    def raising(search):
+        raise NoTransectError("no lane")
+
+    monkeypatch.setattr(search_module, "refine_offsets", raising)
+    cell = _rectangle()
+    key = decomposed_module._key(cell)
+    for cutoff, cached in ((None, True), (1e9, False)):
+        search = _open_search()
+        opt = search.optimum(cell, cutoff)
+        assert opt is not None and opt.info["plans_later"]
+        assert search.finished(cell, opt) is None
+        assert (key in search.cache) == cached and key not in search.later
+        assert search.cache.get(key) is None
+    assert _cell_optima(_open_search(), [cell], beat=None) is None
+
+
+@pytest.mark.parametrize(("name", "teeth"), [("choset", 11), ("merged", 12)])
+def test_a_decomposition_of_max_cells_cells_is_kept(name, teeth):
+    """Exactly :data:`MAX_CELLS` cells (a comb: Choset's cells one per tooth and the bar's,
+    merged one per tooth) is still a decomposition; one more tooth raises (kills ``>=``)."""
+    from boustro.errors import InvalidPolygonError
+    from boustro.mission.decomposed import MAX_CELLS, _decomposition
+
+    assert len(_decomposition(_comb(teeth), 0.0, SPACING, name).cells) == MAX_CELLS == 12
+    with pytest.raises(InvalidPolygonError):
+        _decomposition(_comb(teeth + 1), 0.0, SPACING, name)

@@ -122,8 +122,9 @@ class _Search:
         self.s = frame.sensor.spacing * frame.proj.scale_min
         self.reach = frame.sensor.reach * frame.proj.scale_min
         self.cache: dict[bytes, OptimizeResult | None] = {}
-        # the plans a cell's search left for later (cover_optimum's ``later``), by cell
-        self.later: dict[bytes, Callable[[], OptimizeResult]] = {}
+        # the plans a cell's search left for later (cover_optimum's ``later``) and the cutoff
+        # it was given, by cell
+        self.later: dict[bytes, tuple[Callable[[], OptimizeResult], float | None]] = {}
         self.models: dict[bytes, tuple[float, float, float]] = {}
         self.searches = 0
         self.union_edges = 0
@@ -229,23 +230,32 @@ class _Search:
             return None
         self.cache[key] = opt
         if later:  # its plans after the branch and bound: once the candidate is planned
-            self.later[key] = later[0]
+            self.later[key] = (later[0], cutoff)
             return opt
         if opt.info.get("cut_off"):  # its candidate is screened out: only the bound counts
             return opt
         return self._completed(cell, opt)
 
-    def finished(self, cell: Region, opt: OptimizeResult) -> OptimizeResult:
+    def finished(self, cell: Region, opt: OptimizeResult) -> OptimizeResult | None:
         """The cell's optimum ``opt`` (:meth:`optimum`'s) with the plans its search left for
         later made (:func:`~boustro.optimize.cover.cover_optimum`'s ``later``): the result
-        the search makes without leaving them."""
+        the search makes without leaving them, ``None`` where those plans raise (as
+        :meth:`optimum` returns where the search raises, remembered as it remembers)."""
         key = _key(cell)
         if not opt.info.get("plans_later"):
             return opt
         hit = self.cache.get(key)
         if hit is not None and not hit.info.get("plans_later"):
             return hit
-        return self._completed(cell, self.later.pop(key)())
+        plans, cutoff = self.later.pop(key)
+        try:
+            done = plans()
+        except (NoTransectError, InvalidPolygonError, InvalidParameterError):
+            del self.cache[key]
+            if cutoff is None:  # as optimum's search raising
+                self.cache[key] = None
+            return None
+        return self._completed(cell, done)
 
     def _completed(self, cell: Region, opt: OptimizeResult) -> OptimizeResult:
         """The search's result with the lanes laid from the cell's edges (:meth:`_centred`),
@@ -458,7 +468,13 @@ def _cell_optima(
         floor += max(float(opt.info.get("lower_bound") or 0.0), rest[i]) - rest[i]
     if beat is not None and floor >= beat:
         return None
-    return [search.finished(cells[k], found[k]) for k in range(len(cells))]
+    optima = []
+    for k in range(len(cells)):  # a cell whose plans left for later raise: none (as searched)
+        done = search.finished(cells[k], found[k])
+        if done is None:
+            return None
+        optima.append(done)
+    return optima
 
 
 def _uncertified_where_cut(

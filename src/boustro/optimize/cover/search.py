@@ -750,9 +750,10 @@ def _finished(
     ``settled`` is ``search.settle_deferred(min(floor, best plan before them))``, the lower
     bound :func:`cover_optimum` takes, ``search.settle_deferred(min(floor, best plan))``,
     wherever the best plan after them is not below ``floor`` (the same argument, and the
-    deferred boxes' bounds do not depend on the plans). A plan below ``floor`` (no layout's
-    plan is: ``floor`` bounds them all) would lower it: then ``min(settled, plan)``, also a
-    lower bound."""
+    deferred boxes' bounds do not depend on the plans). A plan below ``floor`` lowers it: then
+    ``min(settled, plan)``, also a lower bound, though not always the value the search without
+    ``later`` settles (``floor`` bounds the layouts of the boxes taken out with their bounds,
+    not of the deferred boxes, whose layouts only ``settle_deferred`` bounds)."""
     t0 = time.perf_counter() - seconds
     before = min(floor, search.best[0])
     polish(search)
