@@ -19,6 +19,7 @@ from .conftest import random_regions
 from .plan_samples import (
     SPACING,
     benchmark_area,
+    count_pass_boxes,
     plan_cost,
     plans_in_boxes,
     sample_boxes,
@@ -314,15 +315,7 @@ def test_the_last_pass_bounds_at_most_its_budget_of_boxes(monkeypatch):
     region = benchmark_area(22)
     cost = CoverCost.time(5.0, 10.0)
     evaluate = plan_cost(region, cost, spacing=10.0)
-    bounded = []
-    box_bounds = CoverSearch.box_bounds
-
-    def count(self, boxes, *args, **kw):
-        if self.branch is not None:
-            bounded.append(len(boxes.theta))
-        return box_bounds(self, boxes, *args, **kw)
-
-    monkeypatch.setattr(CoverSearch, "box_bounds", count)
+    bounded = count_pass_boxes(monkeypatch)
     got = cover_optimum(region, 10.0, cost, evaluate)
     assert got.info["certified"] and 0 < sum(bounded) <= search_module.BRANCH_BUDGET
     monkeypatch.setattr(search_module, "BRANCH_TOUR", False)
