@@ -33,6 +33,7 @@ from .region import (
     _plan_lanes,
     plan_region,
 )
+from .tour import _hole_pass
 
 __all__ = ["CHEAP_ROOM", "lanes_floor", "plan_floor", "screen_floor", "tour_floor"]
 
@@ -64,20 +65,18 @@ def plan_floor(region: Any, spacing: float, **kw: Any) -> tuple[float, int] | No
 
 
 def _open_floor(r: Region, opts: Any) -> tuple[float, int]:
-    """:func:`plan_floor` of a plan without ``keep_inside``: :func:`tour_floor` of its lanes as
-    laid (the plan flies them as they are, :func:`~boustro.plan.region._plan_lanes`) and, with
-    hole passes on, the closed ring of every hole that cuts a lane (the hole pass the plan
-    flies, :func:`~boustro.plan.tour._hole_pass`: the hole's own ring, entered at one of its
-    corners). Why it is below the plan (docs/keep_inside.md, "Eighteenth round"): the path
-    drives every lane whole from one end to the other (a chain's lanes too; run-ins and
-    run-outs only lengthen the path between lane ends, never below the straight line) and every
-    hole pass round from a corner to it, so :func:`tour_floor`'s argument holds, and the plan's
-    turns are its lanes and hole passes less one (:func:`~boustro.plan.region._assemble`)."""
+    """:func:`plan_floor` of a plan without ``keep_inside``: :func:`tour_floor` of its lanes as laid
+    (the plan flies them as they are, :func:`~boustro.plan.region._plan_lanes`) and, with hole
+    passes on, the closed ring of every hole that cuts a lane (the hole pass the plan flies,
+    :func:`~boustro.plan.tour._hole_pass`'s first way round: the hole's own ring, the same
+    length from any of its corners). Why it is below the plan (docs/keep_inside.md, "Eighteenth
+    round"): the path drives every lane whole from one end to the other (a chain's lanes too;
+    run-ins and run-outs only lengthen the path between lane ends, never below the straight
+    line) and every hole pass round from a corner to it, so :func:`tour_floor`'s argument holds,
+    and the plan's turns are its lanes and hole passes less one
+    (:func:`~boustro.plan.region._assemble`)."""
     lanes = _laid_lanes(r, _plan_cells(r, opts, []), opts).lanes
-    rings = [
-        np.concatenate([r.holes[i].vertices, r.holes[i].vertices[:1]])
-        for i in _flown_holes(lanes, opts)
-    ]
+    rings = [_hole_pass(r.holes[i]).options[0][2] for i in _flown_holes(lanes, opts)]
     return tour_floor(lanes, rings)
 
 
