@@ -17,7 +17,10 @@ Spacing 10 m, 5 m/s, 10 s per turn. For each field:
 
 Printed per set: the median and worst ratio of mission time to the brute force's (measured in
 the same run), the share certified, the median gap, lanes, coverage (shapely, the original
-boundary), path outside the area, and planning CPU time (``time.process_time``).
+boundary), path outside the area, and planning CPU time (``time.process_time``), warm: the
+compiled kernels are built by an untimed plan of a random area with holes (and the embedded
+field) first, so the first fields' CPU is not the compiler's (after a source change numba's
+on-disk cache is rebuilt: 15-19 s on the first two fields otherwise).
 
     python benchmarks/mission_time.py --data F2C/data [--random 100] [--keep-inside]
 """
@@ -57,11 +60,14 @@ def _fields(data: str | None, n_random: int, seed: int) -> list[tuple[str, objec
     rng = np.random.default_rng(seed)
     for i in range(n_random):
         r = random_region(rng, int(rng.integers(6, 16)), int(rng.integers(1, 4)), roughness=0.5)
-        k = 300.0 / r.diameter
-        ring = r.shell.vertices * k
-        holes = [h.vertices * k for h in r.holes]
-        out.append((f"random {i}", (ring, holes), None))
+        out.append((f"random {i}", _scaled(r), None))
     return out
+
+
+def _scaled(r: Region) -> tuple[np.ndarray, list[np.ndarray]]:
+    """A random region's shell and holes scaled to 300 m across."""
+    k = 300.0 / r.diameter
+    return r.shell.vertices * k, [h.vertices * k for h in r.holes]
 
 
 def _plan(area, crs, **kw):
@@ -101,6 +107,7 @@ def main() -> None:
         help="also plan each field with the time objective and --keep-inside",
     )
     args = ap.parse_args()
+    _warm(args.keep_inside)
     rows = []
     for name, area, crs in _fields(args.data, args.random, args.seed):
         timed = _row(area, crs)
@@ -126,6 +133,16 @@ def main() -> None:
                 flush=True,
             )
     _summary(rows)
+
+
+def _warm(keep_inside: bool) -> None:
+    """Plan a convex field and a concave area with holes once, untimed (the module docstring)."""
+    r = random_region(np.random.default_rng(12345), 8, 2, roughness=0.5)
+    for area, crs in ((embedded_field(), None), (_scaled(r), None)):
+        _plan(area, crs, speed=SPEED, turn_time=TURN_TIME)
+        _plan(area, crs, fitness=SmithFitness())
+        if keep_inside:
+            _plan(area, crs, speed=SPEED, turn_time=TURN_TIME, keep_inside=True)
 
 
 def _brute_centred(area, crs) -> tuple[float, float]:
