@@ -11,6 +11,7 @@ import pytest
 
 import boustro.optimize.cover.bounds as bounds_module
 import boustro.optimize.cover.branch as branch_module
+import boustro.optimize.cover.last_pass as last_pass_module
 import boustro.optimize.cover.search as search_module
 from boustro.geometry import Polygon
 from boustro.geometry.region import Region
@@ -116,9 +117,9 @@ def test_boxes_are_not_retired_below_the_discard_value_where_the_certificate_is_
 
 def _with_and_without(monkeypatch, i: int, flag: str, off: object):
     """The benchmark's random area ``i`` searched as is and with ``branch.<flag>`` at ``off``;
-    its ``evaluate``; without the last pass over the retired boxes (``search.BRANCH_TOUR``,
+    its ``evaluate``; without the last pass over the retired boxes (``last_pass.BRANCH_TOUR``,
     which certifies some of them without the flag: random area 1 without ``CERTIFY_FIRST``)."""
-    monkeypatch.setattr(search_module, "BRANCH_TOUR", False)
+    monkeypatch.setattr(last_pass_module, "BRANCH_TOUR", False)
     region = benchmark_area(i)
     cost = CoverCost.time(5.0, 10.0)
     evaluate = plan_cost(region, cost, spacing=10.0)
@@ -196,9 +197,9 @@ def test_boxes_set_aside_for_reopening_stay_in_the_floor_where_the_search_never_
     floor that forgot them certified the plan (review, thirteenth round). Area 3 served until
     its plan certified (fifteenth round: moves in the grown shell); on area 2 the mutant
     returning the floor without the set-aside boxes certifies (seen 2026-11-28). Without the
-    last pass over those boxes (``search.BRANCH_TOUR``: it raises the floor where they are
+    last pass over those boxes (``last_pass.BRANCH_TOUR``: it raises the floor where they are
     kept, 1245.198 -> 1245.216 s here, and has none to raise without ``REOPEN``)."""
-    monkeypatch.setattr(search_module, "BRANCH_TOUR", False)
+    monkeypatch.setattr(last_pass_module, "BRANCH_TOUR", False)
     region = benchmark_area(2)
     cost = CoverCost.time(5.0, 10.0)
     evaluate = plan_cost(region, cost, spacing=10.0)

@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
+import boustro.optimize.cover.last_pass as last_pass_module
 import boustro.optimize.cover.one_tree as one_tree_module
 import boustro.optimize.cover.one_tree_branch as branch_module
-import boustro.optimize.cover.search as search_module
 from boustro.optimize.cover import CoverCost, cover_optimum
 from boustro.optimize.cover.search import CoverSearch
 
@@ -181,7 +181,7 @@ def test_the_last_pass_certifies_with_the_same_plan_below_a_sweep(monkeypatch):
     cost = CoverCost.time(5.0, 10.0)
     evaluate = plan_cost(region, cost, spacing=10.0)
     got = cover_optimum(region, 10.0, cost, evaluate)
-    monkeypatch.setattr(search_module, "BRANCH_TOUR", False)
+    monkeypatch.setattr(last_pass_module, "BRANCH_TOUR", False)
     _certified_by_the_pass(got, cover_optimum(region, 10.0, cost, evaluate), evaluate, seed=4)
 
 
@@ -250,7 +250,7 @@ def test_the_last_pass_leaves_the_deferred_boxes_in_the_floor(monkeypatch):
 def test_where_the_pass_cannot_certify_its_floor_keeps_the_boxes_left_as_they_are(monkeypatch):
     """The benchmark's random area 5 (the lowest retired boxes stay below the discard value
     whatever the branching): not certified, the floor at most the least bound of the retired
-    boxes after the first :data:`~.search.BRANCH_CHUNK` (kept as they are) and of the rest of
+    boxes after the first :data:`~.last_pass.BRANCH_CHUNK` (kept as they are) and of the rest of
     the floor, and at least the floor without the pass; not certified either with every retired
     box in the first chunk (a review: a pass that dropped the branched boxes' or the boxes
     left's bounds from its floor passed the other tests)."""
@@ -270,10 +270,12 @@ def test_where_the_pass_cannot_certify_its_floor_keeps_the_boxes_left_as_they_ar
     lower = got.info["lower_bound"]
     assert not got.info["certified"]
     assert lower < got.fitness - got.info["rtol"] * abs(got.fitness)
-    assert len(seen["bounds"]) > search_module.BRANCH_CHUNK
-    assert seen["lower"] <= lower <= min(seen["bounds"][search_module.BRANCH_CHUNK], seen["rest"])
+    assert len(seen["bounds"]) > last_pass_module.BRANCH_CHUNK
+    assert (
+        seen["lower"] <= lower <= min(seen["bounds"][last_pass_module.BRANCH_CHUNK], seen["rest"])
+    )
     # every retired box in the first chunk: the branched ones alone hold the floor down
-    monkeypatch.setattr(search_module, "BRANCH_CHUNK", 10**9)
+    monkeypatch.setattr(last_pass_module, "BRANCH_CHUNK", 10**9)
     got = cover_optimum(region, 10.0, cost, evaluate)
     assert not got.info["certified"] and seen["lower"] <= got.info["lower_bound"]
 
@@ -299,7 +301,7 @@ def test_the_last_pass_keeps_the_rest_of_the_floor(monkeypatch):
 
 
 def test_the_last_pass_bounds_at_most_its_budget_of_boxes(monkeypatch):
-    """:data:`~.search.BRANCH_BUDGET` caps the boxes the pass bounds (without it the benchmark's
+    """:data:`~.last_pass.BRANCH_BUDGET` caps the boxes the pass bounds (without it the benchmark's
     random area 35 bounded 207,631, 133 s of CPU): random area 22 (804 boxes) certified with the
     default budget; with a budget of 100 the levels past it are not bounded, the boxes keep
     their bounds and the certificate is lost, the floor still at least the one without the pass
@@ -309,11 +311,11 @@ def test_the_last_pass_bounds_at_most_its_budget_of_boxes(monkeypatch):
     evaluate = plan_cost(region, cost, spacing=10.0)
     bounded = count_pass_boxes(monkeypatch)
     got = cover_optimum(region, 10.0, cost, evaluate)
-    assert got.info["certified"] and 0 < sum(bounded) <= search_module.BRANCH_BUDGET
-    monkeypatch.setattr(search_module, "BRANCH_TOUR", False)
+    assert got.info["certified"] and 0 < sum(bounded) <= last_pass_module.BRANCH_BUDGET
+    monkeypatch.setattr(last_pass_module, "BRANCH_TOUR", False)
     before = cover_optimum(region, 10.0, cost, evaluate)
-    monkeypatch.setattr(search_module, "BRANCH_TOUR", True)
-    monkeypatch.setattr(search_module, "BRANCH_BUDGET", 100)
+    monkeypatch.setattr(last_pass_module, "BRANCH_TOUR", True)
+    monkeypatch.setattr(last_pass_module, "BRANCH_BUDGET", 100)
     bounded.clear()
     small = cover_optimum(region, 10.0, cost, evaluate)
     assert sum(bounded) <= 100 and not small.info["certified"]
@@ -332,7 +334,7 @@ def test_the_last_pass_with_more_children_certifies_with_the_same_plan(monkeypat
     cost = CoverCost.time(5.0, 10.0)
     evaluate = plan_cost(region, cost, spacing=10.0)
     seen: dict[str, list] = {"picked": [], "sizes": []}
-    settle, levels = CoverSearch.settle_branched, CoverSearch._branched_boxes
+    settle, levels = CoverSearch.settle_branched, last_pass_module._branched_boxes
 
     def spy(self, lower, value, rtol):
         if self.retired:
@@ -351,7 +353,7 @@ def test_the_last_pass_with_more_children_certifies_with_the_same_plan(monkeypat
         return levels(self, boxes, bounds, mult, target)
 
     monkeypatch.setattr(CoverSearch, "settle_branched", spy)
-    monkeypatch.setattr(CoverSearch, "_branched_boxes", chunk)
+    monkeypatch.setattr(last_pass_module, "_branched_boxes", chunk)
     got = cover_optimum(region, 10.0, cost, evaluate)
     picked = np.concatenate(seen["picked"])
     assert len(picked) == len(seen["low"]) > 4
@@ -361,7 +363,7 @@ def test_the_last_pass_with_more_children_certifies_with_the_same_plan(monkeypat
     assert 0 < sizes[-1] <= 4 * 4 ** (len(sizes) - 1)
     for a, b in zip(seen["first_bounds"], seen["first_bounds"][1:], strict=False):
         assert a[-1] <= b[0]  # the lowest first
-    monkeypatch.setattr(search_module, "BRANCH_NODES", 12)
+    monkeypatch.setattr(last_pass_module, "BRANCH_NODES", 12)
     _certified_by_the_pass(got, cover_optimum(region, 10.0, cost, evaluate), evaluate, seed=28)
 
 

@@ -1,5 +1,5 @@
 """The last pass's last level bounded lowest first, stopping once no box left can lower its
-floor (:meth:`~boustro.optimize.cover.search.CoverSearch._level_bounds`, eighteenth round): the
+floor (:func:`~boustro.optimize.cover.last_pass._level_bounds`, eighteenth round): the
 same floor as every box bounded, fewer boxes."""
 
 from __future__ import annotations
@@ -9,6 +9,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+import boustro.optimize.cover.branch as branch_module
+import boustro.optimize.cover.last_pass as last_pass_module
 import boustro.optimize.cover.search as search_module
 from boustro.optimize.cover import CoverCost, cover_optimum
 from boustro.optimize.cover.one_tree import Multipliers
@@ -22,9 +24,9 @@ def _pass(monkeypatch, index, budget, levels, slice_):
     region = benchmark_area(index)
     cost = CoverCost.time(5.0, 10.0)
     bounded = count_pass_boxes(monkeypatch)
-    monkeypatch.setattr(search_module, "BRANCH_BUDGET", budget)
-    monkeypatch.setattr(search_module, "BRANCH_LEVELS", levels)
-    monkeypatch.setattr(search_module, "BRANCH_SLICE", slice_)
+    monkeypatch.setattr(last_pass_module, "BRANCH_BUDGET", budget)
+    monkeypatch.setattr(last_pass_module, "BRANCH_LEVELS", levels)
+    monkeypatch.setattr(last_pass_module, "BRANCH_SLICE", slice_)
     got = cover_optimum(region, 10.0, cost, plan_cost(region, cost, spacing=10.0))
     return got, sum(bounded)
 
@@ -79,11 +81,11 @@ def test_a_boxs_bound_does_not_depend_on_the_boxes_bounded_with_it(monkeypatch):
     monkeypatch.setattr(CoverSearch, "settle_branched", spy)
     cover_optimum(region, 10.0, cost, plan_cost(region, cost, spacing=10.0))
     search = seen["search"]
-    boxes, _, _, mult = search_module.joined_parts(seen["parts"])
-    take = search_module.take_multipliers
+    boxes, _, _, mult = branch_module.joined_parts(seen["parts"])
+    take = branch_module.take_multipliers
     n = len(boxes.theta)
     assert n > 20
-    search.branch = (search_module.BRANCH_NODES, search_module.BRANCH_RTOL * seen["target"])
+    search.branch = (last_pass_module.BRANCH_NODES, last_pass_module.BRANCH_RTOL * seen["target"])
     whole = take(mult, np.arange(n))
     at_once = search.box_bounds(boxes, tour_below=seen["target"], multipliers=whole)
     order = np.random.default_rng(1).permutation(n)
@@ -102,7 +104,7 @@ def test_a_boxs_bound_does_not_depend_on_the_boxes_bounded_with_it(monkeypatch):
 
 
 def _level(monkeypatch, bounds, got, level, left, mult=None):
-    """:meth:`CoverSearch._level_bounds` over boxes of 1 degree x 1 m (halved into 4 each at a
+    """:func:`~.last_pass._level_bounds` over boxes of 1 degree x 1 m (halved into 4 each at a
     radius of 57.3 m) whose bounds so far are ``bounds`` and whose bounds with the 1-tree would be
     ``got`` (a stub of :meth:`~CoverSearch.box_bounds`, which writes each box's ``got`` into its
     multipliers, warm, as the 1-tree writes its best ones back), 2 at a time: its answer and the
@@ -122,10 +124,10 @@ def _level(monkeypatch, bounds, got, level, left, mult=None):
         return np.asarray(got, dtype=np.float64)[idx]
 
     fake = SimpleNamespace(box_bounds=box_bounds, branch_left=left, radius=57.3)
-    monkeypatch.setattr(search_module, "BRANCH_SLICE", 2)
-    monkeypatch.setattr(search_module, "BRANCH_LEVELS", 4)
-    out = CoverSearch._level_bounds(
-        fake, boxes, np.asarray(bounds, dtype=np.float64), mult, 100.0, level, np.inf
+    monkeypatch.setattr(last_pass_module, "BRANCH_SLICE", 2)
+    monkeypatch.setattr(last_pass_module, "BRANCH_LEVELS", 4)
+    out = last_pass_module._level_bounds(
+        fake, boxes, np.asarray(bounds, dtype=np.float64), mult, 100.0, level
     )
     return out, sorted(asked)
 
