@@ -19,7 +19,7 @@ from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from .._files import atomic_write
+from .._files import atomic_write_all
 from ..errors import InvalidParameterError, MissingDependencyError
 from ..io.formats import FORMATS
 from .executors import Outcome, run_dask, run_inline, run_local
@@ -111,8 +111,8 @@ class _Writer:
 
     def add(self, results: list[FieldResult]) -> None:
         for r in results:
-            for path, data in r.files:  # written before the row that names them is committed
-                atomic_write(os.path.join(self.missions or ".", path), data)
+            # a field's files (one per sortie), all or none, before the row that names them
+            atomic_write_all((os.path.join(self.missions or ".", p), d) for p, d in r.files)
             for name, rows in r.rows.items():
                 self.pending.setdefault(name, []).extend(rows)
             self.planned += r.status == "ok"
