@@ -128,3 +128,20 @@ def test_batch_part_files_of_a_field_all_or_none(tmp_path, monkeypatch):
     monkeypatch.undo()
     boustro.batch(area, tmp_path / "again.gpkg", spacing=20.0, workers=1, missions=missions)
     assert sorted(os.listdir(missions)) == ["1-Both-part1.geojson", "1-Both-part2.geojson"]
+
+
+def test_batch_refused_before_its_output_is_made(tmp_path, monkeypatch):
+    """QA 19: an unreachable --scheduler (after its 30 s timeout) or a chunk size of 0 left an
+    empty GeoPackage holding the run's options, which refused a rerun with other options."""
+    distributed = pytest.importorskip("distributed")
+    area = _two_fields(tmp_path)
+
+    def unreachable(address, timeout):
+        raise OSError(f"Timed out trying to connect to {address} after {timeout} s")
+
+    monkeypatch.setattr(distributed, "Client", unreachable)
+    with pytest.raises(boustro.errors.InvalidParameterError, match="cannot connect: Timed out"):
+        boustro.batch(area, tmp_path / "plans.gpkg", spacing=20.0, scheduler="tcp://10.0.0.1:1")
+    with pytest.raises(boustro.errors.InvalidParameterError, match="chunk_size must be >= 1"):
+        boustro.batch(area, tmp_path / "plans.gpkg", spacing=20.0, chunk_size=0)
+    assert sorted(os.listdir(tmp_path)) == ["two.geojson"]
