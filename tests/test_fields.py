@@ -166,7 +166,7 @@ def test_one_field_reads_as_read_area(tmp_path):
         read_areas(tmp_path / "missing.geojson")
     bad = tmp_path / "bad.wkt"
     bad.write_text("MULTIPOLYGON (((0 0, 1 0, 1 1, 0 0)), ((5 5, 6 5)))")
-    with pytest.raises(PolygonFileError, match="polygon 1"):
+    with pytest.raises(PolygonFileError, match="polygon 2"):  # counted from 1, as --field
         read_areas(bad)
 
 
@@ -380,7 +380,7 @@ def test_field_shows_only_its_own_reading_warnings(tmp_path, capsys, caplog):
     assert "not closed" not in caplog.text
     caplog.clear()
     assert main(["plan", str(path), "--spacing", "10", "--field", "Open"]) == 0
-    assert caplog.text.count("feature 1: the ring is not closed") == 1
+    assert caplog.text.count("feature 2: the ring is not closed") == 1
 
 
 def test_unknown_field_shows_no_field_warnings_before_its_error(tmp_path, capsys, caplog):

@@ -79,8 +79,8 @@ def test_field_round_trip_and_scale():
 @pytest.mark.parametrize(
     ("ring", "match"),
     [
-        ([(0, 0), (1, 0), (1, 91)], "latitude 91 at vertex 2 is outside"),
-        ([(0, 0), (181, 0), (1, 1)], "longitude 181 at vertex 1 is outside"),
+        ([(0, 0), (1, 0), (1, 91)], "latitude 91 at vertex 3 is outside"),
+        ([(0, 0), (181, 0), (1, 1)], "longitude 181 at vertex 2 is outside"),
         ([(179.9, 0), (-179.9, 0), (-179.9, 0.1), (179.9, 0.1)], "crosses the antimeridian"),
         ([(0, 85), (90, 85), (180, 85), (-90, 85)], "encloses the North Pole"),
         ([(0, -89), (120, -89), (-120, -89)], "encloses the South Pole"),

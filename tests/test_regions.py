@@ -53,14 +53,14 @@ def test_region_basics():
 @pytest.mark.parametrize(
     ("holes", "match"),
     [
-        ([[(5, 5), (6, 5), (6, 6)]], "hole 0 lies outside the shell"),
-        ([[(3, 1), (4.5, 1), (4.5, 2)]], "hole 0 touches or crosses the shell"),
-        ([[(0, 1), (1, 1), (1, 2)]], "hole 0 touches or crosses the shell"),
-        ([INNER, [(1.5, 1.5), (3, 1.5), (3, 3)]], "holes 0 and 1 touch or overlap"),
-        ([INNER, [(2, 2), (3, 2), (3, 3)]], "holes 0 and 1 touch or overlap"),
-        ([[(0.5, 0.5), (3.5, 0.5), (3.5, 3.5), (0.5, 3.5)], INNER], "hole 1 lies inside hole 0"),
-        ([[(1, 1), (2, 2), (2, 1), (1, 2)]], "hole 0: the polygon is self-intersecting"),
-        ([[(1, 1), (2, 2), (3, 3)]], "hole 0: the polygon has zero area"),
+        ([[(5, 5), (6, 5), (6, 6)]], "hole 1 lies outside the shell"),
+        ([[(3, 1), (4.5, 1), (4.5, 2)]], "hole 1 touches or crosses the shell"),
+        ([[(0, 1), (1, 1), (1, 2)]], "hole 1 touches or crosses the shell"),
+        ([INNER, [(1.5, 1.5), (3, 1.5), (3, 3)]], "holes 1 and 2 touch or overlap"),
+        ([INNER, [(2, 2), (3, 2), (3, 3)]], "holes 1 and 2 touch or overlap"),
+        ([[(0.5, 0.5), (3.5, 0.5), (3.5, 3.5), (0.5, 3.5)], INNER], "hole 2 lies inside hole 1"),
+        ([[(1, 1), (2, 2), (2, 1), (1, 2)]], "hole 1: the polygon is self-intersecting"),
+        ([[(1, 1), (2, 2), (3, 3)]], "hole 1: the polygon has zero area"),
     ],
 )
 def test_invalid_holes_are_refused(holes, match):

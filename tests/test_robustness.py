@@ -151,7 +151,7 @@ def test_several_polygons_warn_that_only_the_first_is_used(caplog):
     with caplog.at_level(logging.WARNING):
         area = area_from_json(data, "f.geojson")
     assert len(area.ring) == 4
-    assert "only the first (feature 1)" in caplog.text
+    assert "only the first (feature 2)" in caplog.text
 
 
 # -- outputs ---------------------------------------------------------------------------------

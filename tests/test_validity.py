@@ -98,7 +98,7 @@ def test_near_touching_edges_are_refused_at_any_scale(scale):
 def test_hole_rules_at_any_scale(scale):
     shell = np.array([(0, 0), (4, 0), (4, 4), (0, 4)]) * scale
     near = 1 + 1e-10  # within TOUCH_TOLERANCE (1e-9) of the diameter of the hole at x = 1
-    with pytest.raises(InvalidPolygonError, match="holes 0 and 1 touch or overlap"):
+    with pytest.raises(InvalidPolygonError, match="holes 1 and 2 touch or overlap"):
         Region(
             shell,
             [
@@ -106,7 +106,7 @@ def test_hole_rules_at_any_scale(scale):
                 for h in ([(1, 1), (1, 2), (0.5, 2)], [(near, 1), (2, 1), (2, 2)])
             ],
         )
-    with pytest.raises(InvalidPolygonError, match="hole 0 touches or crosses the shell"):
+    with pytest.raises(InvalidPolygonError, match="hole 1 touches or crosses the shell"):
         Region(shell, [np.array([(1e-10, 1), (1, 1), (1, 2)]) * scale])
     ok = Region(
         shell,
@@ -316,7 +316,7 @@ def test_a_hole_touching_the_shell_at_a_point_is_planned_with_full_coverage(tmp_
     out = tmp_path / "m.geojson"
     argv = ["plan", path, "--crs", "planar", "--spacing", "10", "--out", out]
     code, _, err = run_cli(capsys, *argv)
-    assert code == 0 and "hole 0 at [50.0, 0.0] touches the shell" in err
+    assert code == 0 and "hole 1 at [50.0, 0.0] touches the shell" in err
     features = json.loads(out.read_text())["features"]
     assert _covered_share_left(features, shell, [hole], 5.0) < 1e-9
 
@@ -400,8 +400,8 @@ def test_holes_touching_each_other_at_a_point_are_planned_with_full_coverage(
     argv = ["plan", path, "--crs", "planar", "--spacing", "10", "--out", out]
     code, _, err = run_cli(capsys, *argv)
     assert code == 0 and out.exists(), err
-    assert "hole 1 touches hole 0 at [60.0, 20.0]" in err
-    assert ("hole 0 at [50.0, 0.0] touches the shell" in err) == on_shell
+    assert "hole 2 touches hole 1 at [60.0, 20.0]" in err
+    assert ("hole 1 at [50.0, 0.0] touches the shell" in err) == on_shell
     assert "planned with each hole cut back" in err if on_shell else "the hole cut back" in err
     features = json.loads(out.read_text())["features"]
     assert _covered_share_left(features, shell, [first, second], 5.0) < 1e-9
@@ -443,7 +443,7 @@ def test_detach_holes_only_shrinks_the_holes_that_touch(holes):
     [
         (
             [[(50, 0), (60, 20), (40, 20)]],
-            "hole 0 at [50.0, 0.0] touches the shell; planned with the hole cut back",
+            "hole 1 at [50.0, 0.0] touches the shell; planned with the hole cut back",
         ),
         (
             [
@@ -451,7 +451,7 @@ def test_detach_holes_only_shrinks_the_holes_that_touch(holes):
                 [(20, 20), (30, 30), (20, 30)],
                 [(0, 50), (9, 60), (9, 50)],
             ],
-            "hole 0 at [50.0, 0.0] and hole 2 at [0.0, 50.0] touch the shell; planned with each "
+            "hole 1 at [50.0, 0.0] and hole 3 at [0.0, 50.0] touch the shell; planned with each "
             "hole cut back",
         ),
     ],
@@ -501,7 +501,7 @@ def test_a_lonlat_hole_that_crosses_the_shell_only_in_the_utm_frame_is_cut_back(
     assert original.is_valid and original.exterior.distance(original.interiors[0]) > 1e-8
     area = Area(np.array(shell[:-1]), "EPSG:4326", "x", "f.json", (np.array(hole[:-1]),))
     _, note = detach_holes(area)
-    assert note is not None and "hole 0" in note
+    assert note is not None and "hole 1" in note
     path = tmp_path / "snapped.geojson"
     path.write_text(json.dumps({"type": "Polygon", "coordinates": [shell, hole]}))
     out = tmp_path / "m.geojson"

@@ -468,6 +468,7 @@ def test_too_many_vertices_and_too_much_work_are_refused(client):
         ({"area": BOW_TIE, "options": {"spacing": 1, "start": ["5", 52]}}, "options.start must"),
         ({"area": BOW_TIE, "options": {}}, "exactly one of options.spacing"),
         ({"area": BOW_TIE, "options": {"spacing": 1, "warp": 9}}, "unknown option(s) 'warp'"),
+        ({"area": BOW_TIE, "options": {"spacing": 1, "turn_time": 5}}, "options.turn_time needs"),
         ({"area": BOW_TIE, "options": {"spacing": 1, "layout": "x"}}, "options.layout"),
         ({"area": BOW_TIE, "options": {"spacing": 1, "start": [1]}}, "options.start"),
         (

@@ -22,7 +22,7 @@ from typing import Any
 
 from ..errors import InvalidParameterError
 from ..mission.defaults import DEFAULT_HULL_TOLERANCE
-from ..mission.options import sensor_of, vehicle_of
+from ..mission.options import check_turn_time, sensor_of, vehicle_of
 from ..objectives import get_objective
 from ..vehicle import Vehicle
 
@@ -120,6 +120,7 @@ class PlanOptions:
         one = self.for_field({c: 1.0 for c in self.columns.values()})
         one.spacing_arg()
         one.vehicle()
+        check_turn_time(one.speed, one.turn_time)  # a speed column gives every field a speed
 
     def settings(self) -> dict[str, Any]:
         """Plain JSON of the options (stored with the output). The options added since the

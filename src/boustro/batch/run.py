@@ -12,6 +12,7 @@ temporary file and renamed when the run ends (or is interrupted).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import time
@@ -19,7 +20,7 @@ from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from .._files import atomic_write
+from .._files import atomic_write_all
 from ..errors import InvalidParameterError, MissingDependencyError
 from ..io.formats import FORMATS
 from .executors import Outcome, run_dask, run_inline, run_local
@@ -111,8 +112,8 @@ class _Writer:
 
     def add(self, results: list[FieldResult]) -> None:
         for r in results:
-            for path, data in r.files:  # written before the row that names them is committed
-                atomic_write(os.path.join(self.missions or ".", path), data)
+            # a field's files (one per sortie), all or none, before the row that names them
+            atomic_write_all((os.path.join(self.missions or ".", p), d) for p, d in r.files)
             for name, rows in r.rows.items():
                 self.pending.setdefault(name, []).extend(rows)
             self.planned += r.status == "ok"
@@ -182,6 +183,20 @@ def batch(
     source = _source(fields, layer, crs, options)
     settings = {"options": options.settings(), "crs": source.crs, "missions": fmt}
     targets = layer_paths(out)  # an unknown format: refused before any work
+    _check_counts(workers, chunk_size)  # and these, and the scheduler, before the output is made
+    with contextlib.ExitStack() as stack:
+        if client is None and scheduler is not None:
+            client = stack.enter_context(_connect(scheduler))
+        return _run(source, out, targets, settings, options, fmt, missions, workers, client,
+                    chunk_size, progress)  # fmt: skip
+
+
+def _run(
+    source: Source, out: str, targets: dict[str, str], settings: dict[str, Any],
+    options: PlanOptions, fmt: str | None, missions: str | os.PathLike[str] | None,
+    workers: int | None, client: Any, chunk_size: int, progress: bool | None,
+) -> BatchResult:  # fmt: skip
+    """:func:`batch` once its inputs are checked (and a scheduler connected)."""
     t0 = time.perf_counter()
     label = out if not targets else f"{out} (its state {store_path(out)})"
     store = Store(store_path(out), source.crs, settings, label)
@@ -191,7 +206,7 @@ def batch(
         job = Job(options, source.crs, source.crs_missing, store.srs_id, fmt)
         writer = _Writer(store, None if missions is None else os.fspath(missions),
                          _bar(len(todo), progress))  # fmt: skip
-        outcomes = _outcomes(todo, job, workers, client, scheduler, chunk_size)
+        outcomes = _outcomes(todo, job, workers, client, chunk_size)
         try:
             for chunk, outcome in outcomes:
                 writer.add(_lost(chunk, outcome, job) if isinstance(outcome, BaseException)
@@ -219,18 +234,20 @@ def _source(fields: Any, layer: str | None, crs: str | None, options: PlanOption
     return source_from_frame(fields, crs=crs, columns=list(options.columns.values()))
 
 
-def _outcomes(
-    todo: list[Feature], job: Job, workers: int | None, client: Any, scheduler: str | None,
-    chunk_size: int,
-) -> Generator[Outcome, None, None]:  # fmt: skip
+def _check_counts(workers: int | None, chunk_size: int) -> None:
     if chunk_size < 1:
         raise InvalidParameterError(f"chunk_size must be >= 1, got {chunk_size!r}")
-    if client is not None or scheduler is not None:
-        yield from _on_dask(_chunks(todo, chunk_size), job, client, scheduler)
+    if workers is not None and workers < 1:
+        raise InvalidParameterError(f"workers must be >= 1, got {workers!r}")
+
+
+def _outcomes(
+    todo: list[Feature], job: Job, workers: int | None, client: Any, chunk_size: int
+) -> Generator[Outcome, None, None]:
+    if client is not None:
+        yield from run_dask(_chunks(todo, chunk_size), job, client)
         return
     count = (os.cpu_count() or 1) if workers is None else workers
-    if count < 1:
-        raise InvalidParameterError(f"workers must be >= 1, got {workers!r}")
     if count == 1 or len(todo) <= 1:
         yield from run_inline(_chunks(todo, chunk_size), job)
     else:  # chunks small enough that every worker gets several (few fields: no idle worker)
@@ -238,10 +255,8 @@ def _outcomes(
         yield from run_local(_chunks(todo, size), job, count)
 
 
-def _on_dask(chunks: Iterator[list[Feature]], job: Job, client: Any, scheduler: str | None):
-    if client is not None:
-        yield from run_dask(chunks, job, client)
-        return
+def _connect(scheduler: str) -> Any:
+    """A ``dask.distributed.Client`` of ``scheduler`` (a context manager that closes it)."""
     try:
         from distributed import Client
     except ImportError:
@@ -249,11 +264,9 @@ def _on_dask(chunks: Iterator[list[Feature]], job: Job, client: Any, scheduler: 
             "--scheduler needs dask.distributed: pip install 'boustro[dask]'"
         ) from None
     try:
-        own = Client(scheduler, timeout=30)
+        return Client(scheduler, timeout=30)
     except OSError as exc:
         raise InvalidParameterError(f"--scheduler {scheduler}: cannot connect: {exc}") from None
-    with own:
-        yield from run_dask(chunks, job, own)
 
 
 def _bar(total: int, progress: bool | None) -> Any:

@@ -154,7 +154,7 @@ def read_source(
         title = _plain(data[read.index(label)][i]) if label else None
         text = str(title).strip() if title is not None else ""
         blob = wkb[i] if wkb is not None else None
-        features.append(Feature(i + 1, text or f"feature {fids[i]}", blob, values))
+        features.append(Feature(i + 1, text or f"feature {i + 1}", blob, values))
     where = where if layer is None else f"{where}: layer {chosen}"
     if crs is not None:
         return Source(where, given, features)

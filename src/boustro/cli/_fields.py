@@ -14,6 +14,7 @@ from typing import TypeVar
 
 from ..errors import BoustroError, InvalidParameterError
 from ..io import Area
+from ..io.area import field_label
 from ..io.formats import render
 from ..io.formats._fields import field_path, render_fields
 from ..mission import Mission
@@ -105,17 +106,24 @@ def _held_log() -> Iterator[list[logging.LogRecord]]:
 
 
 def plan_fields(areas: Sequence[Area], plan_one: Callable[[Area], T]) -> list[T]:
-    """``plan_one`` of every area. A single area's error passes unchanged; with several, every
-    area is tried and the failures become one :class:`FieldsError` naming each."""
+    """``plan_one`` of every area. A single area's error names the field if it has a name
+    (``field 'North': farm.kml: polygon 2: ...``); with several, every area is tried and the
+    failures become one :class:`FieldsError` naming each."""
     if len(areas) == 1:
-        return [plan_one(areas[0])]
+        try:
+            return [plan_one(areas[0])]
+        except BoustroError as exc:
+            label = field_label(areas[0], 1, 1)
+            if not label:
+                raise
+            raise type(exc)(f"{label}: {exc}") from None
     done: list[T] = []
     failed: list[str] = []
     for i, area in enumerate(areas, start=1):
         try:
             done.append(plan_one(area))
         except BoustroError as exc:
-            failed.append(f"field {area.name!r} ({i} of {len(areas)}): {exc}")
+            failed.append(f"{field_label(area, i, len(areas))}: {exc}")
     if failed:
         raise FieldsError(
             f"{len(failed)} of {len(areas)} fields failed, nothing written (--field NAME plans "

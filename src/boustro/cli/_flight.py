@@ -8,6 +8,7 @@ from typing import Any
 from ..errors import InvalidParameterError
 from ..mission import Mission, plan_area
 from ..mission.crosshatch import plan_crosshatch
+from ..mission.project import START_NAME
 from ..mission.sorties import check_speed, split_mission
 from ..mission.terrain import DEFAULT_TOLERANCE, check_height, follow_terrain, open_dem
 from ._common import positive_float
@@ -68,11 +69,17 @@ def add_flight_options(p: argparse.ArgumentParser, point: Any) -> None:
 
 def plan_mission(args: argparse.Namespace, area: Any, spacing: Any, **kwargs: Any) -> Mission:
     """The mission of one area: :func:`plan_area`, or a crosshatch pair."""
+    name = None
     if args.home is not None and kwargs.get("start") is None:
         kwargs["start"] = args.home
-    if args.crosshatch:
-        return plan_crosshatch(area, spacing, **kwargs)
-    return plan_area(area, spacing, **kwargs)
+        name = START_NAME.set("home")  # a far home is warned about as home, not "the start"
+    try:
+        if args.crosshatch:
+            return plan_crosshatch(area, spacing, **kwargs)
+        return plan_area(area, spacing, **kwargs)
+    finally:
+        if name is not None:
+            START_NAME.reset(name)
 
 
 def check_flight(args: argparse.Namespace) -> None:

@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import io
 import logging
 import math
+import os
 import sys
 from typing import Any
 
+from .._files import atomic_write
 from ..errors import InvalidParameterError
 from ..objectives import SmithFitness
 from ..optimize import GRID_200, OptimizeResult, TemperatureSchedule, optimize, resolve_method
@@ -247,7 +250,10 @@ def _save_plot(path: str, polygon, result, found: OptimizeResult) -> None:
         title=f"{found.method}: {math.degrees(found.angle):.2f} deg, offset "
         f"{found.offset:.4g}, fitness {found.fitness:.4f}",
     )
-    fig.savefig(path, dpi=150, bbox_inches="tight")
+    buf = io.BytesIO()  # rendered whole, then written atomically: a failure writes nothing
+    ext = os.path.splitext(path)[1].lstrip(".").lower() or "png"
+    fig.savefig(buf, format=ext, dpi=150, bbox_inches="tight")
+    atomic_write(path, buf.getvalue())
 
 
 def run(args: argparse.Namespace) -> int:

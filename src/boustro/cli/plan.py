@@ -10,14 +10,15 @@ import sys
 from typing import Any
 
 from .. import objectives
+from .._files import atomic_write_all
 from ..errors import InvalidParameterError
 from ..io import Area, embedded_field, read_areas
-from ..io.formats import FORMATS, atomic_write, format_for
+from ..io.formats import FORMATS, format_for
 from ..io.formats._common import ALTITUDE_FORMATS, check_altitude
 from ..io.repair import check_area, detach_holes, repair_area
 from ..mission import DEFAULT_HULL_TOLERANCE, DEFAULT_METHOD, Mission
 from ..mission.camera import camera_presets
-from ..mission.options import sensor_of, vehicle_of
+from ..mission.options import check_turn_time, sensor_of, vehicle_of
 from ..plot.plan import plot_plan
 from ..vehicle import Vehicle
 from ._camera import add_trigger_options, camera_arg
@@ -560,10 +561,7 @@ def run(args: argparse.Namespace) -> int:
     if args.format is not None and args.out is None:
         raise InvalidParameterError("--format needs --out FILE")
     check_flight(args)
-    if args.turn_time and args.speed is None:  # else ignored: no duration, no time objective
-        raise InvalidParameterError(
-            "--turn-time needs --speed (the duration is path / speed + turns x turn time)"
-        )
+    check_turn_time(args.speed, args.turn_time)
     areas = _load(args)
     _vehicle(args)  # --reverse without --turn-radius: one error before any work
     check_sweep(args)
@@ -585,8 +583,7 @@ def run(args: argparse.Namespace) -> int:
         outputs += [(p, d, "plot", i) for p, d, i in plots]
     for path, _, fmt_or_plot, _ in outputs:  # a field's own file name too
         check_not_input(path, "--plot" if fmt_or_plot == "plot" else "--out", args.area)
-    for path, data, _, _ in outputs:
-        atomic_write(path, data)
+    atomic_write_all((path, data) for path, data, _, _ in outputs)  # all files or none
     results = []
     for k, mission in enumerate(missions):
         mine = [(path, fmt) for path, _, fmt, i in outputs if i is None or i == k]

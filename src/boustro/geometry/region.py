@@ -109,7 +109,7 @@ class Region:
             raise InvalidPolygonError(
                 "holes must be a sequence of rings (each an (N, 2) array), got one (N, 2) array"
             )
-        self._holes = tuple(_as_polygon(h, f"hole {i}") for i, h in enumerate(holes))
+        self._holes = tuple(_as_polygon(h, f"hole {i}") for i, h in enumerate(holes, start=1))
         _check_holes(self._shell, self._holes)
         rings = [self._shell.vertices] + [h.vertices[::-1] for h in self._holes]
         edges = np.concatenate([_ring_segments(r) for r in rings])

@@ -118,12 +118,12 @@ def holes_problem(
     for i, hole in enumerate(holes):
         if touching[i]:
             return (
-                f"hole {i} touches or crosses the shell's boundary near "
+                f"hole {i + 1} touches or crosses the shell's boundary near "
                 f"{_near(rings[i], shell_ring)} (holes must lie strictly inside the shell)"
             )
         if not shapely.contains_xy(shell_area, hole[0, 0], hole[0, 1]):
             return (
-                f"hole {i} lies outside the shell (its vertex {hole[0].tolist()} is not "
+                f"hole {i + 1} lies outside the shell (its vertex {hole[0].tolist()} is not "
                 "inside the shell)"
             )
     first, second = shapely.STRtree(areas).query(areas, predicate="dwithin", distance=tol)
@@ -133,11 +133,11 @@ def holes_problem(
         i, j = int(first[k]), int(second[k])
         if shapely.dwithin(rings[i], rings[j], tol):
             return (
-                f"holes {i} and {j} touch or overlap near {_near(rings[i], rings[j])} "
+                f"holes {i + 1} and {j + 1} touch or overlap near {_near(rings[i], rings[j])} "
                 "(holes must be disjoint)"
             )
         if shapely.contains_xy(areas[i], holes[j][0, 0], holes[j][0, 1]):
-            return f"hole {j} lies inside hole {i} (holes must be disjoint)"
+            return f"hole {j + 1} lies inside hole {i + 1} (holes must be disjoint)"
         if shapely.contains_xy(areas[j], holes[i][0, 0], holes[i][0, 1]):
-            return f"hole {i} lies inside hole {j} (holes must be disjoint)"
+            return f"hole {i + 1} lies inside hole {j + 1} (holes must be disjoint)"
     return None

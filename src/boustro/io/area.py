@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 from dataclasses import dataclass
 
@@ -10,7 +11,7 @@ from numpy.typing import NDArray
 
 from ..errors import PolygonFileError
 
-__all__ = ["LONLAT", "Area", "close_ring", "crs_name", "crs_text"]
+__all__ = ["LONLAT", "Area", "close_ring", "crs_name", "crs_text", "field_label"]
 
 #: WGS 84 longitude/latitude, the CRS of GeoJSON (RFC 7946), KML and GPX.
 LONLAT = "EPSG:4326"
@@ -40,6 +41,24 @@ class Area:
     source: str
     holes: tuple[NDArray[np.float64], ...] = ()
     cut_holes: tuple[NDArray[np.float64], ...] = ()
+
+
+def field_label(area: Area, index: int, count: int) -> str:
+    """How a message names field ``index`` (from 1, as ``--field``) of ``count``:
+    ``field 'North' (2 of 3)``; one field: ``field 'North'``, or ``""`` without a name of its
+    own (none, or the file's stem, which the message's location says already).
+
+    Example:
+        >>> a = Area(np.zeros((3, 2)), None, "North", "farm.kml: polygon 2")
+        >>> field_label(a, 2, 3), field_label(a, 1, 1)
+        ("field 'North' (2 of 3)", "field 'North'")
+        >>> field_label(Area(np.zeros((3, 2)), None, "farm", "data/farm.kml"), 1, 1)
+        ''
+    """
+    if count > 1:
+        return f"field {area.name!r} ({index} of {count})"
+    stem = os.path.splitext(os.path.basename(area.source.split(": ", 1)[0]))[0]
+    return f"field {area.name!r}" if area.name and area.name != stem else ""
 
 
 def close_ring(ring: np.ndarray, where: str) -> np.ndarray:

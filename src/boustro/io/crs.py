@@ -156,14 +156,14 @@ def check_lonlat(ring: ArrayLike, where: str = "area") -> NDArray[np.float64]:
     if len(bad):
         i = int(bad[0])
         raise InvalidPolygonError(
-            f"{where}: latitude {lat[i]:g} at vertex {i} is outside [-90, 90] (coordinates must "
-            "be longitude, latitude in that order; for projected coordinates give --crs)"
+            f"{where}: latitude {lat[i]:g} at vertex {i + 1} is outside [-90, 90] (coordinates "
+            "must be longitude, latitude in that order; for projected coordinates give --crs)"
         )
     bad = np.flatnonzero(np.abs(lon) > 180)
     if len(bad):
         i = int(bad[0])
         raise InvalidPolygonError(
-            f"{where}: longitude {lon[i]:g} at vertex {i} is outside [-180, 180] (an area "
+            f"{where}: longitude {lon[i]:g} at vertex {i + 1} is outside [-180, 180] (an area "
             "across the antimeridian must be split there; for projected coordinates give --crs)"
         )
     if np.any(np.abs(lat) == 90):
@@ -183,7 +183,8 @@ def check_lonlat(ring: ArrayLike, where: str = "area") -> NDArray[np.float64]:
         i = int(jumps[0])
         raise InvalidPolygonError(
             f"{where}: the area crosses the antimeridian (180 degrees longitude) between vertex "
-            f"{i} ({lon[i]:g}) and vertex {(i + 1) % len(lon)} ({lon[(i + 1) % len(lon)]:g}); "
+            f"{i + 1} ({lon[i]:g}) and vertex {(i + 1) % len(lon) + 1} "
+            f"({lon[(i + 1) % len(lon)]:g}); "
             "split it there (RFC 7946, section 3.1.9) or give it in a projected CRS with --crs"
         )
     return pts

@@ -65,7 +65,7 @@ def _json_fields(data: Any, where: str, crs: str | None) -> list[_Named]:
         features = data.get("features")
         if not isinstance(features, list):
             raise PolygonFileError(f"{where}: a FeatureCollection needs a list of features")
-        items = [(f, f"{where}: feature {i}") for i, f in enumerate(features)]
+        items = [(f, f"{where}: feature {i}") for i, f in enumerate(features, start=1)]
     elif data["type"] == "Feature":
         items = [(data, where)]
     else:
@@ -80,9 +80,11 @@ def _json_fields(data: Any, where: str, crs: str | None) -> list[_Named]:
             name = str(feature["id"])
         names = _part_names(name, len(polygons))
         for k, (coords, part) in enumerate(zip(polygons, names, strict=True)):
-            here = at if len(polygons) == 1 else f"{at}: part {k}"
+            here = at if len(polygons) == 1 else f"{at}: part {k + 1}"
             ring, holes = _geometry_rings({"type": "Polygon", "coordinates": coords}, here)
-            holes_t = tuple(_close_open(h, f"{here}: hole {i}") for i, h in enumerate(holes))
+            holes_t = tuple(
+                _close_open(h, f"{here}: hole {i}") for i, h in enumerate(holes, start=1)
+            )
             out.append((part, Area(_close_open(ring, here), area_crs, part, here, holes_t)))
     return out
 
@@ -127,7 +129,7 @@ def _xml_fields(text: str, where: str, crs: str | None) -> list[_Named]:
         if owner is not None and name and owners.count(id(owner)) > 1:
             part[id(owner)] = part.get(id(owner), 0) + 1
             name = f"{name} part {part[id(owner)]}"
-        at = f"{where}: polygon {i}" if len(polygons) > 1 else where
+        at = f"{where}: polygon {i + 1}" if len(polygons) > 1 else where
         out.append((name, xml_polygon_area(polygon, at, crs, name, srs)))
     return out
 
@@ -162,10 +164,10 @@ def _wkt_polygons(text: str, where: str) -> tuple[list[list[np.ndarray]], str | 
         parts = _wkt_nested(rest, where)
         if not all(isinstance(p, list) for p in parts):
             raise PolygonFileError(f"{where}: a MULTIPOLYGON holds polygons in parentheses")
-        return [wkt_rings(p, f"{where}: polygon {k}") for k, p in enumerate(parts)], srid
+        return [wkt_rings(p, f"{where}: polygon {k}") for k, p in enumerate(parts, start=1)], srid
     if kind == "GEOMETRYCOLLECTION":
         found = []
-        for k, piece in enumerate(_split_top(rest, where)):
+        for k, piece in enumerate(_split_top(rest, where), start=1):
             found += _wkt_polygons(piece, f"{where}: geometry {k}")[0]
         return found, srid
     return [], srid

@@ -134,26 +134,27 @@ def _feature_name(fields: list[str], data: list[Any], i: int) -> str:
 def _layer_fields(pyogrio: Any, path: str, layer: str, where: str, crs: str | None) -> list:
     import shapely
 
-    meta, fids, wkb, data = pyogrio.raw.read(path, layer=layer)
+    meta, _, wkb, data = pyogrio.raw.read(path, layer=layer)
     if wkb is None:  # a table without geometry
         return []
     layer_crs = crs or (crs_from_file(meta["crs"], where) if meta.get("crs") else LONLAT)
     fields = [str(f) for f in meta["fields"]]
     out = []
-    for i, blob in enumerate(wkb):
-        fid = fids[i] if fids is not None else i
+    for i, blob in enumerate(wkb):  # feature N: the N-th of the layer, from 1 (not GDAL's FID)
         try:
             polygons = _parts(shapely.from_wkb(blob) if blob is not None else None)
         except shapely.errors.GEOSException as exc:
-            raise PolygonFileError(f"{where}: feature {fid}: unreadable geometry: {exc}") from None
+            raise PolygonFileError(
+                f"{where}: feature {i + 1}: unreadable geometry: {exc}"
+            ) from None
         name = _feature_name(fields, data, i)
         for k, poly in enumerate(polygons):
             part = f"{name} part {k + 1}" if name and len(polygons) > 1 else name
-            at = f"{where}: feature {fid}" + (f" part {k}" if len(polygons) > 1 else "")
+            at = f"{where}: feature {i + 1}" + (f": part {k + 1}" if len(polygons) > 1 else "")
             ring = _close_open(np.asarray(poly.exterior.coords, dtype=np.float64)[:, :2], at)
             holes = tuple(
                 _close_open(np.asarray(h.coords, dtype=np.float64)[:, :2], f"{at}: hole {j}")
-                for j, h in enumerate(poly.interiors)
+                for j, h in enumerate(poly.interiors, start=1)
             )
             out.append((part, Area(ring, layer_crs, part, at, holes)))
     return out

@@ -25,7 +25,7 @@ def _ring(coords: Any, where: str) -> np.ndarray:
     if not isinstance(coords, Sequence) or isinstance(coords, str) or len(coords) == 0:
         raise PolygonFileError(f"{where}: expected a list of [x, y] positions, got {coords!r:.80}")
     rows = []
-    for i, pos in enumerate(coords):
+    for i, pos in enumerate(coords, start=1):
         if (
             not isinstance(pos, Sequence)
             or isinstance(pos, str)
@@ -84,7 +84,7 @@ def _geometry_rings(geom: Any, where: str) -> tuple[np.ndarray, list[np.ndarray]
         raise PolygonFileError(f"{where}: a Polygon needs at least one ring")
     holes = [
         _closed(_ring(h, f"{where}: hole {i}"), f"{where}: hole {i}")
-        for i, h in enumerate(coords[1:])
+        for i, h in enumerate(coords[1:], start=1)
     ]
     return _closed(_ring(coords[0], where), where), holes
 
@@ -126,10 +126,10 @@ def _polygon_geometry(data: dict[str, Any], where: str) -> tuple[Any, str, Any]:
                 "%s: %d polygon features; only the first (feature %d) is used",
                 where,
                 len(found),
-                found[0][0],
+                found[0][0] + 1,
             )
         i, feature = found[0]
-        return feature["geometry"], f"{where}: feature {i}", feature
+        return feature["geometry"], f"{where}: feature {i + 1}", feature
     if kind == "Feature":
         geom = data.get("geometry")
         if not isinstance(geom, dict):
@@ -234,7 +234,7 @@ def area_from_json(data: Any, where: str = "input", crs: str | None = None) -> A
         crs or LONLAT,
         name,
         where,
-        tuple(_close_open(h, f"{where}: hole {i}") for i, h in enumerate(holes)),
+        tuple(_close_open(h, f"{where}: hole {i}") for i, h in enumerate(holes, start=1)),
     )
 
 

@@ -25,7 +25,7 @@ def _xml_coordinates(element: ElementTree.Element, where: str) -> np.ndarray:
         tag = _local(child.tag)
         if tag == "coordinates":
             rows = []
-            for i, token in enumerate((child.text or "").split()):
+            for i, token in enumerate((child.text or "").split(), start=1):
                 parts = token.split(",")
                 try:
                     rows.append((float(parts[0]), float(parts[1])))
@@ -103,7 +103,7 @@ def xml_polygon_area(
         # KML may hold several LinearRings in one innerBoundaryIs.
         rings = [e for e in element.iter() if _local(e.tag) == "LinearRing"] or [element]
         for r in rings:
-            holes.append(_close_open(_xml_coordinates(r, where), f"{where}: hole {len(holes)}"))
+            holes.append(_close_open(_xml_coordinates(r, where), f"{where}: hole {len(holes) + 1}"))
     if crs is None and srs:  # a CRS given by the caller overrides the file's
         crs = crs_from_file(srs, where)
     if srs and _north_first(srs):  # a URN/URI srsName: the CRS's own axis order, lat first

@@ -68,9 +68,9 @@ def wkt_rings(nested: list[Any], where: str) -> list[np.ndarray]:
         raise PolygonFileError(f"{where}: a WKT POLYGON needs rings in parentheses")
     parsed = []
     for r_index, ring_items in enumerate(rings):
-        what = where if r_index == 0 else f"{where}: hole {r_index - 1}"
+        what = where if r_index == 0 else f"{where}: hole {r_index}"
         rows = []
-        for i, pos in enumerate(ring_items):
+        for i, pos in enumerate(ring_items, start=1):
             if not isinstance(pos, str):
                 raise PolygonFileError(f"{what}: position {i} of the ring is nested, not 'x y'")
             parts = pos.split()

@@ -143,9 +143,9 @@ def detach_holes(area: Area) -> tuple[Area, str | None]:
         for k in near:
             at = shapely.get_coordinates(shapely.shortest_line(rings[i + 1], rings[k]))[0]
             if k == 0:
-                on_shell.append(f"hole {i} at {at.tolist()}")
+                on_shell.append(f"hole {i + 1} at {at.tolist()}")
             else:
-                on_holes.append(f"hole {i} touches hole {k - 1} at {at.tolist()}")
+                on_holes.append(f"hole {i + 1} touches hole {k} at {at.tolist()}")
         cut = shapely.Polygon(h).difference(shapely.union_all([rings[k] for k in near]).buffer(gap))
         holes += [
             np.asarray(p.exterior.coords, dtype=np.float64)[:-1]

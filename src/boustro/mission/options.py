@@ -5,7 +5,8 @@
 they go together, and build the spacing (metres, a :class:`~boustro.sensors.Camera` or a
 :class:`~boustro.sensors.Swath`) and the :class:`~boustro.vehicle.Vehicle` that
 :func:`boustro.mission.plan_area` takes: ``boustro plan`` and ``boustro batch`` share them, so
-the two commands accept the same combinations with the same messages.
+the two commands accept the same combinations with the same messages. :func:`check_turn_time`
+is the rule of a turn time without a speed for ``plan``, ``batch`` and the page's API alike.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from ..errors import InvalidParameterError
 from ..sensors import Camera, Swath
 from ..vehicle import Vehicle
 
-__all__ = ["sensor_of", "vehicle_of"]
+__all__ = ["check_turn_time", "sensor_of", "vehicle_of"]
 
 
 def sensor_of(o: Any, default: float | None = None) -> Any:
@@ -84,3 +85,28 @@ def vehicle_of(o: Any) -> Vehicle | None:
             raise InvalidParameterError("--reverse needs --turn-radius")
         return None
     return Vehicle(turn_radius=o.turn_radius, reverse=o.reverse)
+
+
+def _dashed(option: str) -> str:
+    """``turn_time`` -> ``--turn-time``: an option as the command line spells it."""
+    return "--" + option.replace("_", "-")
+
+
+def check_turn_time(speed: float | None, turn_time: float, spell: Any = _dashed) -> None:
+    """Refuse a turn time without a speed: the turn time counts only in the mission's duration
+    (path / speed + turns x turn time) and in the time objective, which both need the speed,
+    so without one it would be ignored silently. ``spell`` names an option in the messages
+    (``--turn-time`` on the command line, ``options.turn_time`` in the page's API).
+
+    Example:
+        >>> check_turn_time(None, 0.0)
+        >>> check_turn_time(None, 5.0, lambda name: name)
+        Traceback (most recent call last):
+        ...
+        boustro.errors.InvalidParameterError: turn_time needs speed (the duration is ...)
+    """
+    if turn_time and speed is None:
+        raise InvalidParameterError(
+            f"{spell('turn_time')} needs {spell('speed')} (the duration is path / speed + "
+            "turns x turn time)"
+        )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextvars
 import dataclasses
 import math
 from collections.abc import Sequence
@@ -20,7 +21,11 @@ from ..plan import nearly_convex
 from ..sensors import SensorSpacing
 from .defaults import log
 
-__all__ = ["AUTO_CRS", "Frame", "Sensor", "as_area", "project", "sensor_spacing"]
+__all__ = ["AUTO_CRS", "START_NAME", "Frame", "Sensor", "as_area", "project", "sensor_spacing"]
+
+#: What the far-start warning calls the start: ``boustro plan --home`` sets "home" while it
+#: plans from the home (the start is the home there, and the user gave no start).
+START_NAME: contextvars.ContextVar[str] = contextvars.ContextVar("start_name", default="the start")
 
 
 def sensor_spacing(spacing: Any) -> tuple[float, float, float, float | None, str | None]:
@@ -108,7 +113,7 @@ def _project_holes(area: Area, proj: Projection) -> list[NDArray[np.float64]]:
     """The holes in the plan frame, checked."""
     where = area.source
     holes_plan = []
-    for i, hole in enumerate(area.holes):
+    for i, hole in enumerate(area.holes, start=1):
         if proj.geographic:
             check_lonlat(proj.to_lonlat(proj.to_plan(hole)), f"{where}: hole {i}")
         hp = proj.to_plan(hole)
@@ -195,8 +200,10 @@ def _warn_far_start(
         cause = (
             "swapped longitude and latitude?"
             if geographic
-            else "a point in other coordinates than the area's (the start is in the area's CRS)?"
+            else f"a point in other coordinates than the area's ({START_NAME.get()} is in the "
+            "area's CRS)?"
         )
         log.warning(
-            "the start is %.3g m from the area, %.0f times its size: %s", far, far / size, cause
-        )
+            "%s is %.3g m from the area, %.0f times its size: %s",
+            START_NAME.get(), far, far / size, cause,
+        )  # fmt: skip

@@ -21,6 +21,7 @@ import numpy as np
 
 from ..errors import BoustroError, InvalidParameterError, PolygonFileError
 from ..io import Area, areas_from_object, read_areas
+from ..io.area import field_label
 from ..io.crs import Projection
 from ..io.formats import FORMATS, format_for, render
 from ..io.formats._fields import render_fields, safe_name
@@ -169,13 +170,17 @@ def _plan_checked(body: dict[str, Any], opts: PlanOptions) -> list[Mission]:
     """:func:`plan_request` of a request whose members and options are checked."""
     areas = request_areas(body["area"], opts)
     missions, failed = [], []
-    for area in areas:
+    for i, area in enumerate(areas, start=1):
         try:
             missions.append(_plan_one(area, opts))
         except (InvalidParameterError, PolygonFileError, ValueError) as exc:
-            if len(areas) == 1:
+            label = field_label(area, i, len(areas))  # as boustro plan names it
+            if len(areas) > 1:
+                failed.append(f"{label}: {exc}")
+            elif label and isinstance(exc, BoustroError):
+                raise type(exc)(f"{label}: {exc}") from None
+            else:
                 raise
-            failed.append(f"{area.name}: {exc}")
     if failed:
         raise InvalidParameterError("; ".join(failed))
     return missions

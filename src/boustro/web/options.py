@@ -16,6 +16,7 @@ from typing import Any
 from .. import objectives
 from ..errors import InvalidParameterError, as_number
 from ..mission import DEFAULT_HULL_TOLERANCE
+from ..mission.options import check_turn_time
 from ..plan import check_headland
 from ..sensors import Camera, Swath
 from ..vehicle import Vehicle
@@ -220,6 +221,7 @@ def parse_options(options: Any) -> PlanOptions:
         vehicle=_vehicle(options),
         headland=_headland(options),
     )
+    check_turn_time(kwargs["speed"], kwargs["turn_time"], lambda name: f"options.{name}")
     crs = check_epsg(options["crs"], "options.crs") if options.get("crs") is not None else None
     picked = options.get("field")
     if picked is not None and (isinstance(picked, bool) or not isinstance(picked, (str, int))):
