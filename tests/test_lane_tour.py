@@ -460,12 +460,12 @@ def test_ring_starts_routes_from_the_unit_before_to_the_unit_after(monkeypatch):
     hole = _Pass("hole", -1, 0.0, [(ring[0], ring[-1], ring, 80.0)])
     seen = []
 
-    def spy(r, before, after, router):
+    def spy(r, before, after):
         seen.append(
             (None if before is None else tuple(before), None if after is None else tuple(after))
         )
 
-    monkeypatch.setattr(lane_tour, "_ring_start", spy)
+    monkeypatch.setattr(lane_tour, "_ring_candidates", spy)
     router, start = Router(region), np.array([1.0, 1.0])
     passes = [lane((5, 30), (45, 30)), hole, lane((45, 70), (5, 70))]
     lane_tour.ring_starts(passes, [0, 1, 2], [0, 0, 0], start, router, False)
@@ -538,3 +538,76 @@ def test_a_kick_shorter_by_the_distances_but_longer_flown_is_not_kept(monkeypatc
     np.testing.assert_array_equal(np.stack(got), np.stack(worse))
     got = lane_tour._kicked(_StraightRouter(), pts, dist, worse, 0, 3, 100)
     np.testing.assert_array_equal(np.stack(got), np.stack(good))
+
+
+def _ring_starts_one_by_one(passes, order, choice, start, router, force_start):
+    """:func:`lane_tour.ring_starts` as it was before the waves: each closed pass in driving
+    order, its moves routed alone (:func:`lane_tour._ring_start`)."""
+    units = lane_tour._units(passes, order, choice)
+    n = len(units)
+    for k in range(n):
+        if units[k][0].kind == "chain" or not lane_tour._closed(units[k][1]):
+            continue
+        before = (
+            lane_tour._ends(units[k - 1 : k], router, 0.0, False)[1]
+            if k
+            else (start if force_start else None)
+        )
+        after = lane_tour._ends(units[k + 1 : k + 2], router, 0.0, False)[0] if k + 1 < n else None
+        ring = lane_tour._ring_start(units[k][1], before, after, router)
+        if ring is not None:
+            units[k] = (units[k][0], ring)
+    return [pts for _, pts in units]
+
+
+@pytest.mark.parametrize("force_start", [False, True])
+def test_ring_starts_in_waves_equal_one_by_one(force_start):
+    """:func:`lane_tour.ring_starts` routes the closed passes of a wave (:func:`_ring_waves`)
+    together: the same starts as each pass alone in driving order, where runs of up to four
+    holes follow each other in the tour (a pass's new start is the next one's unit before)."""
+    from boustro.plan.tour import _Pass
+
+    holes = [[(x, 40), (x + 12, 40), (x + 12, 60), (x, 60)] for x in (20, 50, 80, 110)]
+    region = Region([(0, 0), (150, 0), (150, 100), (0, 100)], holes)
+    router, start = Router(region), np.array([1.0, 1.0])
+
+    def lane(a, b):
+        pts = np.array([a, b], dtype=np.float64)
+        return _Pass("chain", 0, 0.0, [(pts[0], pts[1], pts, float(np.hypot(*(pts[1] - pts[0]))))])
+
+    def hole(i, turn):
+        ring = np.roll(np.array(holes[i], dtype=np.float64), turn, axis=0)
+        ring = np.vstack([ring, ring[:1]])
+        return _Pass("hole", -1, 0.0, [(ring[0], ring[-1], ring, 64.0)])
+
+    rng = np.random.default_rng(3)
+    runs = moved = 0
+    for _ in range(24):
+        rings = [hole(i, int(rng.integers(4))) for i in rng.permutation(4)]
+        cut = sorted(rng.choice(np.arange(1, 4), size=int(rng.integers(0, 4)), replace=False))
+        ends = rng.uniform(5, 145, (len(cut) + 2, 2, 2)) * [1, 0.3] + [[0, 0], [0, 70]]
+        lanes = [lane(a, b) for a, b in ends]
+        tour, lo = [lanes[0]], 0
+        for i, c in enumerate([*cut, 4]):
+            tour += [*rings[lo:c], lanes[i + 1]]
+            lo = c
+        tour += lanes[len(cut) + 1 :]
+        order, choice = list(range(len(tour))), [0] * len(tour)
+        want = _ring_starts_one_by_one(tour, order, choice, start, router, force_start)
+        got = lane_tour.ring_starts(tour, order, choice, start, Router(region), force_start)
+        got_pts = [pts for _, pts in lane_tour._units(*got)]
+        assert len(got_pts) == len(want)
+        for a, b in zip(got_pts, want, strict=True):
+            np.testing.assert_array_equal(a, b)
+        given = [pts for _, pts in lane_tour._units(tour, order, choice)]
+        moved += sum(not np.array_equal(a, b) for a, b in zip(want, given, strict=True))
+        runs += len(lane_tour._ring_waves([k for k, (p, _) in enumerate(
+            lane_tour._units(tour, order, choice)) if p.kind == "hole"])) > 1  # fmt: skip
+    assert runs >= 6 and moved >= 6
+
+
+def test_ring_waves():
+    """Consecutive tour positions of closed passes go to successive waves."""
+    assert lane_tour._ring_waves([]) == []
+    assert lane_tour._ring_waves([1, 3, 5]) == [[1, 3, 5]]
+    assert lane_tour._ring_waves([1, 2, 3, 6, 7, 9]) == [[1, 6, 9], [2, 7], [3]]

@@ -42,6 +42,7 @@ import contextlib
 import zlib
 from collections.abc import Callable, Iterator
 from contextvars import ContextVar
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -283,7 +284,12 @@ def ring_starts(
     shortest as flown (:func:`_ring_start`), in driving order (a ring's new start is the next
     one's unit before); the given tour where none is shorter. Where :func:`refinement` is on
     and the tour has :data:`LANE_TOUR_UNITS` units at most. Each change shortens the moves it
-    touches as flown, so the tour is never longer."""
+    touches as flown, so the tour is never longer.
+
+    The rings whose neighbours are not rings decided before them (every ring that does not
+    follow another in the tour, then the second of each run of rings, ...) have their moves
+    routed in one :meth:`Router.paths` call (:func:`_ring_waves`): a route depends on its
+    ends only, so each ring's start is the one it gets alone, in driving order."""
     units = _units(passes, order, choice)
     n = len(units)
     rings = [k for k, (p, pts) in enumerate(units) if p.kind != "chain" and _closed(pts)]
@@ -295,13 +301,33 @@ def ring_starts(
 
     start = np.asarray(start, dtype=np.float64)
     changed = False
-    for k in rings:
-        before = end(k - 1, 1) if k else start if force_start else None
-        after = end(k + 1, 0) if k + 1 < n else None
-        ring = _ring_start(units[k][1], before, after, router)
-        if ring is not None:
-            units[k], changed = (units[k][0], ring), True
+    for wave in _ring_waves(rings):
+        found = []
+        for k in wave:
+            before = end(k - 1, 1) if k else start if force_start else None
+            after = end(k + 1, 0) if k + 1 < n else None
+            found.append((k, _ring_candidates(units[k][1], before, after)))
+        asked = [c for _, c in found if c is not None]
+        flown = iter(_flown_many(asked, router))
+        for k, c in found:
+            ring = None if c is None else _ring_pick(c, next(flown))
+            if ring is not None:
+                units[k], changed = (units[k][0], ring), True
     return _as_passes(units) if changed else (passes, order, choice)
+
+
+def _ring_waves(rings: list[int]) -> list[list[int]]:
+    """The tour positions of closed passes in waves: the ``i``-th of each run of consecutive
+    positions in wave ``i`` (a ring's unit before is decided in an earlier wave, its unit
+    after in a later one or not a ring)."""
+    waves: list[list[int]] = []
+    run = 0
+    for i, k in enumerate(rings):
+        run = run + 1 if i and rings[i - 1] == k - 1 else 0
+        if run == len(waves):
+            waves.append([])
+        waves[run].append(k)
+    return waves
 
 
 def _closed(ring: NDArray[np.float64]) -> bool:
@@ -323,6 +349,28 @@ def _ring_start(
     start (:meth:`Router.paths`, as the driver flies them, in one call). Where no
     candidate's straight moves are shorter than the present start's, nothing is routed (a
     heuristic's cut: the present start is kept)."""
+    c = _ring_candidates(ring, before, after)
+    return None if c is None else _ring_pick(c, _flown_many([c], router)[0])
+
+
+class _RingChoice(NamedTuple):
+    """:func:`_ring_start`'s points to route (``at``: the present start first) and moves."""
+
+    ring: NDArray[np.float64]
+    at: NDArray[np.float64]
+    edge: NDArray[np.int64]  # the ring's edge of each candidate (``at[1:]``)
+    starts: NDArray[np.float64]
+    targets: NDArray[np.float64]
+    legs: int  # moves per point (1 or 2)
+
+
+def _ring_candidates(
+    ring: NDArray[np.float64],
+    before: NDArray[np.float64] | None,
+    after: NDArray[np.float64] | None,
+) -> _RingChoice | None:
+    """:func:`_ring_start`'s candidates and the moves to route, ``None`` where nothing is
+    routed (no end, or no candidate nearer than the present start by the straight lines)."""
     ends = [q for q in (before, after) if q is not None]
     if not ends:
         return None
@@ -351,12 +399,34 @@ def _ring_start(
     if after is not None:
         starts.append(at)
         targets.append(np.repeat(after[None], len(at), axis=0))
-    routes = router.paths(np.vstack(starts), np.vstack(targets))  # one call: all at once
-    flown = np.array([r.length for r in routes]).reshape(len(starts), len(at)).sum(axis=0)
+    return _RingChoice(ring, at, j[near], np.vstack(starts), np.vstack(targets), len(starts))
+
+
+def _flown_many(choices: list[_RingChoice], router: Router) -> list[NDArray[np.float64]]:
+    """Per choice, its points' moves as flown (summed per point), every move of every choice
+    routed in one :meth:`Router.paths` call."""
+    if not choices:
+        return []
+    routes = router.paths(
+        np.vstack([c.starts for c in choices]), np.vstack([c.targets for c in choices])
+    )
+    lengths = np.array([r.length for r in routes])
+    out, lo = [], 0
+    for c in choices:
+        hi = lo + c.legs * len(c.at)
+        out.append(lengths[lo:hi].reshape(c.legs, len(c.at)).sum(axis=0))
+        lo = hi
+    return out
+
+
+def _ring_pick(choice: _RingChoice, flown: NDArray[np.float64]) -> NDArray[np.float64] | None:
+    """The ring entered at the choice's point of least ``flown`` moves (the present start on
+    ties), ``None`` where that is the present start or not shorter than it."""
     best = int(np.argmin(flown))
     if not flown[best] < flown[0] - 1e-9:
         return None
-    at, i = at[best], int(j[near[best - 1]])
+    v = choice.ring[:-1]
+    at, i = choice.at[best], int(choice.edge[best - 1])
     body = np.roll(v, -(i + 1), axis=0)  # v[i + 1], ..., v[i]: the loop after edge i
     if np.array_equal(at, body[0]):
         return np.vstack([body, body[:1]])
