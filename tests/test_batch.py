@@ -422,6 +422,27 @@ def test_cli_a_directory_of_fields_is_one_line_saying_so(tmp_path, capsys):
     assert "no such file" not in err and not (tmp_path / "o.gpkg").exists()
 
 
+def test_cli_a_file_of_several_layers_needs_layer(tmp_path, capsys):
+    # QA round 19: `plan` read every layer of a GeoPackage, `batch` the first one silently
+    two = tmp_path / "two.gpkg"
+    for layer, x in (("north", 0), ("south", 1000)):
+        wkb = np.array([shapely.to_wkb(shapely.box(x, 0, x + 100, 100))], dtype=object)
+        pyogrio.raw.write(str(two), wkb, [np.array([layer], dtype=object)], ["name"],
+                          crs=CRS, geometry_type="Polygon", driver="GPKG", layer=layer,
+                          append=layer == "south")  # fmt: skip
+    out = tmp_path / "o.gpkg"
+    assert main(["batch", str(two), "--out", str(out), "--spacing", "10"]) == 2
+    err = capsys.readouterr().err
+    assert err == (
+        f"boustro: error: {two}: 2 layers with geometries (north, south): give one with "
+        "--layer, or plan each in its own batch\n"
+    )
+    assert not out.exists()
+    assert main(["-q", "batch", str(two), "--out", str(out), "--spacing", "10",
+                 "--layer", "south"]) == 0  # fmt: skip
+    assert _layer(out, "fields")["name"].tolist() == ["south"]
+
+
 def test_cli_bad_input_is_one_line(tmp_path, capsys):
     assert main(["batch", str(tmp_path / "missing.gpkg"), "--out", str(tmp_path / "o.gpkg"),
                  "--spacing", "10"]) == 2  # fmt: skip

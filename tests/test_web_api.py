@@ -411,6 +411,16 @@ def test_nan_and_infinity_are_refused(client, embedded):
         assert "non-finite" in _error(response)
 
 
+def test_a_spacing_whose_figures_overflow_is_refused(client, embedded, recwarn):
+    """QA round 19: ``spacing: 1e300`` was planned (200) with shapely's overflow warnings in
+    the server's log; it is refused as ``boustro plan`` refuses it (one rule, plan_area's)."""
+    message = _error(
+        client.post("/api/plan", json={"area": embedded, "options": {"spacing": 1e300}})
+    )
+    assert "spacing 1e+300 is too wide: at most 1e+100" in message
+    assert not [w for w in recwarn if "overflow" in str(w.message)]
+
+
 def test_only_epsg_codes_name_a_crs(client, embedded):
     for crs in ("+proj=utm +zone=31 +datum=WGS84", "+init=/etc/passwd", 'PROJCS["x"]', True):
         body = {"area": embedded, "options": {"spacing": 10, "crs": crs}}

@@ -151,8 +151,8 @@ def batch(
     """Plan every feature of ``fields`` and write the plans to ``out``; see the module.
 
     Args:
-        fields: a vector file GDAL reads (every feature of ``layer``, default the first layer
-            with geometries, is a field), a GeoDataFrame, or a :class:`Source`.
+        fields: a vector file GDAL reads (every feature of ``layer``, needed when the file
+            has several layers with geometries, is a field), a GeoDataFrame, or a :class:`Source`.
         out: the output: a ``.gpkg`` (layers ``lanes``, ``paths``, ``fields``), or a file name
             in another vector format (one file per layer). An existing output is resumed: its
             fields are skipped; one made with other options is refused.

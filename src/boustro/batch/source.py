@@ -90,6 +90,11 @@ def _pick_layer(pyogrio: Any, path: str, layer: str | None, where: str) -> str:
     spatial = [n for n, kind in layers if kind is not None]
     if not spatial:
         raise PolygonFileError(f"{where}: no layer with geometries")
+    if len(spatial) > 1:  # not the first silently: boustro plan reads every layer
+        raise InvalidParameterError(
+            f"{where}: {len(spatial)} layers with geometries ({', '.join(spatial)}): give one "
+            "with --layer, or plan each in its own batch"
+        )
     return spatial[0]
 
 
@@ -100,7 +105,8 @@ def read_source(
     crs: str | None = None,
     columns: Sequence[str] = (),
 ) -> Source:
-    """The features of ``layer`` (default: the first with geometries) of a file GDAL reads.
+    """The features of ``layer`` (default: the file's only layer with geometries) of a file GDAL
+    reads.
 
     Args:
         crs: the CRS of the coordinates, overriding the file's (``"planar"`` for plain x/y).
@@ -108,7 +114,8 @@ def read_source(
 
     Raises:
         PolygonFileError: a missing or unreadable file, a refused CRS, no layer of geometries.
-        InvalidParameterError: an unknown layer or column, an unknown ``crs``.
+        InvalidParameterError: an unknown layer or column, an unknown ``crs``, no ``layer`` for
+            a file of several layers with geometries.
         MissingDependencyError: pyogrio is not installed.
     """
     name = os.fspath(path)

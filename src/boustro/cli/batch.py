@@ -16,9 +16,9 @@ __all__ = ["register", "run"]
 DETAILS = """\
 input:
   any vector file GDAL reads through pyogrio (GeoPackage, Shapefile, GeoJSON, FlatGeobuf,
-  GeoParquet if the local GDAL has the driver); every feature of --layer (default: the first
-  layer with geometries) is a field, named by its name/id column. A layer without a CRS is
-  not taken as longitude/latitude: give --crs (EPSG:4326, or 'planar' for plain x/y), else
+  GeoParquet if the local GDAL has the driver); every feature of --layer (needed when the file
+  has several layers with geometries) is a field, named by its name/id column. A layer without
+  a CRS is not taken as longitude/latitude: give --crs (EPSG:4326, or 'planar' for plain x/y), else
   each field is reported with an error. A MultiPolygon feature is planned part by part.
 
 options:
@@ -64,7 +64,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("fields", metavar="FIELDS", help="vector file of fields (see below)")
     p.add_argument("--out", required=True, metavar="PLANS", help="output, e.g. plans.gpkg")
-    p.add_argument("--layer", help="the layer of FIELDS (default: the first with geometries)")
+    p.add_argument(
+        "--layer", help="the layer of FIELDS (needed when it has several with geometries)"
+    )
     p.add_argument(
         "--crs",
         default=None,

@@ -106,13 +106,47 @@ def coverage(plan: Plan, region: Polygon | Region | ArrayLike | None = None) -> 
     u, n = _axes(plan.angle)
     origin = plan.polygon.centre
     target = shapely.Polygon(np.stack([(ring - origin) @ u, (ring - origin) @ n], axis=1))
-    t_lo, lo, t_hi, hi = _aligned_boxes(
-        plan.transects, plan.angle, origin, _sides(plan), plan.spacing
-    )
-    swept = float(np.sum((t_hi - t_lo) * (hi - lo)))
-    real = (t_hi > t_lo) & (hi > lo)
-    union = shapely.union_all(shapely.box(t_lo, lo, t_hi, hi)[real])
+    swept, union = _lanes_union(plan.transects, plan.angle, origin, plan, _within(ring, plan))
     return _measure(target, union, swept)
+
+
+def _within(ring: ArrayLike, plan: Plan) -> float:
+    """How far across a footprint can matter to the coverage of ``ring``: the diagonal ``D`` of
+    the box around the ring's vertices and the plan's transects, so every point of the area lies
+    within ``D`` of every point of every transect.
+
+    Exactness: a lane's box ``[c + a, c + b]`` across (``c`` its offset) holds no point of the
+    area beyond ``c +- D``, so cutting ``a`` and ``b`` to ``[-D, D]`` leaves its part of the area
+    unchanged; a pass's buffer of radius ``reach >= D`` holds the whole area, as does its buffer
+    of radius ``D``. Union and intersection with the area commute, so the covered area is the
+    same, while the coordinates stay of the area's size: a spacing of ``1e20`` m measured with
+    its full width lost the area to rounding ("covered 0.0000%"). The swept area (and so the
+    overlap) is still that of the full footprints.
+    """
+    points = np.concatenate([np.asarray(ring, dtype=np.float64), plan.transects.reshape(-1, 2)])
+    return float(np.hypot(*(points.max(axis=0) - points.min(axis=0))))
+
+
+def _lanes_union(
+    transects: NDArray[np.float64],
+    angle: float,
+    origin: NDArray[np.float64],
+    plan: Plan,
+    within: float,
+) -> tuple[float, Any]:
+    """The swept area of the lanes' footprints at ``angle`` and their union in the lanes' frame,
+    the footprints cut to ``within`` across their lane (:func:`_within`)."""
+    import shapely
+
+    sides = _sides(plan)
+    t_lo, lo, t_hi, hi = _aligned_boxes(transects, angle, origin, sides, plan.spacing)
+    swept = float(np.sum((t_hi - t_lo) * (hi - lo)))
+    cut = [(max(a, -within), min(b, within)) for a, b in sides]
+    if cut != sides:  # edges that differ by rounding at the cut width's scale, not the spacing's
+        scale = min(plan.spacing, within)
+        t_lo, lo, t_hi, hi = _aligned_boxes(transects, angle, origin, cut, scale)
+    real = (t_hi > t_lo) & (hi > lo)
+    return swept, shapely.union_all(shapely.box(t_lo, lo, t_hi, hi)[real])
 
 
 def _axes(angle: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -176,28 +210,25 @@ def _aligned_boxes(
     return t_lo, lo, t_hi, hi
 
 
-def footprint(plan: Plan) -> tuple[Any, float]:
+def footprint(plan: Plan, within: float = math.inf) -> tuple[Any, float]:
     """The union of a plan's sensor footprints as a shapely geometry (plan frame), and the sum
     of their areas. Lanes: rectangles (one union per lane direction, built in that direction's
     frame, see :func:`coverage`); passes around holes and boundary passes: every point within
     ``reach`` of the pass (the vehicle turns on the spot at the corners with its sensor on),
-    whose swept area is :func:`_passes_swept`."""
+    whose swept area is :func:`_passes_swept`. ``within``: the union is of the footprints cut
+    to ``within`` across their transect (exact for an area within ``within`` of every transect
+    point, see :func:`_within`); the sum is of the whole footprints."""
     import shapely
 
     origin = plan.polygon.centre
     angles = plan.transect_angle()
     lane = np.array(plan.role()) == "lane"
-    sides = _sides(plan)
     parts = []
     swept = 0.0
     for angle in np.unique(angles[lane]):
         pick = lane & (angles == angle)
-        t_lo, lo, t_hi, hi = _aligned_boxes(
-            plan.transects[pick], float(angle), origin, sides, plan.spacing
-        )
-        swept += float(np.sum((t_hi - t_lo) * (hi - lo)))
-        real = (t_hi > t_lo) & (hi > lo)
-        union = shapely.union_all(shapely.box(t_lo, lo, t_hi, hi)[real])
+        area, union = _lanes_union(plan.transects[pick], float(angle), origin, plan, within)
+        swept += area
         u, n = _axes(float(angle))
         parts.append(
             shapely.transform(union, lambda p, u=u, n=n: origin + p[:, :1] * u + p[:, 1:] * n)
@@ -205,7 +236,8 @@ def footprint(plan: Plan) -> tuple[Any, float]:
     holes = ~lane
     if holes.any():
         lines = shapely.linestrings(plan.transects[holes])
-        buffers = shapely.buffer(lines, plan.reach, quad_segs=64)  # round ends, not octagons
+        # round ends, not octagons
+        buffers = shapely.buffer(lines, min(plan.reach, within), quad_segs=64)
         swept += _passes_swept(plan.transects[holes], plan.reach, plan.spacing)
         parts.append(shapely.union_all(buffers))
     return shapely.union_all(parts), swept
@@ -232,8 +264,10 @@ def _coverage_general(plan: Plan, region: Any) -> Coverage:
     if region is None:
         region = plan.region if plan.region is not None else plan.polygon
     if hasattr(region, "shell"):
-        target = shapely.Polygon(region.shell.vertices, [h.vertices for h in region.holes])
+        ring = region.shell.vertices
+        target = shapely.Polygon(ring, [h.vertices for h in region.holes])
     else:
-        target = shapely.Polygon(as_polygon(region).vertices)
-    union, swept = footprint(plan)
+        ring = as_polygon(region).vertices
+        target = shapely.Polygon(ring)
+    union, swept = footprint(plan, _within(ring, plan))
     return _measure(target, union, swept)
