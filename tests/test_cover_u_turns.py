@@ -125,6 +125,29 @@ def test_least_floor_over_the_lines():
     assert moves[1] == pytest.approx(90.0 + 3 * (math.pi - 2) * 8.0, rel=1e-8)
 
 
+def test_one_move_across_an_odd_number_of_lines_where_the_lines_have_both_parities():
+    """Every order of ``n`` consecutive lines whose moves cross at most ``max_lines`` lines
+    (a brute force over the permutations) has moves at least :func:`u_turn_moves` with
+    ``mixed``, and above the same without it where the least floor is not at an odd number of
+    lines (so ``least_odd`` taken at two lines or over every ``j`` fails here)."""
+    raised = 0
+    for reverse, r, most in itertools.product((False, True), (3.0, 8.0, 15.0, 30.0), (2, 3)):
+        turns = UTurns(r, reverse, most)
+        assert turns.least_odd(10.0) == min(turns.floor(j * 10.0) for j in range(1, most + 1, 2))
+        for n in range(2, 8):
+            best = math.inf
+            for order in itertools.permutations(range(n)):
+                steps = [abs(b - a) for a, b in itertools.pairwise(order)]
+                if max(steps) <= most:
+                    best = min(best, sum(turns.floor(j * 10.0) for j in steps))
+            span = np.array([(n - 1) * 10.0])
+            bound = u_turn_moves(turns, np.array([n - 1]), span, 10.0, np.array([True]))[0]
+            assert bound <= best * (1 + 1e-12)
+            plain = u_turn_moves(turns, np.array([n - 1]), span, 10.0)[0]
+            raised += bound > plain * (1 + 1e-9)
+    assert raised >= 20, raised
+
+
 @pytest.mark.parametrize("n", range(1, 12))
 def test_convex_orders_cross_at_most_two_lines(n):
     """The premise of :data:`CONVEX_MAX_LINES`: :func:`lane_order`'s candidates (the

@@ -56,7 +56,12 @@ line and every move is such a U-turn between lanes ``1 <= j <= 2`` lines apart
 their lines). :func:`u_turn_moves` bounds the sum of
 ``M`` such moves from below by the larger of ``M * min_j f(j)`` and ``span + M (pi - 2) R``
 (``f(j)`` the larger of the floors above at ``w = j spacing``, ``span`` the lateral distance
-the moves must cover). A move of the plan that is not flown as a turn (a turn that would leave
+the moves must cover). Where the lines that every plan of the layouts fills with lanes include
+both parities, a plan's order steps at least once from one parity to the other, a move across
+an odd number of lines (one, for the convex planner's): a plan's ``M' >= M`` moves are at
+least ``min_{j odd} f(j) + (M' - 1) min_j f(j)``, so one of the ``M`` is charged the odd
+least (at 10 m spacing and 8 m forward, 39.5 m instead of 29.1 m: the skip pattern's one move
+of one line is a bulb). A move of the plan that is not flown as a turn (a turn that would leave
 the field or enter a hole keeps its straight move), a lane shorter than the heading's
 threshold (``1e-12``, :mod:`boustro.plan.vehicle_path`) or a hole pass (a closed polygonal
 loop whose exit heading is not its entry heading) break the premise, so the floor is only
@@ -119,6 +124,13 @@ class UTurns:
                 return self.floor(j * spacing)
         return min(self.floor(j * spacing), self.floor((j + 1) * spacing))
 
+    def least_odd(self, spacing: float) -> float:
+        """The least :meth:`floor` over lanes an odd number of lines apart, at most
+        ``max_lines`` (:meth:`least` where that is not known)."""
+        if self.max_lines is None:
+            return self.least(spacing)
+        return min(self.floor(j * spacing) for j in range(1, self.max_lines + 1, 2))
+
 
 def bulb(radius: float, lateral: float) -> float:
     """The least forward-only (Dubins) U-turn of radius ``radius`` whose ends lie ``lateral``
@@ -128,11 +140,20 @@ def bulb(radius: float, lateral: float) -> float:
 
 
 def u_turn_moves(
-    turns: UTurns, n_moves: NDArray[np.int64], span: NDArray[np.float64], spacing: float
+    turns: UTurns,
+    n_moves: NDArray[np.int64],
+    span: NDArray[np.float64],
+    spacing: float,
+    mixed: NDArray[np.bool_] | None = None,
 ) -> NDArray[np.float64]:
     """A floor of the total length of ``n_moves`` U-turns between lanes on distinct lines of
-    spacing ``spacing`` whose lateral offsets add up to at least ``span`` (per layout)."""
+    spacing ``spacing`` whose lateral offsets add up to at least ``span`` (per layout); where
+    ``mixed`` (the lanes' lines include both parities) one of them crosses an odd number of
+    lines (:meth:`UTurns.least_odd`)."""
     m = np.maximum(n_moves, 0).astype(np.float64)
-    each = m * turns.least(spacing)
+    least = turns.least(spacing)
+    each = m * least
+    if mixed is not None:
+        each = each + np.where(mixed & (m > 0), turns.least_odd(spacing) - least, 0.0)
     along = np.where(m > 0, span + m * (math.pi - 2.0) * turns.radius, 0.0)
     return (1.0 - SHAVE) * np.maximum(each, along)
