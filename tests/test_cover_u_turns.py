@@ -16,6 +16,7 @@ from boustro.geometry.region import Region
 from boustro.io import embedded_field
 from boustro.mission import plan_area
 from boustro.optimize.cover import CoverCost
+from boustro.optimize.cover.boxes import Boxes
 from boustro.optimize.cover.search import CoverSearch
 from boustro.optimize.cover.u_turns import CONVEX_MAX_LINES, UTurns, u_turn_moves
 from boustro.plan import build_plan, vehicle_stats
@@ -127,25 +128,55 @@ def test_least_floor_over_the_lines():
 
 def test_one_move_across_an_odd_number_of_lines_where_the_lines_have_both_parities():
     """Every order of ``n`` consecutive lines whose moves cross at most ``max_lines`` lines
-    (a brute force over the permutations) has moves at least :func:`u_turn_moves` with
-    ``mixed``, and above the same without it where the least floor is not at an odd number of
-    lines (so ``least_odd`` taken at two lines or over every ``j`` fails here)."""
+    (any number where that is not known; a brute force over the permutations) has moves at
+    least :func:`u_turn_moves` with ``mixed``, and above the same without it where the least
+    floor is not at an odd number of lines (so ``least_odd`` taken at two lines or over every
+    ``j``, or at one line where ``max_lines`` is not known, fails here); no move, no charge."""
     raised = 0
-    for reverse, r, most in itertools.product((False, True), (3.0, 8.0, 15.0, 30.0), (2, 3)):
+    for reverse, r, most in itertools.product((False, True), (3.0, 8.0, 15.0, 30.0), (2, 3, None)):
         turns = UTurns(r, reverse, most)
-        assert turns.least_odd(10.0) == min(turns.floor(j * 10.0) for j in range(1, most + 1, 2))
+        floors = {j: turns.floor(j * 10.0) for j in range(1, 8)}
+        if most is not None:
+            assert turns.least_odd(10.0) == min(floors[j] for j in range(1, most + 1, 2))
         for n in range(2, 8):
             best = math.inf
             for order in itertools.permutations(range(n)):
                 steps = [abs(b - a) for a, b in itertools.pairwise(order)]
-                if max(steps) <= most:
-                    best = min(best, sum(turns.floor(j * 10.0) for j in steps))
+                if most is None or max(steps) <= most:
+                    best = min(best, sum(floors[j] for j in steps))
             span = np.array([(n - 1) * 10.0])
             bound = u_turn_moves(turns, np.array([n - 1]), span, 10.0, np.array([True]))[0]
             assert bound <= best * (1 + 1e-12)
             plain = u_turn_moves(turns, np.array([n - 1]), span, 10.0)[0]
             raised += bound > plain * (1 + 1e-9)
+        none = u_turn_moves(turns, np.array([0, -1]), np.zeros(2), 10.0, np.array([True, True]))
+        assert np.all(none == 0.0)
     assert raised >= 20, raised
+
+
+def test_point_value_charges_the_odd_move():
+    """The bound itself (:func:`~boustro.optimize.cover.bounds.lower_bounds`, through the
+    search's point value) charges one move of the convex planner's plan as the bulb of one
+    line: a 130 x 70 m rectangle, lines along its long side (9 m spacing, an 8 m radius
+    forward), is exactly its lanes plus one bulb ``R (pi + 2 acos(9 / 16))`` and ``n - 2``
+    half circles with ``2 (9 - 8)`` m across (the skip pattern's turns, along-offset 0), and
+    below the real flown plan; without the odd move (``bounds.py`` not passing the lines'
+    parities) it is 2.7 s lower and fails here."""
+    r = 8.0
+    rect = Polygon([(0, 0), (130, 0), (130, 70), (0, 70)])
+    cost = dataclasses.replace(COST, u_turns=UTurns(r, False, CONVEX_MAX_LINES))
+    search = CoverSearch(Region(rect), SPACING, SPACING / 2, cost, None, False)
+    offsets = np.array([0.0, 1.3, 4.5])
+    zeros = np.zeros(len(offsets))
+    points = search.point_values(Boxes(zeros, zeros, offsets, zeros), exact=True)
+    for d, point in zip(offsets, points, strict=True):
+        plan = build_plan(rect, SPACING, 0.0, float(d), speed=5.0, turn_time=10.0)
+        n = plan.stats.n_transects
+        bulb = r * (math.pi + 2 * math.acos(SPACING / (2 * r)))
+        moves = bulb + (n - 2) * (math.pi * r + 2 * SPACING - 2 * r)
+        assert point == pytest.approx(COST.of(plan.stats.transect_length + moves, n - 1), rel=1e-9)
+        flown = vehicle_stats(plan, Vehicle(turn_radius=r))
+        assert point <= COST.of(flown.path_length, flown.n_turns)
 
 
 @pytest.mark.parametrize("n", range(1, 12))

@@ -115,8 +115,10 @@ class UTurns:
 
     def least(self, spacing: float) -> float:
         """The least :meth:`floor` over lanes ``j`` lines apart (``j spacing``), ``1 <= j <=
-        max_lines``: the floors are convex in ``j`` (the bulb is, ``acos`` being convex on ``[0,
-        1]``) and nondecreasing once ``j spacing >= 2 radius``."""
+        max_lines``: the floors are nonincreasing in ``j`` while ``j spacing <= 2 radius`` (the
+        bulb decreases; it is concave there, ``acos`` being concave on ``[0, 1]``) and
+        nondecreasing from there on, so the least is at one of the two ``j`` around ``2 radius /
+        spacing``."""
         j = max(1, math.floor(2.0 * self.radius / spacing))
         if self.max_lines is not None:
             j = min(j, self.max_lines)
