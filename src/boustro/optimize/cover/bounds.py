@@ -113,9 +113,9 @@ def lower_bounds(
         exact = _boustrophedon_moves(st, spacing)
         moves = np.where(np.isfinite(exact), np.maximum(moves, exact), moves)
     if cost.u_turns is not None:  # every move a U-turn across lines (the convex planner's)
-        odd = (used & (idx % 2 == 1)).any(axis=1) & (used & (idx % 2 == 0)).any(axis=1)
+        mixed = (used & (idx % 2 == 1)).any(axis=1) & (used & (idx % 2 == 0)).any(axis=1)
         n_moves = used.sum(axis=1) - 1
-        moves = np.maximum(moves, u_turn_moves(cost.u_turns, n_moves, moves, spacing, odd))
+        moves = np.maximum(moves, u_turn_moves(cost.u_turns, n_moves, moves, spacing, mixed))
     turns = np.maximum(n_lanes + n_passes - 1, 0)
     runs = 2.0 * cost.turnaround * n_lanes if runins else 0.0
     if ends is not None:  # the larger of the two bounds on the moves (and extra lanes)
