@@ -88,7 +88,8 @@ def lower_bounds(
     ``tour_branch``: its branching, :func:`~.one_tree.one_tree_bound`'s ``branch``).
     With ``cost.u_turns`` (the convex planner's plans with a vehicle, whose every move is a
     U-turn; the caller's premise) the moves are at least :func:`~.u_turns.u_turn_moves` of one
-    move fewer than the lines with lanes, across the span. ``runins=False`` (an area with
+    move fewer than the lines with lanes, across the span, one of them across an odd number of
+    lines where those lines have both parities. ``runins=False`` (an area with
     holes: the planner cuts a run-in or run-out that would enter a hole) counts no run-ins or
     run-outs in the lanes' length.
     """
@@ -112,7 +113,9 @@ def lower_bounds(
         exact = _boustrophedon_moves(st, spacing)
         moves = np.where(np.isfinite(exact), np.maximum(moves, exact), moves)
     if cost.u_turns is not None:  # every move a U-turn across lines (the convex planner's)
-        moves = np.maximum(moves, u_turn_moves(cost.u_turns, used.sum(axis=1) - 1, moves, spacing))
+        mixed = (used & (idx % 2 == 1)).any(axis=1) & (used & (idx % 2 == 0)).any(axis=1)
+        n_moves = used.sum(axis=1) - 1
+        moves = np.maximum(moves, u_turn_moves(cost.u_turns, n_moves, moves, spacing, mixed))
     turns = np.maximum(n_lanes + n_passes - 1, 0)
     runs = 2.0 * cost.turnaround * n_lanes if runins else 0.0
     if ends is not None:  # the larger of the two bounds on the moves (and extra lanes)
