@@ -91,3 +91,14 @@ def test_beyond_the_reach_or_within_the_old_window_the_pass_is_as_before():
     assert calls[0][1] == pytest.approx(3.0)
     assert calls[0][2] == last_pass_module.BRANCH_BUDGET - 4
     assert floor == 1000.0
+
+
+@pytest.mark.parametrize("lowest", [995.5, 987.0])
+def test_the_window_class_spans_from_the_old_window_to_the_reach(lowest):
+    """Lowest box 3.5 s below the discard value (just past 0.3% of the plan) and 12 s below
+    (1.2%, within 1.5%): the window class, the lowest box alone first, the branching's window
+    its distance (a review: a class starting at twice the old window, or a reach of 1%,
+    passed the tests above)."""
+    floor, calls = _pass([lowest, 996.0], [1001.0, 1002.0])
+    assert calls[0][0] == [0] and calls[0][1] == pytest.approx(999.0 - lowest)
+    assert floor == 1000.0  # the plan
