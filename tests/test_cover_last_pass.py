@@ -18,11 +18,12 @@ VALUE, RTOL = 1000.0, 1e-3
 TARGET = VALUE - RTOL * VALUE  # 999: the discard value
 
 
-def _pass(bounds, got, lower=900.0):
+def _pass(bounds, got, lower=900.0, whole=None):
     """:func:`~.last_pass.settle_branched` over retired boxes of 1 degree (radius 57.3 m)
     whose bounds so far are ``bounds``, with a stub of ``box_bounds`` that gives every box, and
-    every half of it, its root box's ``got``: the floor returned and each call's (root boxes,
-    the branching's window, boxes left in the budget)."""
+    every half of it, its root box's ``got`` (``whole``: a root box itself, unhalved, gets
+    ``whole[root]`` instead where given): the floor returned and each call's (root boxes, the
+    branching's window, boxes left in the budget)."""
     n = len(bounds)
     boxes = Boxes(
         np.radians(np.arange(n, dtype=np.float64)), np.full(n, np.radians(0.5)), np.zeros(n),
@@ -34,7 +35,11 @@ def _pass(bounds, got, lower=900.0):
         assert tour_below == TARGET
         root = np.rint(np.degrees(part.theta)).astype(int)
         calls.append((sorted(set(root.tolist())), search.branch[1], search.branch_left))
-        return np.asarray(got, dtype=np.float64)[root]
+        out = np.asarray(got, dtype=np.float64)[root]
+        for i, r in enumerate(root.tolist()):
+            if whole and r in whole and part.delta[i] == np.radians(0.5):
+                out[i] = whole[r]
+        return out
 
     search = SimpleNamespace(
         retired=[(boxes, np.asarray(bounds, dtype=np.float64), np.asarray(bounds), None)],
@@ -91,6 +96,38 @@ def test_beyond_the_reach_or_within_the_old_window_the_pass_is_as_before():
     assert calls[0][1] == pytest.approx(3.0)
     assert calls[0][2] == last_pass_module.BRANCH_BUDGET - 4
     assert floor == 1000.0
+
+
+def test_the_window_class_does_not_start_where_its_budget_cannot_reach_every_box(monkeypatch):
+    """Six boxes below the discard value, each reaching it at its first bound: with a budget of
+    five boxes the pass cannot certify (a box left unbounded keeps its bound below it), so it
+    bounds none (the early fail) and the floor is the lowest box's 990; with six it bounds
+    each once and the floor is the least of theirs (1000)."""
+    bounds = [995.0, 990.0, 996.0, 997.0, 996.5, 995.5]
+    got = [1001.0, 1000.0, 1002.0, 1003.0, 1004.0, 1005.0]
+    monkeypatch.setattr(last_pass_module, "BRANCH_REACH_BUDGET", 5)
+    floor, calls = _pass(bounds, got)
+    assert calls == [] and floor == 990.0
+    monkeypatch.setattr(last_pass_module, "BRANCH_REACH_BUDGET", 6)
+    floor, calls = _pass(bounds, got)
+    assert sorted(r for c in calls for r in c[0]) == [0, 1, 2, 3, 4, 5] and floor == 1000.0
+
+
+def test_the_window_class_stops_where_the_boxes_left_outnumber_the_budget_left(monkeypatch):
+    """The lowest box reaches the discard value only once halved (1 + 4 boxes of a budget of
+    9): the five boxes left then outnumber the four left in the budget, so the pass stops
+    after the first chunk (no other box bounded) and the floor is the least bound of the
+    boxes left (995). Within 0.3% of the plan the pass is as before, without it: six boxes
+    and a budget of five, its first chunk of four is bounded (the two left are over it)."""
+    bounds = [995.0, 990.0, 996.0, 997.0, 996.5, 995.5]
+    got = [1001.0, 1000.0, 1002.0, 1003.0, 1004.0, 1005.0]
+    monkeypatch.setattr(last_pass_module, "BRANCH_REACH_BUDGET", 9)
+    floor, calls = _pass(bounds, got, whole={1: 992.0})
+    assert {r for c in calls for r in c[0]} == {1} and len(calls) == 2
+    assert floor == 995.0
+    monkeypatch.setattr(last_pass_module, "BRANCH_BUDGET", 5)
+    floor, calls = _pass([997.0, 996.5, 997.5, 998.0, 997.8, 997.2], got)
+    assert calls[0][0] == [0, 1, 2, 5] and len(calls) == 1 and floor == 997.8
 
 
 @pytest.mark.parametrize("lowest", [995.5, 987.0])
