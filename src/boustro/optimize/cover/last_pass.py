@@ -49,6 +49,24 @@ BRANCH_BUDGET = 12_000
 #: ... bounding a level's boxes this many at a time, lowest first, so that the last level
 #: stops once no box left can lower its least bound (:func:`_level_bounds`).
 BRANCH_SLICE = 256
+#: The window class (nineteenth round): the pass also runs where the lowest retired box is
+#: below the discard value by more than :data:`BRANCH_RTOL` of the best plan, up to this share
+#: of it (boxes retired at radii of 0.04-1.4 m by the settling margin, 3.7-16 s below on the
+#: benchmark's random areas), with three changes that only decide what is bounded and where
+#: the 1-tree branches (a box not bounded keeps its bound, which holds; the branching is sound
+#: for any window, :mod:`~.one_tree_branch`): the 1-tree is branched wherever a layout is short
+#: of the target by at most the lowest box's distance to it (every box of the pass, whose
+#: halves' bounds are at least their box's, is within it); the lowest box alone is the first
+#: chunk (if it stays below, the pass stops after one box's levels: the cheap early stop); and
+#: at most :data:`BRANCH_REACH_BUDGET` boxes in all (docs/mission_time.md, "The window class").
+BRANCH_REACH = 1.5e-2
+#: ... bounding at most this many boxes in all there (:data:`BRANCH_BUDGET` elsewhere); the
+#: pass stops before a chunk where more boxes below the discard value are left than boxes in
+#: the budget (the exact early fail: a box left unbounded keeps its bound below the discard
+#: value, and each box takes at least one of the budget, so the pass could no longer certify;
+#: random 38 and 16 of ``benchmarks/mission_time.py``, 6,333 and 5,915 such boxes, before any
+#: chunk, random 20 after three: docs/mission_time.md, "The window class").
+BRANCH_REACH_BUDGET = 4_000
 
 
 def settle_branched(search: Any, lower: float, value: float, rtol: float) -> float:
@@ -60,7 +78,9 @@ def settle_branched(search: Any, lower: float, value: float, rtol: float) -> flo
     half keeps its box's bound where higher: it holds fewer layouts), :data:`BRANCH_LEVELS`
     times at most; the chunks after one that stays below it are left as they are. Only where
     it can decide: the rest of the floor at or above the discard value, every retired box
-    within :data:`BRANCH_RTOL` of the best plan below it. Plans only before, so the same
+    within :data:`BRANCH_RTOL` of the best plan below it, or within :data:`BRANCH_REACH` (the
+    window class: the lowest box alone first, the branching's window its distance to the
+    discard value, :data:`BRANCH_REACH_BUDGET` boxes). Plans only before, so the same
     plans; each box's bound only rises, so the floor too. The floor of the boxes not
     deferred: the deferred boxes join it after (:meth:`~.search.CoverSearch.settle_deferred`)."""
     target = value - rtol * abs(value)
@@ -71,17 +91,22 @@ def settle_branched(search: Any, lower: float, value: float, rtol: float) -> flo
         return lower
     window = BRANCH_RTOL * abs(value)
     boxes, bounds, _, mult = joined_parts(retired)
-    if float(bounds.min()) < target - window:
+    lowest = float(bounds.min())
+    if lowest < target - max(window, BRANCH_REACH * abs(value)):
         return lower
+    wide = lowest < target - window  # the window class (BRANCH_REACH)
     order = np.argsort(bounds, kind="stable")
     order = order[bounds[order] < target]
     above = float(bounds[bounds >= target].min(initial=math.inf))  # kept as they are
     floor = min(search.rest_floor, value, above)
     work, evaluations = search.work, search.bound_evaluations  # not the search's work
-    search.branch = (BRANCH_NODES, window)
-    search.branch_left = BRANCH_BUDGET
-    start, stop = 0, BRANCH_CHUNK
+    search.branch = (BRANCH_NODES, target - lowest if wide else window)
+    search.branch_left = BRANCH_REACH_BUDGET if wide else BRANCH_BUDGET
+    start, stop = 0, 1 if wide else BRANCH_CHUNK
     while start < len(order):  # the lowest first: the pass stops where a chunk stays low
+        if wide and len(order) - start > search.branch_left:  # cannot certify: the early fail
+            floor = min(floor, float(bounds[order[start:]].min()))
+            break
         pick = order[start:stop]
         got = _branched_boxes(
             search, boxes.take(pick), bounds[pick], take_multipliers(mult, pick), target
@@ -106,7 +131,8 @@ def _branched_boxes(
 ) -> float:
     """The least bound over ``boxes`` (``bounds`` their bounds so far) with the 1-tree
     branched, the boxes below ``target`` halved :data:`BRANCH_LEVELS` times at most, within
-    what is left of :data:`BRANCH_BUDGET` (``branch_left``; a level past it is not bounded
+    what is left of the budget (``branch_left``: :data:`BRANCH_BUDGET`, or
+    :data:`BRANCH_REACH_BUDGET` in the window class; a level past it is not bounded
     and its boxes keep their bounds so far, each at most its layouts' values)."""
     low_min = math.inf
     for level in range(BRANCH_LEVELS + 1):
