@@ -40,28 +40,11 @@ from .defaults import DEFAULT_HULL_TOLERANCE
 from .estimate import SAY_SECONDS, WorkEstimate, check_work, frame_estimate
 from .map_back import angle_for_bearing, map_back
 from .options import check_turn_time
-from .project import AUTO_CRS, Frame, Sensor, as_area, project, sensor_spacing
+from .project import AUTO_CRS, MAX_SPACING, Frame, Sensor, as_area, project, sensor_spacing
 from .steps import Planned, plan_concave, plan_convex
 from .types import Mission
 
 __all__ = ["MAX_SPACING", "estimate_work", "plan_area"]
-
-#: The widest spacing (and sensor footprint) planned, metres or planar units: far beyond any
-#: survey (an area narrower than the spacing gets one lane whatever the spacing), and far below
-#: where the geometry overflows float64 (a buffer of the reach squares it: from ~1.3e154 on,
-#: shapely warned of overflows and invalid values while planning 1e300).
-MAX_SPACING = 1e100
-
-
-def _check_spacing(sensor: Sensor) -> Sensor:
-    """Refuse a spacing or footprint wider than :data:`MAX_SPACING` (``boustro plan``,
-    ``batch`` and the page's API all plan through :func:`plan_area`: one rule)."""
-    if not max(sensor.spacing, 2 * sensor.reach) <= MAX_SPACING:
-        raise InvalidParameterError(
-            f"spacing {max(sensor.spacing, 2 * sensor.reach):g} is too wide: at most "
-            f"{MAX_SPACING:g} (an area narrower than the spacing gets one lane anyway)"
-        )
-    return sensor
 
 
 def plan_area(
@@ -199,7 +182,7 @@ def plan_area(
         turn_time = vehicle.turn_time if turn_time == 0 else turn_time
     check_turn_time(speed, turn_time, lambda name: name)  # as plan, batch and the page's API
     area = as_area(area, crs, holes)
-    sensor = _check_spacing(Sensor(*sensor_spacing(spacing)))
+    sensor = Sensor(*sensor_spacing(spacing))
     if passes and sensor.nadir_gap > 0:
         raise InvalidParameterError(
             "headland (--headland) does not take a nadir gap: the headland passes would not "

@@ -21,15 +21,43 @@ from ..plan import nearly_convex
 from ..sensors import SensorSpacing
 from .defaults import log
 
-__all__ = ["AUTO_CRS", "START_NAME", "Frame", "Sensor", "as_area", "project", "sensor_spacing"]
+__all__ = [
+    "AUTO_CRS",
+    "MAX_SPACING",
+    "START_NAME",
+    "Frame",
+    "Sensor",
+    "as_area",
+    "project",
+    "sensor_spacing",
+]
 
 #: What the far-start warning calls the start: ``boustro plan --home`` sets "home" while it
 #: plans from the home (the start is the home there, and the user gave no start).
 START_NAME: contextvars.ContextVar[str] = contextvars.ContextVar("start_name", default="the start")
 
 
+#: The widest spacing (and sensor footprint) planned, metres or planar units: far beyond any
+#: survey (an area narrower than the spacing gets one lane whatever the spacing), and far below
+#: where the geometry overflows float64 (a buffer of the reach squares it: from ~1.3e154 on,
+#: shapely warned of overflows and invalid values while planning 1e300).
+MAX_SPACING = 1e100
+
+
 def sensor_spacing(spacing: Any) -> tuple[float, float, float, float | None, str | None]:
-    """(spacing, reach, nadir gap, altitude, description) from a number or a sensor."""
+    """(spacing, reach, nadir gap, altitude, description) from a number or a sensor; a spacing
+    or footprint wider than :data:`MAX_SPACING` is refused (``boustro plan``, ``batch`` and the
+    page's API all plan through :func:`~boustro.mission.plan_area`: one rule)."""
+    out = _sensor_spacing(spacing)
+    if not max(out[0], 2 * out[1]) <= MAX_SPACING:
+        raise InvalidParameterError(
+            f"spacing {max(out[0], 2 * out[1]):g} is too wide: at most "
+            f"{MAX_SPACING:g} (an area narrower than the spacing gets one lane anyway)"
+        )
+    return out
+
+
+def _sensor_spacing(spacing: Any) -> tuple[float, float, float, float | None, str | None]:
     if hasattr(spacing, "spacing") and callable(spacing.spacing):
         spacing = spacing.spacing()
     if isinstance(spacing, SensorSpacing):
